@@ -1,0 +1,256 @@
+//! Command line (SPEC §6). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
+//! (clap reports usage errors with status 2 itself).
+
+use crate::dataset::{Dataset, Kind};
+use crate::effects::EffectSet;
+use crate::experiment::Experiment;
+use crate::fitfile::FitFile;
+use crate::motor::Motor;
+use crate::ode::DiffsolBdf;
+use crate::params::{MotorParams, ParamSet};
+use crate::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
+use crate::units::Quantity;
+use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "vanefit",
+    version,
+    about = "Estimate pneumatic vane motor parameters and find missing physics"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Validate a dataset and print a summary.
+    Check { dataset: PathBuf },
+    /// Simulate every experiment of a dataset under a parameter set.
+    Simulate {
+        dataset: PathBuf,
+        /// Fit file (vanefit.fit/1); omitted: the default motor.
+        #[arg(long)]
+        params: Option<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Write a synthetic dataset from the simulator.
+    Synth {
+        out_dataset: PathBuf,
+        /// Fit file with the true parameters; omitted: the default motor.
+        #[arg(long)]
+        params: Option<PathBuf>,
+        /// Effects to switch on (comma-separated ids), overriding the fit file's.
+        #[arg(long)]
+        effects: Option<String>,
+        /// Sensor noise as a multiple of a typical rig's (0 for none).
+        #[arg(long, default_value_t = 1.0)]
+        noise: f64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+/// A failure to report: message for stderr, exit status 1.
+#[derive(Debug)]
+pub struct Failure(pub String);
+
+impl<E: std::error::Error> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Failure(e.to_string())
+    }
+}
+
+/// Runs a parsed command.
+pub fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Command::Check { dataset } => check(&dataset),
+        Command::Simulate {
+            dataset,
+            params,
+            out,
+        } => simulate(&dataset, params.as_deref(), &out),
+        Command::Synth {
+            out_dataset,
+            params,
+            effects,
+            noise,
+            seed,
+        } => synth(
+            &out_dataset,
+            params.as_deref(),
+            effects.as_deref(),
+            noise,
+            seed,
+        ),
+    }
+}
+
+fn check(dir: &Path) -> Result<(), Failure> {
+    let ds = Dataset::load(dir)?;
+    println!(
+        "dataset {} ({}): motor {}, p_atm {:.0} Pa, {} experiment(s)",
+        ds.name,
+        if ds.synthetic {
+            "synthetic"
+        } else {
+            "measured"
+        },
+        ds.motor.name.as_deref().unwrap_or("unnamed"),
+        ds.p_atm_pa,
+        ds.experiments.len()
+    );
+    for ex in &ds.experiments {
+        println!(
+            "  {} {} ({} rows)",
+            ex.kind.id(),
+            ex.file,
+            ex.recording.rows()
+        );
+        for c in &ex.recording.columns {
+            let (lo, hi) =
+                c.si.iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                        (a.min(*v), b.max(*v))
+                    });
+            let to = |v: f64| c.unit.from_si(v, ds.p_atm_pa);
+            println!(
+                "    {:<20} {:>13} .. {:<13} [{}]",
+                c.name,
+                num(to(lo)),
+                num(to(hi)),
+                c.unit.suffix()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A number for people: fixed point in the usual range, scientific otherwise.
+fn num(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
+        format!("{v:.4e}")
+    } else {
+        format!("{v:.5}")
+    }
+}
+
+/// Parameters for a dataset: defaults, then the rig's motor, then the fit file.
+pub fn params_for(
+    ds: &Dataset,
+    fit: Option<&FitFile>,
+) -> Result<(MotorParams, EffectSet), Failure> {
+    if let Some(f) = fit {
+        return Ok((f.params.clone(), f.effects.clone()));
+    }
+    let mut set = ParamSet::default();
+    if let Some(z) = ds.motor.vanes {
+        set.set("z", f64::from(z))?;
+    }
+    if let Some(v) = ds.motor.displacement_m3 {
+        set.set("v_disp", v)?;
+    }
+    if let Some(e) = ds.motor.expansion_ratio {
+        set.set("eps", e)?;
+    }
+    let p = set.check().map_err(|e| {
+        Failure(format!(
+            "{}: [motor] gives {e}",
+            ds.dir.join("rig.toml").display()
+        ))
+    })?;
+    Ok((p, EffectSet::empty()))
+}
+
+fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure> {
+    let ds = Dataset::load(dir)?;
+    let fit = params.map(FitFile::read).transpose()?;
+    let (p, effects) = params_for(&ds, fit.as_ref())?;
+    let motor = Motor::new(p, effects);
+    let solver = DiffsolBdf::default();
+    std::fs::create_dir_all(out)
+        .map_err(|e| Failure(format!("{}: cannot create: {e}", out.display())))?;
+    for data in &ds.experiments {
+        let sim = Experiment::new(data, ds.p_atm_pa)?.simulate(&motor, &solver)?;
+        let rec = &data.recording;
+        let inputs: &[Quantity] = match data.kind {
+            Kind::Datasheet => &[Quantity::Time, Quantity::Speed, Quantity::PPort1],
+            _ => &[Quantity::Time, Quantity::PPort1, Quantity::CPort2],
+        };
+        let mut header = Vec::new();
+        let mut cols: Vec<Vec<String>> = Vec::new();
+        for c in rec.columns.iter().filter(|c| inputs.contains(&c.quantity)) {
+            header.push(c.name.clone());
+            cols.push(c.raw.clone());
+        }
+        for c in rec.columns.iter().filter(|c| !inputs.contains(&c.quantity)) {
+            if let Some(v) = sim.channel(c.quantity) {
+                header.push(c.name.clone());
+                cols.push(
+                    v.iter()
+                        .map(|x| format!("{:.6e}", c.unit.from_si(*x, ds.p_atm_pa)))
+                        .collect(),
+                );
+            }
+        }
+        let mut text = header.join(",") + "\n";
+        for r in 0..rec.rows() {
+            let row: Vec<&str> = cols.iter().map(|c| c[r].as_str()).collect();
+            text.push_str(&row.join(","));
+            text.push('\n');
+        }
+        let path = out.join(&data.file);
+        crate::fsutil::write_atomic(&path, text.as_bytes())
+            .map_err(|e| Failure(format!("{}: {e}", path.display())))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn synth(
+    out: &Path,
+    params: Option<&Path>,
+    effects: Option<&str>,
+    noise: f64,
+    seed: u64,
+) -> Result<(), Failure> {
+    if !(noise.is_finite() && noise >= 0.0) {
+        return Err(Failure(format!("--noise {noise}: must be a number >= 0")));
+    }
+    let fit = params.map(FitFile::read).transpose()?;
+    let (p, mut fx) = match &fit {
+        Some(f) => (f.params.clone(), f.effects.clone()),
+        None => (MotorParams::default(), EffectSet::empty()),
+    };
+    if let Some(list) = effects {
+        fx = EffectSet::parse_list(list).map_err(|m| Failure(format!("--effects: {m}")))?;
+    }
+    let motor = Motor::new(p, fx.clone());
+    let plan = SynthPlan::default();
+    let experiments = synthesize(
+        &motor,
+        &DiffsolBdf::default(),
+        &plan,
+        &SensorNoise::typical().scaled(noise),
+        seed,
+    )?;
+    let description = format!("seed {seed}, noise x{noise}.");
+    write_dataset(out, &experiments, &plan, &motor, &fx, &description)?;
+    let truth = FitFile::from_params(
+        &out.file_name().unwrap_or_default().to_string_lossy(),
+        motor.params.clone(),
+        fx,
+    );
+    truth
+        .write(&out.join("truth.json"))
+        .map_err(|e| Failure(format!("{}: {e}", out.display())))?;
+    println!(
+        "wrote dataset {} ({} experiments, truth in truth.json)",
+        out.display(),
+        experiments.len()
+    );
+    Ok(())
+}

@@ -1,0 +1,647 @@
+//! Datasets on disk (SPEC §3): `rig.toml` plus one CSV recording per experiment.
+//! Everything is validated here, at the edge, and converted to SI; errors name the file,
+//! the line and the column.
+
+use crate::constants::P_ATM_PA;
+use crate::motor::Load;
+use crate::units::{parse_column, ColumnNameError, Quantity, Unit};
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A located problem with input data.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DataError {
+    pub file: PathBuf,
+    /// 1-based line, where known.
+    pub line: Option<u64>,
+    /// 1-based column index and its name, where known.
+    pub column: Option<(usize, String)>,
+    pub message: String,
+}
+
+impl DataError {
+    pub fn new(file: &Path, message: impl Into<String>) -> Self {
+        Self {
+            file: file.to_path_buf(),
+            line: None,
+            column: None,
+            message: message.into(),
+        }
+    }
+    fn at(mut self, line: u64) -> Self {
+        self.line = Some(line);
+        self
+    }
+    fn col(mut self, index0: usize, name: &str) -> Self {
+        self.column = Some((index0 + 1, name.to_string()));
+        self
+    }
+}
+
+impl fmt::Display for DataError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+            if let Some((c, _)) = &self.column {
+                write!(f, ":{c}")?;
+            }
+        }
+        if let Some((_, name)) = &self.column {
+            write!(f, " (column '{name}')")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+impl std::error::Error for DataError {}
+
+/// One column of a recording, converted to SI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    /// Name as written in the file's header.
+    pub name: String,
+    pub quantity: Quantity,
+    pub unit: Unit,
+    /// Values in SI, one per data row.
+    pub si: Vec<f64>,
+    /// Values as written in the file (kept so exports can copy input columns verbatim).
+    pub raw: Vec<String>,
+}
+
+/// A CSV recording: columns in file order, all of equal length.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    pub file: PathBuf,
+    pub columns: Vec<Column>,
+    /// Line number of each data row (header is line 1).
+    pub lines: Vec<u64>,
+}
+
+impl Recording {
+    pub fn rows(&self) -> usize {
+        self.lines.len()
+    }
+    pub fn column(&self, q: Quantity) -> Option<&Column> {
+        self.columns.iter().find(|c| c.quantity == q)
+    }
+    /// The SI values of a column that must be present.
+    pub fn values(&self, q: Quantity) -> Result<&[f64], DataError> {
+        self.column(q).map(|c| c.si.as_slice()).ok_or_else(|| {
+            DataError::new(
+                &self.file,
+                format!(
+                    "missing column for {} (e.g. '{}_{}')",
+                    q.prefix(),
+                    q.prefix(),
+                    q.si_unit().suffix()
+                ),
+            )
+            .at(1)
+        })
+    }
+
+    /// Reads and validates a CSV recording. `p_atm_pa` converts gauge pressures.
+    pub fn read(path: &Path, p_atm_pa: f64) -> Result<Self, DataError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| DataError::new(path, format!("cannot read: {e}")))?;
+        Self::parse(path, &text, p_atm_pa)
+    }
+
+    /// Parses CSV text (`path` is used in messages only).
+    pub fn parse(path: &Path, text: &str, p_atm_pa: f64) -> Result<Self, DataError> {
+        if text.trim().is_empty() {
+            return Err(DataError::new(
+                path,
+                "file is empty (expected a header row and data rows)",
+            )
+            .at(1));
+        }
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .trim(csv::Trim::All)
+            .from_reader(text.as_bytes());
+        let headers = reader
+            .headers()
+            .map_err(|e| DataError::new(path, format!("unreadable header: {e}")).at(1))?
+            .clone();
+        let mut columns = Vec::with_capacity(headers.len());
+        for (i, name) in headers.iter().enumerate() {
+            let (quantity, unit) = parse_column(name).map_err(|e| {
+                let msg = match e {
+                    ColumnNameError::UnknownUnit { quantity, unit } => {
+                        let known: Vec<_> = quantity.units().iter().map(|u| u.suffix()).collect();
+                        format!(
+                            "unknown unit '{unit}' for {} (known: {})",
+                            quantity.prefix(),
+                            known.join(", ")
+                        )
+                    }
+                    ColumnNameError::UnknownColumn => {
+                        let known: Vec<_> = Quantity::ALL.iter().map(|q| q.prefix()).collect();
+                        format!(
+                            "unknown column (a name is a quantity and its unit; quantities: {})",
+                            known.join(", ")
+                        )
+                    }
+                };
+                DataError::new(path, msg).at(1).col(i, name)
+            })?;
+            if let Some(prev) = columns.iter().position(|c: &Column| c.quantity == quantity) {
+                return Err(DataError::new(
+                    path,
+                    format!(
+                        "{} given twice (also column {})",
+                        quantity.prefix(),
+                        prev + 1
+                    ),
+                )
+                .at(1)
+                .col(i, name));
+            }
+            columns.push(Column {
+                name: name.to_string(),
+                quantity,
+                unit,
+                si: Vec::new(),
+                raw: Vec::new(),
+            });
+        }
+        let mut lines = Vec::new();
+        for record in reader.records() {
+            let record = record.map_err(|e| {
+                let line = e.position().map(|p| p.line()).unwrap_or(0);
+                DataError::new(path, format!("malformed row: {e}")).at(line)
+            })?;
+            let line = record.position().map(|p| p.line()).unwrap_or(0);
+            if record.len() != columns.len() {
+                return Err(DataError::new(
+                    path,
+                    format!(
+                        "row has {} fields, header has {}",
+                        record.len(),
+                        columns.len()
+                    ),
+                )
+                .at(line));
+            }
+            for (i, (field, col)) in record.iter().zip(columns.iter_mut()).enumerate() {
+                let v: f64 = field.parse().map_err(|_| {
+                    DataError::new(
+                        path,
+                        format!("'{field}' is not a number (use '.' as decimal mark)"),
+                    )
+                    .at(line)
+                    .col(i, &col.name)
+                })?;
+                if !v.is_finite() {
+                    return Err(
+                        DataError::new(path, format!("'{field}' is not a finite number"))
+                            .at(line)
+                            .col(i, &col.name),
+                    );
+                }
+                col.si.push(col.unit.to_si(v, p_atm_pa));
+                col.raw.push(field.to_string());
+            }
+            lines.push(line);
+        }
+        if lines.is_empty() {
+            return Err(DataError::new(path, "no data rows after the header").at(1));
+        }
+        let rec = Recording {
+            file: path.to_path_buf(),
+            columns,
+            lines,
+        };
+        rec.check_time()?;
+        Ok(rec)
+    }
+
+    fn check_time(&self) -> Result<(), DataError> {
+        let Some((i, col)) = self
+            .columns
+            .iter()
+            .enumerate()
+            .find(|(_, c)| c.quantity == Quantity::Time)
+        else {
+            return Ok(());
+        };
+        for k in 1..col.si.len() {
+            if col.si[k] <= col.si[k - 1] {
+                return Err(DataError::new(
+                    &self.file,
+                    format!(
+                        "time does not increase ({} after {})",
+                        col.raw[k],
+                        col.raw[k - 1]
+                    ),
+                )
+                .at(self.lines[k])
+                .col(i, &col.name));
+            }
+        }
+        Ok(())
+    }
+
+    /// Refuses an abscissa that does not span a range (a ramp that does not ramp).
+    pub fn check_spans(&self, q: Quantity, min_relative_span: f64) -> Result<(), DataError> {
+        let v = self.values(q)?;
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(*x), b.max(*x))
+            });
+        if hi - lo <= min_relative_span * hi.abs().max(lo.abs()) {
+            let i = self
+                .columns
+                .iter()
+                .position(|c| c.quantity == q)
+                .unwrap_or(0);
+            return Err(DataError::new(
+                &self.file,
+                format!(
+                    "{} does not span a range (all values near {lo:e} SI)",
+                    q.prefix()
+                ),
+            )
+            .col(i, &self.columns[i].name));
+        }
+        Ok(())
+    }
+}
+
+/// The experiment kinds of SPEC §2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    Datasheet,
+    PressureRamp,
+    OutletThrottle,
+}
+
+impl Kind {
+    pub fn id(self) -> &'static str {
+        match self {
+            Kind::Datasheet => "datasheet",
+            Kind::PressureRamp => "pressure_ramp",
+            Kind::OutletThrottle => "outlet_throttle",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RigFile {
+    #[serde(default)]
+    synthetic: bool,
+    #[serde(default)]
+    description: Option<String>,
+    motor: MotorSection,
+    #[serde(default)]
+    conditions: ConditionsSection,
+    experiment: Vec<ExperimentSection>,
+}
+
+/// The `[motor]` table of rig.toml.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MotorSection {
+    #[serde(default)]
+    pub name: Option<String>,
+    pub vanes: Option<u32>,
+    pub displacement_m3: Option<f64>,
+    pub expansion_ratio: Option<f64>,
+    #[serde(default)]
+    pub length_m: Option<f64>,
+    #[serde(default)]
+    pub r_stator_m: Option<f64>,
+    #[serde(default)]
+    pub r_rotor_m: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConditionsSection {
+    #[serde(default = "default_p_atm")]
+    p_atm_pa: f64,
+    #[serde(default = "default_temperature")]
+    temperature_k: f64,
+}
+
+impl Default for ConditionsSection {
+    fn default() -> Self {
+        Self {
+            p_atm_pa: default_p_atm(),
+            temperature_k: default_temperature(),
+        }
+    }
+}
+
+fn default_p_atm() -> f64 {
+    P_ATM_PA
+}
+fn default_temperature() -> f64 {
+    crate::constants::T0_K
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExperimentSection {
+    kind: Kind,
+    file: String,
+    #[serde(default)]
+    p_supply_mpa: Option<f64>,
+    #[serde(default)]
+    load: Option<LoadSection>,
+    #[serde(default)]
+    weight: Option<f64>,
+    #[serde(default)]
+    weights: Option<std::collections::BTreeMap<String, f64>>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+enum LoadSection {
+    None,
+    ViscousBrake { c_nm_s_rad: f64 },
+    Torque { t_nm: f64 },
+}
+
+/// One experiment as the rig file describes it, with its recording.
+#[derive(Debug, Clone)]
+pub struct ExperimentData {
+    pub kind: Kind,
+    /// File name as given in rig.toml.
+    pub file: String,
+    pub p_supply_pa: Option<f64>,
+    pub load: Load,
+    /// Weight of the whole experiment in the cost (default 1).
+    pub weight: f64,
+    /// Weight per channel prefix (e.g. "flow1"), default 1.
+    pub channel_weights: std::collections::BTreeMap<String, f64>,
+    pub recording: Recording,
+}
+
+/// A dataset: a motor and its recordings.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    pub dir: PathBuf,
+    pub name: String,
+    pub synthetic: bool,
+    pub description: Option<String>,
+    pub motor: MotorSection,
+    pub p_atm_pa: f64,
+    pub temperature_k: f64,
+    pub experiments: Vec<ExperimentData>,
+}
+
+impl Dataset {
+    /// Reads `<dir>/rig.toml` and every recording it names.
+    pub fn load(dir: &Path) -> Result<Self, DataError> {
+        let rig_path = dir.join("rig.toml");
+        if !dir.is_dir() {
+            return Err(DataError::new(dir, "dataset folder not found"));
+        }
+        let text = std::fs::read_to_string(&rig_path)
+            .map_err(|e| DataError::new(&rig_path, format!("cannot read: {e}")))?;
+        let rig: RigFile =
+            toml::from_str(&text).map_err(|e| locate_toml_error(&rig_path, &text, &e))?;
+        check_rig(&rig_path, &rig)?;
+        let p_atm_pa = rig.conditions.p_atm_pa;
+        let mut experiments = Vec::with_capacity(rig.experiment.len());
+        for ex in &rig.experiment {
+            let recording = Recording::read(&dir.join(&ex.file), p_atm_pa)?;
+            let data = ExperimentData {
+                kind: ex.kind,
+                file: ex.file.clone(),
+                p_supply_pa: ex.p_supply_mpa.map(|p| p * 1e6),
+                load: match ex.load {
+                    None | Some(LoadSection::None) => Load::None,
+                    Some(LoadSection::ViscousBrake { c_nm_s_rad }) => {
+                        Load::ViscousBrake { c_nm_s_rad }
+                    }
+                    Some(LoadSection::Torque { t_nm }) => Load::Torque { t_nm },
+                },
+                weight: ex.weight.unwrap_or(1.0),
+                channel_weights: ex.weights.clone().unwrap_or_default(),
+                recording,
+            };
+            check_experiment(&data)?;
+            experiments.push(data);
+        }
+        Ok(Dataset {
+            dir: dir.to_path_buf(),
+            name: dir
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            synthetic: rig.synthetic,
+            description: rig.description,
+            motor: rig.motor,
+            p_atm_pa,
+            temperature_k: rig.conditions.temperature_k,
+            experiments,
+        })
+    }
+}
+
+fn locate_toml_error(path: &Path, text: &str, e: &toml::de::Error) -> DataError {
+    let mut err = DataError::new(path, e.message().to_string());
+    if let Some(span) = e.span() {
+        let before = &text[..span.start.min(text.len())];
+        let line = before.matches('\n').count() as u64 + 1;
+        let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0);
+        err = err.at(line);
+        let token = text[span.start.min(text.len())..span.end.min(text.len())]
+            .trim()
+            .to_string();
+        err.column = Some((col + 1, token));
+    }
+    err
+}
+
+fn check_rig(path: &Path, rig: &RigFile) -> Result<(), DataError> {
+    let c = &rig.conditions;
+    if !(c.p_atm_pa.is_finite() && (50e3..=150e3).contains(&c.p_atm_pa)) {
+        return Err(DataError::new(
+            path,
+            format!(
+                "conditions.p_atm_pa = {} Pa is not a plausible atmosphere (50 to 150 kPa)",
+                c.p_atm_pa
+            ),
+        ));
+    }
+    if !(c.temperature_k.is_finite() && c.temperature_k > 150.0 && c.temperature_k < 500.0) {
+        return Err(DataError::new(
+            path,
+            format!(
+                "conditions.temperature_k = {} K is not plausible",
+                c.temperature_k
+            ),
+        ));
+    }
+    if rig.experiment.is_empty() {
+        return Err(DataError::new(path, "no [[experiment]] tables"));
+    }
+    for ex in &rig.experiment {
+        if let Some(p) = ex.p_supply_mpa {
+            if !(p.is_finite() && p * 1e6 > c.p_atm_pa && p < 5.0) {
+                return Err(DataError::new(path, format!("experiment '{}': p_supply_mpa = {p} must be an absolute pressure above atmosphere and below 5 MPa", ex.file)));
+            }
+        }
+        let bad_weight = |w: f64| !(w.is_finite() && w >= 0.0);
+        if ex.weight.is_some_and(bad_weight)
+            || ex
+                .weights
+                .as_ref()
+                .is_some_and(|m| m.values().any(|w| bad_weight(*w)))
+        {
+            return Err(DataError::new(
+                path,
+                format!("experiment '{}': weights must be finite and >= 0", ex.file),
+            ));
+        }
+        match ex.load {
+            Some(LoadSection::ViscousBrake { c_nm_s_rad })
+                if !(c_nm_s_rad.is_finite() && c_nm_s_rad >= 0.0) =>
+            {
+                return Err(DataError::new(
+                    path,
+                    format!("experiment '{}': load c_nm_s_rad must be >= 0", ex.file),
+                ));
+            }
+            Some(LoadSection::Torque { t_nm }) if !t_nm.is_finite() => {
+                return Err(DataError::new(
+                    path,
+                    format!("experiment '{}': load t_nm must be finite", ex.file),
+                ));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Checks that an experiment has the columns its kind needs.
+fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
+    let rec = &ex.recording;
+    let need = |q: Quantity| rec.values(q).map(|_| ());
+    let outputs: &[Quantity] = match ex.kind {
+        Kind::Datasheet => {
+            need(Quantity::Speed)?;
+            if ex.p_supply_pa.is_none() && rec.column(Quantity::PPort1).is_none() {
+                return Err(DataError::new(
+                    &rec.file,
+                    "datasheet needs p_supply_mpa in rig.toml or a p_port1 column",
+                ));
+            }
+            &[Quantity::Torque, Quantity::Flow1, Quantity::Flow2]
+        }
+        Kind::PressureRamp => {
+            need(Quantity::Time)?;
+            need(Quantity::PPort1)?;
+            rec.check_spans(Quantity::PPort1, 0.05)?;
+            &[
+                Quantity::Flow1,
+                Quantity::Flow2,
+                Quantity::Speed,
+                Quantity::Torque,
+            ]
+        }
+        Kind::OutletThrottle => {
+            need(Quantity::Time)?;
+            need(Quantity::CPort2)?;
+            if ex.p_supply_pa.is_none() && rec.column(Quantity::PPort1).is_none() {
+                return Err(DataError::new(
+                    &rec.file,
+                    "outlet_throttle needs p_supply_mpa in rig.toml or a p_port1 column",
+                ));
+            }
+            let c = rec.values(Quantity::CPort2)?;
+            if let Some(k) = c.iter().position(|v| *v <= 0.0) {
+                let i = rec
+                    .columns
+                    .iter()
+                    .position(|c| c.quantity == Quantity::CPort2)
+                    .unwrap_or(0);
+                return Err(DataError::new(&rec.file, "conductance must be > 0")
+                    .at(rec.lines[k])
+                    .col(i, &rec.columns[i].name));
+            }
+            rec.check_spans(Quantity::CPort2, 0.05)?;
+            &[
+                Quantity::Flow1,
+                Quantity::Flow2,
+                Quantity::Speed,
+                Quantity::Torque,
+            ]
+        }
+    };
+    if !outputs.iter().any(|q| rec.column(*q).is_some()) {
+        let names: Vec<_> = outputs.iter().map(|q| q.prefix()).collect();
+        return Err(DataError::new(
+            &rec.file,
+            format!(
+                "{} has no measured channel (expected one of: {})",
+                ex.kind.id(),
+                names.join(", ")
+            ),
+        )
+        .at(1));
+    }
+    if ex.kind != Kind::Datasheet {
+        if let Some(p) = rec.column(Quantity::PPort1) {
+            if let Some(k) = p.si.iter().position(|v| *v <= 0.0) {
+                return Err(
+                    DataError::new(&rec.file, "absolute pressure must be > 0").at(rec.lines[k])
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Recording, DataError> {
+        Recording::parse(Path::new("x.csv"), text, 101_325.0)
+    }
+
+    #[test]
+    fn errors_name_line_and_column() {
+        let e = parse("t_s,flow1_g_s\n0,1.0\n0.1,abc\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.column.clone()),
+            (Some(3), Some((2, "flow1_g_s".into())))
+        );
+        assert_eq!(
+            e.to_string(),
+            "x.csv:3:2 (column 'flow1_g_s'): 'abc' is not a number (use '.' as decimal mark)"
+        );
+        let e = parse("t_s,flow1_g_s\n0,1.0\n0,2\n").unwrap_err();
+        assert_eq!(e.line, Some(3));
+        assert!(e.message.contains("time does not increase"));
+        let e = parse("t_s,flow1_cfm\n0,1\n").unwrap_err();
+        assert!(e.message.contains("unknown unit 'cfm'"), "{e}");
+        assert!(parse("").unwrap_err().message.contains("empty"));
+        assert!(parse("t_s,flow1_g_s\n")
+            .unwrap_err()
+            .message
+            .contains("no data rows"));
+        assert!(parse("t_s,flow1_g_s\n0,NaN\n")
+            .unwrap_err()
+            .message
+            .contains("finite"));
+    }
+
+    #[test]
+    fn gauge_pressure_uses_rig_atmosphere() {
+        let r =
+            Recording::parse(Path::new("x.csv"), "t_s,p_port1_bar_g\n0,6.0\n", 95_000.0).unwrap();
+        assert!((r.values(Quantity::PPort1).unwrap()[0] - 695_000.0).abs() < 1e-9);
+    }
+}

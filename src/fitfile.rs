@@ -1,0 +1,303 @@
+//! Fitted parameter sets as JSON, format `vanefit.fit/1` (SPEC §4): written by `fit`, read
+//! back by `simulate` and by other tools. Partial files mean defaults for the rest; unknown
+//! names, wrong units and non-physical values are refused with the file and line.
+
+use crate::effects::{Effect, EffectSet};
+use crate::params::{spec, MotorParams, ParamSet, PARAMS};
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+pub const FORMAT: &str = "vanefit.fit/1";
+
+/// A problem with a fit file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitFileError {
+    pub file: PathBuf,
+    pub line: Option<usize>,
+    pub message: String,
+}
+
+impl fmt::Display for FitFileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "{}:{l}: {}", self.file.display(), self.message),
+            None => write!(f, "{}: {}", self.file.display(), self.message),
+        }
+    }
+}
+
+impl std::error::Error for FitFileError {}
+
+/// One parameter's entry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParamEntry {
+    pub value: f64,
+    pub unit: String,
+    pub estimated: bool,
+    pub ci95: Option<[f64; 2]>,
+}
+
+/// Number of starts and how many converged.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct Starts {
+    pub total: usize,
+    pub converged: usize,
+}
+
+/// Cost evaluations, wall time and threads of the run that made the fit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct RunInfo {
+    pub evaluations: u64,
+    pub wall_s: f64,
+    pub threads: usize,
+}
+
+/// A complete fit file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitFile {
+    pub dataset: String,
+    pub effects: EffectSet,
+    pub params: MotorParams,
+    /// Names of the estimated parameters.
+    pub estimated: Vec<String>,
+    /// 95% intervals by name (absent: not computed).
+    pub ci95: Vec<(String, [f64; 2])>,
+    pub cost: Option<f64>,
+    pub starts: Option<Starts>,
+    pub seed: Option<u64>,
+    pub run: Option<RunInfo>,
+}
+
+impl FitFile {
+    /// A fit file holding plain parameters (nothing estimated).
+    pub fn from_params(dataset: &str, params: MotorParams, effects: EffectSet) -> Self {
+        Self {
+            dataset: dataset.to_string(),
+            effects,
+            params,
+            estimated: Vec::new(),
+            ci95: Vec::new(),
+            cost: None,
+            starts: None,
+            seed: None,
+            run: None,
+        }
+    }
+
+    /// The JSON document (parameters in the fixed order of `params::PARAMS`; effect
+    /// parameters only for the effects switched on).
+    pub fn to_json(&self) -> Value {
+        let mut parameters = Map::new();
+        for s in PARAMS {
+            if s.effect.is_some_and(|e| !self.effects.contains(e)) {
+                continue;
+            }
+            let ci = self.ci95.iter().find(|(n, _)| n == s.name).map(|(_, c)| *c);
+            let entry = ParamEntry {
+                value: self.params.get(s.name).unwrap_or(s.default),
+                unit: s.unit.to_string(),
+                estimated: self.estimated.iter().any(|n| n == s.name),
+                ci95: ci,
+            };
+            parameters.insert(
+                s.name.to_string(),
+                serde_json::to_value(entry).expect("plain data"),
+            );
+        }
+        let mut doc = Map::new();
+        doc.insert("format".into(), FORMAT.into());
+        doc.insert("dataset".into(), self.dataset.clone().into());
+        doc.insert(
+            "model".into(),
+            serde_json::json!({ "effects": self.effects.ids() }),
+        );
+        doc.insert("parameters".into(), Value::Object(parameters));
+        doc.insert("cost".into(), self.cost.map_or(Value::Null, Value::from));
+        doc.insert(
+            "starts".into(),
+            serde_json::to_value(self.starts).expect("plain data"),
+        );
+        doc.insert("seed".into(), self.seed.map_or(Value::Null, Value::from));
+        doc.insert(
+            "run".into(),
+            serde_json::to_value(self.run).expect("plain data"),
+        );
+        doc.insert("version".into(), env!("CARGO_PKG_VERSION").into());
+        Value::Object(doc)
+    }
+
+    /// Writes the file atomically (temporary file, then rename).
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(&self.to_json()).expect("plain data") + "\n";
+        crate::fsutil::write_atomic(path, text.as_bytes())
+    }
+
+    /// Reads a fit file from disk.
+    pub fn read(path: &Path) -> Result<Self, FitFileError> {
+        let text = std::fs::read_to_string(path).map_err(|e| FitFileError {
+            file: path.to_path_buf(),
+            line: None,
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::parse(path, &text)
+    }
+
+    /// Parses fit-file text (`path` is used in messages only).
+    pub fn parse(path: &Path, text: &str) -> Result<Self, FitFileError> {
+        let fail = |line: Option<usize>, message: String| FitFileError {
+            file: path.to_path_buf(),
+            line,
+            message,
+        };
+        let line_of = |needle: &str| text.lines().position(|l| l.contains(needle)).map(|i| i + 1);
+        let doc: Value = serde_json::from_str(text)
+            .map_err(|e| fail(Some(e.line()), format!("not valid JSON: {e}")))?;
+        let obj = doc
+            .as_object()
+            .ok_or_else(|| fail(None, "expected a JSON object".into()))?;
+        if let Some(f) = obj.get("format") {
+            if f.as_str() != Some(FORMAT) {
+                return Err(fail(
+                    line_of("\"format\""),
+                    format!("format {f} is not \"{FORMAT}\""),
+                ));
+            }
+        }
+        let effects = match obj.get("model").and_then(|m| m.get("effects")) {
+            None | Some(Value::Null) => EffectSet::empty(),
+            Some(Value::Array(ids)) => ids
+                .iter()
+                .map(|v| {
+                    v.as_str()
+                        .ok_or_else(|| "effect ids must be strings".to_string())
+                        .and_then(|s| s.parse::<Effect>())
+                })
+                .collect::<Result<EffectSet, _>>()
+                .map_err(|m| fail(line_of("\"effects\""), m))?,
+            Some(_) => {
+                return Err(fail(
+                    line_of("\"effects\""),
+                    "model.effects must be a list of ids".into(),
+                ))
+            }
+        };
+        let mut set = ParamSet::default();
+        let mut estimated = Vec::new();
+        let mut ci95 = Vec::new();
+        let params = match obj.get("parameters") {
+            None => Map::new(),
+            Some(Value::Object(m)) => m.clone(),
+            Some(_) => {
+                return Err(fail(
+                    line_of("\"parameters\""),
+                    "parameters must be an object".into(),
+                ))
+            }
+        };
+        for (name, entry) in &params {
+            let here = line_of(&format!("\"{name}\""));
+            let s = spec(name).ok_or_else(|| fail(here, format!("unknown parameter '{name}'")))?;
+            let (value, unit, est, ci) = match entry {
+                Value::Number(n) => (n.as_f64(), None, false, None),
+                Value::Object(o) => (
+                    o.get("value").and_then(Value::as_f64),
+                    o.get("unit").and_then(Value::as_str),
+                    o.get("estimated").and_then(Value::as_bool).unwrap_or(false),
+                    o.get("ci95")
+                        .and_then(|c| serde_json::from_value::<[f64; 2]>(c.clone()).ok()),
+                ),
+                _ => (None, None, false, None),
+            };
+            let value = value.ok_or_else(|| {
+                fail(
+                    here,
+                    format!("parameter '{name}' needs a numeric \"value\""),
+                )
+            })?;
+            if let Some(u) = unit {
+                if u != s.unit {
+                    return Err(fail(here, format!("parameter '{name}' has unit '{u}', expected '{}' (no conversion is done)", s.unit)));
+                }
+            }
+            set.set(name, value)
+                .map_err(|e| fail(here, e.to_string()))?;
+            if est {
+                estimated.push(name.clone());
+            }
+            if let Some(c) = ci {
+                ci95.push((name.clone(), c));
+            }
+        }
+        let params = set
+            .check()
+            .map_err(|e| fail(line_of(&format!("\"{}\"", e.name)), e.to_string()))?;
+        Ok(FitFile {
+            dataset: obj
+                .get("dataset")
+                .and_then(Value::as_str)
+                .unwrap_or_default()
+                .to_string(),
+            effects,
+            params,
+            estimated,
+            ci95,
+            cost: obj.get("cost").and_then(Value::as_f64),
+            starts: obj
+                .get("starts")
+                .and_then(|v| serde_json::from_value(v.clone()).ok()),
+            seed: obj.get("seed").and_then(Value::as_u64),
+            run: obj
+                .get("run")
+                .and_then(|v| serde_json::from_value(v.clone()).ok()),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_keeps_every_value() {
+        let p = MotorParams::default()
+            .with("c_1e", 1.234567890123e-9)
+            .unwrap();
+        let mut f = FitFile::from_params("demo", p, EffectSet::empty().with(Effect::SensorLag));
+        f.estimated = vec!["c_1e".into()];
+        f.ci95 = vec![("c_1e".into(), [1e-9, 1.5e-9])];
+        f.cost = Some(3.5);
+        let text = serde_json::to_string_pretty(&f.to_json()).unwrap();
+        let back = FitFile::parse(Path::new("f.json"), &text).unwrap();
+        assert_eq!(back.params, f.params);
+        assert_eq!(back.effects, f.effects);
+        assert_eq!(back.estimated, f.estimated);
+        assert_eq!(back.ci95, f.ci95);
+        assert_eq!(back.cost, Some(3.5));
+    }
+
+    #[test]
+    fn partial_file_means_defaults_and_unknown_names_fail_with_line() {
+        let f = FitFile::parse(
+            Path::new("f.json"),
+            r#"{"parameters": {"visc": {"value": 1e-4}}}"#,
+        )
+        .unwrap();
+        assert_eq!(f.params.visc, 1e-4);
+        assert_eq!(f.params.c_in1, MotorParams::default().c_in1);
+        let text = "{\n \"parameters\": {\n  \"c_in1\": 7e-9,\n  \"c_magic\": 1\n }\n}";
+        let e = FitFile::parse(Path::new("f.json"), text).unwrap_err();
+        assert_eq!(e.line, Some(4));
+        assert!(e.message.contains("unknown parameter 'c_magic'"));
+        let e =
+            FitFile::parse(Path::new("f.json"), r#"{"parameters": {"vol1": -2e-6}}"#).unwrap_err();
+        assert!(e.message.contains("vol1"));
+        let e = FitFile::parse(
+            Path::new("f.json"),
+            r#"{"parameters": {"vol1": {"value": 2e-6, "unit": "l"}}}"#,
+        )
+        .unwrap_err();
+        assert!(e.message.contains("unit 'l'"));
+    }
+}

@@ -1,0 +1,304 @@
+//! The motor model: parameters → state derivatives (SPEC §1, paper Figs. 7 and 8).
+//!
+//! State x = [p_1, p_2, p_e, ω]: the pressures (Pa) of the three isothermal lumped volumes
+//! at the stator inlets and the rotor speed (rad/s). Pressures are states rather than masses
+//! because they are better scaled for the integrator; with constant volume and temperature
+//! dm/dt = Σṁ is the same equation as dp/dt = R·T0/V · Σṁ (paper eqs. 14–15).
+//!
+//! Flow paths (ISO 6358 nozzles, `nozzle`):
+//! port 1 → in_1 → V_1; V_2 → out_2 → port 2; V_e → EXT → atmosphere;
+//! leakage V_1 → V_e (1_Ext), V_2 → V_e (2_Ext), V_1 → V_2 (1_2);
+//! plus the displacement flows of the ideal motor (`thermo`).
+//! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (SPEC §1.5).
+
+use crate::constants::RT0;
+use crate::effects::{Effect, EffectSet};
+use crate::friction;
+use crate::nozzle::{series_flow, Nozzle};
+use crate::params::MotorParams;
+use crate::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
+use std::f64::consts::PI;
+
+/// Number of ODE states.
+pub const N_STATES: usize = 4;
+/// State vector [p_1 (Pa), p_2 (Pa), p_e (Pa), ω (rad/s)].
+pub type State = [f64; N_STATES];
+
+/// Index of each state in [`State`].
+pub mod idx {
+    pub const P1: usize = 0;
+    pub const P2: usize = 1;
+    pub const PE: usize = 2;
+    pub const OMEGA: usize = 3;
+}
+
+/// Mechanical load on the shaft.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Load {
+    /// Free shaft.
+    #[default]
+    None,
+    /// Eddy-current brake: T_load = c·ω (c in N·m·s/rad).
+    ViscousBrake { c_nm_s_rad: f64 },
+    /// Constant torque opposing forward rotation, N·m (an active load).
+    Torque { t_nm: f64 },
+}
+
+impl Load {
+    /// Load torque at speed ω, N·m.
+    pub fn torque(&self, omega: f64) -> f64 {
+        match *self {
+            Load::None => 0.0,
+            Load::ViscousBrake { c_nm_s_rad } => c_nm_s_rad * omega,
+            Load::Torque { t_nm } => t_nm,
+        }
+    }
+}
+
+/// What the surroundings impose on the motor at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Boundary {
+    /// Absolute pressure upstream of port 1, Pa (supply, or atmosphere when reversed).
+    pub p_port1_pa: f64,
+    /// Absolute pressure downstream of port 2, Pa (atmosphere, or supply when reversed).
+    pub p_port2_pa: f64,
+    /// Atmosphere that the exhaust port discharges to, Pa.
+    pub p_atm_pa: f64,
+    /// Extra nozzle in series in front of port 1 (inlet throttling), m³/(s·Pa).
+    pub c_port1_m3_s_pa: Option<f64>,
+    /// Extra nozzle in series behind port 2 (outlet throttling), m³/(s·Pa).
+    pub c_port2_m3_s_pa: Option<f64>,
+    pub load: Load,
+}
+
+impl Boundary {
+    /// Supply at port 1, port 2 and exhaust to atmosphere.
+    pub fn supplied(p_supply_pa: f64, p_atm_pa: f64, load: Load) -> Self {
+        Self {
+            p_port1_pa: p_supply_pa,
+            p_port2_pa: p_atm_pa,
+            p_atm_pa,
+            c_port1_m3_s_pa: None,
+            c_port2_m3_s_pa: None,
+            load,
+        }
+    }
+}
+
+/// Every flow and torque at one state: the balances behind the derivatives.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Balance {
+    /// Mass flow into the motor at port 1, kg/s.
+    pub flow_port1_kg_s: f64,
+    /// Mass flow out of the motor at port 2, kg/s.
+    pub flow_port2_kg_s: f64,
+    /// Mass flow out of the exhaust port, kg/s.
+    pub flow_exhaust_kg_s: f64,
+    /// Leakage V_1 → V_e, V_2 → V_e, V_1 → V_2, kg/s.
+    pub leak_1e_kg_s: f64,
+    pub leak_2e_kg_s: f64,
+    pub leak_12_kg_s: f64,
+    pub displacement: DisplacementFlows,
+    /// Net mass flow into V_1, V_2, V_e, kg/s.
+    pub dm1_kg_s: f64,
+    pub dm2_kg_s: f64,
+    pub dme_kg_s: f64,
+    /// Torque of the ideal motor, N·m.
+    pub torque_ideal_nm: f64,
+    /// Friction torque (all friction terms), N·m.
+    pub torque_friction_nm: f64,
+    /// Load torque, N·m.
+    pub torque_load_nm: f64,
+}
+
+impl Balance {
+    /// Shaft torque T − T_f, N·m: what a brake measures at steady speed.
+    pub fn torque_shaft_nm(&self) -> f64 {
+        self.torque_ideal_nm - self.torque_friction_nm
+    }
+}
+
+/// A motor model: checked parameters plus the effects switched on.
+#[derive(Debug, Clone)]
+pub struct Motor {
+    pub params: MotorParams,
+    pub effects: EffectSet,
+    cycle: Cycle,
+}
+
+impl Motor {
+    pub fn new(params: MotorParams, effects: EffectSet) -> Self {
+        let cycle = Cycle {
+            vanes: params.z.round(),
+            v_fill_m3: params.v_disp / params.z.round(),
+            v_dead_m3: params.v_dead,
+            eps: params.eps,
+            n_poly: params.n_poly,
+        };
+        Self {
+            params,
+            effects,
+            cycle,
+        }
+    }
+
+    /// The base model with default parameters (motor AR034-11).
+    pub fn default_motor() -> Self {
+        Self::new(MotorParams::default(), EffectSet::empty())
+    }
+
+    pub fn cycle(&self) -> &Cycle {
+        &self.cycle
+    }
+
+    fn nozzle(&self, c: f64) -> Nozzle {
+        Nozzle::new(c, self.params.b_crit)
+    }
+
+    /// Leakage conductance multiplier (`speed_dependent_leakage`):
+    /// 1 + g/(1 + (ω/ω_seal)²), 1 in the base model.
+    fn leak_factor(&self, omega: f64) -> f64 {
+        if self.effects.contains(Effect::SpeedDependentLeakage) {
+            let p = &self.params;
+            1.0 + p.g_seal / (1.0 + (omega / p.w_seal).powi(2))
+        } else {
+            1.0
+        }
+    }
+
+    /// Pressure a compartment is filled to (`incomplete_filling`):
+    /// p_e + (p_inlet − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²); p_inlet in the base model.
+    fn filling_pressure(&self, p_inlet: f64, p_e: f64, omega: f64) -> f64 {
+        if self.effects.contains(Effect::IncompleteFilling) {
+            let eta = 1.0 / (1.0 + (omega / self.params.w_fill).powi(2));
+            p_e + (p_inlet - p_e) * eta
+        } else {
+            p_inlet
+        }
+    }
+
+    /// Mass carried back in the dead volume (`dead_volume_carryover`), kg/s:
+    /// p_discharge·V_carry·z·|ω|/(2π·RT).
+    fn carryover(&self, p_discharge: f64, omega: f64) -> f64 {
+        if self.effects.contains(Effect::DeadVolumeCarryover) {
+            p_discharge * self.params.v_carry * self.cycle.vanes * omega.abs() / (2.0 * PI * RT0)
+        } else {
+            0.0
+        }
+    }
+
+    /// All friction torques at speed ω, N·m (base Coulomb + viscous, or the effects).
+    pub fn friction_torque(&self, omega: f64, p_inlet: f64, p_e: f64) -> f64 {
+        let p = &self.params;
+        let mut t_coulomb = p.t_coulomb;
+        if self.effects.contains(Effect::PressureDependentFriction) {
+            t_coulomb += p.k_fric_p * (p_inlet - p_e).max(0.0);
+        }
+        let mut t = if self.effects.contains(Effect::BreakawayFriction) {
+            let t_static = p.t_static + (t_coulomb - p.t_coulomb);
+            friction::stribeck(omega, t_coulomb, t_static, p.w_stribeck, p.visc, p.w_reg)
+        } else {
+            friction::coulomb_viscous(omega, t_coulomb, p.visc, p.w_reg)
+        };
+        if self.effects.contains(Effect::VaneFrictionSpeedSquared) {
+            t += p.c_w2 * omega * omega.abs();
+        }
+        t
+    }
+
+    /// Torque of the ideal motor with the forward/reverse blend of SPEC §1.2, N·m.
+    fn ideal_torque(&self, p1: f64, p2: f64, pe: f64, omega: f64) -> f64 {
+        let w_fwd = forward_weight(omega);
+        let fill_fwd = self.filling_pressure(p1, pe, omega);
+        let fill_rev = self.filling_pressure(p2, pe, omega);
+        let t_fwd = self.cycle.torque_one_way(fill_fwd, p2, pe);
+        let t_rev = -self.cycle.torque_one_way(fill_rev, p1, pe);
+        w_fwd * t_fwd + (1.0 - w_fwd) * t_rev
+    }
+
+    /// Evaluates every flow and torque at state `x` under boundary `bc`.
+    pub fn balance(&self, x: &State, bc: &Boundary) -> Balance {
+        let p = &self.params;
+        let [p1, p2, pe, omega] = *x;
+        let flow_port1_kg_s = self.port_flow(p.c_in1, bc.c_port1_m3_s_pa, bc.p_port1_pa, p1);
+        let flow_port2_kg_s = self.port_flow(p.c_out2, bc.c_port2_m3_s_pa, p2, bc.p_port2_pa);
+        let flow_exhaust_kg_s = self.nozzle(p.c_ext).flow(pe, bc.p_atm_pa);
+        let leak = self.leak_factor(omega);
+        let leak_1e_kg_s = self.nozzle(p.c_1e * leak).flow(p1, pe);
+        let leak_2e_kg_s = self.nozzle(p.c_2e * leak).flow(p2, pe);
+        let leak_12_kg_s = self.nozzle(p.c_12 * leak).flow(p1, p2);
+        let (p_in, p_dis) = if omega >= 0.0 { (p1, p2) } else { (p2, p1) };
+        let displacement = displacement_flows(
+            &self.cycle,
+            omega,
+            self.filling_pressure(p_in, pe, omega),
+            pe,
+            self.carryover(p_dis, omega),
+        );
+        Balance {
+            flow_port1_kg_s,
+            flow_port2_kg_s,
+            flow_exhaust_kg_s,
+            leak_1e_kg_s,
+            leak_2e_kg_s,
+            leak_12_kg_s,
+            displacement,
+            dm1_kg_s: flow_port1_kg_s - leak_1e_kg_s - leak_12_kg_s + displacement.into_1_kg_s,
+            dm2_kg_s: leak_12_kg_s - flow_port2_kg_s - leak_2e_kg_s + displacement.into_2_kg_s,
+            dme_kg_s: leak_1e_kg_s + leak_2e_kg_s - flow_exhaust_kg_s + displacement.into_e_kg_s,
+            torque_ideal_nm: self.ideal_torque(p1, p2, pe, omega),
+            torque_friction_nm: self.friction_torque(omega, p_in, pe),
+            torque_load_nm: bc.load.torque(omega),
+        }
+    }
+
+    /// Flow through a duct with an optional throttle in series, from `p_a` to `p_b`, kg/s.
+    fn port_flow(&self, c_duct: f64, c_throttle: Option<f64>, p_a: f64, p_b: f64) -> f64 {
+        let duct = self.nozzle(c_duct);
+        match c_throttle {
+            None => duct.flow(p_a, p_b),
+            Some(c) => series_flow(&duct, &self.nozzle(c), p_a, p_b).0,
+        }
+    }
+
+    /// Time derivatives of the state, dx/dt (paper eqs. 14–15 and SPEC §1.5).
+    pub fn derivatives(&self, x: &State, bc: &Boundary) -> State {
+        let b = self.balance(x, bc);
+        self.derivatives_from(&b)
+    }
+
+    /// dx/dt from an already evaluated balance.
+    pub fn derivatives_from(&self, b: &Balance) -> State {
+        let p = &self.params;
+        [
+            RT0 / p.vol1 * b.dm1_kg_s,
+            RT0 / p.vol2 * b.dm2_kg_s,
+            RT0 / p.vole * b.dme_kg_s,
+            (b.torque_ideal_nm - b.torque_friction_nm - b.torque_load_nm) / p.inertia,
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volumes_store_exactly_what_the_ports_exchange() {
+        let m = Motor::default_motor();
+        let bc = Boundary::supplied(7.3e5, 1.01325e5, Load::None);
+        for x in [
+            [6e5, 1.5e5, 1.3e5, 800.0],
+            [3e5, 4e5, 2e5, -300.0],
+            [2e5, 1e5, 1e5, 0.0],
+        ] {
+            let b = m.balance(&x, &bc);
+            let stored = b.dm1_kg_s + b.dm2_kg_s + b.dme_kg_s;
+            let exchanged = b.flow_port1_kg_s - b.flow_port2_kg_s - b.flow_exhaust_kg_s;
+            assert!(
+                (stored - exchanged).abs() < 1e-15,
+                "{stored} vs {exchanged}"
+            );
+        }
+    }
+}

@@ -1,0 +1,150 @@
+//! Steady operating points by Newton's method on the balances (mass at V_1, V_2, V_e and,
+//! when speed is free, torque), globalised by pseudo-transient continuation: each step solves
+//! (I/Δt − J)·Δx = f(x) with Δt growing as the residual falls (switched evolution relaxation),
+//! so that far from the solution it follows the physical transient and near it it is Newton.
+
+use crate::motor::{idx, Boundary, Motor, State, N_STATES};
+use nalgebra::{SMatrix, SVector};
+use std::fmt;
+
+/// What the steady solver could not do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteadyError(pub String);
+
+impl fmt::Display for SteadyError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "no steady state: {}", self.0)
+    }
+}
+
+impl std::error::Error for SteadyError {}
+
+/// Typical magnitude of each state (for steps and convergence).
+const SCALE: State = [1e5, 1e5, 1e5, 100.0];
+
+/// Steady state at an imposed speed ω (the datasheet experiment): pressures that close the
+/// three mass balances. `guess` seeds the iteration (its ω is replaced).
+pub fn at_speed(
+    motor: &Motor,
+    bc: &Boundary,
+    omega: f64,
+    guess: &State,
+) -> Result<State, SteadyError> {
+    let mut x0 = *guess;
+    x0[idx::OMEGA] = omega;
+    solve(motor, bc, x0, true)
+}
+
+/// Steady state with the speed free (torque balanced by friction and load).
+pub fn free(motor: &Motor, bc: &Boundary, guess: &State) -> Result<State, SteadyError> {
+    solve(motor, bc, *guess, false)
+}
+
+/// A first guess: inlet at supply, the rest at atmosphere, standing still.
+pub fn initial_guess(bc: &Boundary) -> State {
+    [bc.p_port1_pa, bc.p_port2_pa, bc.p_atm_pa, 0.0]
+}
+
+fn solve(motor: &Motor, bc: &Boundary, x0: State, speed_fixed: bool) -> Result<State, SteadyError> {
+    let n_free = if speed_fixed { 3 } else { 4 };
+    let f = |x: &State| motor.derivatives(x, bc);
+    let mut x = x0;
+    let mut fx = f(&x);
+    let mut res = residual_norm(&fx, n_free);
+    let mut dt = 1e-3;
+    for _ in 0..200 {
+        if res == 0.0 {
+            return Ok(x);
+        }
+        let jac = jacobian(&f, &x, &fx, n_free);
+        let mut a = SMatrix::<f64, 4, 4>::identity() / dt - jac;
+        let mut rhs = SVector::<f64, 4>::from(fx);
+        if speed_fixed {
+            a.fill_row(idx::OMEGA, 0.0);
+            a.fill_column(idx::OMEGA, 0.0);
+            a[(idx::OMEGA, idx::OMEGA)] = 1.0;
+            rhs[idx::OMEGA] = 0.0;
+        }
+        let Some(dx) = a.lu().solve(&rhs) else {
+            dt *= 0.1;
+            continue;
+        };
+        let mut step = 1.0;
+        let (x_new, f_new, res_new) = loop {
+            let cand: State = std::array::from_fn(|i| x[i] + step * dx[i]);
+            if cand[..3].iter().all(|p| *p > 0.0) {
+                let fc = f(&cand);
+                let rc = residual_norm(&fc, n_free);
+                if rc.is_finite() {
+                    break (cand, fc, rc);
+                }
+            }
+            step *= 0.5;
+            if step < 1e-6 {
+                return Err(SteadyError("pressures would turn negative".into()));
+            }
+        };
+        let small_step =
+            (0..n_free).all(|i| (step * dx[i]).abs() <= 1e-10 * x_new[i].abs().max(SCALE[i]));
+        dt = if res_new == 0.0 {
+            1e12
+        } else {
+            (dt * (res / res_new).clamp(0.2, 1e3)).min(1e12)
+        };
+        x = x_new;
+        fx = f_new;
+        res = res_new;
+        if small_step && dt > 1.0 {
+            return Ok(x);
+        }
+    }
+    Err(SteadyError(format!(
+        "not converged after 200 iterations (residual {res:.3e})"
+    )))
+}
+
+/// Residual in state units per second, each scaled by its typical magnitude.
+fn residual_norm(fx: &State, n_free: usize) -> f64 {
+    (0..n_free)
+        .map(|i| (fx[i] / SCALE[i]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+fn jacobian(
+    f: &dyn Fn(&State) -> State,
+    x: &State,
+    fx: &State,
+    n_free: usize,
+) -> SMatrix<f64, 4, 4> {
+    let mut jac = SMatrix::<f64, 4, 4>::zeros();
+    for j in 0..n_free {
+        let h = 1e-7 * x[j].abs().max(SCALE[j]);
+        let mut xh = *x;
+        xh[j] += h;
+        let fh = f(&xh);
+        for i in 0..N_STATES {
+            jac[(i, j)] = (fh[i] - fx[i]) / h;
+        }
+    }
+    jac
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motor::Load;
+
+    #[test]
+    fn steady_state_closes_every_balance() {
+        let m = Motor::default_motor();
+        let bc = Boundary::supplied(7.3e5, 101_325.0, Load::ViscousBrake { c_nm_s_rad: 2e-4 });
+        let x = free(&m, &bc, &initial_guess(&bc)).unwrap();
+        let d = m.derivatives(&x, &bc);
+        for i in 0..3 {
+            assert!(d[i].abs() < 1e-3, "dp{i}/dt = {}", d[i]);
+        }
+        assert!(d[3].abs() < 1e-6);
+        assert!(x[idx::OMEGA] > 100.0);
+    }
+}
