@@ -122,6 +122,24 @@ impl Experiment {
         })
     }
 
+    /// The abscissa of each recorded row, SI, as the reference responses use it: imposed
+    /// speed (rad/s) for the datasheet, port-1 pressure (Pa) for the pressure ramp, log10 of
+    /// the port-2 conductance (log10 m³/(s·Pa)) for the outlet throttle. For transient
+    /// experiments it is the smoothed input that drove the simulation, not the noisy samples.
+    pub fn abscissa(&self) -> Vec<f64> {
+        match &self.drive {
+            Drive::Datasheet { speeds, .. } => speeds.clone(),
+            Drive::Transient {
+                times,
+                p_supply,
+                log10_c_port2,
+            } => match (self.kind, log10_c_port2) {
+                (Kind::OutletThrottle, Some(c)) => times.iter().map(|t| c.at(*t)).collect(),
+                _ => times.iter().map(|t| p_supply.at(*t)).collect(),
+            },
+        }
+    }
+
     /// Boundary conditions of a transient experiment at time t.
     fn boundary_at(&self, p_supply: &Schedule, log10_c: Option<&Schedule>, t: f64) -> Boundary {
         let mut bc = Boundary::supplied(
