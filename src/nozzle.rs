@@ -62,45 +62,167 @@ impl Nozzle {
 
 /// Steady flow through two restrictions in series with no volume between them, kg/s, and
 /// the pressure between them, Pa. The intermediate pressure is the root of
-/// `first.flow(p_a, p_m) = second.flow(p_m, p_b)`, which is unique because the left side
-/// falls and the right side rises with p_m; it is bracketed by [min, max] of p_a and p_b and
-/// found by bisection refined with the Illinois false-position step.
+/// g(p_m) = first.flow(p_a, p_m) − second.flow(p_m, p_b), unique because g falls strictly
+/// with p_m; it is bracketed by [min, max] of p_a and p_b and found by Newton's method with
+/// the analytic slope, falling back to bisection whenever a step leaves the bracket.
 pub fn series_flow(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64, f64) {
+    let closed = if p_a > p_b {
+        series_closed_form(first, second, p_a, p_b)
+    } else {
+        series_closed_form(second, first, p_b, p_a)
+    };
+    if let Some(p_m) = closed {
+        return (0.5 * (first.flow(p_a, p_m) + second.flow(p_m, p_b)), p_m);
+    }
+    series_newton(first, second, p_a, p_b)
+}
+
+/// Closed-form intermediate pressure for flow from `p_u` through `up` then `down` to `p_d`
+/// (p_u > p_d) when neither nozzle is in its laminar range. In the choked and subsonic
+/// ranges the squared flow is a quadratic polynomial in the pressures,
+/// ṁ² = (C·ρ0)²·(p_u² − ((p_d − b·p_u)/(1 − b))²) or (C·ρ0·p_u)², so ṁ_up² = ṁ_down² is a
+/// quadratic in p_m for each of the four regime pairs; the root that lies inside its own
+/// regimes is the solution (it is unique, as the flow balance has one root). `None` when
+/// the root lies in a laminar range.
+fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<f64> {
+    let (k1, k2) = (
+        (up.c_m3_s_pa * RHO0_KG_M3).powi(2),
+        (down.c_m3_s_pa * RHO0_KG_M3).powi(2),
+    );
+    let (b1, b2) = (up.b_crit, down.b_crit);
+    let (s1, s2) = (1.0 / (1.0 - b1).powi(2), 1.0 / (1.0 - b2).powi(2));
+    for up_choked in [false, true] {
+        // ṁ_up² = a1·p² + b1·p + c1 as a polynomial in p = p_m.
+        let (a1, l1, c1) = if up_choked {
+            (0.0, 0.0, k1 * p_u * p_u)
+        } else {
+            (
+                -k1 * s1,
+                2.0 * k1 * s1 * b1 * p_u,
+                k1 * p_u * p_u * (1.0 - b1 * b1 * s1),
+            )
+        };
+        for down_choked in [false, true] {
+            let (a2, l2, c2) = if down_choked {
+                (k2, 0.0, 0.0)
+            } else {
+                (
+                    k2 * (1.0 - b2 * b2 * s2),
+                    2.0 * k2 * s2 * b2 * p_d,
+                    -k2 * s2 * p_d * p_d,
+                )
+            };
+            let in_regimes = |p: f64| {
+                let up_ok = if up_choked {
+                    p <= b1 * p_u
+                } else {
+                    p > b1 * p_u && p <= R_LAMINAR * p_u
+                };
+                let down_ok = if down_choked {
+                    p_d <= b2 * p
+                } else {
+                    p_d > b2 * p && p_d <= R_LAMINAR * p
+                };
+                p > p_d && p < p_u && up_ok && down_ok
+            };
+            if let Some(p) = quadratic_roots(a1 - a2, l1 - l2, c1 - c2)
+                .into_iter()
+                .flatten()
+                .find(|p| in_regimes(*p))
+            {
+                return Some(p);
+            }
+        }
+    }
+    None
+}
+
+/// Real roots of a·x² + b·x + c = 0, computed without cancellation.
+fn quadratic_roots(a: f64, b: f64, c: f64) -> [Option<f64>; 2] {
+    if a.abs() <= 1e-14 * (b.abs() + c.abs() / 1e5) {
+        return [(b != 0.0).then(|| -c / b), None];
+    }
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return [None, None];
+    }
+    let q = -0.5 * (b + b.signum() * disc.sqrt());
+    [Some(q / a), (q != 0.0).then(|| c / q)]
+}
+
+/// Safeguarded Newton solve of the series balance (used in the laminar ranges).
+fn series_newton(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64, f64) {
     let (mut lo, mut hi) = (p_a.min(p_b), p_a.max(p_b));
-    let residual = |p_m: f64| first.flow(p_a, p_m) - second.flow(p_m, p_b);
-    let (mut f_lo, mut f_hi) = (residual(lo), residual(hi));
     if hi - lo <= 0.0 {
         return (0.0, p_a);
     }
-    // residual falls with p_m: f(lo) ≥ 0 ≥ f(hi).
-    let mut side = 0i8;
-    for _ in 0..100 {
-        let mut p_m = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
-        if !p_m.is_finite() || p_m <= lo || p_m >= hi {
-            p_m = 0.5 * (lo + hi);
-        }
-        let f = residual(p_m);
-        if f > 0.0 {
+    // Start from the exact answer for b = 0, where ṁ² = (C·ρ0)²·(p_u² − p_d²) per nozzle:
+    // p_m² = (C1²·p_a² + C2²·p_b²)/(C1² + C2²).
+    let (c1, c2) = (first.c_m3_s_pa.powi(2), second.c_m3_s_pa.powi(2));
+    let mut p_m = ((c1 * p_a * p_a + c2 * p_b * p_b) / (c1 + c2)).sqrt();
+    if !(p_m > lo && p_m < hi) {
+        p_m = 0.5 * (lo + hi);
+    }
+    for _ in 0..60 {
+        let (f1, _, d1_dm) = first.flow_with_slopes(p_a, p_m);
+        let (f2, d2_dm, _) = second.flow_with_slopes(p_m, p_b);
+        let g = f1 - f2;
+        if g > 0.0 {
             lo = p_m;
-            f_lo = f;
-            if side == 1 {
-                f_hi *= 0.5;
-            }
-            side = 1;
         } else {
             hi = p_m;
-            f_hi = f;
-            if side == -1 {
-                f_lo *= 0.5;
-            }
-            side = -1;
         }
-        if hi - lo <= 1e-10 * hi {
+        let slope = d1_dm - d2_dm;
+        let newton = p_m - g / slope;
+        let next = if slope < 0.0 && newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        let converged = (next - p_m).abs() <= 1e-12 * p_m || hi - lo <= 1e-12 * hi;
+        p_m = next;
+        if converged {
             break;
         }
     }
-    let p_m = 0.5 * (lo + hi);
     (0.5 * (first.flow(p_a, p_m) + second.flow(p_m, p_b)), p_m)
+}
+
+impl Nozzle {
+    /// Mass flow from `p_a` to `p_b` and its partial derivatives (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b),
+    /// in kg/s and kg/(s·Pa). With m = C·ρ0·p_u·ψ(r), r = p_d/p_u:
+    /// ∂m/∂p_d = C·ρ0·ψ'(r), ∂m/∂p_u = C·ρ0·(ψ − r·ψ'(r)).
+    pub fn flow_with_slopes(&self, p_a: f64, p_b: f64) -> (f64, f64, f64) {
+        let k = self.c_m3_s_pa * RHO0_KG_M3;
+        let (p_u, p_d, sign) = if p_a >= p_b {
+            (p_a, p_b, 1.0)
+        } else {
+            (p_b, p_a, -1.0)
+        };
+        if p_u <= 0.0 {
+            return (0.0, 0.0, 0.0);
+        }
+        let r = p_d / p_u;
+        let (ps, dps) = (psi(r, self.b_crit), psi_slope(r, self.b_crit));
+        let (m, dm_du, dm_dd) = (k * p_u * ps, k * (ps - r * dps), k * dps);
+        if sign > 0.0 {
+            (m, dm_du, dm_dd)
+        } else {
+            (-m, -dm_dd, -dm_du)
+        }
+    }
+}
+
+/// dψ/dr for 0 ≤ r ≤ 1 (finite everywhere thanks to the laminar branch).
+pub fn psi_slope(r: f64, b_crit: f64) -> f64 {
+    if r <= b_crit {
+        0.0
+    } else if r <= R_LAMINAR {
+        let x = (r - b_crit) / (1.0 - b_crit);
+        -x / ((1.0 - b_crit) * (1.0 - x * x).max(1e-300).sqrt())
+    } else {
+        -subsonic(R_LAMINAR, b_crit) / (1.0 - R_LAMINAR)
+    }
 }
 
 #[cfg(test)]
@@ -122,6 +244,57 @@ mod tests {
             let above = psi(R_LAMINAR + 1e-13, b);
             assert!((below - above).abs() < 1e-6);
             assert_eq!(psi(1.0, b), 0.0);
+        }
+    }
+
+    #[test]
+    fn slopes_match_finite_differences() {
+        let n = Nozzle::new(5e-9, 0.45);
+        for (pa, pb) in [
+            (6e5, 1e5),
+            (6e5, 4e5),
+            (3e5, 2.9995e5),
+            (2e5, 5e5),
+            (1e5, 1.00005e5),
+        ] {
+            let (m, da, db) = n.flow_with_slopes(pa, pb);
+            assert_eq!(m, n.flow(pa, pb));
+            let h = 1e-3;
+            let fd_a = (n.flow(pa + h, pb) - n.flow(pa - h, pb)) / (2.0 * h);
+            let fd_b = (n.flow(pa, pb + h) - n.flow(pa, pb - h)) / (2.0 * h);
+            assert!(
+                (da - fd_a).abs() <= 1e-5 * da.abs().max(1e-12),
+                "{pa} {pb}: {da} vs {fd_a}"
+            );
+            assert!(
+                (db - fd_b).abs() <= 1e-5 * db.abs().max(1e-12),
+                "{pa} {pb}: {db} vs {fd_b}"
+            );
+        }
+    }
+
+    #[test]
+    fn closed_form_series_agrees_with_newton_in_every_regime() {
+        let duct = Nozzle::new(6.758e-9, 0.5);
+        for c in [5e-8, 1e-8, 3e-9, 1e-9, 2e-10] {
+            let thr = Nozzle::new(c, 0.4);
+            for p_up in [1.02e5, 1.5e5, 2.5e5, 4e5, 8e5] {
+                for (a, b, pa, pb) in [
+                    (&duct, &thr, p_up, 1.01325e5),
+                    (&thr, &duct, 1.01325e5, p_up),
+                ] {
+                    let (flow, p_m) = series_flow(a, b, pa, pb);
+                    let (flow_n, p_m_n) = series_newton(a, b, pa, pb);
+                    assert!(
+                        (p_m - p_m_n).abs() < 1e-6 * p_m,
+                        "c {c:e} p {p_up}: {p_m} vs {p_m_n}"
+                    );
+                    assert!(
+                        (flow - flow_n).abs() < 1e-9 * flow.abs(),
+                        "{flow} vs {flow_n}"
+                    );
+                }
+            }
         }
     }
 
