@@ -1,0 +1,248 @@
+//! The search space: which parameters are estimated, their bounds, and the map between
+//! physical values and the unconstrained coordinates that Nelder–Mead moves in.
+//!
+//! Each estimated parameter has bounds [lo, hi]. Positive parameters are placed on a log
+//! scale, u = (ln v − ln lo)/(ln hi − ln lo); others linearly, u = (v − lo)/(hi − lo).
+//! The optimizer's coordinate is θ = logit(u) = ln(u/(1 − u)), so any θ ∈ ℝ is a value
+//! strictly inside the bounds (log for positive parameters, logistic for boxed ones).
+
+use crate::effects::EffectSet;
+use crate::params::{spec, Domain, MotorParams, ParamSet};
+use std::fmt;
+
+/// One estimated parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dimension {
+    pub name: String,
+    pub lo: f64,
+    pub hi: f64,
+    pub log_scale: bool,
+}
+
+/// Parameters that are estimated, on top of fixed values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamSpace {
+    pub dims: Vec<Dimension>,
+    /// Values of everything not estimated (and the template for the estimated ones).
+    pub fixed: MotorParams,
+    pub effects: EffectSet,
+}
+
+/// An error in the estimation set-up (unknown name, bad bounds).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpaceError(pub String);
+
+impl fmt::Display for SpaceError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SpaceError {}
+
+/// The base model's estimated parameters by default (SPEC §1.7): six conductances and the
+/// two friction terms.
+pub const DEFAULT_ESTIMATED: [&str; 8] = [
+    "c_in1",
+    "c_out2",
+    "c_ext",
+    "c_1e",
+    "c_2e",
+    "c_12",
+    "t_coulomb",
+    "visc",
+];
+
+fn logit(u: f64) -> f64 {
+    (u / (1.0 - u)).ln()
+}
+
+fn logistic(theta: f64) -> f64 {
+    1.0 / (1.0 + (-theta).exp())
+}
+
+impl Dimension {
+    /// A dimension with the default bounds of its parameter (`ParamSpec::search`).
+    pub fn for_param(name: &str) -> Result<Self, SpaceError> {
+        let s = spec(name).ok_or_else(|| SpaceError(format!("unknown parameter '{name}'")))?;
+        if matches!(s.domain, Domain::Integer(..)) {
+            return Err(SpaceError(format!(
+                "parameter '{name}' is a whole number and cannot be estimated"
+            )));
+        }
+        Self::with_bounds(name, s.search.0, s.search.1)
+    }
+
+    /// A dimension with explicit bounds (SI).
+    pub fn with_bounds(name: &str, lo: f64, hi: f64) -> Result<Self, SpaceError> {
+        let s = spec(name).ok_or_else(|| SpaceError(format!("unknown parameter '{name}'")))?;
+        let log_scale = matches!(s.domain, Domain::Positive | Domain::NonNegative);
+        let ok = lo.is_finite() && hi.is_finite() && lo < hi && (!log_scale || lo > 0.0);
+        if !ok {
+            return Err(SpaceError(format!(
+                "bounds of '{name}': need finite lo < hi{} (got {lo:e}..{hi:e})",
+                if log_scale { " and lo > 0" } else { "" }
+            )));
+        }
+        if let Domain::Interval(a, b) = s.domain {
+            if lo < a || hi > b {
+                return Err(SpaceError(format!(
+                    "bounds of '{name}' must lie in [{a}, {b}]"
+                )));
+            }
+        }
+        Ok(Self {
+            name: name.to_string(),
+            lo,
+            hi,
+            log_scale,
+        })
+    }
+
+    /// Position u ∈ (0, 1) of a value within the bounds.
+    pub fn unit(&self, v: f64) -> f64 {
+        if self.log_scale {
+            (v.ln() - self.lo.ln()) / (self.hi.ln() - self.lo.ln())
+        } else {
+            (v - self.lo) / (self.hi - self.lo)
+        }
+    }
+
+    /// Value at position u ∈ [0, 1].
+    pub fn from_unit(&self, u: f64) -> f64 {
+        if self.log_scale {
+            (self.lo.ln() + u * (self.hi.ln() - self.lo.ln())).exp()
+        } else {
+            self.lo + u * (self.hi - self.lo)
+        }
+    }
+
+    /// Optimizer coordinate θ of a value (clamped a hair inside the bounds).
+    pub fn theta(&self, v: f64) -> f64 {
+        logit(self.unit(v).clamp(1e-9, 1.0 - 1e-9))
+    }
+
+    /// Value at optimizer coordinate θ.
+    pub fn value(&self, theta: f64) -> f64 {
+        self.from_unit(logistic(theta))
+    }
+}
+
+impl ParamSpace {
+    /// Estimates `names` (default bounds) over `fixed`, with the effects switched on.
+    pub fn new(names: &[&str], fixed: MotorParams, effects: EffectSet) -> Result<Self, SpaceError> {
+        let dims = names
+            .iter()
+            .map(|n| Dimension::for_param(n))
+            .collect::<Result<Vec<_>, _>>()?;
+        Self::from_dims(dims, fixed, effects)
+    }
+
+    pub fn from_dims(
+        dims: Vec<Dimension>,
+        fixed: MotorParams,
+        effects: EffectSet,
+    ) -> Result<Self, SpaceError> {
+        for (i, d) in dims.iter().enumerate() {
+            if dims[..i].iter().any(|e| e.name == d.name) {
+                return Err(SpaceError(format!("parameter '{}' listed twice", d.name)));
+            }
+            if let Some(e) = spec(&d.name).and_then(|s| s.effect) {
+                if !effects.contains(e) {
+                    return Err(SpaceError(format!(
+                        "parameter '{}' belongs to effect '{e}', which is not switched on",
+                        d.name
+                    )));
+                }
+            }
+        }
+        if dims.is_empty() {
+            return Err(SpaceError("nothing to estimate".into()));
+        }
+        Ok(Self {
+            dims,
+            fixed,
+            effects,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.dims.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.dims.is_empty()
+    }
+
+    pub fn names(&self) -> Vec<String> {
+        self.dims.iter().map(|d| d.name.clone()).collect()
+    }
+
+    /// Checked parameters at optimizer coordinates θ. Values strictly inside the bounds can
+    /// still break a cross-constraint (e.g. v_dead ≥ V_fill): that is an error to penalise.
+    pub fn params(&self, theta: &[f64]) -> Result<MotorParams, crate::params::ParamError> {
+        let mut set = ParamSet::from(self.fixed.clone());
+        for (d, t) in self.dims.iter().zip(theta) {
+            set.set(&d.name, d.value(*t))?;
+        }
+        set.check()
+    }
+
+    /// Optimizer coordinates of a parameter set.
+    pub fn theta(&self, p: &MotorParams) -> Vec<f64> {
+        self.dims
+            .iter()
+            .map(|d| d.theta(p.get(&d.name).unwrap_or(d.lo)))
+            .collect()
+    }
+
+    /// Optimizer coordinates of a point of the unit cube (for start designs).
+    pub fn theta_of_unit(&self, u: &[f64]) -> Vec<f64> {
+        u.iter().map(|x| logit(x.clamp(1e-9, 1.0 - 1e-9))).collect()
+    }
+
+    /// Position in the unit cube of optimizer coordinates.
+    pub fn unit_of_theta(&self, theta: &[f64]) -> Vec<f64> {
+        theta.iter().map(|t| logistic(*t)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn theta_round_trips_inside_bounds() {
+        let s = ParamSpace::new(
+            &["c_in1", "b_crit", "t_coulomb"],
+            MotorParams::default(),
+            EffectSet::empty(),
+        )
+        .unwrap();
+        let p = MotorParams::default();
+        let th = s.theta(&p);
+        let back = s.params(&th).unwrap();
+        for d in &s.dims {
+            let (a, b) = (p.get(&d.name).unwrap(), back.get(&d.name).unwrap());
+            assert!((a - b).abs() < 1e-12 * a.abs(), "{}: {a} vs {b}", d.name);
+        }
+        for t in [-40.0, -3.0, 0.0, 5.0, 40.0] {
+            for d in &s.dims {
+                let v = d.value(t);
+                assert!(v >= d.lo && v <= d.hi);
+            }
+        }
+    }
+
+    #[test]
+    fn set_up_errors_are_named() {
+        let e =
+            ParamSpace::new(&["c_nope"], MotorParams::default(), EffectSet::empty()).unwrap_err();
+        assert!(e.0.contains("c_nope"));
+        let e =
+            ParamSpace::new(&["v_carry"], MotorParams::default(), EffectSet::empty()).unwrap_err();
+        assert!(e.0.contains("dead_volume_carryover"));
+        assert!(Dimension::with_bounds("c_in1", 1e-8, 1e-9).is_err());
+        assert!(ParamSpace::new(&["z"], MotorParams::default(), EffectSet::empty()).is_err());
+    }
+}

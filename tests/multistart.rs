@@ -1,0 +1,163 @@
+//! The multi-start runner on objectives with known answers: it finds the minimum, gives the
+//! same result whatever the thread count, and a resumed run ends where an uninterrupted one
+//! would.
+
+use vanefit::effects::EffectSet;
+use vanefit::estimate::multistart::{self, cluster, Ending, ResultsFile, Silent};
+use vanefit::estimate::{Evaluation, MultiStartConfig, Objective, ParamSpace, DEFAULT_ESTIMATED};
+use vanefit::motor::Motor;
+use vanefit::params::MotorParams;
+
+/// χ² of log-parameters against a known truth: a bowl with its bottom at the truth.
+struct Bowl {
+    truth: MotorParams,
+}
+
+impl Objective for Bowl {
+    fn evaluate(&self, motor: &Motor) -> Evaluation {
+        let chi2: f64 = DEFAULT_ESTIMATED
+            .iter()
+            .map(|n| {
+                let (a, b) = (motor.params.get(n).unwrap(), self.truth.get(n).unwrap());
+                ((a.ln() - b.ln()) / 0.05).powi(2)
+            })
+            .sum();
+        Evaluation {
+            cost: chi2,
+            chi2,
+            n_points: 100,
+            failed: false,
+        }
+    }
+}
+
+/// Two valleys: the true one and a worse local one (a double well in c_ext).
+struct DoubleWell;
+
+impl Objective for DoubleWell {
+    fn evaluate(&self, motor: &Motor) -> Evaluation {
+        let x = (motor.params.c_ext / 1e-8).log10(); // in [-1, 1] over the bounds
+        let cost = 10.0 * (x * x - 0.25).powi(2) + 0.3 * x + 1.0;
+        Evaluation {
+            cost,
+            chi2: cost,
+            n_points: 10,
+            failed: false,
+        }
+    }
+}
+
+fn truth() -> MotorParams {
+    let p = MotorParams::default();
+    p.with("c_in1", 8.1e-9)
+        .unwrap()
+        .with("c_12", 1.3e-9)
+        .unwrap()
+        .with("visc", 9e-5)
+        .unwrap()
+}
+
+fn space() -> ParamSpace {
+    ParamSpace::new(
+        &DEFAULT_ESTIMATED,
+        MotorParams::default(),
+        EffectSet::empty(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn recovers_the_bottom_of_a_bowl() {
+    let obj = Bowl { truth: truth() };
+    let s = space();
+    let cfg = MultiStartConfig {
+        starts: 8,
+        seed: 3,
+        sd_tolerance: 1e-12,
+        max_iters: 4000,
+        ..Default::default()
+    };
+    let out = multistart::run(&obj, &s, &cfg, &Silent, None, false).unwrap();
+    let best = s.params(&out.best().theta).unwrap();
+    for n in DEFAULT_ESTIMATED {
+        let (a, b) = (best.get(n).unwrap(), truth().get(n).unwrap());
+        assert!((a / b - 1.0).abs() < 1e-3, "{n}: {a} vs {b}");
+    }
+    assert!(out.converged() >= 1);
+}
+
+#[test]
+fn same_seed_same_result_whatever_the_thread_count() {
+    let obj = Bowl { truth: truth() };
+    let s = space();
+    let run = |threads| {
+        let cfg = MultiStartConfig {
+            starts: 6,
+            seed: 11,
+            threads: Some(threads),
+            stage_iters: 40,
+            max_iters: 400,
+            ..Default::default()
+        };
+        multistart::run(&obj, &s, &cfg, &Silent, None, false).unwrap()
+    };
+    let (one, two) = (run(1), run(2));
+    assert_eq!(one.results, two.results);
+    assert_eq!(one.threads, 1);
+    assert_eq!(two.threads, 2);
+}
+
+#[test]
+fn resumed_run_ends_where_an_uninterrupted_one_would() {
+    let obj = DoubleWell;
+    let s = space();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("starts.jsonl");
+    let cfg = MultiStartConfig {
+        starts: 12,
+        seed: 5,
+        stage_iters: 5,
+        max_iters: 300,
+        kill_after_rounds: 1,
+        kill_factor: 1.0,
+        kill_margin: 0.1,
+        ..Default::default()
+    };
+    let file = ResultsFile::new(&path);
+    let full = multistart::run(&obj, &s, &cfg, &Silent, Some(&file), false).unwrap();
+    assert!(
+        full.results
+            .iter()
+            .any(|r| r.ending == Ending::StoppedEarly),
+        "the test needs early stops"
+    );
+    // Interrupt: keep the header and the first few finished starts, and a torn last line.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut kept: Vec<&str> = text.lines().take(4).collect();
+    let torn = &text.lines().nth(4).unwrap()[..20];
+    kept.push(torn);
+    std::fs::write(&path, kept.join("\n")).unwrap();
+    let resumed = multistart::run(&obj, &s, &cfg, &Silent, Some(&file), true).unwrap();
+    assert_eq!(full.results, resumed.results);
+}
+
+#[test]
+fn double_well_has_two_minima_and_the_deeper_one_wins() {
+    let obj = DoubleWell;
+    let s = ParamSpace::new(&["c_ext"], MotorParams::default(), EffectSet::empty()).unwrap();
+    let cfg = MultiStartConfig {
+        starts: 16,
+        seed: 2,
+        sd_tolerance: 1e-12,
+        kill_factor: 1e9,
+        ..Default::default()
+    };
+    let out = multistart::run(&obj, &s, &cfg, &Silent, None, false).unwrap();
+    let clusters = cluster(&out.results, &s, 0.02);
+    assert_eq!(clusters.len(), 2, "{clusters:?}");
+    assert_eq!(clusters.iter().map(|c| c.members.len()).sum::<usize>(), 16);
+    let x = (s.params(&out.best().theta).unwrap().c_ext / 1e-8).log10();
+    // Exact minimum of 10(x²−¼)² + 0.3x on the left: 40x(x²−¼) + 0.3 = 0 near x = −0.5.
+    let g = 40.0 * x * (x * x - 0.25) + 0.3;
+    assert!(x < 0.0 && g.abs() < 1e-3, "x = {x}, gradient {g}");
+}
