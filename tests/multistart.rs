@@ -161,3 +161,63 @@ fn double_well_has_two_minima_and_the_deeper_one_wins() {
     let g = 40.0 * x * (x * x - 0.25) + 0.3;
     assert!(x < 0.0 && g.abs() < 1e-3, "x = {x}, gradient {g}");
 }
+
+#[test]
+fn profile_and_curvature_intervals_match_the_closed_form_of_a_bowl() {
+    use vanefit::estimate::uncertainty::{
+        curvature_covariance, curvature_intervals, profile_intervals,
+    };
+    use vanefit::estimate::Problem;
+    let truth = truth();
+    let obj = Bowl {
+        truth: truth.clone(),
+    };
+    let s = ParamSpace::new(
+        &["c_in1", "c_12", "visc"],
+        MotorParams::default(),
+        EffectSet::empty(),
+    )
+    .unwrap();
+    let problem = Problem::new(&obj, &s, false);
+    let theta = s.theta(&truth);
+    let cov = curvature_covariance(&problem, &theta, 1e-3).unwrap();
+    // χ² = Σ (Δ ln p / 0.05)²: the 95% interval of each is ln p ± 1.96·0.05 (1.96² = 3.84).
+    let half = 0.05 * vanefit::estimate::uncertainty::CHI2_95.sqrt();
+    for iv in curvature_intervals(&problem, &theta, Some(&cov))
+        .into_iter()
+        .chain(profile_intervals(&problem, &theta, 0.0, Some(&cov), 400))
+    {
+        let v = truth.get(&iv.name).unwrap();
+        let (lo, hi) = (iv.lo.unwrap(), iv.hi.unwrap());
+        assert!(
+            ((v / lo).ln() - half).abs() < 2e-3,
+            "{} {:?}: lo {lo:e}",
+            iv.name,
+            iv.method
+        );
+        assert!(
+            ((hi / v).ln() - half).abs() < 2e-3,
+            "{} {:?}: hi {hi:e}",
+            iv.name,
+            iv.method
+        );
+    }
+}
+
+#[test]
+fn a_parameter_the_cost_ignores_is_not_identifiable() {
+    use vanefit::estimate::uncertainty::profile_intervals;
+    use vanefit::estimate::Problem;
+    let truth = truth();
+    let obj = Bowl {
+        truth: truth.clone(),
+    };
+    // b_crit does not enter the bowl: its profile is flat on both sides.
+    let s = ParamSpace::new(&["c_in1", "b_crit"], truth.clone(), EffectSet::empty()).unwrap();
+    let problem = Problem::new(&obj, &s, false);
+    let theta = s.theta(&truth);
+    let ivs = profile_intervals(&problem, &theta, 0.0, None, 200);
+    assert!(ivs[0].identifiable(), "{ivs:?}");
+    assert!(!ivs[1].identifiable());
+    assert_eq!((ivs[1].lo, ivs[1].hi), (None, None));
+}

@@ -4,6 +4,7 @@
 pub mod multistart;
 pub mod objective;
 pub mod space;
+pub mod uncertainty;
 
 pub use multistart::{MultiStartConfig, MultiStartOutcome, RunObserver, StartResult};
 pub use objective::{Evaluation, Objective, Problem};

@@ -1,0 +1,265 @@
+//! Parameter uncertainty: 95% intervals by profile likelihood, with a curvature (Hessian)
+//! estimate as the faster fallback, and a check of identifiability.
+//!
+//! Both use χ² = Σ (simulation − reference)²/σ² over the data points, which is −2·log L up
+//! to a constant when the reference is the least-squares polynomial of the data (the data's
+//! residuals about the polynomial are orthogonal to it, so differences of χ² against the
+//! polynomial equal differences against the data). The 95% profile interval of parameter j
+//! is where min over the others of χ² rises by χ²₁(0.95) = 3.841 above its minimum.
+
+use super::objective::{Problem, Profiled};
+use argmin::core::{Executor, State};
+use argmin::solver::neldermead::NelderMead;
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// χ²₁ quantile at 95%.
+pub const CHI2_95: f64 = 3.841_458_820_694_124;
+/// Beyond this |θ| the logistic map is at its bound to 1 part in 3e6.
+const THETA_EDGE: f64 = 15.0;
+
+/// How an interval was obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    Profile,
+    Curvature,
+}
+
+/// A 95% interval of one parameter, SI. A side is `None` where χ² never rose enough
+/// before the search bound: the data do not pin the parameter down on that side.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Interval {
+    pub name: String,
+    pub value: f64,
+    pub lo: Option<f64>,
+    pub hi: Option<f64>,
+    pub method: Method,
+}
+
+impl Interval {
+    pub fn identifiable(&self) -> bool {
+        self.lo.is_some() && self.hi.is_some()
+    }
+    pub fn ci95(&self) -> Option<[f64; 2]> {
+        Some([self.lo?, self.hi?])
+    }
+}
+
+fn nelder_mead(
+    problem: Profiled<'_>,
+    start: Vec<f64>,
+    step: f64,
+    max_iters: u64,
+) -> (Vec<f64>, f64) {
+    if start.is_empty() {
+        let c = argmin::core::CostFunction::cost(&problem, &start).unwrap_or(f64::INFINITY);
+        return (start, c);
+    }
+    let mut simplex = vec![start.clone()];
+    for i in 0..start.len() {
+        let mut v = start.clone();
+        v[i] += step;
+        simplex.push(v);
+    }
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(1e-9)
+        .expect("tolerance >= 0");
+    match Executor::new(problem, solver)
+        .configure(|s| s.max_iters(max_iters))
+        .ctrlc(false)
+        .run()
+    {
+        Ok(res) => (
+            res.state.get_best_param().cloned().unwrap_or(start),
+            res.state.get_best_cost(),
+        ),
+        Err(_) => (start, f64::INFINITY),
+    }
+}
+
+/// Minimises χ² from θ (a short polish after a cost fit whose weights differ from χ²'s).
+pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec<f64>, f64) {
+    let all: Vec<usize> = (0..theta.len()).collect();
+    let p = Profiled {
+        inner: problem,
+        template: theta.to_vec(),
+        free: all.clone(),
+        use_chi2: true,
+    };
+    let start0 = problem.evaluate(theta).chi2;
+    let (t, c) = nelder_mead(p, theta.to_vec(), 0.05, max_iters);
+    if c <= start0 {
+        (t, c)
+    } else {
+        (theta.to_vec(), start0)
+    }
+}
+
+/// Covariance of θ from the curvature of χ²: Σ = 2·H⁻¹, H by central differences.
+/// `None` when H is not positive definite (a flat or ill-posed direction).
+pub fn curvature_covariance(problem: &Problem<'_>, theta: &[f64], h: f64) -> Option<DMatrix<f64>> {
+    let k = theta.len();
+    let chi2 = |t: &[f64]| problem.evaluate(t).chi2;
+    let f0 = chi2(theta);
+    let shifted = |i: usize, di: f64, j: usize, dj: f64| {
+        let mut t = theta.to_vec();
+        t[i] += di;
+        t[j] += dj;
+        chi2(&t)
+    };
+    let mut hess = DMatrix::zeros(k, k);
+    for i in 0..k {
+        hess[(i, i)] = (shifted(i, h, i, 0.0) - 2.0 * f0 + shifted(i, -h, i, 0.0)) / (h * h);
+        for j in 0..i {
+            let v = (shifted(i, h, j, h) - shifted(i, h, j, -h) - shifted(i, -h, j, h)
+                + shifted(i, -h, j, -h))
+                / (4.0 * h * h);
+            hess[(i, j)] = v;
+            hess[(j, i)] = v;
+        }
+    }
+    let chol = hess.cholesky()?;
+    Some(chol.inverse() * 2.0)
+}
+
+/// Intervals from the curvature: θ̂ ± 1.96·σ_θ, mapped back through the transforms
+/// (so positive parameters get intervals that are symmetric on a log scale).
+pub fn curvature_intervals(
+    problem: &Problem<'_>,
+    theta: &[f64],
+    cov: Option<&DMatrix<f64>>,
+) -> Vec<Interval> {
+    problem
+        .space
+        .dims
+        .iter()
+        .enumerate()
+        .map(|(j, d)| {
+            let sd = cov
+                .map(|c| c[(j, j)])
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .map(f64::sqrt);
+            let within = |t: f64| (t.abs() < THETA_EDGE).then(|| d.value(t));
+            Interval {
+                name: d.name.clone(),
+                value: d.value(theta[j]),
+                lo: sd.and_then(|s| within(theta[j] - 1.96 * s)),
+                hi: sd.and_then(|s| within(theta[j] + 1.96 * s)),
+                method: Method::Curvature,
+            }
+        })
+        .collect()
+}
+
+/// Profile of χ² along coordinate j: re-optimises the others at θ_j = t.
+struct Profile<'a> {
+    problem: &'a Problem<'a>,
+    j: usize,
+    others: Vec<usize>,
+    max_iters: u64,
+}
+
+impl Profile<'_> {
+    fn at(&self, base: &[f64], t: f64) -> (Vec<f64>, f64) {
+        let mut template = base.to_vec();
+        template[self.j] = t;
+        let start: Vec<f64> = self.others.iter().map(|i| base[*i]).collect();
+        let p = Profiled {
+            inner: self.problem,
+            template: template.clone(),
+            free: self.others.clone(),
+            use_chi2: true,
+        };
+        let (free, c) = nelder_mead(p, start, 0.05, self.max_iters);
+        for (i, v) in self.others.iter().zip(&free) {
+            template[*i] = *v;
+        }
+        (template, c)
+    }
+
+    /// Where the profile crosses χ²_min + 3.841 on one side (`dir` = ±1), in θ_j.
+    fn crossing(&self, theta_hat: &[f64], chi2_min: f64, dir: f64, step0: f64) -> Option<f64> {
+        let t0 = theta_hat[self.j];
+        let (mut t_in, mut d_in): (f64, f64) = (t0, 0.0);
+        let mut base = theta_hat.to_vec();
+        let mut step = step0;
+        loop {
+            let t = t0 + dir * step;
+            if t.abs() > THETA_EDGE {
+                return None;
+            }
+            let (b, c) = self.at(&base, t);
+            let delta = c - chi2_min;
+            if delta >= CHI2_95 {
+                // √Δ is close to linear in θ near the optimum: interpolate it, then refine once.
+                let mut t_out = t;
+                let mut d_out = delta;
+                for _ in 0..2 {
+                    let (a, z) = (d_in.max(0.0).sqrt(), d_out.sqrt());
+                    let tc = t_in + (CHI2_95.sqrt() - a) / (z - a) * (t_out - t_in);
+                    let (_, cc) = self.at(&b, tc);
+                    let dc = cc - chi2_min;
+                    if (dc - CHI2_95).abs() < 0.05 {
+                        return Some(tc);
+                    }
+                    if dc < CHI2_95 {
+                        t_in = tc;
+                        d_in = dc;
+                    } else {
+                        t_out = tc;
+                        d_out = dc;
+                    }
+                }
+                let (a, z) = (d_in.max(0.0).sqrt(), d_out.sqrt());
+                return Some(t_in + (CHI2_95.sqrt() - a) / (z - a) * (t_out - t_in));
+            }
+            t_in = t;
+            d_in = delta;
+            base = b;
+            step *= 2.0;
+        }
+    }
+}
+
+/// Profile-likelihood intervals for every estimated parameter (in parallel), starting from
+/// the χ² optimum `theta_hat` and using the curvature covariance (if any) to size steps.
+pub fn profile_intervals(
+    problem: &Problem<'_>,
+    theta_hat: &[f64],
+    chi2_min: f64,
+    cov: Option<&DMatrix<f64>>,
+    max_iters: u64,
+) -> Vec<Interval> {
+    let k = theta_hat.len();
+    (0..k)
+        .into_par_iter()
+        .map(|j| {
+            let d = &problem.space.dims[j];
+            let step = cov
+                .map(|c| c[(j, j)])
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .map_or(0.3, |v| v.sqrt().clamp(0.02, 2.0));
+            let profile = Profile {
+                problem,
+                j,
+                others: (0..k).filter(|i| *i != j).collect(),
+                max_iters,
+            };
+            let lo = profile
+                .crossing(theta_hat, chi2_min, -1.0, step)
+                .map(|t| d.value(t));
+            let hi = profile
+                .crossing(theta_hat, chi2_min, 1.0, step)
+                .map(|t| d.value(t));
+            Interval {
+                name: d.name.clone(),
+                value: d.value(theta_hat[j]),
+                lo,
+                hi,
+                method: Method::Profile,
+            }
+        })
+        .collect()
+}
