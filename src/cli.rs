@@ -37,6 +37,8 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Estimate parameters from a dataset (multi-start Nelder-Mead) and export a fit file.
+    Fit(crate::estimate::command::FitArgs),
     /// Write a synthetic dataset from the simulator.
     Synth {
         out_dataset: PathBuf,
@@ -52,6 +54,8 @@ pub enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Speed-control studies (paper section 5): throttling, frequency response, closed loop.
+    Control(crate::control::study::ControlArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -68,6 +72,7 @@ impl<E: std::error::Error> From<E> for Failure {
 pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Command::Check { dataset } => check(&dataset),
+        Command::Fit(args) => crate::estimate::command::run(&args).map_err(Failure),
         Command::Simulate {
             dataset,
             params,
@@ -86,11 +91,21 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             noise,
             seed,
         ),
+        Command::Control(args) => crate::control::study::run(args),
     }
 }
 
 fn check(dir: &Path) -> Result<(), Failure> {
     let ds = Dataset::load(dir)?;
+    // Every reference is fitted before anything is printed: a channel that cannot give one
+    // refuses the dataset like any other bad input.
+    let references = ds
+        .experiments
+        .iter()
+        .map(|ex| {
+            crate::reference::experiment_references(ex, &crate::reference::FitOptions::default())
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     println!(
         "dataset {} ({}): motor {}, p_atm {:.0} Pa, {} experiment(s)",
         ds.name,
@@ -103,7 +118,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
         ds.p_atm_pa,
         ds.experiments.len()
     );
-    for ex in &ds.experiments {
+    for (ex, refs) in ds.experiments.iter().zip(&references) {
         println!(
             "  {} {} ({} rows)",
             ex.kind.id(),
@@ -125,8 +140,59 @@ fn check(dir: &Path) -> Result<(), Failure> {
                 c.unit.suffix()
             );
         }
+        for r in refs {
+            print_reference(r, ds.p_atm_pa);
+        }
     }
     Ok(())
+}
+
+/// One reference response for `check`: channel, degree, R², σ in the column's unit, valid
+/// range in the abscissa column's unit, and its pieces when the data jump.
+fn print_reference(r: &crate::reference::ChannelReference, p_atm_pa: f64) {
+    let a = &r.abscissa;
+    let fit = &r.reference;
+    let x_name = if a.log10 {
+        format!("log10 {}", a.column)
+    } else {
+        a.column.clone()
+    };
+    let sigma = num(r.display_difference(fit.sigma(), p_atm_pa));
+    let floor = if fit.sigma() > fit.sigma_residual() {
+        " (resolution floor)"
+    } else {
+        ""
+    };
+    let range = |lo: f64, hi: f64| {
+        let (u, v) = (a.display(lo, p_atm_pa), a.display(hi, p_atm_pa));
+        format!("{} .. {} {}", num(u), num(v), a.unit.suffix())
+    };
+    let pieces = fit.pieces();
+    let (lo, hi) = fit.range();
+    let degree = if pieces.len() == 1 {
+        format!("degree {}", pieces[0].degree)
+    } else {
+        format!("{} pieces", pieces.len())
+    };
+    println!(
+        "    reference {} vs {x_name}: {degree}, R² {:.5}, σ {sigma} {}{floor}, {} points, {}",
+        r.column,
+        fit.r_squared(),
+        r.unit.suffix(),
+        fit.n_fitted(),
+        range(lo, hi)
+    );
+    if pieces.len() > 1 {
+        for (k, p) in pieces.iter().enumerate() {
+            println!(
+                "      piece {}: degree {}, {} points, {}",
+                k + 1,
+                p.degree,
+                p.n,
+                range(p.x_min, p.x_max)
+            );
+        }
+    }
 }
 
 /// A number for people: fixed point in the usual range, scientific otherwise.

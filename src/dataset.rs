@@ -104,13 +104,14 @@ impl Recording {
 
     /// Reads and validates a CSV recording. `p_atm_pa` converts gauge pressures.
     pub fn read(path: &Path, p_atm_pa: f64) -> Result<Self, DataError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| DataError::new(path, format!("cannot read: {e}")))?;
+        let text = read_text(path)?;
         Self::parse(path, &text, p_atm_pa)
     }
 
     /// Parses CSV text (`path` is used in messages only).
     pub fn parse(path: &Path, text: &str, p_atm_pa: f64) -> Result<Self, DataError> {
+        // A byte-order mark (as spreadsheet programs write) is not part of the first name.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if text.trim().is_empty() {
             return Err(DataError::new(
                 path,
@@ -168,10 +169,11 @@ impl Recording {
                 raw: Vec::new(),
             });
         }
-        let mut lines = Vec::new();
+        let mut lines: Vec<u64> = Vec::new();
         for record in reader.records() {
             let record = record.map_err(|e| {
-                let line = e.position().map(|p| p.line()).unwrap_or(0);
+                let next = lines.last().map_or(2, |l| l + 1);
+                let line = e.position().map_or(next, |p| p.line());
                 DataError::new(path, format!("malformed row: {e}")).at(line)
             })?;
             let line = record.position().map(|p| p.line()).unwrap_or(0);
@@ -248,25 +250,41 @@ impl Recording {
     /// Refuses an abscissa that does not span a range (a ramp that does not ramp).
     pub fn check_spans(&self, q: Quantity, min_relative_span: f64) -> Result<(), DataError> {
         let v = self.values(q)?;
-        let (lo, hi) = v
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-                (a.min(*x), b.max(*x))
-            });
-        if hi - lo <= min_relative_span * hi.abs().max(lo.abs()) {
+        if v.is_empty() {
+            return Err(DataError::new(&self.file, "no data rows").at(1));
+        }
+        let (mut ilo, mut ihi) = (0, 0);
+        for (k, x) in v.iter().enumerate() {
+            if *x < v[ilo] {
+                ilo = k;
+            }
+            if *x > v[ihi] {
+                ihi = k;
+            }
+        }
+        let (lo, hi) = (v[ilo], v[ihi]);
+        let spread = (hi - lo).partial_cmp(&(min_relative_span * hi.abs().max(lo.abs())));
+        if spread != Some(std::cmp::Ordering::Greater) {
             let i = self
                 .columns
                 .iter()
                 .position(|c| c.quantity == q)
                 .unwrap_or(0);
+            let col = &self.columns[i];
+            let first = self.lines.first().copied().unwrap_or(2);
+            let last = self.lines.last().copied().unwrap_or(first);
             return Err(DataError::new(
                 &self.file,
                 format!(
-                    "{} does not span a range (all values near {lo:e} SI)",
-                    q.prefix()
+                    "{} does not span a range: from line {first} to line {last} it stays between {} and {} (needs a spread of more than {}% of its magnitude)",
+                    q.prefix(),
+                    col.raw[ilo],
+                    col.raw[ihi],
+                    min_relative_span * 100.0
                 ),
             )
-            .col(i, &self.columns[i].name));
+            .at(last)
+            .col(i, &col.name));
         }
         Ok(())
     }
@@ -404,15 +422,28 @@ impl Dataset {
         if !dir.is_dir() {
             return Err(DataError::new(dir, "dataset folder not found"));
         }
-        let text = std::fs::read_to_string(&rig_path)
-            .map_err(|e| DataError::new(&rig_path, format!("cannot read: {e}")))?;
+        let text = read_text(&rig_path)?;
         let rig: RigFile =
             toml::from_str(&text).map_err(|e| locate_toml_error(&rig_path, &text, &e))?;
-        check_rig(&rig_path, &rig)?;
+        check_rig(&rig_path, &text, &rig)?;
         let p_atm_pa = rig.conditions.p_atm_pa;
         let mut experiments = Vec::with_capacity(rig.experiment.len());
-        for ex in &rig.experiment {
-            let recording = Recording::read(&dir.join(&ex.file), p_atm_pa)?;
+        for (k, ex) in rig.experiment.iter().enumerate() {
+            let csv = dir.join(&ex.file);
+            if !csv.is_file() {
+                return Err(located(
+                    &rig_path,
+                    &text,
+                    Table::Experiment(k),
+                    "file",
+                    format!(
+                        "recording '{}' not found (looked for {})",
+                        ex.file,
+                        csv.display()
+                    ),
+                ));
+            }
+            let recording = Recording::read(&csv, p_atm_pa)?;
             let data = ExperimentData {
                 kind: ex.kind,
                 file: ex.file.clone(),
@@ -450,23 +481,114 @@ impl Dataset {
 fn locate_toml_error(path: &Path, text: &str, e: &toml::de::Error) -> DataError {
     let mut err = DataError::new(path, e.message().to_string());
     if let Some(span) = e.span() {
-        let before = &text[..span.start.min(text.len())];
+        // Spans are byte offsets; never slice inside a character.
+        let mut start = span.start.min(text.len());
+        while !text.is_char_boundary(start) {
+            start -= 1;
+        }
+        let mut end = span.end.clamp(start, text.len());
+        while !text.is_char_boundary(end) {
+            end += 1;
+        }
+        let before = &text[..start];
         let line = before.matches('\n').count() as u64 + 1;
-        let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0);
+        let col = before[before.rfind('\n').map_or(0, |i| i + 1)..]
+            .chars()
+            .count();
         err = err.at(line);
-        let token = text[span.start.min(text.len())..span.end.min(text.len())]
-            .trim()
-            .to_string();
+        let token: String = text[start..end].trim().chars().take(40).collect();
         err.column = Some((col + 1, token));
     }
     err
 }
 
-fn check_rig(path: &Path, rig: &RigFile) -> Result<(), DataError> {
+/// Reads a text file; bytes that are not UTF-8 are refused with their line.
+fn read_text(path: &Path) -> Result<String, DataError> {
+    let bytes =
+        std::fs::read(path).map_err(|e| DataError::new(path, format!("cannot read: {e}")))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        let prefix = &e.as_bytes()[..valid];
+        let line = prefix.iter().filter(|b| **b == b'\n').count() as u64 + 1;
+        let byte = valid
+            - prefix
+                .iter()
+                .rposition(|b| *b == b'\n')
+                .map_or(0, |i| i + 1)
+            + 1;
+        DataError::new(
+            path,
+            format!("not UTF-8 text (byte {byte} of the line); save the file as UTF-8"),
+        )
+        .at(line)
+    })
+}
+
+/// A table of rig.toml.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Table {
+    /// Keys before any table header.
+    Top,
+    Conditions,
+    /// The k-th `[[experiment]]` (0-based).
+    Experiment(usize),
+}
+
+/// 1-based line and character column of `key = ...` (also inside an inline table) in a
+/// table of rig.toml text.
+fn key_location(text: &str, table: Table, key: &str) -> Option<(u64, usize)> {
+    let mut current = Some(Table::Top);
+    let mut experiments = 0;
+    let mut header = None;
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim_start();
+        if t.starts_with("[[") && t[2..].trim_start().starts_with("experiment") {
+            current = Some(Table::Experiment(experiments));
+            experiments += 1;
+        } else if t.starts_with("[[") || (t.starts_with('[') && !t.starts_with("[conditions")) {
+            current = None;
+        } else if t.starts_with("[conditions") {
+            current = Some(Table::Conditions);
+        } else if current == Some(table) {
+            for (at, _) in line.match_indices(key) {
+                let before_ok = line[..at]
+                    .chars()
+                    .next_back()
+                    .is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+                let after_ok = line[at + key.len()..].trim_start().starts_with('=');
+                if before_ok && after_ok {
+                    return Some((i as u64 + 1, line[..at].chars().count() + 1));
+                }
+            }
+            continue;
+        } else {
+            continue;
+        }
+        if current == Some(table) {
+            header = Some((i as u64 + 1, 1));
+        }
+    }
+    header
+}
+
+/// An error about a key of rig.toml, located at that key (or its table).
+fn located(path: &Path, text: &str, table: Table, key: &str, message: String) -> DataError {
+    let mut err = DataError::new(path, message);
+    if let Some((line, col)) = key_location(text, table, key) {
+        err.line = Some(line);
+        err.column = Some((col, key.to_string()));
+    }
+    err
+}
+
+fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
     let c = &rig.conditions;
     if !(c.p_atm_pa.is_finite() && (50e3..=150e3).contains(&c.p_atm_pa)) {
-        return Err(DataError::new(
+        return Err(located(
             path,
+            text,
+            Table::Conditions,
+            "p_atm_pa",
             format!(
                 "conditions.p_atm_pa = {} Pa is not a plausible atmosphere (50 to 150 kPa)",
                 c.p_atm_pa
@@ -474,8 +596,11 @@ fn check_rig(path: &Path, rig: &RigFile) -> Result<(), DataError> {
         ));
     }
     if !(c.temperature_k.is_finite() && c.temperature_k > 150.0 && c.temperature_k < 500.0) {
-        return Err(DataError::new(
+        return Err(located(
             path,
+            text,
+            Table::Conditions,
+            "temperature_k",
             format!(
                 "conditions.temperature_k = {} K is not plausible",
                 c.temperature_k
@@ -483,38 +608,67 @@ fn check_rig(path: &Path, rig: &RigFile) -> Result<(), DataError> {
         ));
     }
     if rig.experiment.is_empty() {
-        return Err(DataError::new(path, "no [[experiment]] tables"));
+        return Err(located(
+            path,
+            text,
+            Table::Top,
+            "experiment",
+            "no [[experiment]] tables".into(),
+        ));
     }
-    for ex in &rig.experiment {
+    for (k, ex) in rig.experiment.iter().enumerate() {
+        let at =
+            |key: &str, message: String| located(path, text, Table::Experiment(k), key, message);
         if let Some(p) = ex.p_supply_mpa {
             if !(p.is_finite() && p * 1e6 > c.p_atm_pa && p < 5.0) {
-                return Err(DataError::new(path, format!("experiment '{}': p_supply_mpa = {p} must be an absolute pressure above atmosphere and below 5 MPa", ex.file)));
+                return Err(at("p_supply_mpa", format!("experiment '{}': p_supply_mpa = {p} must be an absolute pressure above atmosphere and below 5 MPa", ex.file)));
             }
         }
         let bad_weight = |w: f64| !(w.is_finite() && w >= 0.0);
-        if ex.weight.is_some_and(bad_weight)
-            || ex
-                .weights
-                .as_ref()
-                .is_some_and(|m| m.values().any(|w| bad_weight(*w)))
-        {
-            return Err(DataError::new(
-                path,
-                format!("experiment '{}': weights must be finite and >= 0", ex.file),
+        if ex.weight.is_some_and(bad_weight) {
+            return Err(at(
+                "weight",
+                format!("experiment '{}': weight must be finite and >= 0", ex.file),
             ));
+        }
+        if let Some(weights) = &ex.weights {
+            let channels = crate::reference::channels_of(ex.kind);
+            for (name, w) in weights {
+                if !channels.iter().any(|q| q.prefix() == name) {
+                    let known: Vec<_> = channels.iter().map(|q| q.prefix()).collect();
+                    return Err(at(
+                        name,
+                        format!(
+                            "experiment '{}': weights names '{name}', which is not a channel of {} (channels: {})",
+                            ex.file,
+                            ex.kind.id(),
+                            known.join(", ")
+                        ),
+                    ));
+                }
+                if bad_weight(*w) {
+                    return Err(at(
+                        name,
+                        format!(
+                            "experiment '{}': weight of {name} must be finite and >= 0",
+                            ex.file
+                        ),
+                    ));
+                }
+            }
         }
         match ex.load {
             Some(LoadSection::ViscousBrake { c_nm_s_rad })
                 if !(c_nm_s_rad.is_finite() && c_nm_s_rad >= 0.0) =>
             {
-                return Err(DataError::new(
-                    path,
+                return Err(at(
+                    "c_nm_s_rad",
                     format!("experiment '{}': load c_nm_s_rad must be >= 0", ex.file),
                 ));
             }
             Some(LoadSection::Torque { t_nm }) if !t_nm.is_finite() => {
-                return Err(DataError::new(
-                    path,
+                return Err(at(
+                    "t_nm",
                     format!("experiment '{}': load t_nm must be finite", ex.file),
                 ));
             }
@@ -528,9 +682,21 @@ fn check_rig(path: &Path, rig: &RigFile) -> Result<(), DataError> {
 fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
     let rec = &ex.recording;
     let need = |q: Quantity| rec.values(q).map(|_| ());
+    if rec.rows() < crate::reference::MIN_POINTS {
+        return Err(DataError::new(
+            &rec.file,
+            format!(
+                "{} data rows are too few for a reference response (need at least {})",
+                rec.rows(),
+                crate::reference::MIN_POINTS
+            ),
+        )
+        .at(rec.lines.last().copied().unwrap_or(1)));
+    }
     let outputs: &[Quantity] = match ex.kind {
         Kind::Datasheet => {
             need(Quantity::Speed)?;
+            rec.check_spans(Quantity::Speed, 0.05)?;
             if ex.p_supply_pa.is_none() && rec.column(Quantity::PPort1).is_none() {
                 return Err(DataError::new(
                     &rec.file,
@@ -591,12 +757,19 @@ fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
         )
         .at(1));
     }
-    if ex.kind != Kind::Datasheet {
-        if let Some(p) = rec.column(Quantity::PPort1) {
-            if let Some(k) = p.si.iter().position(|v| *v <= 0.0) {
-                return Err(
-                    DataError::new(&rec.file, "absolute pressure must be > 0").at(rec.lines[k])
-                );
+    for q in [Quantity::PPort1, Quantity::PPort2] {
+        if let Some(i) = rec.columns.iter().position(|c| c.quantity == q) {
+            let col = &rec.columns[i];
+            if let Some(k) = col.si.iter().position(|v| *v <= 0.0) {
+                return Err(DataError::new(
+                    &rec.file,
+                    format!(
+                        "'{}' is not a possible pressure (absolute pressure must be > 0)",
+                        col.raw[k]
+                    ),
+                )
+                .at(rec.lines[k])
+                .col(i, &col.name));
             }
         }
     }

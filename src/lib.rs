@@ -8,8 +8,11 @@
 
 pub mod cli;
 pub mod constants;
+pub mod control;
+pub mod cost;
 pub mod dataset;
 pub mod effects;
+pub mod estimate;
 pub mod experiment;
 pub mod fitfile;
 pub mod friction;
@@ -19,6 +22,8 @@ pub mod motor;
 pub mod nozzle;
 pub mod ode;
 pub mod params;
+pub mod plot;
+pub mod reference;
 pub mod schedule;
 pub mod steady;
 pub mod synth;

@@ -128,13 +128,13 @@ pub struct Motor {
 
 impl Motor {
     pub fn new(params: MotorParams, effects: EffectSet) -> Self {
-        let cycle = Cycle {
-            vanes: params.z.round(),
-            v_fill_m3: params.v_disp / params.z.round(),
-            v_dead_m3: params.v_dead,
-            eps: params.eps,
-            n_poly: params.n_poly,
-        };
+        let cycle = Cycle::new(
+            params.z.round(),
+            params.v_disp / params.z.round(),
+            params.v_dead,
+            params.eps,
+            params.n_poly,
+        );
         Self {
             params,
             effects,

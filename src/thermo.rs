@@ -20,6 +20,10 @@ pub struct Cycle {
     pub eps: f64,
     /// Polytropic index n, 1 ≤ n ≤ 1.4.
     pub n_poly: f64,
+    /// V_fill·(1 − ε^(1−n))/(n−1) and V_exp·(ε^(n−1) − 1)/(n−1), m³, computed once: the
+    /// right-hand side evaluates the work many thousand times per simulation.
+    expansion_m3: f64,
+    compression_m3: f64,
 }
 
 /// `(ε^(n−1) − 1)/(n−1)`, continuous through n = 1 where it equals ln ε.
@@ -47,6 +51,19 @@ pub fn expansion_factor(eps: f64, n_poly: f64) -> f64 {
 }
 
 impl Cycle {
+    /// A cycle from its volumes, m³, expansion ratio and polytropic index.
+    pub fn new(vanes: f64, v_fill_m3: f64, v_dead_m3: f64, eps: f64, n_poly: f64) -> Self {
+        Self {
+            vanes,
+            v_fill_m3,
+            v_dead_m3,
+            eps,
+            n_poly,
+            expansion_m3: v_fill_m3 * expansion_factor(eps, n_poly),
+            compression_m3: eps * v_fill_m3 * compression_factor(eps, n_poly),
+        }
+    }
+
     /// Expanded volume V_exp = ε·V_fill, m³.
     pub fn v_exp_m3(&self) -> f64 {
         self.eps * self.v_fill_m3
@@ -66,9 +83,7 @@ impl Cycle {
     /// `p_a`: filling pressure, `p_b`: discharge pressure, `p_e`: exhaust pressure, all Pa.
     pub fn work(&self, p_a: f64, p_b: f64, p_e: f64) -> f64 {
         let displacement = (p_a - p_b) * (self.v_fill_m3 - self.v_dead_m3);
-        let expansion = p_a * self.v_fill_m3 * expansion_factor(self.eps, self.n_poly);
-        let compression = p_e * self.v_exp_m3() * compression_factor(self.eps, self.n_poly);
-        displacement + expansion - compression
+        displacement + p_a * self.expansion_m3 - p_e * self.compression_m3
     }
 
     /// Torque of the ideal motor turning forward, T = z·W/(2π) (eq. 13), N·m,
@@ -135,13 +150,7 @@ mod tests {
     use super::*;
 
     fn ar034(eps: f64, n_poly: f64) -> Cycle {
-        Cycle {
-            vanes: 5.0,
-            v_fill_m3: 3.8e-6 / 5.0,
-            v_dead_m3: 0.1e-6,
-            eps,
-            n_poly,
-        }
+        Cycle::new(5.0, 3.8e-6 / 5.0, 0.1e-6, eps, n_poly)
     }
 
     #[test]

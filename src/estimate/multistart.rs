@@ -42,6 +42,10 @@ pub struct MultiStartConfig {
     pub kill_margin: f64,
     /// Keep every start's cost trace.
     pub keep_traces: bool,
+    /// Fresh simplices around the best point after convergence (restarted Nelder–Mead):
+    /// a collapsed simplex is the method's known failure, and a restart that finds nothing
+    /// better is the convergence test.
+    pub max_restarts: u32,
 }
 
 impl Default for MultiStartConfig {
@@ -58,6 +62,7 @@ impl Default for MultiStartConfig {
             kill_factor: 3.0,
             kill_margin: 10.0,
             keep_traces: false,
+            max_restarts: 20,
         }
     }
 }
@@ -127,6 +132,9 @@ pub fn latin_hypercube(starts: usize, dims: usize, seed: u64) -> Vec<Vec<f64>> {
 
 struct Runner {
     index: usize,
+    restarts: u32,
+    /// Best cost when the current simplex was started.
+    cost_at_restart: f64,
     theta0: Vec<f64>,
     solver: Option<NelderMead<Vec<f64>, f64>>,
     theta: Vec<f64>,
@@ -138,24 +146,94 @@ struct Runner {
     trace: Vec<f64>,
 }
 
+/// A Nelder–Mead solver on a right-angled simplex at `theta` with edge `step`, with the
+/// dimension-adaptive expansion and shrink of Gao and Han (2012): γ = 1 + 2/n,
+/// σ = 1 − 1/n, which keep the simplex from collapsing in more than a few dimensions
+/// (their contraction 0.75 − 1/(2n) is outside argmin's (0, 0.5], so ρ stays 0.5).
+fn simplex_solver(vertices: Vec<Vec<f64>>, sd_tolerance: f64) -> NelderMead<Vec<f64>, f64> {
+    let n = (vertices.len().max(3) - 1) as f64;
+    NelderMead::new(vertices)
+        .with_sd_tolerance(sd_tolerance)
+        .and_then(|s| s.with_gamma(1.0 + 2.0 / n))
+        .and_then(|s| s.with_sigma(1.0 - 1.0 / n))
+        .expect("valid Nelder-Mead coefficients")
+}
+
+/// A right-angled simplex at `theta` with edge `step`, stepping towards the middle of the
+/// range so that it stays well inside it.
+fn axis_simplex(theta: &[f64], step: f64) -> Vec<Vec<f64>> {
+    let mut simplex = vec![theta.to_vec()];
+    for i in 0..theta.len() {
+        let mut v = theta.to_vec();
+        v[i] += if theta[i] > 0.0 { -step } else { step };
+        simplex.push(v);
+    }
+    simplex
+}
+
+/// A simplex shaped like the cost's valley at `theta`: edges along the eigenvectors of the
+/// finite-difference Hessian H, each long enough to raise the cost by about `rise`
+/// (length √(2·rise/λ)). Nelder–Mead's weakness is a long, narrow, tilted valley, which a
+/// right-angled simplex crosses in many small steps; a simplex aligned with the valley
+/// moves along it at once. `None` if H has no usable curvature.
+fn curvature_simplex(
+    problem: &Problem<'_>,
+    theta: &[f64],
+    f0: f64,
+    h: f64,
+    rise: f64,
+) -> Option<Vec<Vec<f64>>> {
+    let k = theta.len();
+    let f = |t: &[f64]| problem.evaluate(t).cost;
+    let at = |moves: &[(usize, f64)]| {
+        let mut t = theta.to_vec();
+        for (i, d) in moves {
+            t[*i] += d;
+        }
+        f(&t)
+    };
+    let mut hess = nalgebra::DMatrix::<f64>::zeros(k, k);
+    let (plus, minus): (Vec<f64>, Vec<f64>) =
+        (0..k).map(|i| (at(&[(i, h)]), at(&[(i, -h)]))).unzip();
+    for i in 0..k {
+        hess[(i, i)] = (plus[i] - 2.0 * f0 + minus[i]) / (h * h);
+        for j in 0..i {
+            let v = (at(&[(i, h), (j, h)]) - at(&[(i, h), (j, -h)]) - at(&[(i, -h), (j, h)])
+                + at(&[(i, -h), (j, -h)]))
+                / (4.0 * h * h);
+            hess[(i, j)] = v;
+            hess[(j, i)] = v;
+        }
+    }
+    if !hess.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let eig = nalgebra::SymmetricEigen::new(hess);
+    let largest = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(*v));
+    if largest <= 0.0 {
+        return None;
+    }
+    let mut simplex = vec![theta.to_vec()];
+    for (j, lambda) in eig.eigenvalues.iter().enumerate() {
+        // Flat or negative directions get the length of the flattest usable one, capped.
+        let curvature = lambda.max(largest * 1e-10);
+        let len = (2.0 * rise / curvature).sqrt().min(2.0);
+        let mut v = theta.to_vec();
+        for (i, x) in v.iter_mut().enumerate() {
+            *x += len * eig.eigenvectors[(i, j)];
+        }
+        simplex.push(v);
+    }
+    Some(simplex)
+}
+
 impl Runner {
     fn new(index: usize, theta0: Vec<f64>, cfg: &MultiStartConfig) -> Self {
-        let mut simplex = vec![theta0.clone()];
-        for i in 0..theta0.len() {
-            let mut v = theta0.clone();
-            // Step towards the middle of the range so the simplex stays well inside it.
-            v[i] += if theta0[i] > 0.0 {
-                -cfg.initial_step
-            } else {
-                cfg.initial_step
-            };
-            simplex.push(v);
-        }
-        let solver = NelderMead::new(simplex)
-            .with_sd_tolerance(cfg.sd_tolerance)
-            .expect("tolerance >= 0");
+        let solver = simplex_solver(axis_simplex(&theta0, cfg.initial_step), cfg.sd_tolerance);
         Self {
             index,
+            restarts: 0,
+            cost_at_restart: f64::INFINITY,
             theta: theta0.clone(),
             theta0,
             solver: Some(solver),
@@ -173,6 +251,7 @@ impl Runner {
         let Some(solver) = self.solver.take() else {
             return;
         };
+        let cost_before = self.cost;
         let problem = Problem::new(objective, space, cfg.keep_traces);
         let iters = cfg.stage_iters.min(cfg.max_iters - self.iterations);
         let result = Executor::new(problem, solver)
@@ -189,14 +268,42 @@ impl Runner {
                         self.cost = state.get_best_cost();
                     }
                 }
-                self.converged =
+                let collapsed =
                     state.get_termination_reason() == Some(&TerminationReason::SolverConverged);
                 let problem = res.problem.problem.expect("problem is returned");
-                self.evaluations += problem.evaluations();
                 if let Some(t) = problem.take_trace() {
                     self.trace.extend(t);
                 }
                 self.solver = Some(res.solver);
+                // A stage that gained nothing has stagnated (a simplex stuck in a curved
+                // valley): treat it like a collapse and restart around the best point.
+                let stalled = cost_before.is_finite()
+                    && cost_before - self.cost <= 1e-9 * (1.0 + self.cost.abs());
+                if collapsed || stalled {
+                    let gained = self.cost_at_restart - self.cost > 1e-6 * (1.0 + self.cost.abs());
+                    if gained && self.restarts < cfg.max_restarts {
+                        self.restarts += 1;
+                        self.cost_at_restart = self.cost;
+                        // Aim each edge at a rise of 1% of the cost (at least 0.01).
+                        let rise = (0.01 * self.cost).max(0.01);
+                        let vertices =
+                            curvature_simplex(&problem, &self.theta, self.cost, 1e-3, rise)
+                                .unwrap_or_else(|| {
+                                    axis_simplex(
+                                        &self.theta,
+                                        (cfg.initial_step * 0.5f64.powi(self.restarts as i32))
+                                            .max(1e-3),
+                                    )
+                                });
+                        self.solver = Some(simplex_solver(vertices, cfg.sd_tolerance));
+                    } else {
+                        self.converged = true;
+                    }
+                }
+                self.evaluations += problem.evaluations();
+                if let Some(t) = problem.take_trace() {
+                    self.trace.extend(t);
+                }
             }
             Err(_) => self.converged = false,
         }

@@ -108,13 +108,14 @@ impl Dimension {
         }
     }
 
-    /// Value at position u ∈ [0, 1].
+    /// Value at position u ∈ [0, 1] (never outside the bounds, whatever the rounding).
     pub fn from_unit(&self, u: f64) -> f64 {
-        if self.log_scale {
+        let v = if self.log_scale {
             (self.lo.ln() + u * (self.hi.ln() - self.lo.ln())).exp()
         } else {
             self.lo + u * (self.hi - self.lo)
-        }
+        };
+        v.clamp(self.lo, self.hi)
     }
 
     /// Optimizer coordinate θ of a value (clamped a hair inside the bounds).

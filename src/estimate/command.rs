@@ -1,0 +1,265 @@
+//! `vanefit fit` (SPEC §6): options, progress, summary and export.
+
+use super::fit::{
+    fit, fit_file, most_sensitive_experiment, FitOutcome, FitSetup, UncertaintyMethod,
+};
+use super::multistart::{MultiStartConfig, RunObserver, StartResult};
+use super::report;
+use super::space::{Dimension, ParamSpace, DEFAULT_ESTIMATED};
+use crate::cost::{CostModel, CostOptions};
+use crate::dataset::Dataset;
+use crate::effects::EffectSet;
+use crate::motor::Motor;
+use crate::params::spec;
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+
+#[derive(Args, Debug, Clone)]
+pub struct FitArgs {
+    /// Dataset folder (rig.toml and recordings).
+    pub dataset: PathBuf,
+    /// Number of start points (Latin hypercube).
+    #[arg(long, default_value_t = 32)]
+    pub starts: usize,
+    /// Seed of the start design; a seed gives the same result whatever the thread count.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Effects to switch on (comma-separated ids of SPEC §5); their parameters are estimated too.
+    #[arg(long, default_value = "")]
+    pub effects: String,
+    /// Parameters to estimate (comma-separated; default: six conductances, t_coulomb, visc).
+    #[arg(long)]
+    pub estimate: Option<String>,
+    /// Search bounds, e.g. `c_in1=1e-9:2e-8,visc=1e-6:1e-3` (SI).
+    #[arg(long)]
+    pub bounds: Option<String>,
+    /// Iteration budget of each start.
+    #[arg(long, default_value_t = 2000)]
+    pub max_iters: u64,
+    /// How to compute 95% intervals.
+    #[arg(long, value_enum, default_value_t = Uncertainty::Profile)]
+    pub uncertainty: Uncertainty,
+    /// Continue an interrupted run from its results file (<out>.starts.jsonl).
+    #[arg(long)]
+    pub resume: bool,
+    /// Keep every start's cost trace in the results file.
+    #[arg(long)]
+    pub trace: bool,
+    /// Skip the plots.
+    #[arg(long)]
+    pub no_plots: bool,
+    /// Fit file to write (vanefit.fit/1); results and plots go next to it.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Uncertainty {
+    Profile,
+    Curvature,
+    None,
+}
+
+/// A progress bar over starts with the best cost so far; drawn only on a terminal.
+struct Progress(ProgressBar);
+
+impl RunObserver for Progress {
+    fn started(&self, total: usize, already_done: usize) {
+        self.0.set_length(total as u64);
+        self.0.set_position(already_done as u64);
+    }
+    fn start_finished(&self, _r: &StartResult, best: f64) {
+        self.0.inc(1);
+        self.0.set_message(format!("best cost {best:.4}"));
+    }
+    fn finished(&self) {
+        self.0.finish_and_clear();
+    }
+}
+
+fn progress() -> Progress {
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} starts  {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    Progress(bar)
+}
+
+/// Parses `name=lo:hi,...` into dimensions.
+fn parse_bounds(text: &str) -> Result<Vec<(String, f64, f64)>, String> {
+    text.split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|item| {
+            let bad = || format!("--bounds: '{item}' is not name=lo:hi");
+            let (name, range) = item.split_once('=').ok_or_else(bad)?;
+            let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
+            let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
+            let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+            Ok((name.trim().to_string(), lo, hi))
+        })
+        .collect()
+}
+
+/// The search space of a fit from the options: estimated names (default set plus every
+/// parameter of the effects switched on), bounds overrides.
+pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, String> {
+    let effects = EffectSet::parse_list(&args.effects).map_err(|m| format!("--effects: {m}"))?;
+    let (fixed, _) = crate::cli::params_for(ds, None).map_err(|f| f.0)?;
+    let mut names: Vec<String> = match &args.estimate {
+        Some(list) => list
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .collect(),
+        None => DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect(),
+    };
+    for e in effects.iter() {
+        for p in e.parameters() {
+            if !names.iter().any(|n| n == p) {
+                names.push(p.to_string());
+            }
+        }
+    }
+    let overrides = parse_bounds(args.bounds.as_deref().unwrap_or(""))?;
+    for (n, _, _) in &overrides {
+        if !names.contains(n) {
+            return Err(format!("--bounds: '{n}' is not estimated"));
+        }
+    }
+    let dims = names
+        .iter()
+        .map(|n| match overrides.iter().find(|(m, _, _)| m == n) {
+            Some((_, lo, hi)) => Dimension::with_bounds(n, *lo, *hi),
+            None => Dimension::for_param(n),
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| format!("--estimate/--bounds: {e}"))?;
+    ParamSpace::from_dims(dims, fixed, effects).map_err(|e| e.to_string())
+}
+
+/// Where the run's side files go: `<out without .json>.<suffix>`.
+pub fn side_path(out: &Path, suffix: &str) -> PathBuf {
+    let stem = out.with_extension("");
+    PathBuf::from(format!("{}.{suffix}", stem.display()))
+}
+
+pub fn run(args: &FitArgs) -> Result<(), String> {
+    if args.starts == 0 {
+        return Err("--starts must be at least 1".into());
+    }
+    if args.threads == Some(0) {
+        return Err("--threads must be at least 1".into());
+    }
+    let ds = Dataset::load(&args.dataset).map_err(|e| e.to_string())?;
+    let space = space_from_args(&ds, args)?;
+    let cost = CostModel::new(&ds, CostOptions::default()).map_err(|e| e.to_string())?;
+    let setup = FitSetup {
+        space,
+        multistart: MultiStartConfig {
+            starts: args.starts,
+            seed: args.seed,
+            threads: args.threads,
+            max_iters: args.max_iters,
+            keep_traces: args.trace,
+            ..MultiStartConfig::default()
+        },
+        uncertainty: match args.uncertainty {
+            Uncertainty::Profile => UncertaintyMethod::Profile,
+            Uncertainty::Curvature => UncertaintyMethod::Curvature,
+            Uncertainty::None => UncertaintyMethod::None,
+        },
+        results_file: Some(side_path(&args.out, "starts.jsonl")),
+        resume: args.resume,
+    };
+    let outcome = fit(&cost, &setup, &progress()).map_err(|e| e.to_string())?;
+    let file = fit_file(&ds.name, &setup, &outcome, args.seed);
+    file.write(&args.out)
+        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    print_summary(&ds, &setup, &outcome, &args.out);
+    if !args.no_plots {
+        let best = Motor::new(outcome.params.clone(), setup.space.effects.clone());
+        let waterfall = side_path(&args.out, "waterfall.svg");
+        report::waterfall(&outcome.run.results, &waterfall).map_err(|e| e.to_string())?;
+        let written = report::overlays(&ds, &cost, &[("fit", &best)], &args.out.with_extension(""))
+            .map_err(|e| e.to_string())?;
+        println!(
+            "plots: {} and {}",
+            waterfall.display(),
+            written
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(())
+}
+
+fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) {
+    let run = &out.run;
+    println!(
+        "fit of {}: cost {:.4}, chi2/n {:.3} over {} points; {} starts ({} converged), {} evaluations, {:.1} s on {} thread(s)",
+        ds.name,
+        out.cost,
+        out.chi2 / out.n_points.max(1) as f64,
+        out.n_points,
+        run.results.len(),
+        run.converged(),
+        out.evaluations,
+        out.wall_s,
+        run.threads
+    );
+    if !setup.space.effects.is_empty() {
+        println!("effects: {}", setup.space.effects.ids().join(", "));
+    }
+    let motor = Motor::new(out.params.clone(), setup.space.effects.clone());
+    println!(
+        "{:<12} {:>13} {:>27}  unit",
+        "parameter", "value", "95% interval"
+    );
+    for d in &setup.space.dims {
+        let v = out.params.get(&d.name).unwrap_or(f64::NAN);
+        let unit = spec(&d.name).map_or("", |s| s.unit);
+        let iv = out.intervals.iter().find(|i| i.name == d.name);
+        let interval = match iv {
+            None => "not computed".to_string(),
+            Some(i) => format!(
+                "[{}, {}]",
+                i.lo.map_or("open".into(), |x| format!("{x:.4e}")),
+                i.hi.map_or("open".into(), |x| format!("{x:.4e}"))
+            ),
+        };
+        let mut note = String::new();
+        if iv.is_some_and(|i| !i.identifiable()) {
+            note = match most_sensitive_experiment(&motor, &d.name) {
+                Some(k) if !ds.experiments.iter().any(|e| e.kind == k) => format!(
+                    "  not identifiable here; a {} experiment would pin it down",
+                    k.id()
+                ),
+                _ => "  not identifiable from these experiments".into(),
+            };
+        }
+        println!("{:<12} {:>13.5e} {:>27}  {unit}{note}", d.name, v, interval);
+    }
+    let fixed: Vec<String> = crate::params::PARAMS
+        .iter()
+        .filter(|s| s.effect.is_none_or(|e| setup.space.effects.contains(e)))
+        .filter(|s| !setup.space.dims.iter().any(|d| d.name == s.name))
+        .map(|s| format!("{}={}", s.name, out.params.get(s.name).unwrap_or(s.default)))
+        .collect();
+    println!("fixed: {}", fixed.join(", "));
+    let minima: Vec<String> = out
+        .clusters
+        .iter()
+        .take(5)
+        .map(|c| format!("{:.4} (x{})", c.cost, c.members.len()))
+        .collect();
+    println!("local minima (cost x starts): {}", minima.join(", "));
+    println!("wrote {}", path.display());
+}

@@ -1,0 +1,215 @@
+//! Fitting a dataset: the runner that owns the multi-start, the uncertainty analysis and the
+//! export. It joins the data's cost (`cost::CostModel`) to the estimator through the
+//! [`Objective`] trait.
+
+use super::multistart::{
+    self, cluster, Cluster, MultiStartConfig, MultiStartOutcome, ResultsFile, RunError, RunObserver,
+};
+use super::objective::{Evaluation, Objective, Problem};
+use super::space::ParamSpace;
+use super::uncertainty::{self, Interval};
+use crate::cost::CostModel;
+use crate::dataset::Kind;
+use crate::fitfile::{FitFile, RunInfo, Starts};
+use crate::motor::Motor;
+use crate::ode::DiffsolBdf;
+use crate::params::MotorParams;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The data's cost as an estimation objective.
+pub struct DataObjective<'a> {
+    pub cost: &'a CostModel,
+    pub solver: Box<dyn crate::ode::StiffSolver + 'a>,
+}
+
+impl Objective for DataObjective<'_> {
+    fn evaluate(&self, motor: &Motor) -> Evaluation {
+        let v = self.cost.evaluate(motor, self.solver.as_ref());
+        // χ² over every compared row: n·mean((y − ŷ)/σ)², unweighted.
+        let (chi2, n_points) = v.channels.iter().fold((0.0, 0), |(c, n), ch| {
+            (c + ch.n as f64 * ch.rms_normalized.powi(2), n + ch.n)
+        });
+        Evaluation {
+            cost: v.total,
+            chi2: if v.failed.is_some() { v.total } else { chi2 },
+            n_points,
+            failed: v.failed.is_some(),
+        }
+    }
+}
+
+/// How intervals are computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UncertaintyMethod {
+    /// Profile likelihood (curvature sizes the steps and fills in if it fails).
+    Profile,
+    /// Curvature of χ² only (fast).
+    Curvature,
+    None,
+}
+
+/// Everything a fit needs besides the data.
+pub struct FitSetup {
+    pub space: ParamSpace,
+    pub multistart: MultiStartConfig,
+    pub uncertainty: UncertaintyMethod,
+    pub results_file: Option<PathBuf>,
+    pub resume: bool,
+}
+
+/// The outcome of a fit.
+#[derive(Debug, Clone)]
+pub struct FitOutcome {
+    pub params: MotorParams,
+    pub theta: Vec<f64>,
+    pub cost: f64,
+    pub chi2: f64,
+    pub n_points: usize,
+    pub intervals: Vec<Interval>,
+    pub clusters: Vec<Cluster>,
+    pub run: MultiStartOutcome,
+    pub evaluations: u64,
+    pub wall_s: f64,
+}
+
+impl FitOutcome {
+    /// Bayesian information criterion, χ² + k·ln n.
+    pub fn bic(&self) -> f64 {
+        self.chi2 + self.theta.len() as f64 * (self.n_points.max(1) as f64).ln()
+    }
+}
+
+/// Fits the space's parameters to the cost.
+pub fn fit(
+    cost: &CostModel,
+    setup: &FitSetup,
+    observer: &dyn RunObserver,
+) -> Result<FitOutcome, RunError> {
+    let t0 = Instant::now();
+    let objective = DataObjective {
+        cost,
+        solver: Box::new(DiffsolBdf::default()),
+    };
+    let file = setup.results_file.as_deref().map(ResultsFile::new);
+    let run = multistart::run(
+        &objective,
+        &setup.space,
+        &setup.multistart,
+        observer,
+        file.as_ref(),
+        setup.resume,
+    )?;
+    let best = run.best().clone();
+    let problem = Problem::new(&objective, &setup.space, false);
+    let at_best = problem.evaluate(&best.theta);
+    let (intervals, extra_evals) = intervals(&problem, &best.theta, setup.uncertainty);
+    let clusters = cluster(&run.results, &setup.space, 0.02);
+    let params = setup
+        .space
+        .params(&best.theta)
+        .map_err(|e| RunError(format!("best parameters: {e}")))?;
+    Ok(FitOutcome {
+        params,
+        theta: best.theta.clone(),
+        cost: best.cost,
+        chi2: at_best.chi2,
+        n_points: at_best.n_points,
+        intervals,
+        clusters,
+        evaluations: run.evaluations + extra_evals + problem.evaluations(),
+        run,
+        wall_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+fn intervals(
+    problem: &Problem<'_>,
+    theta: &[f64],
+    method: UncertaintyMethod,
+) -> (Vec<Interval>, u64) {
+    if method == UncertaintyMethod::None {
+        return (Vec::new(), 0);
+    }
+    let (theta_ml, chi2_min) = uncertainty::polish_chi2(problem, theta, 400);
+    let cov = uncertainty::curvature_covariance(problem, &theta_ml, 1e-3);
+    let curvature = uncertainty::curvature_intervals(problem, &theta_ml, cov.as_ref());
+    if method == UncertaintyMethod::Curvature {
+        return (curvature, 0);
+    }
+    let profile = uncertainty::profile_intervals(problem, &theta_ml, chi2_min, cov.as_ref(), 300);
+    (profile, 0)
+}
+
+/// The experiment kind whose outputs move most (relative to typical sensor noise) when a
+/// parameter changes by 20%, among the three reference experiments: where a parameter that
+/// these data leave open would be pinned down.
+pub fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kind> {
+    use crate::experiment::Experiment;
+    use crate::synth::{free_speed, plan_experiments, SensorNoise, SynthPlan};
+    use crate::units::Quantity;
+    let plan = SynthPlan::default();
+    let noise = SensorNoise::typical();
+    let value = motor.params.get(name)?;
+    let changed = Motor::new(
+        motor.params.with(name, value * 1.2).ok()?,
+        motor.effects.clone(),
+    );
+    let w_free = free_speed(motor, plan.p_supply_pa, plan.p_atm_pa).ok()?;
+    let solver = DiffsolBdf::default();
+    plan_experiments(&plan, w_free)
+        .iter()
+        .filter_map(|d| {
+            let ex = Experiment::new(d, plan.p_atm_pa).ok()?;
+            let (a, b) = (
+                ex.simulate(motor, &solver).ok()?,
+                ex.simulate(&changed, &solver).ok()?,
+            );
+            let score: f64 = a
+                .outputs
+                .iter()
+                .zip(&b.outputs)
+                .map(|((q, ya), (_, yb))| {
+                    let sd = match q {
+                        Quantity::Speed => noise.speed_rad_s,
+                        Quantity::Torque => noise.torque_nm,
+                        _ => noise.flow_kg_s,
+                    };
+                    ya.iter()
+                        .zip(yb)
+                        .map(|(u, v)| ((u - v) / sd).powi(2))
+                        .sum::<f64>()
+                        / ya.len() as f64
+                })
+                .sum();
+            Some((d.kind, score))
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)
+}
+
+/// The fit file of an outcome (SPEC §4).
+pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) -> FitFile {
+    FitFile {
+        dataset: dataset.to_string(),
+        effects: setup.space.effects.clone(),
+        params: out.params.clone(),
+        estimated: setup.space.names(),
+        ci95: out
+            .intervals
+            .iter()
+            .filter_map(|iv| iv.ci95().map(|c| (iv.name.clone(), c)))
+            .collect(),
+        cost: Some(out.cost),
+        starts: Some(Starts {
+            total: out.run.results.len(),
+            converged: out.run.converged(),
+        }),
+        seed: Some(seed),
+        run: Some(RunInfo {
+            evaluations: out.evaluations,
+            wall_s: out.wall_s,
+            threads: out.run.threads,
+        }),
+    }
+}
