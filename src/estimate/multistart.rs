@@ -42,6 +42,9 @@ pub struct MultiStartConfig {
     pub kill_margin: f64,
     /// Keep every start's cost trace.
     pub keep_traces: bool,
+    /// Start points given in optimizer coordinates θ (e.g. a previous fit's optimum); they
+    /// take the first start indices, the Latin hypercube fills the rest.
+    pub given_starts: Vec<Vec<f64>>,
     /// Fresh simplices around the best point after convergence (restarted Nelder–Mead):
     /// a collapsed simplex is the method's known failure, and a restart that finds nothing
     /// better is the convergence test.
@@ -63,6 +66,7 @@ impl Default for MultiStartConfig {
             kill_margin: 10.0,
             keep_traces: false,
             max_restarts: 20,
+            given_starts: Vec::new(),
         }
     }
 }
@@ -465,12 +469,18 @@ pub fn run(
             f.create(space, cfg)?;
         }
     }
-    let points = latin_hypercube(cfg.starts, space.len(), cfg.seed);
-    let mut live: Vec<Runner> = points
+    let given = cfg.given_starts.len().min(cfg.starts);
+    let lhs = latin_hypercube(cfg.starts - given, space.len(), cfg.seed);
+    let points: Vec<Vec<f64>> = cfg.given_starts[..given]
         .iter()
+        .cloned()
+        .chain(lhs.iter().map(|u| space.theta_of_unit(u)))
+        .collect();
+    let mut live: Vec<Runner> = points
+        .into_iter()
         .enumerate()
         .filter(|(i, _)| !done.iter().any(|d| d.index == *i))
-        .map(|(i, u)| Runner::new(i, space.theta_of_unit(u), cfg))
+        .map(|(i, theta)| Runner::new(i, theta, cfg))
         .collect();
     observer.started(cfg.starts, done.len());
     let mut finished = done.clone();
