@@ -37,8 +37,16 @@ pub struct FitArgs {
     /// Search bounds, e.g. `c_in1=1e-9:2e-8,visc=1e-6:1e-3` (SI).
     #[arg(long)]
     pub bounds: Option<String>,
+    /// Where start points are drawn, e.g. `c_12=1e-10:1e-9` (SI); default: a factor
+    /// `--start-spread` either side of the default (AR034-11 values scaled with the rig's
+    /// displacement for conductances), within the bounds.
+    #[arg(long)]
+    pub start_range: Option<String>,
+    /// Default start range: this factor either side of the default value.
+    #[arg(long, default_value_t = 3.0)]
+    pub start_spread: f64,
     /// Iteration budget of each start.
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 3000)]
     pub max_iters: u64,
     /// How to compute 95% intervals.
     #[arg(long, value_enum, default_value_t = Uncertainty::Profile)]
@@ -132,14 +140,45 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, Strin
             return Err(format!("--bounds: '{n}' is not estimated"));
         }
     }
+    let starts = parse_bounds(args.start_range.as_deref().unwrap_or(""))
+        .map_err(|m| m.replace("--bounds", "--start-range"))?;
+    if !(args.start_spread.is_finite() && args.start_spread > 1.0) {
+        return Err(format!(
+            "--start-spread {}: must be a number > 1",
+            args.start_spread
+        ));
+    }
+    // Conductances grow with the motor: scale the AR034-11 defaults with the displacement.
+    let size = fixed.v_disp / crate::params::MotorParams::default().v_disp;
     let dims = names
         .iter()
-        .map(|n| match overrides.iter().find(|(m, _, _)| m == n) {
-            Some((_, lo, hi)) => Dimension::with_bounds(n, *lo, *hi),
-            None => Dimension::for_param(n),
+        .map(|n| {
+            let d = match overrides.iter().find(|(m, _, _)| m == n) {
+                Some((_, lo, hi)) => Dimension::with_bounds(n, *lo, *hi)?,
+                None => Dimension::for_param(n)?,
+            };
+            match starts.iter().find(|(m, _, _)| m == n) {
+                Some((_, lo, hi)) => d.with_start_range(*lo, *hi),
+                None => {
+                    let mut centre = spec(n).map_or(0.0, |s| s.default);
+                    if n.starts_with("c_") {
+                        centre *= size;
+                    }
+                    if d.log_scale && centre > 0.0 {
+                        d.clone()
+                            .with_start_range(
+                                centre / args.start_spread,
+                                centre * args.start_spread,
+                            )
+                            .or(Ok(d))
+                    } else {
+                        Ok(d)
+                    }
+                }
+            }
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| format!("--estimate/--bounds: {e}"))?;
+        .map_err(|e| format!("--estimate/--bounds/--start-range: {e}"))?;
     ParamSpace::from_dims(dims, fixed, effects).map_err(|e| e.to_string())
 }
 

@@ -17,6 +17,9 @@ pub struct Dimension {
     pub lo: f64,
     pub hi: f64,
     pub log_scale: bool,
+    /// Where start points are drawn, inside [lo, hi] (default: all of it).
+    pub start_lo: f64,
+    pub start_hi: f64,
 }
 
 /// Parameters that are estimated, on top of fixed values.
@@ -96,7 +99,23 @@ impl Dimension {
             lo,
             hi,
             log_scale,
+            start_lo: lo,
+            start_hi: hi,
         })
+    }
+
+    /// Draws start points from [lo, hi] ∩ the bounds (refused if empty or not finite).
+    pub fn with_start_range(mut self, lo: f64, hi: f64) -> Result<Self, SpaceError> {
+        let (lo, hi) = (lo.max(self.lo), hi.min(self.hi));
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(SpaceError(format!(
+                "start range of '{}' must be a non-empty part of its bounds [{:e}, {:e}]",
+                self.name, self.lo, self.hi
+            )));
+        }
+        self.start_lo = lo;
+        self.start_hi = hi;
+        Ok(self)
     }
 
     /// Position u ∈ (0, 1) of a value within the bounds.
@@ -197,9 +216,16 @@ impl ParamSpace {
             .collect()
     }
 
-    /// Optimizer coordinates of a point of the unit cube (for start designs).
+    /// Optimizer coordinates of a point of the unit cube of start ranges (for start designs).
     pub fn theta_of_unit(&self, u: &[f64]) -> Vec<f64> {
-        u.iter().map(|x| logit(x.clamp(1e-9, 1.0 - 1e-9))).collect()
+        self.dims
+            .iter()
+            .zip(u)
+            .map(|(d, x)| {
+                let (a, b) = (d.unit(d.start_lo), d.unit(d.start_hi));
+                logit((a + x * (b - a)).clamp(1e-9, 1.0 - 1e-9))
+            })
+            .collect()
     }
 
     /// Position in the unit cube of optimizer coordinates.
