@@ -54,6 +54,8 @@ pub enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Find the physics the model leaves out: locate, explain, model, refit (SPEC §5, §6).
+    Diagnose(crate::diagnose::DiagnoseArgs),
     /// Speed-control studies (paper section 5): throttling, frequency response, closed loop.
     Control(crate::control::study::ControlArgs),
 }
@@ -92,6 +94,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             seed,
         ),
         Command::Control(args) => crate::control::study::run(args),
+        Command::Diagnose(args) => crate::diagnose::run(&args).map_err(Failure),
     }
 }
 

@@ -197,14 +197,15 @@ impl Recording {
                     .at(line)
                     .col(i, &col.name)
                 })?;
-                if !v.is_finite() {
+                let si = col.unit.parse_si(field, p_atm_pa).unwrap_or(f64::NAN);
+                if !(v.is_finite() && si.is_finite()) {
                     return Err(
                         DataError::new(path, format!("'{field}' is not a finite number"))
                             .at(line)
                             .col(i, &col.name),
                     );
                 }
-                col.si.push(col.unit.to_si(v, p_atm_pa));
+                col.si.push(si);
                 col.raw.push(field.to_string());
             }
             lines.push(line);

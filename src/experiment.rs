@@ -147,7 +147,7 @@ impl Experiment {
             self.p_atm_pa,
             self.load,
         );
-        bc.c_port2_m3_s_pa = log10_c.map(|s| 10f64.powf(s.at(t)));
+        bc.c_port2_m3_s_pa = log10_c.map(|s| (s.at(t) * std::f64::consts::LN_10).exp());
         bc
     }
 
@@ -196,7 +196,13 @@ impl Experiment {
                 .or_else(|_| steady::at_speed(motor, &bc, speeds[i], &steady::initial_guess(&bc)))
                 .map_err(|e| self.fail(format!("row {}: {e}", i + 1)))?;
             let b = motor.balance(&x, &bc);
-            results[i] = [b.torque_shaft_nm(), b.flow_port1_kg_s, b.flow_port2_kg_s];
+            // At standstill the brake holds the rotor against the full dry friction.
+            let torque = if speeds[i] == 0.0 {
+                b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
+            } else {
+                b.torque_shaft_nm()
+            };
+            results[i] = [torque, b.flow_port1_kg_s, b.flow_port2_kg_s];
             guess = Some(x);
         }
         for r in results {

@@ -9,6 +9,11 @@ pub fn coulomb_viscous(omega: f64, t_coulomb_nm: f64, visc_nm_s_rad: f64, w_reg:
     t_coulomb_nm * (omega / w_reg).tanh() + visc_nm_s_rad * omega
 }
 
+/// Magnitude of the dry part of Stribeck friction, T_c + (T_s − T_c)·exp(−(ω/ω_s)²), N·m.
+pub fn stribeck_dry(omega: f64, t_coulomb_nm: f64, t_static_nm: f64, w_stribeck: f64) -> f64 {
+    t_coulomb_nm + (t_static_nm - t_coulomb_nm) * (-(omega / w_stribeck).powi(2)).exp()
+}
+
 /// Stribeck breakaway friction (`breakaway_friction`, SPEC §5), N·m:
 /// T_f = (T_c + (T_s − T_c)·exp(−(ω/ω_s)²))·tanh(ω/ω_reg) + d·ω.
 pub fn stribeck(
@@ -19,8 +24,7 @@ pub fn stribeck(
     visc_nm_s_rad: f64,
     w_reg: f64,
 ) -> f64 {
-    let decay = (-(omega / w_stribeck).powi(2)).exp();
-    (t_coulomb_nm + (t_static_nm - t_coulomb_nm) * decay) * (omega / w_reg).tanh()
+    stribeck_dry(omega, t_coulomb_nm, t_static_nm, w_stribeck) * (omega / w_reg).tanh()
         + visc_nm_s_rad * omega
 }
 

@@ -11,6 +11,7 @@ pub mod constants;
 pub mod control;
 pub mod cost;
 pub mod dataset;
+pub mod diagnose;
 pub mod effects;
 pub mod estimate;
 pub mod experiment;

@@ -123,7 +123,90 @@ impl Balance {
 pub struct Motor {
     pub params: MotorParams,
     pub effects: EffectSet,
+    /// Terms found by `vanefit diagnose` outside the catalog (empty: the model as specified).
+    pub extra: Vec<ExtraTerm>,
     cycle: Cycle,
+}
+
+/// The balance a discovered term enters (SPEC §5, uncatalogued mismatches).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum BalanceId {
+    /// The torque balance: the term is a loss torque, N·m, added to the friction torque
+    /// (so it also lowers the shaft torque a datasheet measures).
+    Torque,
+    /// Mass balance of V_1: the term is a mass flow INTO V_1, kg/s (negative: a leak out).
+    Mass1,
+    /// Mass balance of V_2, kg/s into V_2.
+    Mass2,
+    /// Mass balance of V_e, kg/s into V_e.
+    MassE,
+}
+
+/// The pressure factor of a discovered term's feature (Pa, or 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PressureFactor {
+    One,
+    P1,
+    P2,
+    Pe,
+    /// Gauge pressures p − p_atm.
+    P1Gauge,
+    P2Gauge,
+    PeGauge,
+    P1MinusPe,
+    P2MinusPe,
+    P1MinusP2,
+}
+
+/// The speed factor of a discovered term's feature.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum SpeedFactor {
+    One,
+    /// ω, rad/s.
+    Omega,
+    /// |ω|, rad/s.
+    AbsOmega,
+    /// ω·|ω|, (rad/s)².
+    OmegaAbsOmega,
+    /// tanh(ω/ω_reg), 1: a Coulomb-like sign with the friction's regularisation.
+    Sign,
+}
+
+/// A term outside the catalog: `coefficient · pressure(x) · speed(ω)` added to one balance.
+/// The coefficient is SI: (N·m or kg/s) per unit of the feature.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExtraTerm {
+    pub balance: BalanceId,
+    pub pressure: PressureFactor,
+    pub speed: SpeedFactor,
+    pub coefficient: f64,
+}
+
+impl ExtraTerm {
+    /// The feature pressure(x)·speed(ω) at state x (SI).
+    pub fn feature(&self, x: &State, p_atm_pa: f64, w_reg: f64) -> f64 {
+        let [p1, p2, pe, omega] = *x;
+        let p = match self.pressure {
+            PressureFactor::One => 1.0,
+            PressureFactor::P1 => p1,
+            PressureFactor::P2 => p2,
+            PressureFactor::Pe => pe,
+            PressureFactor::P1Gauge => p1 - p_atm_pa,
+            PressureFactor::P2Gauge => p2 - p_atm_pa,
+            PressureFactor::PeGauge => pe - p_atm_pa,
+            PressureFactor::P1MinusPe => p1 - pe,
+            PressureFactor::P2MinusPe => p2 - pe,
+            PressureFactor::P1MinusP2 => p1 - p2,
+        };
+        let w = match self.speed {
+            SpeedFactor::One => 1.0,
+            SpeedFactor::Omega => omega,
+            SpeedFactor::AbsOmega => omega.abs(),
+            SpeedFactor::OmegaAbsOmega => omega * omega.abs(),
+            SpeedFactor::Sign => (omega / w_reg).tanh(),
+        };
+        self.coefficient * p * w
+    }
 }
 
 impl Motor {
@@ -138,8 +221,15 @@ impl Motor {
         Self {
             params,
             effects,
+            extra: Vec::new(),
             cycle,
         }
+    }
+
+    /// The same motor with discovered terms added to its balances.
+    pub fn with_extra(mut self, terms: &[ExtraTerm]) -> Self {
+        self.extra.extend_from_slice(terms);
+        self
     }
 
     /// The base model with default parameters (motor AR034-11).
@@ -190,20 +280,38 @@ impl Motor {
     /// All friction torques at speed ω, N·m (base Coulomb + viscous, or the effects).
     pub fn friction_torque(&self, omega: f64, p_inlet: f64, p_e: f64) -> f64 {
         let p = &self.params;
+        let (dry, wet) = self.friction_parts(omega, p_inlet, p_e);
+        dry * (omega / p.w_reg).tanh() + wet
+    }
+
+    /// Friction held against the motor at standstill, N·m: the limit ω → 0⁺ of the friction,
+    /// i.e. the dry (Coulomb or static) part in full. The regularised friction is zero at
+    /// exactly ω = 0 (tanh 0 = 0), but a brake that holds the rotor still measures the stall
+    /// torque less this breakaway friction (the datasheet's zero-speed point).
+    pub fn friction_at_rest(&self, p_inlet: f64, p_e: f64) -> f64 {
+        self.friction_parts(0.0, p_inlet, p_e).0
+    }
+
+    /// The friction as dry·tanh(ω/ω_reg) + wet: the magnitude of the dry part (Coulomb, with
+    /// the Stribeck excess and the pressure term where switched on) and the odd, smooth rest
+    /// (viscous d·ω and c₂·ω·|ω|), N·m.
+    fn friction_parts(&self, omega: f64, p_inlet: f64, p_e: f64) -> (f64, f64) {
+        let p = &self.params;
         let mut t_coulomb = p.t_coulomb;
         if self.effects.contains(Effect::PressureDependentFriction) {
             t_coulomb += p.k_fric_p * (p_inlet - p_e).max(0.0);
         }
-        let mut t = if self.effects.contains(Effect::BreakawayFriction) {
+        let dry = if self.effects.contains(Effect::BreakawayFriction) {
             let t_static = p.t_static + (t_coulomb - p.t_coulomb);
-            friction::stribeck(omega, t_coulomb, t_static, p.w_stribeck, p.visc, p.w_reg)
+            friction::stribeck_dry(omega, t_coulomb, t_static, p.w_stribeck)
         } else {
-            friction::coulomb_viscous(omega, t_coulomb, p.visc, p.w_reg)
+            t_coulomb
         };
+        let mut wet = p.visc * omega;
         if self.effects.contains(Effect::VaneFrictionSpeedSquared) {
-            t += p.c_w2 * omega * omega.abs();
+            wet += p.c_w2 * omega * omega.abs();
         }
-        t
+        (dry, wet)
     }
 
     /// Torque of the ideal motor with the forward/reverse blend of SPEC §1.2, N·m.
@@ -228,6 +336,10 @@ impl Motor {
         let leak_2e_kg_s = self.nozzle(p.c_2e * leak).flow(p2, pe);
         let leak_12_kg_s = self.nozzle(p.c_12 * leak).flow(p1, p2);
         let (p_in, p_dis) = if omega >= 0.0 { (p1, p2) } else { (p2, p1) };
+        let mut extra = [0.0; 4];
+        for t in &self.extra {
+            extra[t.balance as usize] += t.feature(x, bc.p_atm_pa, p.w_reg);
+        }
         let displacement = displacement_flows(
             &self.cycle,
             omega,
@@ -243,11 +355,18 @@ impl Motor {
             leak_2e_kg_s,
             leak_12_kg_s,
             displacement,
-            dm1_kg_s: flow_port1_kg_s - leak_1e_kg_s - leak_12_kg_s + displacement.into_1_kg_s,
-            dm2_kg_s: leak_12_kg_s - flow_port2_kg_s - leak_2e_kg_s + displacement.into_2_kg_s,
-            dme_kg_s: leak_1e_kg_s + leak_2e_kg_s - flow_exhaust_kg_s + displacement.into_e_kg_s,
+            dm1_kg_s: flow_port1_kg_s - leak_1e_kg_s - leak_12_kg_s
+                + displacement.into_1_kg_s
+                + extra[BalanceId::Mass1 as usize],
+            dm2_kg_s: leak_12_kg_s - flow_port2_kg_s - leak_2e_kg_s
+                + displacement.into_2_kg_s
+                + extra[BalanceId::Mass2 as usize],
+            dme_kg_s: leak_1e_kg_s + leak_2e_kg_s - flow_exhaust_kg_s
+                + displacement.into_e_kg_s
+                + extra[BalanceId::MassE as usize],
             torque_ideal_nm: self.ideal_torque(p1, p2, pe, omega),
-            torque_friction_nm: self.friction_torque(omega, p_in, pe),
+            torque_friction_nm: self.friction_torque(omega, p_in, pe)
+                + extra[BalanceId::Torque as usize],
             torque_load_nm: bc.load.torque(omega),
         }
     }

@@ -51,7 +51,8 @@ pub const MIN_POINTS: usize = 4;
 pub const MIN_POINTS_FOR_SPLIT: usize = 40;
 /// Factor by which the LOO error (PRESS) must fall for a split to be accepted.
 pub const SPLIT_GAIN: f64 = 1.5;
-/// Residual (in σ) beyond which a point next to a split is taken as part of the jump.
+/// Distance from the rest of its piece, in prediction standard deviations, beyond which a
+/// point next to a split is taken as part of the jump.
 const TRIM_SIGMAS: f64 = 4.0;
 /// Rounds of trimming (each refits the pieces).
 const TRIM_ROUNDS: usize = 3;

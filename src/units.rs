@@ -130,11 +130,51 @@ impl Unit {
             Unit::LSAnr => v * 1e-3 * RHO0_KG_M3,
             Unit::Mpa => v * 1e6,
             Unit::BarAbs => v * 1e5,
-            Unit::BarG => v * 1e5 + p_atm_pa,
+            // One rounding (fused multiply-add), so that every absolute pressure has a
+            // gauge value that converts back to it exactly.
+            Unit::BarG => v.mul_add(1e5, p_atm_pa),
             Unit::Kpa => v * 1e3,
             // 1 dm³/(s·bar) = 1e-3 m³/s per 1e5 Pa.
             Unit::Dm3SBar => v * 1e-8,
         }
+    }
+
+    /// The power of ten k when the unit is exactly 10^k SI units (g/s: −3, MPa: 6,
+    /// dm³/(s·bar): −8, SI units: 0), else `None`.
+    pub fn decimal_exponent(self) -> Option<i32> {
+        match self {
+            Unit::S | Unit::RadS | Unit::Nm | Unit::KgS | Unit::Pa | Unit::M3SPa => Some(0),
+            Unit::GS => Some(-3),
+            Unit::Mpa => Some(6),
+            Unit::BarAbs => Some(5),
+            Unit::Kpa => Some(3),
+            Unit::Dm3SBar => Some(-8),
+            Unit::Rpm | Unit::LMinAnr | Unit::LSAnr | Unit::BarG => None,
+        }
+    }
+
+    /// Reads a number written in this unit and converts it to SI. Where the unit is a power
+    /// of ten of the SI unit, the conversion shifts the decimal exponent of the text before
+    /// it is rounded to binary, so that the SI value is the one nearest the written decimal
+    /// (one rounding, where `to_si(text.parse())` would round twice): the same quantity
+    /// written in g/s or kg/s, in MPa or Pa, gives the same bits. Other units convert with
+    /// [`Unit::to_si`]. `None` when the text is not a number.
+    pub fn parse_si(self, text: &str, p_atm_pa: f64) -> Option<f64> {
+        let v: f64 = text.parse().ok()?;
+        let Some(k) = self.decimal_exponent() else {
+            return Some(self.to_si(v, p_atm_pa));
+        };
+        if k == 0 || v == 0.0 || !v.is_finite() {
+            return Some(self.to_si(v, p_atm_pa));
+        }
+        let (mantissa, exponent) = match text.find(['e', 'E']) {
+            Some(i) => (&text[..i], text[i + 1..].parse::<i32>().ok()?),
+            None => (text, 0),
+        };
+        exponent
+            .checked_add(k)
+            .and_then(|e| format!("{mantissa}e{e}").parse().ok())
+            .or_else(|| Some(self.to_si(v, p_atm_pa)))
     }
 
     /// Converts an SI value back to this unit (inverse of [`Unit::to_si`]).
@@ -207,6 +247,29 @@ mod tests {
                 assert!((u.from_si(si, 101_325.0) - 3.7).abs() < 1e-12);
             }
         }
+    }
+
+    #[test]
+    fn decimal_units_convert_with_one_rounding() {
+        // 0.1003551 MPa is 100355.1 Pa: the same bits whichever way it is written.
+        let pa: f64 = "100355.1".parse().unwrap();
+        assert_eq!(Unit::Mpa.parse_si("1.003551e-1", 0.0), Some(pa));
+        assert_eq!(Unit::Mpa.parse_si("0.1003551", 0.0), Some(pa));
+        assert_eq!(Unit::Kpa.parse_si("100.3551", 0.0), Some(pa));
+        assert_eq!(Unit::BarAbs.parse_si("+1.003551E0", 0.0), Some(pa));
+        let c: f64 = "3.005567e-8".parse().unwrap();
+        assert_eq!(Unit::Dm3SBar.parse_si("3.005567", 0.0), Some(c));
+        assert_eq!(Unit::GS.parse_si("-2.5", 0.0), Some(-2.5e-3));
+        assert_eq!(Unit::GS.parse_si("abc", 0.0), None);
+        assert_eq!(Unit::GS.parse_si("1e", 0.0), None);
+        assert_eq!(Unit::Mpa.parse_si("inf", 0.0), Some(f64::INFINITY));
+        assert!(Unit::Mpa.parse_si("1e308", 0.0).unwrap().is_infinite());
+        assert_eq!(
+            Unit::Rpm.parse_si("60", 0.0),
+            Some(Unit::Rpm.to_si(60.0, 0.0))
+        );
+        // Gauge pressure rounds once too.
+        assert_eq!(Unit::BarG.to_si(6.0, 101_325.0), 701_325.0);
     }
 
     #[test]

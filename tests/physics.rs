@@ -29,7 +29,13 @@ fn characteristic(motor: &Motor, speeds: &[f64]) -> Vec<(f64, f64)> {
             let x = steady::at_speed(motor, &bc, *w, &guess).unwrap();
             guess = x;
             let b = motor.balance(&x, &bc);
-            (b.torque_shaft_nm(), b.flow_port1_kg_s)
+            // At standstill the full dry friction holds against the motor (stall torque).
+            let torque = if *w == 0.0 {
+                b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
+            } else {
+                b.torque_shaft_nm()
+            };
+            (torque, b.flow_port1_kg_s)
         })
         .collect()
 }

@@ -102,43 +102,50 @@ pub fn fit(
     )?;
     let best = run.best().clone();
     let problem = Problem::new(&objective, &setup.space, false);
-    let at_best = problem.evaluate(&best.theta);
-    let (intervals, extra_evals) = intervals(&problem, &best.theta, setup.uncertainty);
+    // With intervals, the estimate is the maximum-likelihood point (χ² polished from the best
+    // start), so that value and interval belong together; without, the best start's point.
+    let (theta, intervals) = match intervals(&problem, &best.theta, setup.uncertainty) {
+        Some((theta_ml, iv)) => (theta_ml, iv),
+        None => (best.theta.clone(), Vec::new()),
+    };
+    let at = problem.evaluate(&theta);
     let clusters = cluster(&run.results, &setup.space, 0.02);
     let params = setup
         .space
-        .params(&best.theta)
+        .params(&theta)
         .map_err(|e| RunError(format!("best parameters: {e}")))?;
     Ok(FitOutcome {
         params,
-        theta: best.theta.clone(),
-        cost: best.cost,
-        chi2: at_best.chi2,
-        n_points: at_best.n_points,
+        cost: at.cost,
+        chi2: at.chi2,
+        n_points: at.n_points,
+        theta,
         intervals,
         clusters,
-        evaluations: run.evaluations + extra_evals + problem.evaluations(),
+        evaluations: run.evaluations + problem.evaluations(),
         run,
         wall_s: t0.elapsed().as_secs_f64(),
     })
 }
 
+/// The maximum-likelihood point and the intervals around it (`None` when not asked for).
 fn intervals(
     problem: &Problem<'_>,
     theta: &[f64],
     method: UncertaintyMethod,
-) -> (Vec<Interval>, u64) {
+) -> Option<(Vec<f64>, Vec<Interval>)> {
     if method == UncertaintyMethod::None {
-        return (Vec::new(), 0);
+        return None;
     }
     let (theta_ml, chi2_min) = uncertainty::polish_chi2(problem, theta, 400);
     let cov = uncertainty::curvature_covariance(problem, &theta_ml, 1e-3);
-    let curvature = uncertainty::curvature_intervals(problem, &theta_ml, cov.as_ref());
-    if method == UncertaintyMethod::Curvature {
-        return (curvature, 0);
-    }
-    let profile = uncertainty::profile_intervals(problem, &theta_ml, chi2_min, cov.as_ref(), 300);
-    (profile, 0)
+    let intervals = match method {
+        UncertaintyMethod::Curvature => {
+            uncertainty::curvature_intervals(problem, &theta_ml, cov.as_ref())
+        }
+        _ => uncertainty::profile_intervals(problem, &theta_ml, chi2_min, cov.as_ref(), 300),
+    };
+    Some((theta_ml, intervals))
 }
 
 /// The experiment kind whose outputs move most (relative to typical sensor noise) when a

@@ -1,0 +1,235 @@
+//! Residual analysis of a fitted model against the recorded data: the noise ratio, and where
+//! (experiment, channel, abscissa range) the model misses by more than noise.
+//!
+//! # Noise ratio
+//!
+//! For every compared row i of channel c (the rows the cost compares, [`ChannelResiduals`]),
+//! r_ci = (y_sim − y_data)/σ_c with y_data the RECORDED value at that row and σ_c the
+//! channel's noise estimate from the data alone (second differences,
+//! [`super::target::noise_sigma`]). Then
+//!
+//! ```text
+//!     noise_ratio = √( (1/C) Σ_c mean_i r_ci² )
+//! ```
+//!
+//! the RMS residual in units of the noise, every channel counting the same (as in the cost,
+//! so that a 25-point datasheet is not drowned by 600-row ramps). A model that reproduces
+//! the true curve scores ≈ 1 (the data scatter by σ about it); the residual against the
+//! reference polynomial would not do (the polynomial already averages noise out and a
+//! perfect model scores ≈ √(p/n) ≪ 1 against it), nor would the polynomial's residual σ as
+//! noise estimate (it holds the polynomial's lack of fit; see [`super::target`]). Values
+//! clearly above 1 are misfit; see [`super::noise_ratio_limit`] for how far above.
+//!
+//! # Locations
+//!
+//! In each channel the normalised residuals r_ci are taken in abscissa order and tested:
+//! * regional bias: windows of n/20, n/10 and n/5 points slide by half a width; a window
+//!   whose mean m has |m|·√w above the Bonferroni-corrected normal quantile (family-wise
+//!   α = 1% over every window of every channel) is flagged; flagged windows of one sign
+//!   merge into a region;
+//! * runs (Wald–Wolfowitz: too few sign changes) and trend (Legendre degree 1–3 of the
+//!   abscissa, χ²(3)), each at α = 1%/C (Bonferroni over the C channels); when both fire
+//!   and no window did, the window of largest |m| is reported.
+//!
+//! A location's severity is |m|, the mean residual over the region in units of the noise
+//! σ (1 means the model is off by one noise standard deviation throughout the region).
+
+use super::stats;
+use super::target::Target;
+use crate::cost::{ChannelResiduals, CostModel};
+use crate::dataset::Kind;
+use crate::motor::Motor;
+use crate::ode::StiffSolver;
+use crate::reference::Abscissa;
+use crate::units::{Quantity, Unit};
+
+/// Family-wise false-alarm rate of the location tests.
+pub const LOCATION_ALPHA: f64 = 0.01;
+
+/// One channel of one experiment: simulation against data at the compared rows, SI.
+#[derive(Debug, Clone)]
+pub struct ChannelData {
+    pub kind: Kind,
+    pub file: String,
+    pub quantity: Quantity,
+    pub column: String,
+    pub unit: Unit,
+    pub abscissa: Abscissa,
+    /// Abscissa of each compared row (SI; log10 SI for the outlet throttle).
+    pub x: Vec<f64>,
+    pub data: Vec<f64>,
+    /// The reference polynomial at the rows (for plots).
+    pub reference: Vec<f64>,
+    pub sim: Vec<f64>,
+    /// Noise standard deviation (SI) from [`Target`].
+    pub sigma: f64,
+}
+
+impl ChannelData {
+    /// Normalised residuals (sim − data)/σ.
+    pub fn normalized(&self) -> Vec<f64> {
+        self.sim
+            .iter()
+            .zip(&self.data)
+            .map(|(s, d)| (s - d) / self.sigma)
+            .collect()
+    }
+
+    /// Mean squared normalised residual against the data.
+    pub fn mean_square(&self) -> f64 {
+        let r = self.normalized();
+        r.iter().map(|v| v * v).sum::<f64>() / r.len().max(1) as f64
+    }
+
+    /// An abscissa value (SI, log10 SI for conductance) as SI of the abscissa quantity
+    /// (the conductance itself, m³/(s·Pa)).
+    pub fn x_si(&self, x: f64) -> f64 {
+        if self.abscissa.log10 {
+            10f64.powf(x)
+        } else {
+            x
+        }
+    }
+}
+
+/// Simulation against data for every compared row of every channel (`target` built on
+/// `cost`).
+pub fn channel_data(
+    cost: &CostModel,
+    target: &Target,
+    motor: &Motor,
+    solver: &dyn StiffSolver,
+) -> Result<Vec<ChannelData>, String> {
+    let res: Vec<ChannelResiduals> = cost.residuals(motor, solver).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity(res.len());
+    for ((r, reference), t) in res.into_iter().zip(cost.references()).zip(&target.channels) {
+        debug_assert_eq!(r.rows, t.rows);
+        out.push(ChannelData {
+            kind: r.experiment_kind,
+            file: r.file,
+            quantity: r.channel,
+            column: r.column,
+            unit: reference.unit,
+            abscissa: reference.abscissa.clone(),
+            data: t.data.clone(),
+            x: r.x,
+            reference: r.measured,
+            sim: r.simulated,
+            sigma: t.sigma,
+        });
+    }
+    Ok(out)
+}
+
+/// √(mean over channels of the mean squared normalised residual against the data) (see the
+/// module documentation). 0 for no channels.
+pub fn noise_ratio(channels: &[ChannelData]) -> f64 {
+    if channels.is_empty() {
+        return 0.0;
+    }
+    (channels.iter().map(ChannelData::mean_square).sum::<f64>() / channels.len() as f64).sqrt()
+}
+
+/// χ² against the data, Σ_c Σ_i r_ci², and the number of points.
+pub fn chi2_data(channels: &[ChannelData]) -> (f64, usize) {
+    channels.iter().fold((0.0, 0), |(c, n), ch| {
+        (c + ch.mean_square() * ch.x.len() as f64, n + ch.x.len())
+    })
+}
+
+/// Where a model misses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Location {
+    pub kind: Kind,
+    pub file: String,
+    pub column: String,
+    pub quantity: Quantity,
+    /// Abscissa range, SI of the abscissa quantity (rad/s, Pa, m³/(s·Pa)), ascending.
+    pub x_range: [f64; 2],
+    /// The same range in the abscissa column's unit, ascending.
+    pub x_range_display: [f64; 2],
+    /// Abscissa column name (for reports).
+    pub x_column: String,
+    /// |mean normalised residual| over the region, σ units.
+    pub severity: f64,
+    /// Mean (sim − data) over the region, in the channel's column unit (signed: positive
+    /// means the model over-predicts).
+    pub bias_display: f64,
+    /// The column's unit suffix.
+    pub unit: String,
+    /// What fired: "bias", "runs+trend".
+    pub test: String,
+}
+
+/// Locations of every channel that misses by more than noise (see the module docs), most
+/// severe first.
+pub fn locate(channels: &[ChannelData], p_atm_pa: f64) -> Vec<Location> {
+    let n_windows: usize = channels
+        .iter()
+        .map(|c| stats::window_count(c.x.len()))
+        .sum();
+    let z_crit = stats::normal_quantile(1.0 - LOCATION_ALPHA / (2.0 * n_windows.max(1) as f64));
+    let alpha_channel = LOCATION_ALPHA / channels.len().max(1) as f64;
+    let mut out = Vec::new();
+    for ch in channels {
+        if ch.x.len() < 10 {
+            continue;
+        }
+        let mut order: Vec<usize> = (0..ch.x.len()).collect();
+        order.sort_by(|a, b| ch.x[*a].total_cmp(&ch.x[*b]));
+        let r_all = ch.normalized();
+        let r: Vec<f64> = order.iter().map(|&i| r_all[i]).collect();
+        let x: Vec<f64> = order.iter().map(|&i| ch.x[i]).collect();
+        let mut regions = stats::biased_regions(&r, z_crit);
+        let mut test = "bias";
+        if regions.is_empty() {
+            let runs = stats::runs_test(&r).is_some_and(|(_, p)| p < alpha_channel);
+            let trend = stats::trend_test(&x, &r, 3).is_some_and(|(_, p)| p < alpha_channel);
+            if runs && trend {
+                // The most biased window, whatever its size.
+                if let Some(reg) = stats::biased_regions(&r, 0.0)
+                    .into_iter()
+                    .max_by(|a, b| a.bias.abs().total_cmp(&b.bias.abs()))
+                {
+                    regions.push(reg);
+                    test = "runs+trend";
+                }
+            }
+        }
+        for reg in regions {
+            let (a, b) = (x[reg.first], x[reg.last]);
+            let (sa, sb) = (ch.x_si(a), ch.x_si(b));
+            let (da, db) = (
+                ch.abscissa.display(a, p_atm_pa),
+                ch.abscissa.display(b, p_atm_pa),
+            );
+            let idx = &order[reg.first..=reg.last];
+            let bias_si =
+                idx.iter().map(|&i| ch.sim[i] - ch.data[i]).sum::<f64>() / idx.len() as f64;
+            let bias_display = ch.unit.from_si(bias_si, p_atm_pa) - ch.unit.from_si(0.0, p_atm_pa);
+            out.push(Location {
+                kind: ch.kind,
+                file: ch.file.clone(),
+                column: ch.column.clone(),
+                quantity: ch.quantity,
+                x_range: [sa.min(sb), sa.max(sb)],
+                x_range_display: [da.min(db), da.max(db)],
+                x_column: ch.abscissa.column.clone(),
+                severity: reg.bias.abs(),
+                bias_display,
+                unit: ch.unit.suffix().to_string(),
+                test: test.to_string(),
+            });
+        }
+    }
+    out.sort_by(|a, b| b.severity.total_cmp(&a.severity));
+    out
+}
+
+/// Per-channel noise ratios, for reports: (file, column, √mean r²).
+pub fn channel_ratios(channels: &[ChannelData]) -> Vec<(String, String, f64)> {
+    channels
+        .iter()
+        .map(|c| (c.file.clone(), c.column.clone(), c.mean_square().sqrt()))
+        .collect()
+}

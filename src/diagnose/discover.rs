@@ -1,0 +1,487 @@
+//! Finding a term outside the catalog: sparse regression of the misfit over a library of
+//! candidate terms in each balance (SPEC §5, "uncatalogued").
+//!
+//! # Method
+//!
+//! A term k·f(x) added to one balance b (torque; mass at V_1, V_2 or V_e) changes the
+//! simulated outputs y by k·s_bf to first order, where s_bf = ∂y/∂k is the output
+//! sensitivity, computed by central differences of whole simulations of every experiment
+//! with the term switched on at ±δ (δ sized so the term is about one noise level of its
+//! balance at a typical operating point: 2 mN·m, 10 mg/s). The features f are evaluated on
+//! the simulated states [p_1, p_2, p_e, ω] along the experiments inside the model
+//! ([`crate::motor::ExtraTerm`]); regressing the residual on s_bf is regressing the balance's
+//! residual on f, seen through the model's dynamics, which is what the recordings observe
+//! (the balances themselves are not measured). The base parameters may move too: their
+//! sensitivities are nuisance columns that every model contains (a concealed effect hides in
+//! them).
+//!
+//! With r = (recorded − simulated)/σ over every compared point (σ the channel's noise,
+//! [`super::target`]) and S the normalised
+//! sensitivities, forward selection with BIC: the nuisance columns are projected out, each
+//! library column's χ² reduction (sᵀr)²/(sᵀs) of the projected quantities is computed, and
+//! the best is kept while its ΔBIC = −Δχ² + ln n is below [`DISCOVERY_DELTA_BIC`]; at most
+//! [`MAX_TERMS`] terms. The linear step only proposes: the chosen term is then put into the
+//! model and refitted nonlinearly, and only the refitted ΔBIC counts.
+//!
+//! # Library
+//!
+//! Torque (a loss torque): p·ω for p ∈ {p_1, p_2, p_e} and the differences p_1 − p_e,
+//! p_2 − p_e, p_1 − p_2 times ω, and pressure-dependent Coulomb-like terms (p_2 − p_e,
+//! p_1 − p_2, gauge pressures)·tanh(ω/ω_reg). Terms the model already has are left out:
+//! tanh and ω alone are the base model's `t_coulomb` and `visc`, ω·|ω| is
+//! `vane_friction_speed_squared`, (p_1 − p_e)·tanh is `pressure_dependent_friction`.
+//! Mass, for each of V_1, V_2, V_e (a flow into the volume): gauge pressures and pressure
+//! differences (pressure-driven leaks); ω, absolute pressures times ω and pressure
+//! differences times ω (speed-driven flows: pumping, carry-over). 50 terms in all.
+
+use super::fitting::Fitted;
+use super::target::Target;
+use crate::cost::CostModel;
+use crate::effects::Category;
+use crate::estimate::space::ParamSpace;
+use crate::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, SpeedFactor as W};
+use crate::ode::DiffsolBdf;
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// Linearised ΔBIC a library term must reach to be refitted.
+pub const DISCOVERY_DELTA_BIC: f64 = -10.0;
+/// Most terms selected in one regression.
+pub const MAX_TERMS: usize = 2;
+
+/// Typical state used to size the perturbation δ of each feature.
+const TYPICAL: [f64; 4] = [5e5, 2e5, 1.5e5, 800.0];
+/// Size of a perturbation in each balance: torque N·m, mass kg/s.
+const TORQUE_STEP: f64 = 2e-3;
+const MASS_STEP: f64 = 1e-5;
+
+/// The library of candidate terms (coefficient 1).
+pub fn library() -> Vec<ExtraTerm> {
+    let term = |balance, pressure, speed| ExtraTerm {
+        balance,
+        pressure,
+        speed,
+        coefficient: 1.0,
+    };
+    let mut out = Vec::new();
+    // Speed only: ω is `visc`, ω·|ω| is `vane_friction_speed_squared`; pressure times speed:
+    for p in [
+        P::P1,
+        P::P2,
+        P::Pe,
+        P::P1MinusPe,
+        P::P2MinusPe,
+        P::P1MinusP2,
+    ] {
+        out.push(term(BalanceId::Torque, p, W::Omega));
+    }
+    // Coulomb-like, pressure-dependent ((p_1 − p_e)·tanh is `pressure_dependent_friction`):
+    for p in [
+        P::P2MinusPe,
+        P::P1MinusP2,
+        P::P1Gauge,
+        P::P2Gauge,
+        P::PeGauge,
+    ] {
+        out.push(term(BalanceId::Torque, p, W::Sign));
+    }
+    for b in [BalanceId::Mass1, BalanceId::Mass2, BalanceId::MassE] {
+        // Pressure-driven flows (gauge pressures and differences; an absolute pressure
+        // alone would blow at vacuum):
+        for p in [
+            P::P1Gauge,
+            P::P2Gauge,
+            P::PeGauge,
+            P::P1MinusPe,
+            P::P2MinusPe,
+            P::P1MinusP2,
+        ] {
+            out.push(term(b, p, W::One));
+        }
+        // Speed-driven flows (pumping, carry-over: density times swept volume):
+        out.push(term(b, P::One, W::Omega));
+        for p in [
+            P::P1,
+            P::P2,
+            P::Pe,
+            P::P1MinusPe,
+            P::P2MinusPe,
+            P::P1MinusP2,
+        ] {
+            out.push(term(b, p, W::Omega));
+        }
+    }
+    out
+}
+
+/// Perturbation δ of a library term's coefficient: the size of one noise level of its
+/// balance at [`TYPICAL`].
+fn step(t: &ExtraTerm) -> f64 {
+    let unit = ExtraTerm {
+        coefficient: 1.0,
+        ..*t
+    };
+    let f = unit
+        .feature(&TYPICAL, crate::constants::P_ATM_PA, 0.2)
+        .abs()
+        .max(1e-30);
+    match t.balance {
+        BalanceId::Torque => TORQUE_STEP / f,
+        _ => MASS_STEP / f,
+    }
+}
+
+/// The SPEC §5 category of a discovered term: torque → torque_loss; a mass term driven by a
+/// pressure difference between two chambers → internal_leakage; other mass terms at V_1 →
+/// inlet_flow, at V_2 or V_e → outlet_flow.
+pub fn category(t: &ExtraTerm) -> Category {
+    match t.balance {
+        BalanceId::Torque => Category::TorqueLoss,
+        _ if matches!(t.pressure, P::P1MinusPe | P::P2MinusPe | P::P1MinusP2) => {
+            Category::InternalLeakage
+        }
+        BalanceId::Mass1 => Category::InletFlow,
+        BalanceId::Mass2 | BalanceId::MassE => Category::OutletFlow,
+    }
+}
+
+fn pressure_symbol(p: P) -> (&'static str, &'static str) {
+    match p {
+        P::One => ("", ""),
+        P::P1 => ("p1", "Pa"),
+        P::P2 => ("p2", "Pa"),
+        P::Pe => ("pe", "Pa"),
+        P::P1Gauge => ("(p1 - p_atm)", "Pa"),
+        P::P2Gauge => ("(p2 - p_atm)", "Pa"),
+        P::PeGauge => ("(pe - p_atm)", "Pa"),
+        P::P1MinusPe => ("(p1 - pe)", "Pa"),
+        P::P2MinusPe => ("(p2 - pe)", "Pa"),
+        P::P1MinusP2 => ("(p1 - p2)", "Pa"),
+    }
+}
+
+fn speed_symbol(w: W) -> (&'static str, &'static str) {
+    match w {
+        W::One => ("", ""),
+        W::Omega => ("omega", "rad/s"),
+        W::AbsOmega => ("|omega|", "rad/s"),
+        W::OmegaAbsOmega => ("omega*|omega|", "rad2/s2"),
+        W::Sign => ("tanh(omega/w_reg)", ""),
+    }
+}
+
+/// The feature as a product of symbols, e.g. `p2*omega`.
+pub fn feature_name(t: &ExtraTerm) -> String {
+    let (p, _) = pressure_symbol(t.pressure);
+    let (w, _) = speed_symbol(t.speed);
+    match (p.is_empty(), w.is_empty()) {
+        (true, true) => "1".into(),
+        (true, false) => w.into(),
+        (false, true) => p.into(),
+        (false, false) => format!("{p}*{w}"),
+    }
+}
+
+/// The SI unit of a term's coefficient.
+pub fn coefficient_unit(t: &ExtraTerm) -> String {
+    let num = match t.balance {
+        BalanceId::Torque => "N*m",
+        _ => "kg/s",
+    };
+    let (_, pu) = pressure_symbol(t.pressure);
+    let (_, wu) = speed_symbol(t.speed);
+    let den: Vec<&str> = [pu, wu].into_iter().filter(|s| !s.is_empty()).collect();
+    if den.is_empty() {
+        num.into()
+    } else {
+        format!("{num}/({})", den.join("*"))
+    }
+}
+
+/// The balance's symbol in a formula.
+pub fn balance_symbol(b: BalanceId) -> &'static str {
+    match b {
+        BalanceId::Torque => "T_loss",
+        BalanceId::Mass1 => "dm1/dt",
+        BalanceId::Mass2 => "dm2/dt",
+        BalanceId::MassE => "dme/dt",
+    }
+}
+
+/// The balance's name in reports and JSON.
+pub fn balance_name(b: BalanceId) -> &'static str {
+    match b {
+        BalanceId::Torque => "torque",
+        BalanceId::Mass1 => "mass_v1",
+        BalanceId::Mass2 => "mass_v2",
+        BalanceId::MassE => "mass_ve",
+    }
+}
+
+/// A term as a formula with its coefficient, e.g.
+/// `T_loss += 1.2e-10 N*m/(Pa*rad/s) * p2*omega`.
+pub fn formula(t: &ExtraTerm) -> String {
+    format!(
+        "{} += {:.4e} {} * {}",
+        balance_symbol(t.balance),
+        t.coefficient,
+        coefficient_unit(t),
+        feature_name(t)
+    )
+}
+
+/// One library term's linearised score.
+#[derive(Debug, Clone)]
+pub struct TermScore {
+    /// The term with the least-squares coefficient (SI).
+    pub term: ExtraTerm,
+    /// χ² reduction after the nuisance parameters are refitted (linearised).
+    pub delta_chi2: f64,
+    /// −Δχ² + ln n.
+    pub delta_bic: f64,
+}
+
+/// The outcome of a regression.
+#[derive(Debug, Clone, Default)]
+pub struct Regression {
+    /// Every library term scored alone (on top of the nuisance), best first.
+    pub ranking: Vec<TermScore>,
+    /// Terms chosen by forward selection, with their joint least-squares coefficients.
+    pub selected: Vec<TermScore>,
+    pub n_points: usize,
+}
+
+/// Normalised outputs of a motor over every compared point: simulation/σ, concatenated in
+/// channel order.
+fn outputs(
+    cost: &CostModel,
+    target: &Target,
+    motor: &Motor,
+    solver: &DiffsolBdf,
+) -> Option<Vec<f64>> {
+    let res = cost.residuals(motor, solver).ok()?;
+    let v: Vec<f64> = res
+        .iter()
+        .zip(&target.channels)
+        .flat_map(|(c, t)| c.simulated.iter().map(move |s| s / t.sigma))
+        .collect();
+    v.iter().all(|x| x.is_finite()).then_some(v)
+}
+
+/// Regresses the misfit of `model` (estimated parameters `names`, whose sensitivities are
+/// nuisance) over the library (see the module documentation).
+pub fn regress(
+    cost: &CostModel,
+    target: &Target,
+    model: &Fitted,
+    names: &[String],
+    threads: Option<usize>,
+) -> Result<Regression, String> {
+    let solver = DiffsolBdf::default();
+    let motor = model.motor();
+    let sim = outputs(cost, target, &motor, &solver)
+        .ok_or_else(|| "the model to regress does not simulate".to_string())?;
+    let data: Vec<f64> = target
+        .channels
+        .iter()
+        .flat_map(|t| t.data.iter().map(move |d| d / t.sigma))
+        .collect();
+    let r: Vec<f64> = data.iter().zip(&sim).map(|(d, s)| d - s).collect();
+    let n = r.len();
+    let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let space = ParamSpace::new(&name_refs, model.params.clone(), model.effects.clone())
+        .map_err(|e| e.to_string())?;
+    let theta = space.theta(&model.params);
+    let h = 1e-2;
+    // Nuisance: estimated parameters (θ) and any discovered terms already in the model.
+    enum Col {
+        Theta(usize),
+        Extra(usize),
+        Library(ExtraTerm, f64),
+    }
+    let mut cols: Vec<Col> = (0..theta.len()).map(Col::Theta).collect();
+    cols.extend((0..model.extra.len()).map(Col::Extra));
+    let n_nuisance = cols.len();
+    let lib = library();
+    cols.extend(lib.iter().map(|t| Col::Library(*t, step(t))));
+    let column = |c: &Col| -> Option<Vec<f64>> {
+        let at = |sign: f64| -> Option<Vec<f64>> {
+            let m = match c {
+                Col::Theta(i) => {
+                    let mut th = theta.clone();
+                    th[*i] += sign * h;
+                    Motor::new(space.params(&th).ok()?, model.effects.clone())
+                        .with_extra(&model.extra)
+                }
+                Col::Extra(i) => {
+                    let mut extra = model.extra.clone();
+                    extra[*i].coefficient *= 1.0 + sign * 0.05;
+                    Motor::new(model.params.clone(), model.effects.clone()).with_extra(&extra)
+                }
+                Col::Library(t, d) => motor.clone().with_extra(&[ExtraTerm {
+                    coefficient: sign * d,
+                    ..*t
+                }]),
+            };
+            outputs(cost, target, &m, &solver)
+        };
+        let (plus, minus) = (at(1.0)?, at(-1.0)?);
+        let denom = match c {
+            Col::Theta(_) => 2.0 * h,
+            Col::Extra(_) => 2.0 * 0.05,
+            Col::Library(_, d) => 2.0 * d,
+        };
+        Some(
+            plus.iter()
+                .zip(&minus)
+                .map(|(a, b)| (a - b) / denom)
+                .collect(),
+        )
+    };
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(k) = threads {
+        builder = builder.num_threads(k);
+    }
+    let pool = builder.build().map_err(|e| e.to_string())?;
+    let columns: Vec<Option<Vec<f64>>> = pool.install(|| cols.par_iter().map(column).collect());
+
+    // Orthonormal basis of the nuisance columns (SVD, dropping directions with singular
+    // value below 1e-8 of the largest: parameters these data cannot see).
+    let nuisance: Vec<&Vec<f64>> = columns[..n_nuisance].iter().flatten().collect();
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    if !nuisance.is_empty() {
+        let a = DMatrix::from_fn(n, nuisance.len(), |i, j| nuisance[j][i]);
+        let svd = a.svd(true, false);
+        let u = svd.u.expect("requested");
+        let smax = svd.singular_values.max();
+        for (j, s) in svd.singular_values.iter().enumerate() {
+            if *s > 1e-8 * smax {
+                basis.push(u.column(j).into_owned());
+            }
+        }
+    }
+    let project = |v: &DVector<f64>, basis: &[DVector<f64>]| -> DVector<f64> {
+        let mut out = v.clone();
+        for q in basis {
+            let c = q.dot(&out);
+            out.axpy(-c, q, 1.0);
+        }
+        out
+    };
+    let ln_n = (n.max(1) as f64).ln();
+    let r0 = DVector::from_vec(r);
+    let lib_cols: Vec<(ExtraTerm, DVector<f64>)> = lib
+        .iter()
+        .zip(&columns[n_nuisance..])
+        .filter_map(|(t, c)| c.as_ref().map(|c| (*t, DVector::from_column_slice(c))))
+        .collect();
+    let score = |basis: &[DVector<f64>], r: &DVector<f64>| -> Vec<(usize, f64, f64)> {
+        lib_cols
+            .iter()
+            .enumerate()
+            .filter_map(|(i, (_, s))| {
+                let sp = project(s, basis);
+                let ss = sp.dot(&sp);
+                (ss > 1e-12 * s.dot(s).max(1e-300)).then(|| {
+                    let sr = sp.dot(r);
+                    (i, sr * sr / ss, sr / ss)
+                })
+            })
+            .collect()
+    };
+    let mut r_perp = project(&r0, &basis);
+    let mut ranking: Vec<TermScore> = score(&basis, &r_perp)
+        .into_iter()
+        .map(|(i, d, beta)| TermScore {
+            term: ExtraTerm {
+                coefficient: beta,
+                ..lib_cols[i].0
+            },
+            delta_chi2: d,
+            delta_bic: -d + ln_n,
+        })
+        .collect();
+    ranking.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+
+    let mut chosen: Vec<usize> = Vec::new();
+    let mut gains: Vec<f64> = Vec::new();
+    while chosen.len() < MAX_TERMS {
+        let Some((i, d, _)) = score(&basis, &r_perp)
+            .into_iter()
+            .filter(|(i, _, _)| !chosen.contains(i))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+        else {
+            break;
+        };
+        if -d + ln_n >= DISCOVERY_DELTA_BIC {
+            break;
+        }
+        let sp = project(&lib_cols[i].1, &basis);
+        let q = &sp / sp.norm();
+        r_perp = project(&r_perp, std::slice::from_ref(&q));
+        basis.push(q);
+        chosen.push(i);
+        gains.push(d);
+    }
+    // Joint coefficients of the chosen terms with the nuisance (least squares).
+    let mut selected = Vec::new();
+    if !chosen.is_empty() {
+        let mut all: Vec<&DVector<f64>> = Vec::new();
+        let nuis: Vec<DVector<f64>> = nuisance
+            .iter()
+            .map(|c| DVector::from_column_slice(c))
+            .collect();
+        all.extend(nuis.iter());
+        all.extend(chosen.iter().map(|&i| &lib_cols[i].1));
+        let a = DMatrix::from_fn(n, all.len(), |i, j| all[j][i]);
+        let beta = a
+            .svd(true, true)
+            .solve(&r0, 1e-10)
+            .map_err(|e| e.to_string())?;
+        for (k, &i) in chosen.iter().enumerate() {
+            let b = beta[nuis.len() + k];
+            selected.push(TermScore {
+                term: ExtraTerm {
+                    coefficient: b,
+                    ..lib_cols[i].0
+                },
+                delta_chi2: gains[k],
+                delta_bic: -gains[k] + ln_n,
+            });
+        }
+    }
+    Ok(Regression {
+        ranking,
+        selected,
+        n_points: n,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn library_terms_are_distinct_and_described() {
+        let lib = library();
+        for (i, a) in lib.iter().enumerate() {
+            for b in &lib[..i] {
+                assert!(
+                    (a.balance, a.pressure, a.speed) != (b.balance, b.pressure, b.speed),
+                    "{a:?}"
+                );
+            }
+            assert!(step(a).is_finite() && step(a) > 0.0);
+        }
+        let t = ExtraTerm {
+            balance: BalanceId::Torque,
+            pressure: P::P2,
+            speed: W::Omega,
+            coefficient: 2e-10,
+        };
+        assert_eq!(feature_name(&t), "p2*omega");
+        assert_eq!(coefficient_unit(&t), "N*m/(Pa*rad/s)");
+        assert!(formula(&t).starts_with("T_loss += 2.0000e-10"));
+        assert_eq!(category(&t), Category::TorqueLoss);
+    }
+}

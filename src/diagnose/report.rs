@@ -1,0 +1,386 @@
+//! The human report of a diagnosis: `report.md` with SVG plots next to it.
+//!
+//! * `overlay.<experiment>.svg`: per channel, the recorded data, the baseline and the
+//!   extended model against the abscissa, in the recording's units;
+//! * `residuals.<experiment>.svg`: per channel, (simulation − data)/σ of the baseline and of
+//!   the extended model (noise is ±1);
+//! * `ranking.svg`: ΔBIC of every refitted model.
+
+use super::analysis::ChannelData;
+use super::{discover, num, summary, Diagnosis, ModelKind};
+use crate::plot::{Chart, Figure, Legend, Series};
+use std::fmt::Write as _;
+use std::path::Path;
+
+fn x_label(ch: &ChannelData) -> String {
+    if ch.abscissa.log10 {
+        format!("{} (log scale)", ch.abscissa.column)
+    } else {
+        ch.abscissa.column.clone()
+    }
+}
+
+/// (display x, display y) of a channel's values, sorted by x.
+fn curve(ch: &ChannelData, y: &[f64], p_atm: f64, as_display: bool) -> Vec<(f64, f64)> {
+    let mut v: Vec<(f64, f64)> =
+        ch.x.iter()
+            .zip(y)
+            .map(|(x, y)| {
+                (
+                    ch.abscissa.display(*x, p_atm),
+                    if as_display {
+                        ch.unit.from_si(*y, p_atm)
+                    } else {
+                        *y
+                    },
+                )
+            })
+            .collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    v
+}
+
+fn stem(file: &str) -> String {
+    Path::new(file)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| file.to_string())
+}
+
+/// Writes the plots and `report.md`.
+pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
+    let p_atm = d.p_atm_pa;
+    let mut files: Vec<String> = d.baseline_channels.iter().map(|c| c.file.clone()).collect();
+    files.dedup();
+    let ext_label = if d.selected.is_empty() {
+        "extended (= baseline)".to_string()
+    } else {
+        format!("extended ({})", d.extended.label)
+    };
+    let mut figures: Vec<(String, String, String)> = Vec::new();
+    for file in &files {
+        let mut overlays = Vec::new();
+        let mut residuals = Vec::new();
+        for (b, e) in d
+            .baseline_channels
+            .iter()
+            .zip(&d.extended_channels)
+            .filter(|(b, _)| &b.file == file)
+        {
+            let mut chart = Chart::new(&format!("{file}: {}", b.column), &x_label(b), &b.column)
+                .with(Series::points("data", curve(b, &b.data, p_atm, true)))
+                .with(Series::line("baseline", curve(b, &b.sim, p_atm, true)))
+                .with(Series::line(&ext_label, curve(e, &e.sim, p_atm, true)))
+                .legend(Legend::UpperLeft);
+            if b.abscissa.log10 {
+                chart = chart.log_x();
+            }
+            overlays.push(chart);
+            let mut chart = Chart::new(
+                &format!("{file}: {} residual / noise", b.column),
+                &x_label(b),
+                "(simulation - data) / sigma",
+            )
+            .with(Series::points(
+                "baseline",
+                curve(b, &b.normalized(), p_atm, false),
+            ))
+            .with(Series::points(
+                &ext_label,
+                curve(e, &e.normalized(), p_atm, false),
+            ))
+            .legend(Legend::UpperLeft);
+            if b.abscissa.log10 {
+                chart = chart.log_x();
+            }
+            residuals.push(chart);
+        }
+        if overlays.is_empty() {
+            continue;
+        }
+        let s = stem(file);
+        let cols = overlays.len().min(3);
+        let o = format!("overlay.{s}.svg");
+        let r = format!("residuals.{s}.svg");
+        Figure::new(overlays, cols)
+            .write_svg(&out.join(&o))
+            .map_err(|e| e.to_string())?;
+        Figure::new(residuals, cols)
+            .write_svg(&out.join(&r))
+            .map_err(|e| e.to_string())?;
+        figures.push((file.clone(), o, r));
+    }
+    let mut ranking = Chart::new("Refitted models", "rank", "dBIC against the baseline")
+        .legend(Legend::LowerRight);
+    for (i, c) in d.candidates.iter().enumerate().take(12) {
+        ranking = ranking.with(Series::points(
+            &c.label,
+            vec![((i + 1) as f64, c.delta_bic)],
+        ));
+    }
+    if !d.candidates.is_empty() {
+        ranking
+            .write_svg(&out.join("ranking.svg"))
+            .map_err(|e| e.to_string())?;
+    }
+
+    let mut md = String::new();
+    let _ = writeln!(md, "# Diagnosis of `{}`\n", d.dataset);
+    let _ = writeln!(md, "{}\n", summary(d));
+    let _ = writeln!(
+        md,
+        "**mismatch: {}**. Baseline noise ratio {:.3} (a correct model exceeds {:.3} with \
+         probability 0.1%), extended {:.3}. Wall time {:.1} s on {} thread(s).\n",
+        d.mismatch,
+        d.baseline.noise_ratio,
+        d.noise_ratio_limit,
+        d.extended.noise_ratio,
+        d.wall_s,
+        d.threads
+    );
+    let _ = writeln!(
+        md,
+        "Noise ratio = RMS over channels of (simulation − recorded data)/σ, σ the noise \
+         estimate of each channel's reference polynomial; ≈ 1 means explained to within \
+         noise. BIC = χ² + k·ln n (χ² against the reference polynomials over n = {} points, \
+         k estimated parameters); a model is selected only when it beats every simpler one by \
+         ΔBIC < −10.\n",
+        d.baseline.fitted.n_points
+    );
+
+    if !d.inputs.is_empty() {
+        let _ = writeln!(
+            md,
+            "Recorded inputs of the transients (errors in variables: the simulation is driven \
+             by their smooth in time where it fits to within noise):\n\n\
+             | file | column | noise | RMS change | smooth |\n|---|---|---|---|---|"
+        );
+        for i in &d.inputs {
+            let rel = i.column.starts_with("c_port2");
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} |",
+                i.file,
+                i.column,
+                if rel {
+                    format!("{:.2}%", 100.0 * i.noise)
+                } else {
+                    format!("{} Pa", num(i.noise))
+                },
+                if rel {
+                    format!("{:.2}%", 100.0 * i.rms_change)
+                } else {
+                    format!("{} Pa", num(i.rms_change))
+                },
+                i.degree
+                    .map_or("kept as recorded".into(), |g| format!("degree {g}"))
+            );
+        }
+        let _ = writeln!(md);
+    }
+    let _ = writeln!(md, "## Where the baseline misses\n");
+    if d.locations.is_empty() {
+        let _ = writeln!(
+            md,
+            "No channel shows a regional bias, runs or trend beyond noise (family-wise α = 1%).\n"
+        );
+    } else {
+        let _ = writeln!(
+            md,
+            "| experiment | channel | abscissa range | severity (σ) | mean sim − data | test |\n|---|---|---|---|---|---|"
+        );
+        for l in &d.locations {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} {} .. {} | {:.2} | {} {} | {} |",
+                l.kind.id(),
+                l.column,
+                l.x_column,
+                num(l.x_range_display[0]),
+                num(l.x_range_display[1]),
+                l.severity,
+                num(l.bias_display),
+                l.unit,
+                l.test
+            );
+        }
+        let _ = writeln!(md);
+    }
+    let _ = writeln!(
+        md,
+        "| experiment | channel | noise ratio baseline | noise ratio extended |\n|---|---|---|---|"
+    );
+    for (b, e) in d.baseline_channels.iter().zip(&d.extended_channels) {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.3} | {:.3} |",
+            b.file,
+            b.column,
+            b.mean_square().sqrt(),
+            e.mean_square().sqrt()
+        );
+    }
+    let _ = writeln!(md);
+
+    let _ = writeln!(md, "## Concealment\n");
+    match &d.concealment {
+        None => {
+            let _ = writeln!(md, "Not tested (one experiment, or switched off).\n");
+        }
+        Some(c) => {
+            let _ = writeln!(
+                md,
+                "Each experiment fitted alone against the joint fit: χ²_joint − Σχ²_alone = \
+                 {:.1} on at most {} degrees of freedom, p = {:.2e} ({}). Held-out: each \
+                 experiment predicted by the base model fitted to the others.\n",
+                c.lr,
+                c.df,
+                c.p_value,
+                if c.disagree() {
+                    "the experiments disagree: a plain fit conceals a mismatch"
+                } else {
+                    "the parameters agree"
+                }
+            );
+            let _ = writeln!(
+                md,
+                "| experiment | noise ratio, joint fit | fitted alone | predicted from the others |\n|---|---|---|---|"
+            );
+            for e in &c.experiments {
+                let _ = writeln!(
+                    md,
+                    "| {} | {:.3} | {:.3} | {} |",
+                    e.file,
+                    e.joint_ratio,
+                    e.alone_ratio,
+                    e.held_out_ratio.map_or("-".into(), |v| format!("{v:.3}"))
+                );
+            }
+            let _ = write!(md, "\n| parameter | joint |");
+            for e in &c.experiments {
+                let _ = write!(md, " {} alone |", e.file);
+            }
+            let _ = write!(md, "\n|---|---|");
+            for _ in &c.experiments {
+                let _ = write!(md, "---|");
+            }
+            let _ = writeln!(md);
+            for n in &d.estimated {
+                let _ = write!(
+                    md,
+                    "| {n} | {} |",
+                    num(d.baseline.fitted.params.get(n).unwrap_or(f64::NAN))
+                );
+                for e in &c.experiments {
+                    let _ = write!(md, " {} |", num(e.alone_params.get(n).unwrap_or(f64::NAN)));
+                }
+                let _ = writeln!(md);
+            }
+            let _ = writeln!(md);
+        }
+    }
+
+    let _ = writeln!(md, "## Candidates\n");
+    let _ = writeln!(
+        md,
+        "Each refitted warm from the baseline optimum; ranked by ΔBIC.\n\n![ranking](ranking.svg)\n"
+    );
+    let _ = writeln!(
+        md,
+        "| model | kind | k | cost | χ² | ΔBIC | noise ratio | held-out noise ratio |\n|---|---|---|---|---|---|---|---|"
+    );
+    let row = |md: &mut String, c: &super::Candidate| {
+        let _ = writeln!(
+            md,
+            "| {} | {:?} | {} | {:.4} | {:.1} | {:.1} | {:.3} | {} |",
+            c.label,
+            c.kind,
+            c.fitted.k,
+            c.fitted.cost,
+            c.fitted.chi2,
+            c.delta_bic,
+            c.noise_ratio,
+            c.held_out.map_or("-".into(), |v| format!("{v:.3}"))
+        );
+    };
+    row(&mut md, &d.baseline);
+    for c in &d.candidates {
+        row(&mut md, c);
+    }
+    let _ = writeln!(md);
+    for s in &d.skipped {
+        let _ = writeln!(md, "* `{}` not tried: {}.", s.effect.id(), s.reason);
+    }
+    let _ = writeln!(md);
+    if let Some(r) = &d.regression {
+        let _ = writeln!(
+            md,
+            "### Term library: linearised regression of the baseline misfit\n\n\
+             Each term alone, on top of a refit of the base parameters (first-order \
+             sensitivities), best first:\n\n| term | linearised ΔBIC |\n|---|---|"
+        );
+        for t in r.ranking.iter().take(8) {
+            let _ = writeln!(
+                md,
+                "| `{}` | {:.1} |",
+                discover::formula(&t.term),
+                t.delta_bic
+            );
+        }
+        let _ = writeln!(md);
+    }
+
+    let _ = writeln!(md, "## Selected\n");
+    if d.selected.is_empty() {
+        let _ = writeln!(md, "Nothing: the base model is kept.\n");
+    } else {
+        for s in &d.selected {
+            let params: Vec<String> = s
+                .parameters
+                .iter()
+                .map(|(n, v, u)| format!("{n} = {} {u}", num(*v)))
+                .collect();
+            let _ = writeln!(
+                md,
+                "* **{}** ({}): {}; ΔBIC {:.1}{}",
+                s.effect,
+                s.category.id(),
+                params.join(", "),
+                s.delta_bic,
+                s.term
+                    .as_ref()
+                    .map_or(String::new(), |t| format!("; `{}`", discover::formula(t)))
+            );
+        }
+        let _ = writeln!(md);
+        if d.extended.kind != ModelKind::Baseline {
+            let _ = writeln!(
+                md,
+                "Locations left after the extension: {}.\n",
+                if d.extended_locations.is_empty() {
+                    "none".to_string()
+                } else {
+                    d.extended_locations
+                        .iter()
+                        .map(|l| format!("{} {} ({:.1}σ)", l.kind.id(), l.column, l.severity))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                }
+            );
+        }
+    }
+
+    let _ = writeln!(md, "## Plots\n");
+    for (file, o, r) in &figures {
+        let _ = writeln!(md, "### {file}\n\n![overlay]({o})\n\n![residuals]({r})\n");
+    }
+
+    let _ = writeln!(md, "## Run\n\n| phase | s |\n|---|---|");
+    for (p, s) in &d.phases {
+        let _ = writeln!(md, "| {p} | {s:.1} |");
+    }
+    let _ = writeln!(md, "| total | {:.1} |", d.wall_s);
+    let path = out.join("report.md");
+    crate::fsutil::write_atomic(&path, md.as_bytes())
+        .map_err(|e| format!("{}: {e}", path.display()))
+}

@@ -1,0 +1,285 @@
+//! What the diagnosis fits: the recorded data themselves, with a noise estimate per channel
+//! that does not depend on any model or polynomial.
+//!
+//! # Why not the cost's references
+//!
+//! The fitting cost ([`crate::cost`]) compares simulations with reference polynomials and
+//! normalises by the polynomial's residual σ. Where a polynomial cannot follow the curve
+//! (a pressure ramp's breakaway, a sharp knee) that σ holds the polynomial's lack of fit
+//! too: on the shipped kind of dataset it overstates the noise of the ramp's speed about
+//! threefold. And the polynomial's own systematic error is a signal that a fit to one
+//! experiment can chase. Both break the statistics of a diagnosis (a correct model would
+//! score a noise ratio well below 1; separate fits would "disagree" on clean data). So the
+//! diagnosis uses the Gaussian likelihood of the recorded rows:
+//!
+//! ```text
+//!     χ² = Σ_c Σ_i ((y_sim,ci − y_data,ci)/σ_c)²                    [1]
+//! ```
+//!
+//! over the rows the cost compares (abscissa inside the reference's valid range; the rows
+//! inside a breakaway jump are left out as there), with σ_c from the data alone.
+//!
+//! # Noise estimate
+//!
+//! Second differences d_i = y_{i+1} − 2y_i + y_{i−1} of the recorded channel, rows in
+//! time order (transients) or in abscissa order (datasheet), remove any smooth curve (its
+//! contribution is f''·h², negligible at these sampling rates) and leave noise with
+//! variance 6σ². Jumps (a motor breaking away) give a few huge d_i, so those beyond five
+//! robust standard deviations (from the median |d_i|) are dropped, then
+//! σ² = mean(d_i²)/6 over the rest. As in the references, σ is at least max|y|/4096 (a
+//! 12-bit converter's resolution), so noise-free data do not get an infinite weight.
+
+use crate::cost::{ChannelResiduals, CostModel, FAILURE_PENALTY};
+use crate::dataset::{Dataset, Kind};
+use crate::reference::{FitOptions, Reference};
+use crate::estimate::objective::{Evaluation, Objective};
+use crate::motor::Motor;
+use crate::ode::DiffsolBdf;
+use crate::units::Quantity;
+
+/// One compared channel: rows, recorded values there, noise.
+#[derive(Debug, Clone)]
+pub struct ChannelTarget {
+    pub file: String,
+    pub quantity: Quantity,
+    /// Recording rows compared (the cost's rows).
+    pub rows: Vec<usize>,
+    /// Recorded values at those rows, SI.
+    pub data: Vec<f64>,
+    /// Noise standard deviation of the channel, SI (see the module documentation).
+    pub sigma: f64,
+}
+
+/// Every compared channel of a dataset, in the cost's channel order.
+#[derive(Debug, Clone)]
+pub struct Target {
+    pub channels: Vec<ChannelTarget>,
+}
+
+/// Noise standard deviation of samples in order (see the module documentation).
+pub fn noise_sigma(y: &[f64]) -> f64 {
+    let floor = (y.iter().fold(0.0f64, |m, v| m.max(v.abs())) / 4096.0).max(f64::MIN_POSITIVE);
+    if y.len() < 5 {
+        return floor;
+    }
+    let d: Vec<f64> = y.windows(3).map(|w| w[2] - 2.0 * w[1] + w[0]).collect();
+    let mut abs: Vec<f64> = d.iter().map(|v| v.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let median = abs[abs.len() / 2];
+    // For Gaussian d with sd s, median |d| = 0.6745 s; keep |d| ≤ 5 s.
+    let cut = 5.0 * median / 0.6745;
+    let kept: Vec<f64> = d.iter().copied().filter(|v| v.abs() <= cut).collect();
+    if kept.is_empty() {
+        return floor;
+    }
+    let ms = kept.iter().map(|v| v * v).sum::<f64>() / kept.len() as f64;
+    (ms / 6.0).sqrt().max(floor)
+}
+
+/// What [`smooth_inputs`] did to one recorded input column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputSmoothing {
+    pub file: String,
+    pub column: String,
+    /// Noise of the recorded column (SI; relative for a conductance, whose log10 is smoothed).
+    pub noise: f64,
+    /// RMS of smooth − recorded (same scale as `noise`).
+    pub rms_change: f64,
+    /// Degree of the smooth (highest over its pieces); `None` when left as recorded.
+    pub degree: Option<usize>,
+}
+
+/// Errors in variables. A transient experiment is driven by its RECORDED input columns
+/// (port-1 pressure, port-2 conductance), which carry their own sensor noise; the
+/// experiment's schedule averages them in bins of ~n/64 samples, which leaves input errors
+/// of σ_in/√(n/64) that stay constant over a bin. The outputs follow them (the ramp's speed
+/// moves ≈ 1.6 rad/s per kPa, so 1 kPa of pressure noise leaves ≈ 0.5 rad/s, one noise σ of
+/// a speed sensor, correlated over a second), and a flexible candidate fits that structure:
+/// on clean synthetic data a breakaway friction then "wins" by ΔBIC −80. So the diagnosis
+/// drives the simulation with the least-squares smooth of each input column in time (the
+/// reference method: Chebyshev polynomial, degree by cross-validation, pieces at jumps), whose
+/// error is σ_in·√(p/n) and smooth, when that smooth describes the column to within its noise
+/// (its residual σ at most 1.2 times the second-difference noise of the column); otherwise the
+/// column is used as recorded. The conductance is smoothed as log10.
+pub fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
+    let mut out = ds.clone();
+    let mut notes = Vec::new();
+    for ex in &mut out.experiments {
+        if ex.kind == Kind::Datasheet {
+            continue;
+        }
+        let Some(times) = ex.recording.column(Quantity::Time).map(|c| c.si.clone()) else {
+            continue;
+        };
+        for col in &mut ex.recording.columns {
+            let log = match col.quantity {
+                Quantity::PPort1 => false,
+                Quantity::CPort2 => true,
+                _ => continue,
+            };
+            let v: Vec<f64> = if log {
+                if col.si.iter().any(|c| *c <= 0.0) {
+                    continue;
+                }
+                col.si.iter().map(|c| c.log10()).collect()
+            } else {
+                col.si.clone()
+            };
+            let noise = noise_sigma(&v);
+            let smooth = Reference::fit(&times, &v, &FitOptions::default()).ok();
+            let accepted = smooth
+                .as_ref()
+                .filter(|r| r.sigma_residual() <= 1.2 * noise);
+            let scale = if log { std::f64::consts::LN_10 } else { 1.0 };
+            let mut note = InputSmoothing {
+                file: ex.file.clone(),
+                column: col.name.clone(),
+                noise: noise * scale,
+                rms_change: 0.0,
+                degree: None,
+            };
+            if let Some(r) = accepted {
+                let new: Vec<f64> = times
+                    .iter()
+                    .zip(&v)
+                    .map(|(t, old)| r.eval(*t).unwrap_or(*old))
+                    .collect();
+                note.rms_change = (new
+                    .iter()
+                    .zip(&v)
+                    .map(|(a, b)| (a - b).powi(2))
+                    .sum::<f64>()
+                    / v.len().max(1) as f64)
+                    .sqrt()
+                    * scale;
+                note.degree = Some(r.degree());
+                col.si = if log {
+                    new.iter().map(|x| 10f64.powf(*x)).collect()
+                } else {
+                    new
+                };
+            }
+            notes.push(note);
+        }
+    }
+    (out, notes)
+}
+
+impl Target {
+    /// The compared rows of every channel of `cost` (built from `ds`), the recorded values
+    /// there and each channel's noise.
+    pub fn new(cost: &CostModel, ds: &Dataset) -> Result<Self, String> {
+        let mut channels = Vec::new();
+        for ex in cost.experiments() {
+            let data = ds
+                .experiments
+                .iter()
+                .find(|e| e.file == ex.file)
+                .ok_or_else(|| format!("{}: not in the dataset", ex.file))?;
+            let abscissa = ex.abscissa();
+            for r in cost.references().filter(|r| r.file == ex.file) {
+                let values = data
+                    .recording
+                    .values(r.quantity)
+                    .map_err(|e| e.to_string())?;
+                let rows: Vec<usize> = (0..abscissa.len())
+                    .filter(|&i| r.reference.eval(abscissa[i]).is_some())
+                    .collect();
+                let ordered: Vec<f64> = match data.kind {
+                    Kind::Datasheet => {
+                        let mut idx: Vec<usize> = (0..values.len()).collect();
+                        idx.sort_by(|a, b| abscissa[*a].total_cmp(&abscissa[*b]));
+                        idx.iter().map(|&i| values[i]).collect()
+                    }
+                    _ => values.to_vec(),
+                };
+                channels.push(ChannelTarget {
+                    file: ex.file.clone(),
+                    quantity: r.quantity,
+                    data: rows.iter().map(|&i| values[i]).collect(),
+                    rows,
+                    sigma: noise_sigma(&ordered),
+                });
+            }
+        }
+        Ok(Self { channels })
+    }
+
+    /// Number of compared points.
+    pub fn n_points(&self) -> usize {
+        self.channels.iter().map(|c| c.rows.len()).sum()
+    }
+
+    /// Per channel Σ((sim − data)/σ)² of simulated residuals (same channel order).
+    pub fn channel_chi2(&self, res: &[ChannelResiduals]) -> Vec<f64> {
+        self.channels
+            .iter()
+            .zip(res)
+            .map(|(t, r)| {
+                r.simulated
+                    .iter()
+                    .zip(&t.data)
+                    .map(|(s, d)| ((s - d) / t.sigma).powi(2))
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// χ² of eq. [1] for a motor, or `None` if the simulation fails or is not finite.
+    pub fn chi2(&self, cost: &CostModel, motor: &Motor, solver: &DiffsolBdf) -> Option<f64> {
+        let res = cost.residuals(motor, solver).ok()?;
+        let c: f64 = self.channel_chi2(&res).iter().sum();
+        c.is_finite().then_some(c)
+    }
+}
+
+/// The likelihood of eq. [1] as an estimation objective: cost = χ²/n (≈ 1 for a correct
+/// model), failures give the cost module's penalty.
+pub struct Likelihood<'a> {
+    pub cost: &'a CostModel,
+    pub target: &'a Target,
+    pub solver: DiffsolBdf,
+}
+
+impl Objective for Likelihood<'_> {
+    fn evaluate(&self, motor: &Motor) -> Evaluation {
+        let n = self.target.n_points();
+        match self.target.chi2(self.cost, motor, &self.solver) {
+            Some(chi2) => Evaluation {
+                cost: chi2 / n.max(1) as f64,
+                chi2,
+                n_points: n,
+                failed: false,
+            },
+            None => Evaluation {
+                cost: FAILURE_PENALTY,
+                chi2: FAILURE_PENALTY,
+                n_points: n,
+                failed: true,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    #[test]
+    fn noise_of_a_smooth_curve_with_a_jump_is_the_noise() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+        let d = Normal::new(0.0, 0.5).unwrap();
+        let y: Vec<f64> = (0..600)
+            .map(|i| {
+                let t = i as f64 / 10.0;
+                let jump = if i > 200 { 400.0 + 5.0 * t } else { 0.0 };
+                1000.0 * (t / 60.0).powi(2) + jump + d.sample(&mut rng)
+            })
+            .collect();
+        let s = noise_sigma(&y);
+        assert!((s - 0.5).abs() < 0.05, "{s}");
+    }
+}

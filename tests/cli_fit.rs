@@ -1,0 +1,119 @@
+//! The `fit` and `simulate` commands end to end: a short fit writes a fit file that
+//! `simulate --params` reads back, a resumed run reproduces it, and bad options exit 1 with
+//! the option named (bad usage: 2).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn vanefit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const DATASET: &str = "measurements/ar034-synthetic";
+
+#[test]
+fn short_fit_exports_a_fit_that_simulate_reads_back_and_resume_reproduces() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = dir.path().join("short.json");
+    let fit_s = fit.to_str().unwrap();
+    let args = [
+        "fit",
+        DATASET,
+        "--starts",
+        "3",
+        "--max-iters",
+        "60",
+        "--uncertainty",
+        "none",
+        "--no-plots",
+        "--out",
+        fit_s,
+    ];
+    let o = vanefit(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&fit).unwrap();
+    let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(doc["format"], "vanefit.fit/1");
+    assert_eq!(doc["starts"]["total"], 3);
+    assert!(doc["run"]["evaluations"].as_u64().unwrap() > 0);
+    assert_eq!(doc["parameters"]["c_in1"]["estimated"], true);
+    assert_eq!(doc["parameters"]["inertia"]["estimated"], false);
+    assert!(Path::new(&dir.path().join("short.starts.jsonl")).exists());
+
+    // The exported fit simulates.
+    let sim_dir = dir.path().join("sim");
+    let o = vanefit(&[
+        "simulate",
+        DATASET,
+        "--params",
+        fit_s,
+        "--out",
+        sim_dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let ramp = std::fs::read_to_string(sim_dir.join("ramp.csv")).unwrap();
+    assert!(ramp.starts_with("t_s,p_port1_mpa,flow1_g_s,flow2_g_s,speed_rpm"));
+
+    // Resuming a finished run reruns nothing and writes the same parameters.
+    let o = vanefit(&[&args[..], &["--resume"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let again: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    assert_eq!(again["parameters"], doc["parameters"]);
+    assert_eq!(again["cost"], doc["cost"]);
+}
+
+#[test]
+fn bad_options_name_the_option_and_exit_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.json");
+    let out = out.to_str().unwrap();
+    for (extra, needle) in [
+        (vec!["--starts", "0"], "--starts"),
+        (vec!["--effects", "magic_friction"], "--effects"),
+        (vec!["--estimate", "c_in1,c_nope"], "c_nope"),
+        (vec!["--bounds", "c_in1=1e-8:1e-9"], "c_in1"),
+        (vec!["--bounds", "visc=abc"], "--bounds"),
+        (vec!["--threads", "0"], "--threads"),
+    ] {
+        let mut args = vec!["fit", DATASET, "--out", out];
+        args.extend(extra);
+        let o = vanefit(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    }
+    assert_eq!(
+        vanefit(&["fit", DATASET]).status.code(),
+        Some(2),
+        "--out is required"
+    );
+    assert_eq!(vanefit(&["frobnicate"]).status.code(), Some(2));
+    let o = vanefit(&["fit", "no/such/dataset", "--out", out]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("no/such/dataset"));
+}
+
+#[test]
+fn simulate_refuses_a_fit_file_with_an_unknown_parameter() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = dir.path().join("bad.json");
+    std::fs::write(&fit, "{\n  \"format\": \"vanefit.fit/1\",\n  \"parameters\": {\n    \"c_inl\": {\"value\": 7e-9}\n  }\n}\n").unwrap();
+    let o = vanefit(&[
+        "simulate",
+        DATASET,
+        "--params",
+        fit.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("bad.json:4") && e.contains("c_inl"), "{e}");
+}
