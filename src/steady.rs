@@ -141,8 +141,8 @@ mod tests {
         let bc = Boundary::supplied(7.3e5, 101_325.0, Load::ViscousBrake { c_nm_s_rad: 2e-4 });
         let x = free(&m, &bc, &initial_guess(&bc)).unwrap();
         let d = m.derivatives(&x, &bc);
-        for i in 0..3 {
-            assert!(d[i].abs() < 1e-3, "dp{i}/dt = {}", d[i]);
+        for (i, dp) in d.iter().take(3).enumerate() {
+            assert!(dp.abs() < 1e-3, "dp{i}/dt = {dp}");
         }
         assert!(d[3].abs() < 1e-6);
         assert!(x[idx::OMEGA] > 100.0);

@@ -76,9 +76,11 @@ impl Cycle {
 
     /// Work done BY the air in one compartment per cycle (eqs. 9–12, SPEC §1.2), J:
     ///
+    /// ```text
     /// W = (p_a − p_b)(V_fill − V_d)
     ///   + p_a·V_fill·(1 − ε^(1−n))/(n−1)      (expansion b→c)
     ///   − p_e·V_exp·(ε^(n−1) − 1)/(n−1)       (compression d→e, from p_e)
+    /// ```
     ///
     /// `p_a`: filling pressure, `p_b`: discharge pressure, `p_e`: exhaust pressure, all Pa.
     pub fn work(&self, p_a: f64, p_b: f64, p_e: f64) -> f64 {

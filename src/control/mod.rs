@@ -10,9 +10,10 @@
 //!   (Figs. 18–20).
 //! * [`design`]: margins of the loop and PI gains for a phase margin or crossover.
 //! * [`min_speed`]: lowest speed without control (pressure-ramp start-up) and with control.
+//! * [`study`]: `vanefit control <study>`, CSV and SVG output.
+//!
 //! The motor is integrated with `ode::DiffsolBdf`, which steps and interpolates itself and so
 //! serves the many short sample-to-sample intervals of the closed loop.
-//! * [`study`]: `vanefit control <study>`, CSV and SVG output.
 //!
 //! SI units inside (Pa absolute, rad/s, N·m, s). The controller's signals are the exception
 //! that the paper imposes: the command is in volts (0–10 V to the valve) and the speed error in
