@@ -221,3 +221,47 @@ fn a_parameter_the_cost_ignores_is_not_identifiable() {
     assert!(!ivs[1].identifiable());
     assert_eq!((ivs[1].lo, ivs[1].hi), (None, None));
 }
+
+/// An objective that breaks: NaN, infinity, then a proper value.
+struct Broken;
+
+impl Objective for Broken {
+    fn evaluate(&self, motor: &Motor) -> Evaluation {
+        let x = motor.params.c_in1.log10();
+        let cost = if x > -8.2 {
+            f64::NAN
+        } else if x < -8.8 {
+            f64::INFINITY
+        } else {
+            (x + 8.5).powi(2)
+        };
+        Evaluation {
+            cost,
+            chi2: cost,
+            n_points: 1,
+            failed: !cost.is_finite(),
+        }
+    }
+}
+
+#[test]
+fn no_nan_or_infinity_reaches_the_optimizer() {
+    use vanefit::estimate::Problem;
+    let s = ParamSpace::new(&["c_in1"], MotorParams::default(), EffectSet::empty()).unwrap();
+    let problem = Problem::new(&Broken, &s, false);
+    for t in [-30.0, -3.0, -1.0, 0.0, 1.0, 3.0, 30.0] {
+        let e = problem.evaluate(&[t]);
+        assert!(e.cost.is_finite() && e.chi2.is_finite(), "θ = {t}: {e:?}");
+    }
+    // And the search still finds the finite valley between the broken regions.
+    let cfg = MultiStartConfig {
+        starts: 4,
+        seed: 9,
+        sd_tolerance: 1e-14,
+        kill_factor: f64::INFINITY,
+        ..Default::default()
+    };
+    let out = multistart::run(&Broken, &s, &cfg, &Silent, None, false).unwrap();
+    let x = s.params(&out.best().theta).unwrap().c_in1.log10();
+    assert!((x + 8.5).abs() < 1e-3, "log10 c_in1 = {x}");
+}

@@ -31,10 +31,10 @@
 
 use crate::cost::{ChannelResiduals, CostModel, FAILURE_PENALTY};
 use crate::dataset::{Dataset, Kind};
-use crate::reference::{FitOptions, Reference};
 use crate::estimate::objective::{Evaluation, Objective};
 use crate::motor::Motor;
 use crate::ode::DiffsolBdf;
+use crate::reference::{FitOptions, Reference};
 use crate::units::Quantity;
 
 /// One compared channel: rows, recorded values there, noise.
