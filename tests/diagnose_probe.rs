@@ -1,3 +1,4 @@
+mod diagnose_support;
 use std::path::PathBuf;
 use vanefit::dataset::Dataset;
 use vanefit::diagnose::{diagnose, summary, DiagnoseOptions};
@@ -50,7 +51,7 @@ fn dataset(experiments: Vec<vanefit::dataset::ExperimentData>) -> Dataset {
 fn probe() {
     let effects = std::env::var("FX").unwrap_or_default();
     let set = EffectSet::parse_list(&effects).unwrap();
-    let mut p = perturbed();
+    let mut p = diagnose_support::perturbed_base();
     if let Ok(v) = std::env::var("PV") {
         for kv in v.split(',') {
             let (k, v) = kv.split_once('=').unwrap();
@@ -64,8 +65,8 @@ fn probe() {
         noise.pressure_pa = 0.0;
         noise.conductance_rel = 0.0;
     }
-    let data = synthesize(&truth, &solver, &SynthPlan::default(), &noise, 11).unwrap();
-    let ds = dataset(data);
+    let _ = (&noise, &solver);
+    let ds = diagnose_support::dataset("probe", diagnose_support::synthesize(&truth, 11));
     let mut o = if std::env::var("FULL").is_ok() {
         DiagnoseOptions::full(4, 1)
     } else {
@@ -79,4 +80,73 @@ fn probe() {
         serde_json::to_string_pretty(&vanefit::diagnose::to_json(&d)).unwrap()
     );
     vanefit::diagnose::write(&d, std::path::Path::new("/tmp/diag_probe")).unwrap();
+}
+
+#[test]
+#[ignore]
+fn probe_steady() {
+    use vanefit::motor::{Boundary, Load};
+    use vanefit::steady;
+    for (ts, dp) in [
+        (0.06, -10.0),
+        (0.06, -1e-6),
+        (0.06, 1e-6),
+        (0.06, 5.0),
+        (0.06, 0.5),
+        (0.02, -10.0),
+        (0.02, -1.0),
+    ] {
+        let p = MotorParams::default().with("t_static", ts).unwrap();
+        let m = Motor::new(p, EffectSet::parse_list("breakaway_friction").unwrap());
+        let bc = Boundary::supplied(
+            101325.0 + dp,
+            101325.0,
+            Load::ViscousBrake { c_nm_s_rad: 1e-4 },
+        );
+        let r = steady::free(&m, &bc, &steady::initial_guess(&bc));
+        eprintln!("t_static {ts} dp {dp}: {:?}", r);
+    }
+}
+
+#[test]
+#[ignore]
+fn probe_steady2() {
+    use vanefit::motor::{Boundary, Load};
+    use vanefit::schedule::Schedule;
+    use vanefit::steady;
+    let plan = SynthPlan::default();
+    let p = MotorParams::default();
+    let m = Motor::new(p, EffectSet::parse_list("breakaway_friction").unwrap());
+    let w = vanefit::synth::free_speed(&m, plan.p_supply_pa, plan.p_atm_pa).unwrap();
+    let exps = vanefit::synth::plan_experiments(&plan, w);
+    let ramp = &exps[1];
+    let t = ramp
+        .recording
+        .values(vanefit::units::Quantity::Time)
+        .unwrap();
+    let pp = ramp
+        .recording
+        .values(vanefit::units::Quantity::PPort1)
+        .unwrap();
+    let s = Schedule::smoothed(t, pp);
+    let p0 = s.at(t[0]);
+    eprintln!("p0 - patm = {:e}", p0 - 101325.0);
+    let bc = Boundary::supplied(p0, 101325.0, Load::ViscousBrake { c_nm_s_rad: 1e-4 });
+    eprintln!("{:?}", steady::free(&m, &bc, &steady::initial_guess(&bc)));
+}
+
+#[test]
+#[ignore]
+fn probe_steady3() {
+    let plan = SynthPlan::default();
+    let p = perturbed();
+    let m = Motor::new(p, EffectSet::parse_list("breakaway_friction").unwrap());
+    let w = vanefit::synth::free_speed(&m, plan.p_supply_pa, plan.p_atm_pa).unwrap();
+    let exps = vanefit::synth::plan_experiments(&plan, w);
+    let ex = vanefit::experiment::Experiment::new(&exps[1], plan.p_atm_pa).unwrap();
+    eprintln!("{:?}", ex.simulate(&m, &DiffsolBdf::default()).map(|_| ()));
+    let mut m2 = m.clone();
+    m2.params = m2.params.with("t_static", 0.05).unwrap();
+    let m2 = Motor::new(m2.params, m2.effects);
+    eprintln!("{:?}", ex.simulate(&m2, &DiffsolBdf::default()).map(|_| ()));
 }
