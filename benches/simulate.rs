@@ -6,7 +6,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use vanefit::experiment::Experiment;
 use vanefit::motor::Motor;
-use vanefit::ode::DiffsolBdf;
+use vanefit::ode::{DiffsolBdf, Tolerances};
 use vanefit::synth::{free_speed, plan_experiments, SynthPlan};
 
 fn experiments() -> (Motor, Vec<Experiment>) {
@@ -37,6 +37,18 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             for e in &ex {
                 black_box(e.simulate(black_box(&motor), &solver).unwrap());
+            }
+        })
+    });
+    // The same at rtol 1e-6, the tolerance a plain simulation would use; the default
+    // (3e-8) is chosen for a smooth fitting cost (see `ode::Tolerances`).
+    let loose = DiffsolBdf {
+        tol: Tolerances::with_rtol(1e-6),
+    };
+    c.bench_function("all_three_rtol_1e-6", |b| {
+        b.iter(|| {
+            for e in &ex {
+                black_box(e.simulate(black_box(&motor), &loose).unwrap());
             }
         })
     });
