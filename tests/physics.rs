@@ -71,6 +71,10 @@ fn default_motor_reproduces_spec_figures() {
         );
     assert!((p_peak / 100.0 - 1.0).abs() < 0.10, "peak power {p_peak} W");
     let at = speeds[k_peak] / w_free;
+    eprintln!(
+        "default motor: stall torque {stall_torque:.4} N*m, standstill flow {:.3} g/s, free speed {rpm_free:.0} rpm, peak power {p_peak:.1} W at {at:.2} of free speed",
+        standstill_flow * 1e3
+    );
     assert!((at - 0.5).abs() < 0.1, "peak power at {at} of free speed");
     // Shaft torque at free speed is zero (the free-running steady state has no load).
     assert!(curve[200].0.abs() < 1e-6);

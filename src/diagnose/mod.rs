@@ -129,14 +129,14 @@ impl DiagnoseOptions {
         }
     }
 
-    /// Reduced effort for tests: one baseline start, two starts per candidate, pairs only
-    /// when needed, held-out prediction of the selected model only.
+    /// Reduced effort for tests: one baseline start, a smaller refit budget, pairs only when
+    /// needed, held-out prediction of the selected model only.
     pub fn quick(seed: u64) -> Self {
         Self {
             starts: 1,
             baseline_iters: 3000,
             refit_iters: 1500,
-            effect_starts: 2,
+            effect_starts: 3,
             pairs_always: false,
             held_out_top: 0,
             progress: false,
@@ -180,6 +180,9 @@ pub struct ExperimentCheck {
     pub joint_ratio: f64,
     /// Noise ratio of the base model fitted to this experiment alone.
     pub alone_ratio: f64,
+    /// [`noise_ratio_limit`] of this experiment's channels: below it, the separate fit
+    /// "looks acceptable".
+    pub alone_limit: f64,
     /// χ² (against the references) of the fit to this experiment alone.
     pub alone_chi2: f64,
     /// The separate fit's parameters.
@@ -536,7 +539,7 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
                 let mut starts = vec![with_effect_params(warm, &other.fitted.params, &other_set)];
                 starts.extend(effect_starts(&[b], warm, 1));
                 pair_jobs.push(FitJob {
-                    label: format!("{}+{}", a.id(), b.id()),
+                    label: label_of(&effects, 0).0,
                     names: names_for(&effects),
                     effects,
                     extra: Vec::new(),
@@ -622,7 +625,7 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
                 disc_jobs.push((
                     ModelKind::CatalogAndUncatalogued,
                     FitJob {
-                        label: format!("{}+uncatalogued", bc.label),
+                        label: label_of(&bc.fitted.effects, 1).0,
                         effects: bc.fitted.effects.clone(),
                         extra: vec![first.term],
                         names,
@@ -671,28 +674,76 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
         noise_ratio: base_ratio,
         held_out: None,
     };
-    let best_bic = candidates
-        .iter()
-        .map(|c| c.delta_bic)
-        .fold(0.0f64, f64::min);
-    let chosen: Option<Candidate> = {
-        let within: Vec<&Candidate> = candidates
-            .iter()
-            .filter(|c| c.delta_bic <= best_bic + SELECT_DELTA_BIC)
-            .collect();
-        if best_bic + SELECT_DELTA_BIC >= 0.0 {
-            None
-        } else {
-            within
-                .into_iter()
-                .min_by(|a, b| {
-                    a.kind
-                        .cmp(&b.kind)
-                        .then(a.delta_bic.total_cmp(&b.delta_bic))
-                })
-                .cloned()
+    let mut chosen = choose(&candidates);
+    // Backward elimination: a model of several parts keeps each part only if dropping it,
+    // refitted warm from the same optimum (so with the same convergence), costs more than
+    // SELECT_DELTA_BIC. A pair can otherwise "win" by converging better than its single.
+    while let Some(c) = chosen.clone().filter(|c| parts(&c.fitted) >= 2) {
+        let mut sub_jobs = Vec::new();
+        let effects: Vec<Effect> = c.fitted.effects.iter().collect();
+        for drop in 0..parts(&c.fitted) {
+            let keep_effects: EffectSet = effects
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != drop)
+                .map(|(_, e)| *e)
+                .collect();
+            let keep_terms: Vec<ExtraTerm> = c
+                .fitted
+                .extra
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| i + effects.len() != drop)
+                .map(|(_, t)| *t)
+                .collect();
+            let (label, _) = label_of(&keep_effects, keep_terms.len());
+            sub_jobs.push(FitJob {
+                label,
+                names: names_for(&keep_effects),
+                starts: vec![c.fitted.params.clone()],
+                effects: keep_effects,
+                extra: keep_terms,
+                lhs: 0,
+                max_iters: opts.refit_iters,
+                seed: opts.seed,
+            });
         }
-    };
+        say(&format!(
+            "checking {}: refitting each part's removal warm from its optimum",
+            c.label
+        ));
+        let mut subs = Vec::new();
+        for (job, r) in sub_jobs
+            .iter()
+            .zip(fitting::run_jobs(&cost, &target, &sub_jobs, threads))
+        {
+            match r {
+                Ok(f) => {
+                    let (label, kind) = label_of(&f.effects, f.extra.len());
+                    let sub = score(&label, kind, f)?;
+                    say(&format!(
+                        "  {:<28} dBIC {:>9.1}  noise ratio {:.3}",
+                        sub.label, sub.delta_bic, sub.noise_ratio
+                    ));
+                    subs.push(sub);
+                }
+                Err(e) => say(&format!("{} failed: {e}", job.label)),
+            }
+        }
+        for sub in &subs {
+            match candidates.iter_mut().find(|x| x.label == sub.label) {
+                Some(x) if x.delta_bic <= sub.delta_bic => {}
+                Some(x) => *x = sub.clone(),
+                None => candidates.push(sub.clone()),
+            }
+        }
+        candidates.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+        let next = choose(&candidates);
+        if next.as_ref().map(|n| &n.label) == Some(&c.label) {
+            break;
+        }
+        chosen = next;
+    }
 
     // 6. Concealment and held-out prediction.
     let mut concealment = None;
@@ -807,6 +858,7 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
                         file: ex.file.clone(),
                         joint_ratio: analysis::noise_ratio(&joint),
                         alone_ratio: analysis::noise_ratio(&ch),
+                        alone_limit: noise_ratio_limit(&ch),
                         alone_chi2: f.chi2,
                         alone_params: f.params.clone(),
                         held_out_ratio: None,
@@ -897,6 +949,51 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
     };
     say(&format!("done in {:.1} s", d.wall_s));
     Ok(d)
+}
+
+/// The simplest model within [`SELECT_DELTA_BIC`] of the lowest BIC, or `None` when no
+/// model beats the baseline by [`SELECT_DELTA_BIC`].
+fn choose(candidates: &[Candidate]) -> Option<Candidate> {
+    let best = candidates.iter().map(|c| c.delta_bic).fold(0.0f64, f64::min);
+    if best + SELECT_DELTA_BIC >= 0.0 {
+        return None;
+    }
+    candidates
+        .iter()
+        .filter(|c| c.delta_bic <= best + SELECT_DELTA_BIC)
+        .min_by(|a, b| {
+            a.kind
+                .cmp(&b.kind)
+                .then(a.delta_bic.total_cmp(&b.delta_bic))
+        })
+        .cloned()
+}
+
+/// Number of parts (catalog effects and discovered terms) of a model.
+fn parts(f: &Fitted) -> usize {
+    f.effects.iter().count() + f.extra.len()
+}
+
+/// Label and kind of a model made of catalog effects and `terms` discovered terms.
+fn label_of(effects: &EffectSet, terms: usize) -> (String, ModelKind) {
+    let mut parts: Vec<String> = effects.ids();
+    let n_effects = parts.len();
+    match terms {
+        0 => {}
+        1 => parts.push("uncatalogued".into()),
+        _ => parts.push(format!("uncatalogued ({terms} terms)")),
+    }
+    let kind = match (n_effects, terms) {
+        (0, 0) => ModelKind::Baseline,
+        (1, 0) => ModelKind::Single,
+        (_, 0) => ModelKind::Pair,
+        (0, _) => ModelKind::Uncatalogued,
+        _ => ModelKind::CatalogAndUncatalogued,
+    };
+    if parts.is_empty() {
+        return ("baseline".into(), kind);
+    }
+    (parts.join("+"), kind)
 }
 
 /// A dataset with the experiments whose index passes `keep`.

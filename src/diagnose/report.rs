@@ -244,15 +244,16 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
             );
             let _ = writeln!(
                 md,
-                "| experiment | noise ratio, joint fit | fitted alone | predicted from the others |\n|---|---|---|---|"
+                "| experiment | noise ratio, joint fit | fitted alone (limit) | predicted from the others |\n|---|---|---|---|"
             );
             for e in &c.experiments {
                 let _ = writeln!(
                     md,
-                    "| {} | {:.3} | {:.3} | {} |",
+                    "| {} | {:.3} | {:.3} ({:.3}) | {} |",
                     e.file,
                     e.joint_ratio,
                     e.alone_ratio,
+                    e.alone_limit,
                     e.held_out_ratio.map_or("-".into(), |v| format!("{v:.3}"))
                 );
             }
