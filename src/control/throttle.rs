@@ -201,7 +201,8 @@ mod tests {
             let free = steady::free(&m, &bc, &steady::initial_guess(&bc)).unwrap();
             let last = pts.last().unwrap().speed_rad_s;
             // A throttle 15 times the duct's conductance costs only a few percent of speed…
-            assert!(last < free[idx::OMEGA] && last > 0.9 * free[idx::OMEGA]);
+            // (equal within the steady solver's tolerance when the throttle is wide open)
+            assert!(last <= free[idx::OMEGA] * (1.0 + 1e-9) && last > 0.9 * free[idx::OMEGA]);
             // …and the smallest one brings the motor well down.
             assert!(pts[0].speed_rad_s < 0.5 * free[idx::OMEGA], "{:?}", pts[0]);
         }

@@ -170,6 +170,94 @@ fn speed_symbol(w: W) -> (&'static str, &'static str) {
     }
 }
 
+/// Id of a pressure factor in files.
+pub fn pressure_id(p: P) -> &'static str {
+    match p {
+        P::One => "one",
+        P::P1 => "p1",
+        P::P2 => "p2",
+        P::Pe => "pe",
+        P::P1Gauge => "p1_gauge",
+        P::P2Gauge => "p2_gauge",
+        P::PeGauge => "pe_gauge",
+        P::P1MinusPe => "p1_minus_pe",
+        P::P2MinusPe => "p2_minus_pe",
+        P::P1MinusP2 => "p1_minus_p2",
+    }
+}
+
+/// Id of a speed factor in files.
+pub fn speed_id(w: W) -> &'static str {
+    match w {
+        W::One => "one",
+        W::Omega => "omega",
+        W::AbsOmega => "abs_omega",
+        W::OmegaAbsOmega => "omega_abs_omega",
+        W::Sign => "sign",
+    }
+}
+
+/// A discovered term as JSON: `{"balance", "pressure", "speed", "coefficient", "unit",
+/// "formula"}` (ids of [`balance_name`], [`pressure_id`], [`speed_id`]; SI coefficient).
+pub fn term_to_json(t: &ExtraTerm) -> serde_json::Value {
+    serde_json::json!({
+        "balance": balance_name(t.balance),
+        "pressure": pressure_id(t.pressure),
+        "speed": speed_id(t.speed),
+        "coefficient": t.coefficient,
+        "unit": coefficient_unit(t),
+        "formula": formula(t),
+    })
+}
+
+/// Reads a term written by [`term_to_json`] (`unit` and `formula` are informative only).
+pub fn term_from_json(v: &serde_json::Value) -> Result<ExtraTerm, String> {
+    let field = |k: &str| {
+        v.get(k)
+            .and_then(serde_json::Value::as_str)
+            .ok_or_else(|| format!("discovered term needs a string \"{k}\""))
+    };
+    let balance = match field("balance")? {
+        "torque" => BalanceId::Torque,
+        "mass_v1" => BalanceId::Mass1,
+        "mass_v2" => BalanceId::Mass2,
+        "mass_ve" => BalanceId::MassE,
+        other => return Err(format!("unknown balance '{other}'")),
+    };
+    let p = field("pressure")?;
+    let pressure = [
+        P::One,
+        P::P1,
+        P::P2,
+        P::Pe,
+        P::P1Gauge,
+        P::P2Gauge,
+        P::PeGauge,
+        P::P1MinusPe,
+        P::P2MinusPe,
+        P::P1MinusP2,
+    ]
+    .into_iter()
+    .find(|x| pressure_id(*x) == p)
+    .ok_or_else(|| format!("unknown pressure factor '{p}'"))?;
+    let w = field("speed")?;
+    let speed = [W::One, W::Omega, W::AbsOmega, W::OmegaAbsOmega, W::Sign]
+        .into_iter()
+        .find(|x| speed_id(*x) == w)
+        .ok_or_else(|| format!("unknown speed factor '{w}'"))?;
+    let coefficient = v
+        .get("coefficient")
+        .and_then(serde_json::Value::as_f64)
+        .filter(|c| c.is_finite())
+        .ok_or("discovered term needs a finite numeric \"coefficient\"")?;
+    Ok(ExtraTerm {
+        balance,
+        pressure,
+        speed,
+        coefficient,
+    })
+}
+
 /// The feature as a product of symbols, e.g. `p2*omega`.
 pub fn feature_name(t: &ExtraTerm) -> String {
     let (p, _) = pressure_symbol(t.pressure);
@@ -483,5 +571,9 @@ mod tests {
         assert_eq!(coefficient_unit(&t), "N*m/(Pa*rad/s)");
         assert!(formula(&t).starts_with("T_loss += 2.0000e-10"));
         assert_eq!(category(&t), Category::TorqueLoss);
+        for t in library() {
+            assert_eq!(term_from_json(&term_to_json(&t)).unwrap(), t);
+        }
+        assert!(term_from_json(&serde_json::json!({"balance": "torque"})).is_err());
     }
 }

@@ -140,11 +140,12 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "Noise ratio = RMS over channels of (simulation − recorded data)/σ, σ the noise \
-         estimate of each channel's reference polynomial; ≈ 1 means explained to within \
-         noise. BIC = χ² + k·ln n (χ² against the reference polynomials over n = {} points, \
-         k estimated parameters); a model is selected only when it beats every simpler one by \
-         ΔBIC < −10.\n",
+        "Noise ratio = RMS over channels of (simulation − recorded data)/σ, σ each channel's \
+         noise estimated from the data alone (second differences); ≈ 1 means explained to \
+         within noise. BIC = χ² + k·ln n (χ² of the recorded data over n = {} compared \
+         points, which every fit minimises; k estimated parameters); a model is selected only \
+         when it beats every simpler one by ΔBIC < −10. `cost` is the project's fitting cost J \
+         (against the reference polynomials) at the fitted parameters.\n",
         d.baseline.fitted.n_points
     );
 
@@ -232,7 +233,9 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
                 md,
                 "Each experiment fitted alone against the joint fit: χ²_joint − Σχ²_alone = \
                  {:.1} on at most {} degrees of freedom, p = {:.2e} ({}). Held-out: each \
-                 experiment predicted by the base model fitted to the others.\n",
+                 experiment predicted by the base model fitted to the others (a held-out ratio \
+                 well above 1 can also mean that the other experiments leave a parameter open: \
+                 compare models by it rather than reading it alone).\n",
                 c.lr,
                 c.df,
                 c.p_value,

@@ -225,7 +225,7 @@ impl Target {
             .collect()
     }
 
-    /// χ² of eq. [1] for a motor, or `None` if the simulation fails or is not finite.
+    /// χ² of eq. \[1\] for a motor, or `None` if the simulation fails or is not finite.
     pub fn chi2(&self, cost: &CostModel, motor: &Motor, solver: &DiffsolBdf) -> Option<f64> {
         let res = cost.residuals(motor, solver).ok()?;
         let c: f64 = self.channel_chi2(&res).iter().sum();
@@ -233,7 +233,7 @@ impl Target {
     }
 }
 
-/// The likelihood of eq. [1] as an estimation objective: cost = χ²/n (≈ 1 for a correct
+/// The likelihood of eq. \[1\] as an estimation objective: cost = χ²/n (≈ 1 for a correct
 /// model), failures give the cost module's penalty.
 pub struct Likelihood<'a> {
     pub cost: &'a CostModel,

@@ -1,0 +1,482 @@
+//! The missing-physics diagnosis proved on synthetic data with known truth (issue 5).
+//!
+//! Every dataset is the paper's three experiments simulated with typical sensor noise
+//! (on the outputs AND on the recorded inputs) from a motor whose base parameters are moved
+//! 20–40% from the defaults ([`diagnose_support::perturbed_base`]), with one effect switched
+//! on at a CONCEALED size: a base-model fit to each experiment alone passes the noise-ratio
+//! test the diagnosis applies (below [`vanefit::diagnose::noise_ratio_limit`] of that
+//! experiment). The sizes and why (torque noise 2 mN·m, flow noise 0.01 g/s, speed noise
+//! 5 rpm; free speed ≈ 1250 rad/s):
+//!
+//! | effect | truth | what it does at that size |
+//! |---|---|---|
+//! | `breakaway_friction` | t_static = 0.0265 N·m (T_c = 0.026) | 0.5 mN·m of static excess: the ramp's breakaway moves by ~1 kPa; any more and the ramp alone cannot be fitted |
+//! | `vane_friction_speed_squared` | c_w2 = 3e-9 N·m·s²/rad² | 5 mN·m at free speed, 8% of the viscous loss, which a viscous term absorbs per experiment |
+//! | `speed_dependent_leakage` | g_seal = 0.03, w_seal = 300 rad/s | 3% more leakage at standstill |
+//! | `dead_volume_carryover` | v_carry = 0.02e-6 m³ | 20% of the dead volume carried back |
+//! | `incomplete_filling` | w_fill = 6000 rad/s | compartments 4% short of port pressure at free speed |
+//! | `pressure_dependent_friction` | k_fric_p = 1.5e-8 N·m/Pa | 9 mN·m more dry friction at full supply |
+//! | `sensor_lag` | tau_sensor = 0.25 s | flows and speed lag by 0.25 s in the 60–65 s ramps |
+//! | uncatalogued torque | 3e-11 N·m·s/(rad·Pa) · p2·ω | 4.5 mN·m at free speed, growing as the outlet is throttled |
+//! | uncatalogued leak | −2e-8 kg/rad · ω at V_1 | 0.025 g/s at free speed |
+//!
+//! `valve_dynamics` has no case: the recorded port-1 pressure is the valve's output and drives
+//! the simulation, so no valve dynamics can show in these experiments (the model has no valve
+//! either); the diagnosis says so and never tries it.
+//!
+//! The normal run diagnoses a representative subset with reduced effort
+//! ([`DiagnoseOptions::quick`]): the clean dataset, breakaway friction (torque loss),
+//! carry-over (inlet flow) and the uncatalogued torque. The full table (every case, the
+//! command line's settings) is `#[ignore]`d; it writes `target/diagnosis-results.md`:
+//!
+//! ```sh
+//! cargo test --release --test diagnose -- --ignored --nocapture full_results_table
+//! ```
+
+mod diagnose_support;
+
+use diagnose_support::{dataset, perturbed_base, synthesize};
+use std::time::Instant;
+use vanefit::diagnose::{
+    diagnose, discover, noise_ratio_limit, summary, to_json, write, DiagnoseOptions, Diagnosis,
+};
+use vanefit::effects::{Effect, EffectSet};
+use vanefit::motor::{BalanceId, ExtraTerm, Motor, PressureFactor, SpeedFactor};
+
+/// What a case should be diagnosed as.
+#[derive(Debug, Clone)]
+enum Expect {
+    Nothing,
+    /// The effect, its main parameter and the relative tolerance of its recovery.
+    Effect(Effect, &'static str, f64),
+    /// A discovered term in this balance with this feature; relative tolerance of the
+    /// coefficient.
+    Uncatalogued(BalanceId, &'static str, f64),
+}
+
+struct Case {
+    effects: EffectSet,
+    params: Vec<(&'static str, f64)>,
+    extra: Vec<ExtraTerm>,
+    expect: Expect,
+}
+
+fn case(name: &str) -> Case {
+    let effect = |e: Effect, params: Vec<(&'static str, f64)>, main: &'static str, tol: f64| Case {
+        effects: EffectSet::empty().with(e),
+        params,
+        extra: Vec::new(),
+        expect: Expect::Effect(e, main, tol),
+    };
+    match name {
+        "clean" => Case {
+            effects: EffectSet::empty(),
+            params: Vec::new(),
+            extra: Vec::new(),
+            expect: Expect::Nothing,
+        },
+        "breakaway_friction" => effect(
+            Effect::BreakawayFriction,
+            vec![("t_static", 0.0265), ("w_stribeck", 30.0)],
+            "t_static",
+            0.02,
+        ),
+        "vane_friction_speed_squared" => effect(
+            Effect::VaneFrictionSpeedSquared,
+            vec![("c_w2", 3e-9)],
+            "c_w2",
+            0.15,
+        ),
+        "speed_dependent_leakage" => effect(
+            Effect::SpeedDependentLeakage,
+            vec![("g_seal", 0.03), ("w_seal", 300.0)],
+            "g_seal",
+            0.15,
+        ),
+        "dead_volume_carryover" => effect(
+            Effect::DeadVolumeCarryover,
+            vec![("v_carry", 0.02e-6)],
+            "v_carry",
+            0.15,
+        ),
+        "incomplete_filling" => effect(
+            Effect::IncompleteFilling,
+            vec![("w_fill", 6000.0)],
+            "w_fill",
+            0.15,
+        ),
+        "pressure_dependent_friction" => effect(
+            Effect::PressureDependentFriction,
+            vec![("k_fric_p", 1.5e-8)],
+            "k_fric_p",
+            0.15,
+        ),
+        "sensor_lag" => effect(
+            Effect::SensorLag,
+            vec![("tau_sensor", 0.25)],
+            "tau_sensor",
+            0.15,
+        ),
+        "uncatalogued torque" => Case {
+            effects: EffectSet::empty(),
+            params: Vec::new(),
+            extra: vec![ExtraTerm {
+                balance: BalanceId::Torque,
+                pressure: PressureFactor::P2,
+                speed: SpeedFactor::Omega,
+                coefficient: 3e-11,
+            }],
+            expect: Expect::Uncatalogued(BalanceId::Torque, "p2*omega", 0.15),
+        },
+        "uncatalogued leak" => Case {
+            effects: EffectSet::empty(),
+            params: Vec::new(),
+            extra: vec![ExtraTerm {
+                balance: BalanceId::Mass1,
+                pressure: PressureFactor::One,
+                speed: SpeedFactor::Omega,
+                coefficient: -2e-8,
+            }],
+            expect: Expect::Uncatalogued(BalanceId::Mass1, "omega", 0.15),
+        },
+        _ => panic!("no case {name}"),
+    }
+}
+
+/// The case's true motor.
+fn truth(c: &Case) -> Motor {
+    let mut p = perturbed_base();
+    for (n, v) in &c.params {
+        p = p.with(n, *v).unwrap();
+    }
+    Motor::new(p, c.effects.clone()).with_extra(&c.extra)
+}
+
+/// One row of the results table.
+struct Row {
+    name: String,
+    detected: String,
+    delta_bic: f64,
+    truth: String,
+    recovered: String,
+    ratios: (f64, f64),
+    alone: Vec<(f64, f64)>,
+    wall_s: f64,
+    ok: Result<(), String>,
+}
+
+fn check(c: &Case, motor: &Motor, d: &Diagnosis) -> Result<(), String> {
+    let conc = d.concealment.as_ref().ok_or("no concealment test")?;
+    // Concealed: every experiment fitted alone passes the noise-ratio test.
+    for e in &conc.experiments {
+        if e.alone_ratio >= e.alone_limit {
+            return Err(format!(
+                "not concealed: {} alone has noise ratio {:.3} (limit {:.3})",
+                e.file, e.alone_ratio, e.alone_limit
+            ));
+        }
+    }
+    let (before, after) = d.noise_ratios();
+    match &c.expect {
+        Expect::Nothing => {
+            if d.mismatch || !d.selected.is_empty() {
+                return Err(format!("claimed {:?}", d.selected));
+            }
+            if conc.disagree() {
+                return Err(format!("separate fits disagree, p {:.2e}", conc.p_value));
+            }
+            if !d.locations.is_empty() {
+                return Err(format!("{} location(s) on clean data", d.locations.len()));
+            }
+        }
+        Expect::Effect(e, main, tol) => {
+            let ids: Vec<&str> = d.selected.iter().map(|s| s.effect.as_str()).collect();
+            if ids != [e.id()] || !d.mismatch {
+                return Err(format!("selected {ids:?}, expected [{}]", e.id()));
+            }
+            let got = d.extended.fitted.params.get(main).unwrap();
+            let want = motor.params.get(main).unwrap();
+            if ((got - want) / want).abs() > *tol {
+                return Err(format!("{main} {got:.4e}, true {want:.4e}"));
+            }
+        }
+        Expect::Uncatalogued(balance, feature, tol) => {
+            let terms: Vec<&ExtraTerm> =
+                d.selected.iter().filter_map(|s| s.term.as_ref()).collect();
+            if d.selected.len() != 1 || terms.len() != 1 {
+                return Err(format!("selected {:?}", d.selected));
+            }
+            let t = terms[0];
+            if t.balance != *balance || discover::feature_name(t) != *feature {
+                return Err(format!("found {}", discover::formula(t)));
+            }
+            let want = c.extra[0].coefficient;
+            if ((t.coefficient - want) / want).abs() > *tol {
+                return Err(format!(
+                    "coefficient {:.4e}, true {want:.4e}",
+                    t.coefficient
+                ));
+            }
+            if d.selected[0].category != discover::category(&c.extra[0]) {
+                return Err(format!("category {:?}", d.selected[0].category));
+            }
+        }
+    }
+    if !matches!(c.expect, Expect::Nothing) {
+        if d.delta_bic() > -10.0 {
+            return Err(format!("dBIC {:.1}", d.delta_bic()));
+        }
+        // Near 1: within what noise alone gives.
+        let limit = noise_ratio_limit(&d.extended_channels);
+        if after > limit || after > before {
+            return Err(format!(
+                "noise ratio {before:.3} -> {after:.3} (limit {limit:.3})"
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn run(name: &str, opts: &DiagnoseOptions) -> (Row, Diagnosis) {
+    let c = case(name);
+    let motor = truth(&c);
+    let ds = dataset(&format!("synthetic {name}"), synthesize(&motor, 11));
+    let t0 = Instant::now();
+    let d = diagnose(&ds, opts).unwrap();
+    let wall_s = t0.elapsed().as_secs_f64();
+    let (truth_s, recovered) = match &c.expect {
+        Expect::Nothing => ("-".to_string(), "-".to_string()),
+        Expect::Effect(_, main, _) => (
+            format!("{main} = {:.4e}", motor.params.get(main).unwrap()),
+            format!("{:.4e}", d.extended.fitted.params.get(main).unwrap()),
+        ),
+        Expect::Uncatalogued(..) => (
+            discover::formula(&c.extra[0]),
+            d.selected
+                .iter()
+                .find_map(|s| s.term.as_ref())
+                .map_or("-".into(), |t| format!("{:.4e}", t.coefficient)),
+        ),
+    };
+    let detected = if d.selected.is_empty() {
+        format!("none (mismatch {})", d.mismatch)
+    } else {
+        d.selected
+            .iter()
+            .map(|s| match &s.term {
+                Some(t) => format!(
+                    "uncatalogued {} ({})",
+                    discover::feature_name(t),
+                    s.category.id()
+                ),
+                None => s.effect.clone(),
+            })
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    let alone = d
+        .concealment
+        .as_ref()
+        .map(|c| {
+            c.experiments
+                .iter()
+                .map(|e| (e.alone_ratio, e.alone_limit))
+                .collect()
+        })
+        .unwrap_or_default();
+    let row = Row {
+        name: name.to_string(),
+        detected,
+        delta_bic: d.delta_bic(),
+        truth: truth_s,
+        recovered,
+        ratios: d.noise_ratios(),
+        alone,
+        wall_s,
+        ok: check(&c, &motor, &d),
+    };
+    eprintln!("{name}: {}", summary(&d));
+    (row, d)
+}
+
+fn assert_case(name: &str) -> Diagnosis {
+    let (row, d) = run(name, &DiagnoseOptions::quick(1));
+    eprintln!(
+        "{name}: detected {}, dBIC {:.1}, {} -> {}, noise ratio {:.3} -> {:.3}, {:.1} s",
+        row.detected,
+        row.delta_bic,
+        row.truth,
+        row.recovered,
+        row.ratios.0,
+        row.ratios.1,
+        row.wall_s
+    );
+    if let Err(e) = &row.ok {
+        panic!("{name}: {e}\n{}", summary(&d));
+    }
+    d
+}
+
+#[test]
+fn clean_dataset_has_no_mismatch_and_the_output_follows_spec() {
+    let d = assert_case("clean");
+    // diagnosis.json exactly in SPEC §6 form, report and plots next to it.
+    let dir = tempfile::tempdir().unwrap();
+    write(&d, dir.path()).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("diagnosis.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+    assert_eq!(
+        keys,
+        [
+            "format",
+            "mismatch",
+            "baseline",
+            "locations",
+            "candidates",
+            "selected",
+            "extended"
+        ]
+    );
+    assert_eq!(v["format"], "vanefit.diagnosis/1");
+    assert_eq!(v["mismatch"], false);
+    assert_eq!(v["selected"].as_array().unwrap().len(), 0);
+    assert_eq!(v["baseline"], v["extended"]);
+    for k in ["cost", "noise_ratio"] {
+        assert!(v["baseline"][k].as_f64().unwrap() > 0.0);
+    }
+    let candidates = v["candidates"].as_array().unwrap();
+    assert_eq!(candidates.len(), 7, "{candidates:?}");
+    for c in candidates {
+        let o = c.as_object().unwrap();
+        assert_eq!(
+            o.keys().collect::<Vec<_>>(),
+            ["effect", "cost", "delta_bic"]
+        );
+        assert!(o["delta_bic"].as_f64().unwrap() > -10.0);
+    }
+    assert!(!candidates.iter().any(|c| c["effect"] == "valve_dynamics"));
+    assert_eq!(to_json(&d), v);
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(report.contains("valve_dynamics"), "{report}");
+    for f in [
+        "ranking.svg",
+        "overlay.datasheet.svg",
+        "residuals.ramp.svg",
+        "overlay.throttle.svg",
+    ] {
+        assert!(dir.path().join(f).is_file(), "{f}");
+        assert!(report.contains(f), "{f}");
+    }
+}
+
+#[test]
+fn concealed_breakaway_friction_is_named() {
+    let d = assert_case("breakaway_friction");
+    // Concealed to the point that the baseline's noise ratio is within noise: only the
+    // refit of the candidates shows it.
+    let v = to_json(&d);
+    assert_eq!(v["selected"][0]["category"], "torque_loss");
+    assert_eq!(
+        v["selected"][0]["parameters"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .collect::<Vec<_>>(),
+        ["t_static", "w_stribeck"]
+    );
+}
+
+#[test]
+fn concealed_dead_volume_carryover_is_named() {
+    let d = assert_case("dead_volume_carryover");
+    assert!(!d.locations.is_empty());
+    assert_eq!(to_json(&d)["selected"][0]["category"], "inlet_flow");
+}
+
+/// In the full table; left out of the normal run to keep it short.
+#[test]
+#[ignore]
+fn concealed_sensor_lag_is_named() {
+    assert_case("sensor_lag");
+}
+
+#[test]
+fn uncatalogued_torque_is_discovered_and_modelled() {
+    let d = assert_case("uncatalogued torque");
+    let v = to_json(&d);
+    let s = &v["selected"][0];
+    assert_eq!(s["effect"], "uncatalogued");
+    assert_eq!(s["category"], "torque_loss");
+    assert_eq!(s["balance"], "torque");
+    assert!(s["formula"].as_str().unwrap().contains("p2*omega"), "{s}");
+    // The extended model's fit file carries the term and still reads as a fit file.
+    let dir = tempfile::tempdir().unwrap();
+    write(&d, dir.path()).unwrap();
+    let path = dir.path().join("extended.json");
+    vanefit::fitfile::FitFile::read(&path).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(
+        vanefit::diagnose::discovered_terms(&v).unwrap(),
+        d.extended.fitted.extra
+    );
+}
+
+/// The table for the README (every case, the command line's settings).
+#[test]
+#[ignore]
+fn full_results_table() {
+    let names = [
+        "clean",
+        "breakaway_friction",
+        "vane_friction_speed_squared",
+        "speed_dependent_leakage",
+        "dead_volume_carryover",
+        "incomplete_filling",
+        "pressure_dependent_friction",
+        "sensor_lag",
+        "uncatalogued torque",
+        "uncatalogued leak",
+    ];
+    let opts = DiagnoseOptions {
+        progress: false,
+        ..DiagnoseOptions::full(4, 1)
+    };
+    let mut md = String::from(
+        "| case | detected | ΔBIC | truth | recovered | noise ratio before → after | each experiment fitted alone (limit) | wall s | ok |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let mut failures = Vec::new();
+    for name in names {
+        let (row, _) = run(name, &opts);
+        let alone: Vec<String> = row
+            .alone
+            .iter()
+            .map(|(r, l)| format!("{r:.3} ({l:.3})"))
+            .collect();
+        md += &format!(
+            "| {} | {} | {:.1} | {} | {} | {:.3} → {:.3} | {} | {:.1} | {} |\n",
+            row.name,
+            row.detected,
+            row.delta_bic,
+            row.truth,
+            row.recovered,
+            row.ratios.0,
+            row.ratios.1,
+            alone.join(", "),
+            row.wall_s,
+            match &row.ok {
+                Ok(()) => "yes".to_string(),
+                Err(e) => format!("NO: {e}"),
+            }
+        );
+        if let Err(e) = row.ok {
+            failures.push(format!("{name}: {e}"));
+        }
+        eprintln!("{md}");
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/diagnosis-results.md");
+    std::fs::write(&path, &md).unwrap();
+    println!("{md}");
+    assert!(failures.is_empty(), "{failures:?}");
+}
