@@ -234,11 +234,23 @@ pub fn params_for(
     Ok((p, EffectSet::empty()))
 }
 
+/// Terms a diagnosis discovered and wrote into a fit file's `model.discovered` list.
+fn discovered_terms(params: Option<&Path>) -> Result<Vec<crate::motor::ExtraTerm>, Failure> {
+    let Some(path) = params else {
+        return Ok(Vec::new());
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| Failure(format!("{}: {e}", path.display())))?;
+    let doc: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Failure(format!("{}:{}: {e}", path.display(), e.line())))?;
+    crate::diagnose::discovered_terms(&doc).map_err(|m| Failure(format!("{}: {m}", path.display())))
+}
+
 fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure> {
     let ds = Dataset::load(dir)?;
     let fit = params.map(FitFile::read).transpose()?;
     let (p, effects) = params_for(&ds, fit.as_ref())?;
-    let motor = Motor::new(p, effects);
+    let motor = Motor::new(p, effects).with_extra(&discovered_terms(params)?);
     let solver = DiffsolBdf::default();
     std::fs::create_dir_all(out)
         .map_err(|e| Failure(format!("{}: cannot create: {e}", out.display())))?;

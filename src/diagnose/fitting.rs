@@ -175,7 +175,8 @@ pub fn run_job(
     finish(motor, x.len(), evaluations)
 }
 
-/// Runs several fits at once (each on one thread; results in job order). Results do not
+/// Runs several fits at once, results in job order. Each fit's starts may also use the
+/// pool's threads (so the last, longest fits do not leave a core idle); results do not
 /// depend on the number of threads.
 pub fn run_jobs(
     cost: &CostModel,
@@ -190,7 +191,7 @@ pub fn run_jobs(
     match builder.build() {
         Ok(pool) => pool.install(|| {
             jobs.par_iter()
-                .map(|j| run_job(cost, target, j, Some(1)))
+                .map(|j| run_job(cost, target, j, threads))
                 .collect()
         }),
         Err(e) => jobs

@@ -850,7 +850,7 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
                         } else {
                             (&cost_without[*i], &target_without[*i])
                         };
-                        fitting::run_job(c, t, job, Some(1))
+                        fitting::run_job(c, t, job, threads)
                     })
                     .collect()
             })
