@@ -890,15 +890,22 @@ fn describe_pi(pi: &PiController) -> String {
     )
 }
 
+/// A scenario's length and the time of its step, checked: `--t-step-s` must fall inside
+/// `--duration-s`.
+fn step_window(duration_s: f64, t_step_s: f64) -> Result<(f64, f64), ControlError> {
+    let dur = positive("--duration-s", duration_s)?;
+    let t_step = non_negative("--t-step-s", t_step_s)?;
+    if t_step >= dur {
+        return Err(bad("--t-step-s", t_step, "before --duration-s"));
+    }
+    Ok((dur, t_step))
+}
+
 fn step(a: &StepArgs) -> Result<(), ControlError> {
     let LoopSetup { s, lp } = loop_setup(&a.common, "step", &a.valve, &a.pi, Some(&a.gains), 1e-4)?;
     let from = positive("--from-rpm", a.from_rpm)? * RAD_S_PER_RPM;
     let to = positive("--to-rpm", a.to_rpm)? * RAD_S_PER_RPM;
-    let dur = positive("--duration-s", a.duration_s)?;
-    let t_step = non_negative("--t-step-s", a.t_step_s)?;
-    if t_step >= dur {
-        return Err(bad("--t-step-s", t_step, "before --duration-s"));
-    }
+    let (dur, t_step) = step_window(a.duration_s, a.t_step_s)?;
     let start = lp
         .settled_at(&s.motor, from)
         .map_err(|e| ControlError(format!("--from-rpm {}: {e}", a.from_rpm)))?;
@@ -970,11 +977,7 @@ fn disturbance(a: &DisturbanceArgs) -> Result<(), ControlError> {
     if !dt.is_finite() {
         return Err(bad("--load-step-nm", dt, "a number"));
     }
-    let dur = positive("--duration-s", a.duration_s)?;
-    let t_step = non_negative("--t-step-s", a.t_step_s)?;
-    if t_step >= dur {
-        return Err(bad("--t-step-s", t_step, "before --duration-s"));
-    }
+    let (dur, t_step) = step_window(a.duration_s, a.t_step_s)?;
     let start = lp
         .settled_at(&s.motor, w)
         .map_err(|e| ControlError(format!("--rpm {}: {e}", a.rpm)))?;
