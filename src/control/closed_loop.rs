@@ -336,6 +336,19 @@ pub struct LoopStart {
 }
 
 impl Loop {
+    /// The same loop with the controller's gains set to zero: the command stays where it
+    /// started (the open-loop comparison of a disturbance study).
+    pub fn without_control(&self) -> Self {
+        Self {
+            pi: PiController {
+                kp: 0.0,
+                ki: 0.0,
+                ..self.pi
+            },
+            ..*self
+        }
+    }
+
     /// Boundary seen by the motor at valve pressure p_v.
     fn boundary(&self, p_valve_pa: f64) -> Boundary {
         Boundary::supplied(
@@ -687,14 +700,7 @@ mod tests {
         assert!(d.final_error_rad_s.abs() < rpm(5.0), "{d:?}");
         assert!(d.recovery_time_s < 5.0, "{d:?}");
         // Without control the same torque step costs a lasting speed loss.
-        let open = Loop {
-            pi: PiController {
-                kp: 0.0,
-                ki: 0.0,
-                ..lp.pi
-            },
-            ..lp
-        };
+        let open = lp.without_control();
         let tr_open = open
             .simulate(&m, &DiffsolBdf::default(), &sc, &start)
             .unwrap();

@@ -488,17 +488,19 @@ fn parse_curves(list: &str) -> Result<Vec<Option<f64>>, ControlError> {
     Ok(out)
 }
 
+/// An absolute pressure option in MPa, checked to lie above atmosphere; returned in Pa.
+fn absolute_pressure_pa(option: &str, mpa: f64) -> Result<f64, ControlError> {
+    let p = positive(option, mpa)? * 1e6;
+    if p <= P_ATM_PA {
+        return Err(bad(option, mpa, "above atmospheric (0.101325)"));
+    }
+    Ok(p)
+}
+
 fn throttle(a: &ThrottleArgs, port: Port) -> Result<(), ControlError> {
     let study = format!("throttle-{}", port.name());
     let s = setup(&a.common, &study, 1e-4)?;
-    let p_supply = positive("--p-supply-mpa", a.p_supply_mpa)? * 1e6;
-    if p_supply <= P_ATM_PA {
-        return Err(bad(
-            "--p-supply-mpa",
-            a.p_supply_mpa,
-            "above atmospheric (0.101325)",
-        ));
-    }
+    let p_supply = absolute_pressure_pa("--p-supply-mpa", a.p_supply_mpa)?;
     let c_min = positive("--c-min-m3-s-pa", a.c_min_m3_s_pa)?;
     let c_max = positive("--c-max-m3-s-pa", a.c_max_m3_s_pa)?;
     if c_max <= c_min {
@@ -989,14 +991,7 @@ fn disturbance(a: &DisturbanceArgs) -> Result<(), ControlError> {
     let solver = DiffsolBdf::default();
     let tr = lp.simulate(&s.motor, &solver, &sc, &start)?;
     // Without control: the command stays where it was (the controller's gains set to zero).
-    let open = Loop {
-        pi: PiController {
-            kp: 0.0,
-            ki: 0.0,
-            ..lp.pi
-        },
-        ..lp
-    };
+    let open = lp.without_control();
     let tr_open = open.simulate(&s.motor, &solver, &sc, &start)?;
     write_csv(&s.out, "disturbance.csv", &trace_table(&tr))?;
     write_csv(&s.out, "disturbance_open_loop.csv", &trace_table(&tr_open))?;
@@ -1035,14 +1030,7 @@ fn disturbance(a: &DisturbanceArgs) -> Result<(), ControlError> {
 fn min_speed(a: &MinSpeedArgs) -> Result<(), ControlError> {
     let LoopSetup { s, lp } =
         loop_setup(&a.common, "min-speed", &a.valve, &a.pi, Some(&a.gains), 0.0)?;
-    let p_max = positive("--p-max-mpa", a.p_max_mpa)? * 1e6;
-    if p_max <= P_ATM_PA {
-        return Err(bad(
-            "--p-max-mpa",
-            a.p_max_mpa,
-            "above atmospheric (0.101325)",
-        ));
-    }
+    let p_max = absolute_pressure_pa("--p-max-mpa", a.p_max_mpa)?;
     let ramp_s = positive("--ramp-s", a.ramp_s)?;
     if !(a.factor > 0.0 && a.factor < 1.0) {
         return Err(bad("--factor", a.factor, "between 0 and 1"));
