@@ -6,15 +6,15 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use std::path::Path;
-use vanefit::cost::{CostModel, CostOptions};
-use vanefit::dataset::Dataset;
-use vanefit::effects::EffectSet;
+use vanefit::data::dataset::Dataset;
 use vanefit::estimate::fit::DataObjective;
 use vanefit::estimate::multistart::{self, MultiStartConfig, Silent};
 use vanefit::estimate::{Objective, ParamSpace, DEFAULT_ESTIMATED};
-use vanefit::motor::Motor;
-use vanefit::ode::DiffsolBdf;
-use vanefit::params::MotorParams;
+use vanefit::model::effects::EffectSet;
+use vanefit::model::motor::Motor;
+use vanefit::model::params::MotorParams;
+use vanefit::numerics::ode::DiffsolBdf;
+use vanefit::objective::cost::{CostModel, CostOptions};
 
 fn bench(c: &mut Criterion) {
     let ds = Dataset::load(Path::new("measurements/ar034-synthetic")).unwrap();

@@ -4,10 +4,10 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
-use vanefit::experiment::Experiment;
-use vanefit::motor::Motor;
-use vanefit::ode::{DiffsolBdf, Tolerances};
-use vanefit::synth::{free_speed, plan_experiments, SynthPlan};
+use vanefit::data::synth::{free_speed, plan_experiments, SynthPlan};
+use vanefit::model::motor::Motor;
+use vanefit::numerics::ode::{DiffsolBdf, Tolerances};
+use vanefit::sim::experiment::Experiment;
 
 fn experiments() -> (Motor, Vec<Experiment>) {
     let motor = Motor::default_motor();

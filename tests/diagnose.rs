@@ -38,10 +38,10 @@ mod diagnose_support;
 use diagnose_support::{dataset, perturbed_base, synthesize};
 use std::time::Instant;
 use vanefit::diagnose::{
-    diagnose, discover, noise_ratio_limit, summary, to_json, write, DiagnoseOptions, Diagnosis,
+    diagnose, discover, noise_ratio_limit, summary, to_json, DiagnoseOptions, Diagnosis,
 };
-use vanefit::effects::{Effect, EffectSet};
-use vanefit::motor::{BalanceId, ExtraTerm, Motor, PressureFactor, SpeedFactor};
+use vanefit::model::effects::{Effect, EffectSet};
+use vanefit::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor, SpeedFactor};
 
 /// What a case should be diagnosed as.
 #[derive(Debug, Clone)]
@@ -322,7 +322,7 @@ fn clean_dataset_has_no_mismatch_and_the_output_follows_spec() {
     let d = assert_case("clean");
     // diagnosis.json exactly in SPEC §6 form, report and plots next to it.
     let dir = tempfile::tempdir().unwrap();
-    write(&d, dir.path()).unwrap();
+    vanefit::report::diagnose::write_all(&d, dir.path()).unwrap();
     let text = std::fs::read_to_string(dir.path().join("diagnosis.json")).unwrap();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
@@ -412,9 +412,9 @@ fn uncatalogued_torque_is_discovered_and_modelled() {
     assert!(s["formula"].as_str().unwrap().contains("p2*omega"), "{s}");
     // The extended model's fit file carries the term and still reads as a fit file.
     let dir = tempfile::tempdir().unwrap();
-    write(&d, dir.path()).unwrap();
+    vanefit::report::diagnose::write_all(&d, dir.path()).unwrap();
     let path = dir.path().join("extended.json");
-    vanefit::fitfile::FitFile::read(&path).unwrap();
+    vanefit::data::fitfile::FitFile::read(&path).unwrap();
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     assert_eq!(

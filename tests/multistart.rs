@@ -2,11 +2,11 @@
 //! same result whatever the thread count, and a resumed run ends where an uninterrupted one
 //! would.
 
-use vanefit::effects::EffectSet;
 use vanefit::estimate::multistart::{self, cluster, Ending, ResultsFile, Silent};
 use vanefit::estimate::{Evaluation, MultiStartConfig, Objective, ParamSpace, DEFAULT_ESTIMATED};
-use vanefit::motor::Motor;
-use vanefit::params::MotorParams;
+use vanefit::model::effects::EffectSet;
+use vanefit::model::motor::Motor;
+use vanefit::model::params::MotorParams;
 
 /// χ² of log-parameters against a known truth: a bowl with its bottom at the truth.
 struct Bowl {
@@ -36,7 +36,7 @@ struct DoubleWell;
 
 impl Objective for DoubleWell {
     fn evaluate(&self, motor: &Motor) -> Evaluation {
-        let x = (motor.params.c_ext / 1e-8).log10(); // in [-1, 1] over the bounds
+        let x = (motor.params.c_ext() / 1e-8).log10(); // in [-1, 1] over the bounds
         let cost = 10.0 * (x * x - 0.25).powi(2) + 0.3 * x + 1.0;
         Evaluation {
             cost,
@@ -156,7 +156,7 @@ fn double_well_has_two_minima_and_the_deeper_one_wins() {
     let clusters = cluster(&out.results, &s, 0.02);
     assert_eq!(clusters.len(), 2, "{clusters:?}");
     assert_eq!(clusters.iter().map(|c| c.members.len()).sum::<usize>(), 16);
-    let x = (s.params(&out.best().theta).unwrap().c_ext / 1e-8).log10();
+    let x = (s.params(&out.best().theta).unwrap().c_ext() / 1e-8).log10();
     // Exact minimum of 10(x²−¼)² + 0.3x on the left: 40x(x²−¼) + 0.3 = 0 near x = −0.5.
     let g = 40.0 * x * (x * x - 0.25) + 0.3;
     assert!(x < 0.0 && g.abs() < 1e-3, "x = {x}, gradient {g}");
@@ -227,7 +227,7 @@ struct Broken;
 
 impl Objective for Broken {
     fn evaluate(&self, motor: &Motor) -> Evaluation {
-        let x = motor.params.c_in1.log10();
+        let x = motor.params.c_in1().log10();
         let cost = if x > -8.2 {
             f64::NAN
         } else if x < -8.8 {
@@ -262,6 +262,6 @@ fn no_nan_or_infinity_reaches_the_optimizer() {
         ..Default::default()
     };
     let out = multistart::run(&Broken, &s, &cfg, &Silent, None, false).unwrap();
-    let x = s.params(&out.best().theta).unwrap().c_in1.log10();
+    let x = s.params(&out.best().theta).unwrap().c_in1().log10();
     assert!((x + 8.5).abs() < 1e-3, "log10 c_in1 = {x}");
 }

@@ -3,14 +3,14 @@
 
 use proptest::prelude::*;
 use std::f64::consts::PI;
-use vanefit::effects::{Effect, EffectSet};
-use vanefit::experiment::Experiment;
-use vanefit::motor::{idx, Boundary, Load, Motor, State};
-use vanefit::nozzle::{psi, Nozzle, R_LAMINAR};
-use vanefit::ode::{DiffsolBdf, StiffSolver, Tolerances};
-use vanefit::params::MotorParams;
-use vanefit::steady;
-use vanefit::synth::{free_speed, plan_experiments, SynthPlan};
+use vanefit::data::synth::{free_speed, plan_experiments, SynthPlan};
+use vanefit::model::effects::{Effect, EffectSet};
+use vanefit::model::motor::{idx, Boundary, Load, Motor, State};
+use vanefit::model::nozzle::{psi, Nozzle, R_LAMINAR};
+use vanefit::model::params::MotorParams;
+use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
+use vanefit::sim::experiment::Experiment;
+use vanefit::sim::steady;
 
 const P_ATM: f64 = 101_325.0;
 const P_SUPPLY: f64 = 0.73e6;
@@ -163,9 +163,9 @@ fn gear_motor_limit_in_full_model() {
     let bc = default_bc();
     let x = [6.0e5, 1.6e5, 1.4e5, 500.0];
     let b = m.balance(&x, &bc);
-    let gear = p.z * (x[0] - x[1]) * (p.v_disp / p.z - p.v_dead) / (2.0 * PI);
+    let gear = p.z() * (x[0] - x[1]) * (p.v_disp() / p.z() - p.v_dead()) / (2.0 * PI);
     let w = 0.5 * (1.0 + 500f64.tanh());
-    let rev = -p.z * (x[1] - x[0]) * (p.v_disp / p.z - p.v_dead) / (2.0 * PI);
+    let rev = -p.z() * (x[1] - x[0]) * (p.v_disp() / p.z() - p.v_dead()) / (2.0 * PI);
     assert!((b.torque_ideal_nm - (w * gear + (1.0 - w) * rev)).abs() < 1e-12);
 }
 

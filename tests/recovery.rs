@@ -2,16 +2,16 @@
 //! Without noise the estimates land within 1% of the truth; with sensor noise the truth lies
 //! inside the reported 95% intervals of the identifiable parameters.
 
-use vanefit::cost::{CostModel, CostOptions};
-use vanefit::dataset::Dataset;
-use vanefit::effects::EffectSet;
+use vanefit::data::dataset::Dataset;
+use vanefit::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
 use vanefit::estimate::fit::{fit, FitSetup, UncertaintyMethod};
 use vanefit::estimate::multistart::{MultiStartConfig, Silent};
 use vanefit::estimate::{ParamSpace, DEFAULT_ESTIMATED};
-use vanefit::motor::Motor;
-use vanefit::ode::DiffsolBdf;
-use vanefit::params::MotorParams;
-use vanefit::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
+use vanefit::model::effects::EffectSet;
+use vanefit::model::motor::Motor;
+use vanefit::model::params::MotorParams;
+use vanefit::numerics::ode::DiffsolBdf;
+use vanefit::objective::cost::{CostModel, CostOptions};
 
 /// A motor that is not the default one: conductances and friction moved by up to 40%.
 fn truth() -> MotorParams {

@@ -11,13 +11,13 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use vanefit::cost::{CostModel, CostOptions};
-use vanefit::dataset::Dataset;
-use vanefit::effects::EffectSet;
-use vanefit::experiment::Experiment;
-use vanefit::motor::Motor;
-use vanefit::ode::DiffsolBdf;
-use vanefit::params::MotorParams;
+use vanefit::data::dataset::Dataset;
+use vanefit::model::effects::EffectSet;
+use vanefit::model::motor::Motor;
+use vanefit::model::params::MotorParams;
+use vanefit::numerics::ode::DiffsolBdf;
+use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::sim::experiment::Experiment;
 use vanefit::units::{column_name, Quantity, Unit};
 
 fn measurements(name: &str) -> PathBuf {

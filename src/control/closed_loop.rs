@@ -49,10 +49,10 @@
 //! stiff solver, the state carried across.
 
 use super::{ControlError, RAD_S_PER_RPM};
-use crate::effects::Effect;
-use crate::motor::{idx, Boundary, Load, Motor, State};
-use crate::ode::StiffSolver;
-use crate::steady;
+use crate::model::effects::Effect;
+use crate::model::motor::{idx, Boundary, Load, Motor, State};
+use crate::numerics::ode::StiffSolver;
+use crate::sim::steady;
 use nalgebra::{Complex, Matrix2, Vector2};
 
 /// How the valve's output pressure follows its set pressure.
@@ -91,11 +91,13 @@ impl Valve {
         let p = &motor.params;
         let dynamics = if motor.effects.contains(Effect::ValveDynamics) {
             ValveDynamics::SecondOrder {
-                tau_s: p.valve_tau,
-                zeta: p.valve_zeta,
+                tau_s: p.valve_tau(),
+                zeta: p.valve_zeta(),
             }
         } else {
-            ValveDynamics::FirstOrder { tau_s: p.valve_tau }
+            ValveDynamics::FirstOrder {
+                tau_s: p.valve_tau(),
+            }
         };
         Self {
             dynamics,
@@ -448,7 +450,7 @@ impl Loop {
         let n = (scenario.duration_s / ts).round() as usize;
         let mut tr = Trace::default();
         let (mut x, mut valve, mut integral) = (start.x, start.valve, start.integral_v);
-        let inertia = motor.params.inertia;
+        let inertia = motor.params.inertia();
         for k in 0..=n {
             let t = k as f64 * ts;
             let r = scenario.setpoint_rad_s.at(t);
@@ -570,7 +572,7 @@ pub fn disturbance_metrics(tr: &Trace, t_step: f64, band_rad_s: f64) -> Disturba
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ode::DiffsolBdf;
+    use crate::numerics::ode::DiffsolBdf;
 
     const P_ATM: f64 = 101_325.0;
 

@@ -204,8 +204,8 @@ mod tests {
     use crate::control::closed_loop::{step_metrics, Loop, Scenario, Steps};
     use crate::control::linear::operating_point;
     use crate::control::RAD_S_PER_RPM;
-    use crate::motor::{idx, Boundary, Load, Motor};
-    use crate::ode::DiffsolBdf;
+    use crate::model::motor::{idx, Boundary, Load, Motor};
+    use crate::numerics::ode::DiffsolBdf;
 
     const P_ATM: f64 = 101_325.0;
 

@@ -17,8 +17,8 @@
 //! running one. [`operating_point`] refuses stalled or unstable points.
 
 use super::ControlError;
-use crate::motor::{idx, Boundary, Motor, State, N_STATES};
-use crate::steady;
+use crate::model::motor::{idx, Boundary, Motor, State, N_STATES};
+use crate::sim::steady;
 use nalgebra::{Complex, Matrix4, Vector4};
 use std::f64::consts::PI;
 
@@ -38,7 +38,7 @@ impl OperatingPoint {
 /// Lowest speed at which the motor counts as running for linearisation, rad/s:
 /// 50·ω_reg (so that the Coulomb friction is saturated, tanh(50) = 1) and at least 10 rad/s.
 pub fn min_running_speed_rad_s(motor: &Motor) -> f64 {
-    (50.0 * motor.params.w_reg).max(10.0)
+    (50.0 * motor.params.w_reg()).max(10.0)
 }
 
 /// Steady state with free speed under `bc`, started from standstill (so that, where several
@@ -101,7 +101,7 @@ impl LinearModel {
         bm.p_port1_pa -= h;
         let (fp, fm) = (f(&op.x, &bp), f(&op.x, &bm));
         let b = Vector4::from_fn(|i, _| (fp[i] - fm[i]) / (2.0 * h));
-        let e = Vector4::new(0.0, 0.0, 0.0, -1.0 / motor.params.inertia);
+        let e = Vector4::new(0.0, 0.0, 0.0, -1.0 / motor.params.inertia());
         let lin = Self { a, b, e, op: *op };
         if let Some(p) = lin.poles().iter().find(|p| p.re >= 0.0 || p.re.is_nan()) {
             return Err(ControlError(format!(
@@ -333,8 +333,8 @@ pub fn rad_s(f_hz: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motor::Load;
-    use crate::ode::{DiffsolBdf, StiffSolver, Tolerances};
+    use crate::model::motor::Load;
+    use crate::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
 
     fn default_point(p_supply_pa: f64) -> (Motor, OperatingPoint) {
         let m = Motor::default_motor();

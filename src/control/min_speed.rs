@@ -27,9 +27,9 @@
 
 use super::closed_loop::{Loop, Scenario, Steps, Trace};
 use super::{ControlError, RAD_S_PER_RPM};
-use crate::motor::{idx, Boundary, Load, Motor, State};
-use crate::ode::DiffsolBdf;
-use crate::steady;
+use crate::model::motor::{idx, Boundary, Load, Motor, State};
+use crate::numerics::ode::DiffsolBdf;
+use crate::sim::steady;
 
 /// A jump of the speed on the ramp.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -61,7 +61,10 @@ pub struct StartUp {
 /// yet saturated; those are numerical devices for standstill, and the motor counts as
 /// standing there.
 pub fn lowest_running_speed_rad_s(motor: &Motor) -> f64 {
-    5.0 * motor.params.w_reg.max(crate::constants::OMEGA_BLEND_RAD_S)
+    5.0 * motor
+        .params
+        .w_reg()
+        .max(crate::units::constants::OMEGA_BLEND_RAD_S)
 }
 
 /// Root in p ∈ [p_lo, p_hi] of an increasing function (bisection with the Illinois
@@ -155,7 +158,7 @@ fn breakaway_pressure(
     p_atm: f64,
     p_max: f64,
 ) -> Result<Option<f64>, ControlError> {
-    let w_st = 5.0 * motor.params.w_reg;
+    let w_st = 5.0 * motor.params.w_reg();
     let mut g = steady::initial_guess(&Boundary::supplied(p_max, p_atm, load));
     increasing_root(p_atm, p_max, &mut |p| {
         let (_, x) = pressures_at(motor, load, p_atm, p, 0.0, &g)?;
@@ -366,7 +369,7 @@ pub fn ramp_simulation(
     ramp_s: f64,
     n: usize,
 ) -> Result<Vec<(f64, f64)>, ControlError> {
-    use crate::ode::StiffSolver;
+    use crate::numerics::ode::StiffSolver;
     let p_at = |t: f64| p_atm_pa + (p_max_pa - p_atm_pa) * (t / ramp_s).clamp(0.0, 1.0);
     let rhs =
         |t: f64, x: &State| motor.derivatives(x, &Boundary::supplied(p_at(t), p_atm_pa, load));
@@ -388,8 +391,8 @@ pub fn ramp_simulation(
 mod tests {
     use super::*;
     use crate::control::closed_loop::{PiController, Valve};
-    use crate::effects::{Effect, EffectSet};
-    use crate::params::MotorParams;
+    use crate::model::effects::{Effect, EffectSet};
+    use crate::model::params::MotorParams;
 
     const P_ATM: f64 = 101_325.0;
 

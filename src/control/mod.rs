@@ -24,7 +24,6 @@ pub mod closed_loop;
 pub mod design;
 pub mod linear;
 pub mod min_speed;
-pub mod study;
 pub mod throttle;
 
 use std::fmt;
@@ -41,14 +40,14 @@ impl fmt::Display for ControlError {
 
 impl std::error::Error for ControlError {}
 
-impl From<crate::steady::SteadyError> for ControlError {
-    fn from(e: crate::steady::SteadyError) -> Self {
+impl From<crate::sim::steady::SteadyError> for ControlError {
+    fn from(e: crate::sim::steady::SteadyError) -> Self {
         ControlError(e.to_string())
     }
 }
 
-impl From<crate::ode::SolveError> for ControlError {
-    fn from(e: crate::ode::SolveError) -> Self {
+impl From<crate::numerics::ode::SolveError> for ControlError {
+    fn from(e: crate::numerics::ode::SolveError) -> Self {
         ControlError(e.to_string())
     }
 }

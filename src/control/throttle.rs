@@ -10,8 +10,8 @@
 //!   from standstill up to the speed where the shaft torque reaches zero (free speed).
 
 use super::ControlError;
-use crate::motor::{idx, Boundary, Load, Motor, State};
-use crate::steady;
+use crate::model::motor::{idx, Boundary, Load, Motor, State};
+use crate::sim::steady;
 
 /// Where the throttle sits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

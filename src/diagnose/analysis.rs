@@ -36,11 +36,11 @@
 
 use super::stats;
 use super::target::Target;
-use crate::cost::{ChannelResiduals, CostModel};
-use crate::dataset::Kind;
-use crate::motor::Motor;
-use crate::ode::StiffSolver;
-use crate::reference::Abscissa;
+use crate::data::dataset::Kind;
+use crate::model::motor::Motor;
+use crate::numerics::ode::StiffSolver;
+use crate::objective::cost::{ChannelResiduals, CostModel};
+use crate::objective::reference::Abscissa;
 use crate::units::{Quantity, Unit};
 
 /// Family-wise false-alarm rate of the location tests.

@@ -9,7 +9,7 @@
 //! with the term switched on at ±δ (δ sized so the term is about one noise level of its
 //! balance at a typical operating point: 2 mN·m, 10 mg/s). The features f are evaluated on
 //! the simulated states [p_1, p_2, p_e, ω] along the experiments inside the model
-//! ([`crate::motor::ExtraTerm`]); regressing the residual on s_bf is regressing the balance's
+//! ([`crate::model::motor::ExtraTerm`]); regressing the residual on s_bf is regressing the balance's
 //! residual on f, seen through the model's dynamics, which is what the recordings observe
 //! (the balances themselves are not measured). The base parameters may move too: their
 //! sensitivities are nuisance columns that every model contains (a concealed effect hides in
@@ -36,11 +36,11 @@
 
 use super::fitting::Fitted;
 use super::target::Target;
-use crate::cost::CostModel;
-use crate::effects::Category;
 use crate::estimate::space::ParamSpace;
-use crate::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, SpeedFactor as W};
-use crate::ode::DiffsolBdf;
+use crate::model::effects::Category;
+use crate::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, SpeedFactor as W};
+use crate::numerics::ode::DiffsolBdf;
+use crate::objective::cost::CostModel;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
@@ -122,7 +122,7 @@ fn step(t: &ExtraTerm) -> f64 {
         ..*t
     };
     let f = unit
-        .feature(&TYPICAL, crate::constants::P_ATM_PA, 0.2)
+        .feature(&TYPICAL, crate::units::constants::P_ATM_PA, 0.2)
         .abs()
         .max(1e-30);
     match t.balance {

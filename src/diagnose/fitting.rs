@@ -9,14 +9,14 @@
 //! term, the coefficient in units of its starting value.
 
 use super::target::{Likelihood, Target};
-use crate::cost::CostModel;
-use crate::effects::EffectSet;
 use crate::estimate::multistart::{self, MultiStartConfig, Silent};
 use crate::estimate::objective::Objective;
 use crate::estimate::space::ParamSpace;
-use crate::motor::{ExtraTerm, Motor};
-use crate::ode::DiffsolBdf;
-use crate::params::MotorParams;
+use crate::model::effects::EffectSet;
+use crate::model::motor::{ExtraTerm, Motor};
+use crate::model::params::MotorParams;
+use crate::numerics::ode::DiffsolBdf;
+use crate::objective::cost::CostModel;
 use argmin::core::{CostFunction, Error, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;

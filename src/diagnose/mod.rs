@@ -43,7 +43,7 @@
 //!    significant, it is paired with the next three candidates.
 //! 5. **Uncatalogued** ([`discover`]): sparse regression of the misfit over a library of
 //!    terms in each balance, on the baseline and on the best catalog model; a term that the
-//!    linearised regression supports is put into the model ([`crate::motor::ExtraTerm`])
+//!    linearised regression supports is put into the model ([`crate::model::motor::ExtraTerm`])
 //!    and refitted.
 //! 6. **Selection.** Among the baseline and every refitted model, the simplest one within
 //!    [`SELECT_DELTA_BIC`] = 10 of the lowest BIC is chosen, simplicity ordered baseline <
@@ -60,22 +60,21 @@
 pub mod analysis;
 pub mod discover;
 pub mod fitting;
-pub mod report;
 pub mod stats;
 pub mod target;
 
-use crate::cost::{CostModel, CostOptions};
-use crate::dataset::{Dataset, Kind};
-use crate::effects::{Category, Effect, EffectSet};
+use crate::data::dataset::{Dataset, Kind};
+use crate::data::fitfile::FitFile;
 use crate::estimate::space::DEFAULT_ESTIMATED;
-use crate::fitfile::FitFile;
-use crate::motor::ExtraTerm;
-use crate::ode::DiffsolBdf;
-use crate::params::{spec, MotorParams};
+use crate::model::effects::{Category, Effect, EffectSet};
+use crate::model::motor::ExtraTerm;
+use crate::model::params::{spec, MotorParams};
+use crate::numerics::ode::DiffsolBdf;
+use crate::objective::cost::{CostModel, CostOptions};
 use analysis::{ChannelData, Location};
 use fitting::{FitJob, Fitted};
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
+
 use std::time::Instant;
 use target::Target;
 
@@ -85,22 +84,6 @@ pub const SELECT_DELTA_BIC: f64 = 10.0;
 pub const CONCEALMENT_ALPHA: f64 = 1e-3;
 /// The format of `diagnosis.json`.
 pub const FORMAT: &str = "vanefit.diagnosis/1";
-
-/// `vanefit diagnose` options (SPEC §6).
-#[derive(clap::Args, Debug, Clone)]
-pub struct DiagnoseArgs {
-    /// Dataset folder (rig.toml and recordings).
-    pub dataset: PathBuf,
-    /// Start points of the baseline fit: the rig's nominal motor plus Latin-hypercube starts.
-    #[arg(long, default_value_t = 4)]
-    pub starts: usize,
-    /// Seed of the start designs; a seed gives the same result whatever the thread count.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Output folder: diagnosis.json, report.md and its SVG plots.
-    #[arg(long)]
-    pub out: PathBuf,
-}
 
 /// How thorough a diagnosis is.
 #[derive(Debug, Clone, PartialEq)]
@@ -351,7 +334,7 @@ pub fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
 fn off_value(name: &str, base: &MotorParams) -> f64 {
     let s = spec(name).expect("effect parameter");
     match name {
-        "t_static" => base.t_coulomb.clamp(s.search.0, s.search.1),
+        "t_static" => base.t_coulomb().clamp(s.search.0, s.search.1),
         "w_stribeck" => s.default,
         "w_seal" => s.default,
         "w_fill" => s.search.1,
@@ -434,7 +417,7 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
     let solver = DiffsolBdf::default();
     let cost = CostModel::new(ds, CostOptions::default()).map_err(|e| e.to_string())?;
     let target = Target::new(&cost, ds)?;
-    let (nominal, _) = crate::cli::params_for(ds, None).map_err(|f| f.0)?;
+    let nominal = ds.nominal_params().map_err(|e| e.to_string())?;
     let base_names = names_for(&EffectSet::empty());
     let threads = opts.threads;
 
@@ -1276,44 +1259,10 @@ pub fn discovered_terms(fit_file: &Value) -> Result<Vec<ExtraTerm>, String> {
     }
 }
 
-/// Writes `diagnosis.json`, `extended.json` (the extended model's fit file), `report.md`
-/// and the plots into `out`.
-pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("{}: cannot create: {e}", out.display()))?;
-    for (name, v) in [
-        ("diagnosis.json", to_json(d)),
-        ("extended.json", extended_fit_file(d)),
-    ] {
-        let path = out.join(name);
-        let text = serde_json::to_string_pretty(&v).expect("plain data") + "\n";
-        crate::fsutil::write_atomic(&path, text.as_bytes())
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    report::write(d, out)
-}
-
-/// `vanefit diagnose`.
-pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
-    if args.starts == 0 {
-        return Err("--starts must be at least 1".into());
-    }
-    let ds = Dataset::load(&args.dataset).map_err(|e| e.to_string())?;
-    let d = diagnose(&ds, &DiagnoseOptions::full(args.starts, args.seed))?;
-    write(&d, &args.out)?;
-    println!("{}", summary(&d));
-    println!(
-        "wrote {} and {} ({:.1} s on {} thread(s))",
-        args.out.join("diagnosis.json").display(),
-        args.out.join("report.md").display(),
-        d.wall_s,
-        d.threads
-    );
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     fn candidate(label: &str, kind: ModelKind, delta_bic: f64) -> Candidate {
         Candidate {
@@ -1388,9 +1337,9 @@ mod tests {
         let base = MotorParams::default();
         let s = effect_starts(&[Effect::IncompleteFilling], &base, 3);
         assert_eq!(s.len(), 3);
-        assert_eq!(s[0].w_fill, 1e5);
-        assert!(s[1].w_fill < 1e5);
+        assert_eq!(s[0].w_fill(), 1e5);
+        assert!(s[1].w_fill() < 1e5);
         let s = effect_starts(&[Effect::BreakawayFriction], &base, 1);
-        assert_eq!(s[0].t_static, base.t_coulomb);
+        assert_eq!(s[0].t_static(), base.t_coulomb());
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! # Why not the cost's references
 //!
-//! The fitting cost ([`crate::cost`]) compares simulations with reference polynomials and
+//! The fitting cost ([`crate::objective::cost`]) compares simulations with reference polynomials and
 //! normalises by the polynomial's residual σ. Where a polynomial cannot follow the curve
 //! (a pressure ramp's breakaway, a sharp knee) that σ holds the polynomial's lack of fit
 //! too: on the shipped kind of dataset it overstates the noise of the ramp's speed about
@@ -29,12 +29,12 @@
 //! σ² = mean(d_i²)/6 over the rest. As in the references, σ is at least max|y|/4096 (a
 //! 12-bit converter's resolution), so noise-free data do not get an infinite weight.
 
-use crate::cost::{ChannelResiduals, CostModel, FAILURE_PENALTY};
-use crate::dataset::{Dataset, Kind};
+use crate::data::dataset::{Dataset, Kind};
 use crate::estimate::objective::{Evaluation, Objective};
-use crate::motor::Motor;
-use crate::ode::DiffsolBdf;
-use crate::reference::{FitOptions, Reference};
+use crate::model::motor::Motor;
+use crate::numerics::ode::DiffsolBdf;
+use crate::objective::cost::{ChannelResiduals, CostModel, FAILURE_PENALTY};
+use crate::objective::reference::{FitOptions, Reference};
 use crate::units::Quantity;
 
 /// One compared channel: rows, recorded values there, noise.

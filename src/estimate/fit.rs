@@ -8,19 +8,19 @@ use super::multistart::{
 use super::objective::{Evaluation, Objective, Problem};
 use super::space::ParamSpace;
 use super::uncertainty::{self, Interval};
-use crate::cost::CostModel;
-use crate::dataset::Kind;
-use crate::fitfile::{FitFile, RunInfo, Starts};
-use crate::motor::Motor;
-use crate::ode::DiffsolBdf;
-use crate::params::MotorParams;
+use crate::data::dataset::Kind;
+use crate::data::fitfile::{FitFile, RunInfo, Starts};
+use crate::model::motor::Motor;
+use crate::model::params::MotorParams;
+use crate::numerics::ode::DiffsolBdf;
+use crate::objective::cost::CostModel;
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// The data's cost as an estimation objective.
 pub struct DataObjective<'a> {
     pub cost: &'a CostModel,
-    pub solver: Box<dyn crate::ode::StiffSolver + 'a>,
+    pub solver: Box<dyn crate::numerics::ode::StiffSolver + 'a>,
 }
 
 impl Objective for DataObjective<'_> {
@@ -152,8 +152,8 @@ fn intervals(
 /// parameter changes by 20%, among the three reference experiments: where a parameter that
 /// these data leave open would be pinned down.
 pub fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kind> {
-    use crate::experiment::Experiment;
-    use crate::synth::{free_speed, plan_experiments, SensorNoise, SynthPlan};
+    use crate::data::synth::{free_speed, plan_experiments, SensorNoise, SynthPlan};
+    use crate::sim::experiment::Experiment;
     use crate::units::Quantity;
     let plan = SynthPlan::default();
     let noise = SensorNoise::typical();

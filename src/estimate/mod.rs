@@ -1,11 +1,9 @@
 //! Estimation: parameter space and transforms (`space`), the argmin objective (`objective`),
 //! the multi-start runner (`multistart`) and parameter uncertainty (`uncertainty`).
 
-pub mod command;
 pub mod fit;
 pub mod multistart;
 pub mod objective;
-pub mod report;
 pub mod space;
 pub mod uncertainty;
 

@@ -398,7 +398,7 @@ impl ResultsFile {
 
     fn create(&self, space: &ParamSpace, cfg: &MultiStartConfig) -> Result<(), RunError> {
         let text = serde_json::to_string(&Self::header(space, cfg)).expect("plain data") + "\n";
-        crate::fsutil::write_atomic(&self.path, text.as_bytes())
+        crate::io::write_atomic(&self.path, text.as_bytes())
             .map_err(|e| RunError(format!("{}: {e}", self.path.display())))
     }
 

@@ -3,7 +3,7 @@
 //! knows nothing of motors), as argmin keeps `problem` apart from `solver`.
 
 use super::space::ParamSpace;
-use crate::motor::Motor;
+use crate::model::motor::Motor;
 use argmin::core::{CostFunction, Error};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;

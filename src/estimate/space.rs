@@ -6,8 +6,8 @@
 //! The optimizer's coordinate is θ = logit(u) = ln(u/(1 − u)), so any θ ∈ ℝ is a value
 //! strictly inside the bounds (log for positive parameters, logistic for boxed ones).
 
-use crate::effects::EffectSet;
-use crate::params::{spec, Domain, MotorParams, ParamSet};
+use crate::model::effects::EffectSet;
+use crate::model::params::{spec, Domain, MotorParams, ParamSet};
 use std::fmt;
 
 /// One estimated parameter.
@@ -200,7 +200,7 @@ impl ParamSpace {
 
     /// Checked parameters at optimizer coordinates θ. Values strictly inside the bounds can
     /// still break a cross-constraint (e.g. v_dead ≥ V_fill): that is an error to penalise.
-    pub fn params(&self, theta: &[f64]) -> Result<MotorParams, crate::params::ParamError> {
+    pub fn params(&self, theta: &[f64]) -> Result<MotorParams, crate::model::params::ParamError> {
         let mut set = ParamSet::from(self.fixed.clone());
         for (d, t) in self.dims.iter().zip(theta) {
             set.set(&d.name, d.value(*t))?;

@@ -3,11 +3,11 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use vanefit::dataset::{Dataset, ExperimentData, MotorSection};
-use vanefit::motor::Motor;
-use vanefit::ode::DiffsolBdf;
-use vanefit::params::MotorParams;
-use vanefit::synth::{SensorNoise, SynthPlan};
+use vanefit::data::dataset::{Dataset, ExperimentData, MotorSection};
+use vanefit::data::synth::{SensorNoise, SynthPlan};
+use vanefit::model::motor::Motor;
+use vanefit::model::params::MotorParams;
+use vanefit::numerics::ode::DiffsolBdf;
 
 /// The base parameters of the test motor: the AR034-11 defaults with every estimated
 /// parameter moved by 20–40% (so that the diagnosis cannot lean on the defaults).
@@ -32,7 +32,7 @@ pub fn perturbed_base() -> MotorParams {
 /// by `synth::synthesize`, typical sensor noise on the measured channels and on the
 /// recorded inputs.
 pub fn synthesize(truth: &Motor, seed: u64) -> Vec<ExperimentData> {
-    vanefit::synth::synthesize(
+    vanefit::data::synth::synthesize(
         truth,
         &DiffsolBdf::default(),
         &SynthPlan::default(),
@@ -58,8 +58,8 @@ pub fn dataset(name: &str, experiments: Vec<ExperimentData>) -> Dataset {
             r_stator_m: None,
             r_rotor_m: None,
         },
-        p_atm_pa: vanefit::constants::P_ATM_PA,
-        temperature_k: vanefit::constants::T0_K,
+        p_atm_pa: vanefit::units::constants::P_ATM_PA,
+        temperature_k: vanefit::units::constants::T0_K,
         experiments,
     }
 }

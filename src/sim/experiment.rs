@@ -1,12 +1,12 @@
 //! The reference experiments of SPEC §2 as first-class types: each knows its inputs (from the
 //! rig and its recording) and simulates the channels that were measured, one value per row.
 
-use crate::dataset::{ExperimentData, Kind};
-use crate::effects::Effect;
-use crate::motor::{idx, Boundary, Load, Motor, State};
-use crate::ode::StiffSolver;
-use crate::schedule::Schedule;
-use crate::steady;
+use crate::model::effects::Effect;
+use crate::model::motor::{idx, Boundary, Load, Motor, State};
+use crate::numerics::ode::StiffSolver;
+use crate::sim::recording::{ExperimentData, Kind, MissingColumn};
+use crate::sim::schedule::Schedule;
+use crate::sim::steady;
 use crate::units::Quantity;
 use std::fmt;
 
@@ -71,7 +71,7 @@ impl Experiment {
     /// Builds the experiment's inputs from its recording (validated by `dataset`).
     pub fn new(data: &ExperimentData, p_atm_pa: f64) -> Result<Self, SimError> {
         let rec = &data.recording;
-        let err = |e: crate::dataset::DataError| SimError {
+        let err = |e: MissingColumn| SimError {
             experiment: data.file.clone(),
             message: e.to_string(),
         };
@@ -247,7 +247,7 @@ impl Experiment {
         }
         if motor.effects.contains(Effect::SensorLag) {
             for ch in out.iter_mut().take(3) {
-                *ch = first_order_lag(times, ch, motor.params.tau_sensor);
+                *ch = first_order_lag(times, ch, motor.params.tau_sensor());
             }
         }
         let [flow1, flow2, speed, torque] = out;

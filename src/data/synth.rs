@@ -2,12 +2,12 @@
 //! sensor noise, written as a complete dataset folder (rig.toml marked synthetic, CSVs).
 //! Used for examples, tests, and to prove the estimator and the diagnosis on known truth.
 
-use crate::dataset::{Column, DataError, ExperimentData, Kind, Recording};
-use crate::effects::EffectSet;
-use crate::experiment::{Experiment, SimError};
-use crate::motor::{idx, Boundary, Load, Motor};
-use crate::ode::StiffSolver;
-use crate::steady;
+use crate::data::dataset::{Column, DataError, ExperimentData, Kind, Recording};
+use crate::model::effects::EffectSet;
+use crate::model::motor::{idx, Boundary, Load, Motor};
+use crate::numerics::ode::StiffSolver;
+use crate::sim::experiment::{Experiment, SimError};
+use crate::sim::steady;
 use crate::units::{column_name, Quantity, Unit};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -78,7 +78,7 @@ impl Default for SynthPlan {
     /// The paper's rig: 0.73 MPa supply, 60 s pressure ramp, 65 s throttle ramp, 10 Hz.
     fn default() -> Self {
         Self {
-            p_atm_pa: crate::constants::P_ATM_PA,
+            p_atm_pa: crate::units::constants::P_ATM_PA,
             p_supply_pa: 0.73e6,
             datasheet_points: 25,
             ramp_duration_s: 60.0,
@@ -297,12 +297,12 @@ pub fn write_dataset(
         "description = {:?}",
         format!("{description} effects: [{}]", effects.ids().join(", "))
     );
-    let _ = writeln!(rig, "\n[motor]\nname = \"AR034-11 (simulated)\"\nvanes = {}\ndisplacement_m3 = {:e}\nexpansion_ratio = {}", p.vanes(), p.v_disp, p.eps);
+    let _ = writeln!(rig, "\n[motor]\nname = \"AR034-11 (simulated)\"\nvanes = {}\ndisplacement_m3 = {:e}\nexpansion_ratio = {}", p.vanes(), p.v_disp(), p.eps());
     let _ = writeln!(
         rig,
         "\n[conditions]\np_atm_pa = {}\ntemperature_k = {}",
         plan.p_atm_pa,
-        crate::constants::T0_K
+        crate::units::constants::T0_K
     );
     for ex in experiments {
         let _ = writeln!(
@@ -326,8 +326,8 @@ pub fn write_dataset(
                 let _ = writeln!(rig, "load = {{ kind = \"torque\", t_nm = {t_nm:e} }}");
             }
         }
-        crate::fsutil::write_atomic(&dir.join(&ex.file), recording_csv(&ex.recording).as_bytes())
+        crate::io::write_atomic(&dir.join(&ex.file), recording_csv(&ex.recording).as_bytes())
             .map_err(io)?;
     }
-    crate::fsutil::write_atomic(&dir.join("rig.toml"), rig.as_bytes()).map_err(io)
+    crate::io::write_atomic(&dir.join("rig.toml"), rig.as_bytes()).map_err(io)
 }

@@ -9,25 +9,25 @@
 //! pressures in MPa absolute, conductances in m3/(s*Pa), torques in N*m, flows in g/s,
 //! commands in V.
 
-use super::closed_loop::{
+use crate::cli::Failure;
+use crate::control::closed_loop::{
     disturbance_metrics, step_metrics, AntiWindup, Loop, PiController, Scenario, Steps, Trace,
     Valve, ValveDynamics,
 };
-use super::design::{design_pi, margins, open_loop, plant, Margins, Target};
-use super::linear::{
+use crate::control::design::{design_pi, margins, open_loop, plant, Margins, Target};
+use crate::control::linear::{
     fit_two_lags, log_grid, operating_point, rad_s, two_lag_guess, unwrapped_phase_deg, LinearModel,
 };
-use super::min_speed::{closed_loop_min_speed, open_loop_start, ramp_simulation};
-use super::throttle::{conductance_grid, speed_vs_conductance, torque_speed, Port};
-use super::{ControlError, RAD_S_PER_RPM};
-use crate::cli::Failure;
-use crate::constants::P_ATM_PA;
-use crate::effects::EffectSet;
-use crate::fitfile::FitFile;
-use crate::motor::{idx, Boundary, Load, Motor};
-use crate::ode::DiffsolBdf;
-use crate::params::MotorParams;
-use crate::plot::{Chart, Figure, Legend, Series};
+use crate::control::min_speed::{closed_loop_min_speed, open_loop_start, ramp_simulation};
+use crate::control::throttle::{conductance_grid, speed_vs_conductance, torque_speed, Port};
+use crate::control::{ControlError, RAD_S_PER_RPM};
+use crate::data::fitfile::FitFile;
+use crate::model::effects::EffectSet;
+use crate::model::motor::{idx, Boundary, Load, Motor};
+use crate::model::params::MotorParams;
+use crate::numerics::ode::DiffsolBdf;
+use crate::report::plot::{Chart, Figure, Legend, Series};
+use crate::units::constants::P_ATM_PA;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 
@@ -448,7 +448,7 @@ impl Table {
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ControlError> {
-    crate::fsutil::write_atomic(path, bytes)
+    crate::io::write_atomic(path, bytes)
         .map_err(|e| ControlError(format!("{}: {e}", path.display())))?;
     println!("wrote {}", path.display());
     Ok(())
@@ -538,7 +538,7 @@ fn throttle(a: &ThrottleArgs, port: Port) -> Result<(), ControlError> {
 
     // Torque-speed curves up to the unthrottled free speed.
     let bc = port.boundary(p_supply, P_ATM_PA, Load::None, None);
-    let free = crate::steady::free(m, &bc, &crate::steady::initial_guess(&bc))?;
+    let free = crate::sim::steady::free(m, &bc, &crate::sim::steady::initial_guess(&bc))?;
     let w_max = 1.02 * free[idx::OMEGA];
     let mut tq = Table::new(&[c_col, "speed_rpm", "torque_nm", "flow1_g_s"]);
     let mut curve_series = Vec::new();
@@ -938,7 +938,11 @@ fn step(a: &StepArgs) -> Result<(), ControlError> {
         P_ATM_PA,
         lp.load,
     );
-    let full = crate::steady::free(&s.motor, &bc_full, &crate::steady::initial_guess(&bc_full))?;
+    let full = crate::sim::steady::free(
+        &s.motor,
+        &bc_full,
+        &crate::sim::steady::initial_guess(&bc_full),
+    )?;
     if full[idx::OMEGA] < to {
         println!(
             "note: --to-rpm {} is above the speed at full command ({:.0} rpm); the command \
@@ -1019,7 +1023,7 @@ fn disturbance(a: &DisturbanceArgs) -> Result<(), ControlError> {
         rpm(d.max_drop_rad_s),
         d.recovery_time_s,
         rpm(d.final_error_rad_s),
-        rpm(super::closed_loop::tail_mean_error(&tr_open, 0.1)),
+        rpm(crate::control::closed_loop::tail_mean_error(&tr_open, 0.1)),
     );
     Ok(())
 }
@@ -1037,10 +1041,10 @@ fn min_speed(a: &MinSpeedArgs) -> Result<(), ControlError> {
     }
     let floor = match a.floor_rpm {
         Some(f) => positive("--floor-rpm", f)? * RAD_S_PER_RPM,
-        None => super::min_speed::lowest_running_speed_rad_s(&s.motor),
+        None => crate::control::min_speed::lowest_running_speed_rad_s(&s.motor),
     };
     let stage_s = positive("--stage-s", a.stage_s)?;
-    if stage_s <= super::min_speed::HOLD_WINDOW_S + 1.0 {
+    if stage_s <= crate::control::min_speed::HOLD_WINDOW_S + 1.0 {
         return Err(bad("--stage-s", stage_s, "longer than 3 s"));
     }
     let m = &s.motor;
@@ -1306,30 +1310,32 @@ fn design(a: &DesignArgs) -> Result<(), ControlError> {
         rpm(w0),
         describe_valve(&lp.valve)
     );
-    let show =
-        |name: &str, pi: &PiController, m: &Margins, st: &super::closed_loop::StepMetrics| {
-            println!(
-                "{name}: kp {:.4} V/({} rpm), ki {:.4} V/({} rpm*s) [G(s) = ({:.4} s + {:.4})/s]; \
+    let show = |name: &str,
+                pi: &PiController,
+                m: &Margins,
+                st: &crate::control::closed_loop::StepMetrics| {
+        println!(
+            "{name}: kp {:.4} V/({} rpm), ki {:.4} V/({} rpm*s) [G(s) = ({:.4} s + {:.4})/s]; \
             crossover {:.3} rad/s ({:.3} Hz), phase margin {:.1} deg, gain margin {:.1} dB; \
             simulated +{:.0} rpm step: overshoot {:.1} %, rise {:.3} s, settling {:.3} s, mean \
             error over the last 10 % {:.2} rpm",
-                pi.kp,
-                pi.speed_unit_rpm,
-                pi.ki,
-                pi.speed_unit_rpm,
-                pi.kp,
-                pi.ki,
-                m.crossover_rad_s,
-                m.crossover_rad_s / (2.0 * std::f64::consts::PI),
-                m.phase_margin_deg,
-                m.gain_margin_db,
-                a.step_rpm,
-                st.overshoot_pct,
-                st.rise_time_s,
-                st.settling_time_s,
-                rpm(st.final_error_rad_s)
-            );
-        };
+            pi.kp,
+            pi.speed_unit_rpm,
+            pi.ki,
+            pi.speed_unit_rpm,
+            pi.kp,
+            pi.ki,
+            m.crossover_rad_s,
+            m.crossover_rad_s / (2.0 * std::f64::consts::PI),
+            m.phase_margin_deg,
+            m.gain_margin_db,
+            a.step_rpm,
+            st.overshoot_pct,
+            st.rise_time_s,
+            st.settling_time_s,
+            rpm(st.final_error_rad_s)
+        );
+    };
     show("designed", &designed, &m_d, &met_d);
     show("paper   ", &paper, &m_p, &met_p);
     if met_d.settling_time_s.is_nan() || rpm(met_d.final_error_rad_s).abs() > 0.02 * a.step_rpm {

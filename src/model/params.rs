@@ -4,7 +4,7 @@
 //! Every parameter is SI. The names are the contract used in fit files and on the command
 //! line; they must not change.
 
-use crate::effects::Effect;
+use crate::model::effects::Effect;
 use std::fmt;
 
 /// What values a parameter may take.
@@ -36,9 +36,11 @@ pub struct ParamSpec {
 
 macro_rules! params {
     ($( $field:ident : $unit:literal = $default:expr, $domain:expr, ($lo:expr, $hi:expr), $effect:expr, $meaning:literal; )*) => {
-        /// Checked motor parameters, SI units. Build them with [`ParamSet::check`].
+        /// Checked motor parameters, SI units. The only way to build them is
+        /// [`ParamSet::check`] (or a default), so every value has passed its check; read them
+        /// through the accessor of the same name.
         #[derive(Debug, Clone, PartialEq)]
-        pub struct MotorParams { $( #[doc = $meaning] pub $field: f64, )* }
+        pub struct MotorParams { $( $field: f64, )* }
 
         /// Every parameter, in a fixed order (the order of fit files and reports).
         pub const PARAMS: &[ParamSpec] = &[
@@ -47,6 +49,10 @@ macro_rules! params {
         ];
 
         impl MotorParams {
+            $(
+                #[doc = concat!($meaning, ", ", $unit, ".")]
+                pub fn $field(&self) -> f64 { self.$field }
+            )*
             /// Value of a named parameter (`None` for an unknown name).
             pub fn get(&self, name: &str) -> Option<f64> {
                 match name { $( stringify!($field) => Some(self.$field), )* _ => None }

@@ -2,8 +2,8 @@
 //! back by `simulate` and by other tools. Partial files mean defaults for the rest; unknown
 //! names, wrong units and non-physical values are refused with the file and line.
 
-use crate::effects::{Effect, EffectSet};
-use crate::params::{spec, MotorParams, ParamSet, PARAMS};
+use crate::model::effects::{Effect, EffectSet};
+use crate::model::params::{spec, MotorParams, ParamSet, PARAMS};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use std::fmt;
@@ -131,7 +131,7 @@ impl FitFile {
     /// Writes the file atomically (temporary file, then rename).
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let text = serde_json::to_string_pretty(&self.to_json()).expect("plain data") + "\n";
-        crate::fsutil::write_atomic(path, text.as_bytes())
+        crate::io::write_atomic(path, text.as_bytes())
     }
 
     /// Reads a fit file from disk.
@@ -284,8 +284,8 @@ mod tests {
             r#"{"parameters": {"visc": {"value": 1e-4}}}"#,
         )
         .unwrap();
-        assert_eq!(f.params.visc, 1e-4);
-        assert_eq!(f.params.c_in1, MotorParams::default().c_in1);
+        assert_eq!(f.params.visc(), 1e-4);
+        assert_eq!(f.params.c_in1(), MotorParams::default().c_in1());
         let text = "{\n \"parameters\": {\n  \"c_in1\": 7e-9,\n  \"c_magic\": 1\n }\n}";
         let e = FitFile::parse(Path::new("f.json"), text).unwrap_err();
         assert_eq!(e.line, Some(4));

@@ -11,18 +11,16 @@
 //! plus the displacement flows of the ideal motor (`thermo`).
 //! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (SPEC §1.5).
 
-use crate::constants::RT0;
-use crate::effects::{Effect, EffectSet};
-use crate::friction;
-use crate::nozzle::{series_flow, Nozzle};
-use crate::params::MotorParams;
-use crate::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
+use crate::model::effects::{Effect, EffectSet};
+use crate::model::friction;
+use crate::model::nozzle::{series_flow, Nozzle};
+use crate::model::params::MotorParams;
+use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
+use crate::units::constants::RT0;
 use std::f64::consts::PI;
 
-/// Number of ODE states.
-pub const N_STATES: usize = 4;
-/// State vector [p_1 (Pa), p_2 (Pa), p_e (Pa), ω (rad/s)].
-pub type State = [f64; N_STATES];
+/// Number of ODE states, and the state vector [p_1 (Pa), p_2 (Pa), p_e (Pa), ω (rad/s)].
+pub use crate::numerics::ode::{State, N_STATES};
 
 /// Index of each state in [`State`].
 pub mod idx {
@@ -212,11 +210,11 @@ impl ExtraTerm {
 impl Motor {
     pub fn new(params: MotorParams, effects: EffectSet) -> Self {
         let cycle = Cycle::new(
-            params.z.round(),
-            params.v_disp / params.z.round(),
-            params.v_dead,
-            params.eps,
-            params.n_poly,
+            params.z().round(),
+            params.v_disp() / params.z().round(),
+            params.v_dead(),
+            params.eps(),
+            params.n_poly(),
         );
         Self {
             params,
@@ -242,7 +240,7 @@ impl Motor {
     }
 
     fn nozzle(&self, c: f64) -> Nozzle {
-        Nozzle::new(c, self.params.b_crit)
+        Nozzle::new(c, self.params.b_crit())
     }
 
     /// Leakage conductance multiplier (`speed_dependent_leakage`):
@@ -250,7 +248,7 @@ impl Motor {
     fn leak_factor(&self, omega: f64) -> f64 {
         if self.effects.contains(Effect::SpeedDependentLeakage) {
             let p = &self.params;
-            1.0 + p.g_seal / (1.0 + (omega / p.w_seal).powi(2))
+            1.0 + p.g_seal() / (1.0 + (omega / p.w_seal()).powi(2))
         } else {
             1.0
         }
@@ -260,7 +258,7 @@ impl Motor {
     /// p_e + (p_inlet − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²); p_inlet in the base model.
     fn filling_pressure(&self, p_inlet: f64, p_e: f64, omega: f64) -> f64 {
         if self.effects.contains(Effect::IncompleteFilling) {
-            let eta = 1.0 / (1.0 + (omega / self.params.w_fill).powi(2));
+            let eta = 1.0 / (1.0 + (omega / self.params.w_fill()).powi(2));
             p_e + (p_inlet - p_e) * eta
         } else {
             p_inlet
@@ -271,7 +269,7 @@ impl Motor {
     /// p_discharge·V_carry·z·|ω|/(2π·RT).
     fn carryover(&self, p_discharge: f64, omega: f64) -> f64 {
         if self.effects.contains(Effect::DeadVolumeCarryover) {
-            p_discharge * self.params.v_carry * self.cycle.vanes * omega.abs() / (2.0 * PI * RT0)
+            p_discharge * self.params.v_carry() * self.cycle.vanes * omega.abs() / (2.0 * PI * RT0)
         } else {
             0.0
         }
@@ -281,7 +279,7 @@ impl Motor {
     pub fn friction_torque(&self, omega: f64, p_inlet: f64, p_e: f64) -> f64 {
         let p = &self.params;
         let (dry, wet) = self.friction_parts(omega, p_inlet, p_e);
-        dry * (omega / p.w_reg).tanh() + wet
+        dry * (omega / p.w_reg()).tanh() + wet
     }
 
     /// Friction held against the motor at standstill, N·m: the limit ω → 0⁺ of the friction,
@@ -297,19 +295,19 @@ impl Motor {
     /// (viscous d·ω and c₂·ω·|ω|), N·m.
     fn friction_parts(&self, omega: f64, p_inlet: f64, p_e: f64) -> (f64, f64) {
         let p = &self.params;
-        let mut t_coulomb = p.t_coulomb;
+        let mut t_coulomb = p.t_coulomb();
         if self.effects.contains(Effect::PressureDependentFriction) {
-            t_coulomb += p.k_fric_p * (p_inlet - p_e).max(0.0);
+            t_coulomb += p.k_fric_p() * (p_inlet - p_e).max(0.0);
         }
         let dry = if self.effects.contains(Effect::BreakawayFriction) {
-            let t_static = p.t_static + (t_coulomb - p.t_coulomb);
-            friction::stribeck_dry(omega, t_coulomb, t_static, p.w_stribeck)
+            let t_static = p.t_static() + (t_coulomb - p.t_coulomb());
+            friction::stribeck_dry(omega, t_coulomb, t_static, p.w_stribeck())
         } else {
             t_coulomb
         };
-        let mut wet = p.visc * omega;
+        let mut wet = p.visc() * omega;
         if self.effects.contains(Effect::VaneFrictionSpeedSquared) {
-            wet += p.c_w2 * omega * omega.abs();
+            wet += p.c_w2() * omega * omega.abs();
         }
         (dry, wet)
     }
@@ -328,17 +326,17 @@ impl Motor {
     pub fn balance(&self, x: &State, bc: &Boundary) -> Balance {
         let p = &self.params;
         let [p1, p2, pe, omega] = *x;
-        let flow_port1_kg_s = self.port_flow(p.c_in1, bc.c_port1_m3_s_pa, bc.p_port1_pa, p1);
-        let flow_port2_kg_s = self.port_flow(p.c_out2, bc.c_port2_m3_s_pa, p2, bc.p_port2_pa);
-        let flow_exhaust_kg_s = self.nozzle(p.c_ext).flow(pe, bc.p_atm_pa);
+        let flow_port1_kg_s = self.port_flow(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, p1);
+        let flow_port2_kg_s = self.port_flow(p.c_out2(), bc.c_port2_m3_s_pa, p2, bc.p_port2_pa);
+        let flow_exhaust_kg_s = self.nozzle(p.c_ext()).flow(pe, bc.p_atm_pa);
         let leak = self.leak_factor(omega);
-        let leak_1e_kg_s = self.nozzle(p.c_1e * leak).flow(p1, pe);
-        let leak_2e_kg_s = self.nozzle(p.c_2e * leak).flow(p2, pe);
-        let leak_12_kg_s = self.nozzle(p.c_12 * leak).flow(p1, p2);
+        let leak_1e_kg_s = self.nozzle(p.c_1e() * leak).flow(p1, pe);
+        let leak_2e_kg_s = self.nozzle(p.c_2e() * leak).flow(p2, pe);
+        let leak_12_kg_s = self.nozzle(p.c_12() * leak).flow(p1, p2);
         let (p_in, p_dis) = if omega >= 0.0 { (p1, p2) } else { (p2, p1) };
         let mut extra = [0.0; 4];
         for t in &self.extra {
-            extra[t.balance as usize] += t.feature(x, bc.p_atm_pa, p.w_reg);
+            extra[t.balance as usize] += t.feature(x, bc.p_atm_pa, p.w_reg());
         }
         let displacement = displacement_flows(
             &self.cycle,
@@ -390,10 +388,10 @@ impl Motor {
     pub fn derivatives_from(&self, b: &Balance) -> State {
         let p = &self.params;
         [
-            RT0 / p.vol1 * b.dm1_kg_s,
-            RT0 / p.vol2 * b.dm2_kg_s,
-            RT0 / p.vole * b.dme_kg_s,
-            (b.torque_ideal_nm - b.torque_friction_nm - b.torque_load_nm) / p.inertia,
+            RT0 / p.vol1() * b.dm1_kg_s,
+            RT0 / p.vol2() * b.dm2_kg_s,
+            RT0 / p.vole() * b.dme_kg_s,
+            (b.torque_ideal_nm - b.torque_friction_nm - b.torque_load_nm) / p.inertia(),
         ]
     }
 }

@@ -5,7 +5,7 @@
 //! picks a sans-serif font when it renders the file.
 //!
 //! ```no_run
-//! use vanefit::plot::{Chart, Series};
+//! use vanefit::report::plot::{Chart, Series};
 //! let chart = Chart::new("Speed", "time [s]", "speed [rpm]")
 //!     .with(Series::line("simulated", vec![(0.0, 0.0), (1.0, 3000.0)]));
 //! chart.write_svg(std::path::Path::new("speed.svg")).unwrap();
@@ -230,7 +230,7 @@ impl Figure {
 }
 
 fn write(path: &Path, svg: &str) -> Result<(), PlotError> {
-    crate::fsutil::write_atomic(path, svg.as_bytes())
+    crate::io::write_atomic(path, svg.as_bytes())
         .map_err(|e| PlotError(format!("{}: {e}", path.display())))
 }
 

@@ -3,7 +3,7 @@
 //! (I/Δt − J)·Δx = f(x) with Δt growing as the residual falls (switched evolution relaxation),
 //! so that far from the solution it follows the physical transient and near it it is Newton.
 
-use crate::motor::{idx, Boundary, Motor, State, N_STATES};
+use crate::model::motor::{idx, Boundary, Motor, State, N_STATES};
 use nalgebra::{SMatrix, SVector};
 use std::fmt;
 
@@ -137,7 +137,7 @@ fn jacobian(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motor::Load;
+    use crate::model::motor::Load;
 
     #[test]
     fn steady_state_closes_every_balance() {

@@ -1,7 +1,7 @@
 //! The fitting cost (SPEC §2, issue 3): simulation against the reference polynomials.
 //!
 //! For every measured channel c of every experiment e, with reference polynomial ŷ_c(x)
-//! and noise level σ_c (both from [`crate::reference`], SI), the simulated value y_c,i at
+//! and noise level σ_c (both from [`crate::objective::reference`], SI), the simulated value y_c,i at
 //! each recorded row i whose abscissa x_i (from [`Experiment::abscissa`]: imposed speed,
 //! smoothed port-1 pressure, log10 of the smoothed port-2 conductance) lies within the
 //! reference's valid range is compared with ŷ_c(x_i):
@@ -24,11 +24,11 @@
 //! ([`CostModel::failures`]). `CostModel` is `Sync`: the estimator calls it from many rayon
 //! threads; the counters are atomic.
 
-use crate::dataset::{DataError, Dataset, Kind};
-use crate::experiment::{Experiment, SimError};
-use crate::motor::Motor;
-use crate::ode::StiffSolver;
-use crate::reference::{experiment_references, ChannelReference, FitOptions};
+use crate::data::dataset::{DataError, Dataset, Kind};
+use crate::model::motor::Motor;
+use crate::numerics::ode::StiffSolver;
+use crate::objective::reference::{experiment_references, ChannelReference, FitOptions};
+use crate::sim::experiment::{Experiment, SimError};
 use crate::units::Quantity;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -375,19 +375,19 @@ fn evenly_spaced(items: &[usize], max: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::effects::EffectSet;
-    use crate::ode::DiffsolBdf;
-    use crate::params::MotorParams;
-    use crate::synth::{synthesize, SensorNoise, SynthPlan};
+    use crate::data::synth::{synthesize, SensorNoise, SynthPlan};
+    use crate::model::effects::EffectSet;
+    use crate::model::params::MotorParams;
+    use crate::numerics::ode::DiffsolBdf;
     use std::path::PathBuf;
 
-    fn dataset(experiments: Vec<crate::dataset::ExperimentData>) -> Dataset {
+    fn dataset(experiments: Vec<crate::data::dataset::ExperimentData>) -> Dataset {
         Dataset {
             dir: PathBuf::from("mem"),
             name: "mem".into(),
             synthetic: true,
             description: None,
-            motor: crate::dataset::MotorSection {
+            motor: crate::data::dataset::MotorSection {
                 name: None,
                 vanes: None,
                 displacement_m3: None,
@@ -396,8 +396,8 @@ mod tests {
                 r_stator_m: None,
                 r_rotor_m: None,
             },
-            p_atm_pa: crate::constants::P_ATM_PA,
-            temperature_k: crate::constants::T0_K,
+            p_atm_pa: crate::units::constants::P_ATM_PA,
+            temperature_k: crate::units::constants::T0_K,
             experiments,
         }
     }
@@ -508,7 +508,10 @@ mod tests {
         assert_eq!(model.failures(), u64::from(c.failed.is_some()));
         // Every base parameter at either end of its search range, one at a time.
         let mut n = 1;
-        for spec in crate::params::PARAMS.iter().filter(|s| s.effect.is_none()) {
+        for spec in crate::model::params::PARAMS
+            .iter()
+            .filter(|s| s.effect.is_none())
+        {
             for v in [spec.search.0, spec.search.1] {
                 let Ok(p) = MotorParams::default().with(spec.name, v) else {
                     continue;
@@ -534,16 +537,18 @@ mod tests {
     impl StiffSolver for BrokenSolver {
         fn solve(
             &self,
-            _rhs: &crate::ode::Rhs<'_>,
+            _rhs: &crate::numerics::ode::Rhs<'_>,
             _t0: f64,
-            x0: crate::motor::State,
+            x0: crate::model::motor::State,
             t_out: &[f64],
-        ) -> Result<Vec<crate::motor::State>, crate::ode::SolveError> {
+        ) -> Result<Vec<crate::model::motor::State>, crate::numerics::ode::SolveError> {
             if self.nan {
-                Ok(vec![[f64::NAN; crate::motor::N_STATES]; t_out.len()])
+                Ok(vec![[f64::NAN; crate::model::motor::N_STATES]; t_out.len()])
             } else {
                 let _ = x0;
-                Err(crate::ode::SolveError("step size too small".into()))
+                Err(crate::numerics::ode::SolveError(
+                    "step size too small".into(),
+                ))
             }
         }
     }

@@ -2,7 +2,9 @@
 //! followed by its unit (`flow1_g_s`, `p_port1_bar_g`); values convert to SI on import and
 //! back on export. Nothing inside the crate sees any unit but SI.
 
-use crate::constants::RHO0_KG_M3;
+pub mod constants;
+
+use crate::units::constants::RHO0_KG_M3;
 use std::f64::consts::PI;
 
 /// A measured or imposed quantity in a recording.

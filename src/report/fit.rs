@@ -1,15 +1,15 @@
 //! Pictures of a fit: the waterfall of final costs over the starts, and per experiment an
 //! overlay of data, reference polynomial and simulation for every channel.
 
-use crate::cost::{ChannelResiduals, CostModel};
-use crate::dataset::Dataset;
-use crate::motor::Motor;
-use crate::ode::DiffsolBdf;
-use crate::plot::{Chart, Figure, PlotError, Series};
-use crate::reference::Abscissa;
+use crate::data::dataset::Dataset;
+use crate::model::motor::Motor;
+use crate::numerics::ode::DiffsolBdf;
+use crate::objective::cost::{ChannelResiduals, CostModel};
+use crate::objective::reference::Abscissa;
+use crate::report::plot::{Chart, Figure, PlotError, Series};
 use std::path::{Path, PathBuf};
 
-use super::multistart::StartResult;
+use crate::estimate::multistart::StartResult;
 
 /// Sorted final costs of every start (log scale): a flat floor reached by many starts is a
 /// well-found minimum; steps are distinct local minima.

@@ -4,7 +4,7 @@
 //! Pressures in Pa (absolute), volumes in m³, work in J, torque in N·m, ω in rad/s,
 //! mass flows in kg/s.
 
-use crate::constants::{OMEGA_BLEND_RAD_S, RT0};
+use crate::units::constants::{OMEGA_BLEND_RAD_S, RT0};
 use std::f64::consts::PI;
 
 /// The volumes and polytropic index that define one compartment's cycle.

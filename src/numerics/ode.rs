@@ -4,8 +4,12 @@
 //! while the rotor and the ramps move over seconds. The default backend is diffsol's
 //! variable-order BDF with a dense LU on the 4×4 Jacobian.
 
-use crate::motor::{State, N_STATES};
 use std::fmt;
+
+/// Number of components of a state (the motor's p_1, p_2, p_e and ω).
+pub const N_STATES: usize = 4;
+/// A state vector. Fixed-size so that a step allocates nothing.
+pub type State = [f64; N_STATES];
 
 /// Right-hand side dx/dt = f(t, x).
 pub type Rhs<'a> = dyn Fn(f64, &State) -> State + 'a;
@@ -66,7 +70,8 @@ pub trait StiffSolver: Send + Sync {
     ) -> Result<Vec<State>, SolveError>;
 }
 
-/// Typical magnitude of each state, used to size finite-difference steps.
+/// Typical magnitude of each state (pressures in Pa, then a speed in rad/s), used to size
+/// finite-difference steps.
 const STATE_SCALE: State = [1e5, 1e5, 1e5, 1.0];
 
 /// Jacobian-vector product J·v by a forward difference, with a step sized so that each

@@ -1,6 +1,6 @@
 //! Reference responses (paper §4.2, SPEC §2): each measured channel of each experiment is
 //! described by a least-squares polynomial of its abscissa, valid only over the measured
-//! range. The cost ([`crate::cost`]) compares simulations against these polynomials.
+//! range. The cost ([`crate::objective::cost`]) compares simulations against these polynomials.
 //!
 //! # Method
 //!
@@ -37,7 +37,7 @@
 //!   piece's valid range ends at its last kept point, which leaves a gap where
 //!   [`Reference::eval`] returns `None`.
 
-use crate::dataset::{DataError, ExperimentData, Kind, Recording};
+use crate::data::dataset::{DataError, ExperimentData, Kind, Recording};
 use crate::units::{Quantity, Unit};
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
@@ -46,7 +46,7 @@ use std::fmt;
 pub const MAX_DEGREE: usize = 8;
 /// Fewest points a reference (or one piece of it) is fitted to: degree 1 plus LOO needs 3,
 /// one more keeps the noise estimate meaningful.
-pub const MIN_POINTS: usize = 4;
+pub const MIN_POINTS: usize = crate::data::dataset::MIN_ROWS;
 /// Fewest points on which a split into pieces is considered.
 pub const MIN_POINTS_FOR_SPLIT: usize = 40;
 /// Factor by which the LOO error (PRESS) must fall for a split to be accepted.
@@ -680,15 +680,7 @@ impl Abscissa {
 
 /// The measured output channels of an experiment kind, in the simulator's order.
 pub fn channels_of(kind: Kind) -> &'static [Quantity] {
-    match kind {
-        Kind::Datasheet => &[Quantity::Torque, Quantity::Flow1, Quantity::Flow2],
-        Kind::PressureRamp | Kind::OutletThrottle => &[
-            Quantity::Flow1,
-            Quantity::Flow2,
-            Quantity::Speed,
-            Quantity::Torque,
-        ],
-    }
+    kind.channels()
 }
 
 /// The reference of one measured channel of one experiment.

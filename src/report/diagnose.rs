@@ -6,9 +6,9 @@
 //!   the extended model (noise is ±1);
 //! * `ranking.svg`: ΔBIC of every refitted model.
 
-use super::analysis::ChannelData;
-use super::{discover, num, summary, Diagnosis, ModelKind};
-use crate::plot::{Chart, Figure, Legend, Series};
+use crate::diagnose::analysis::ChannelData;
+use crate::diagnose::{discover, num, summary, Diagnosis, ModelKind};
+use crate::report::plot::{Chart, Figure, Legend, Series};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -293,7 +293,7 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
         md,
         "| model | kind | k | cost | χ² | ΔBIC | noise ratio | held-out noise ratio |\n|---|---|---|---|---|---|---|---|"
     );
-    let row = |md: &mut String, c: &super::Candidate| {
+    let row = |md: &mut String, c: &crate::diagnose::Candidate| {
         let _ = writeln!(
             md,
             "| {} | {:?} | {} | {:.4} | {:.1} | {:.1} | {:.3} | {} |",
@@ -385,6 +385,21 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
     }
     let _ = writeln!(md, "| total | {:.1} |", d.wall_s);
     let path = out.join("report.md");
-    crate::fsutil::write_atomic(&path, md.as_bytes())
-        .map_err(|e| format!("{}: {e}", path.display()))
+    crate::io::write_atomic(&path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Writes `diagnosis.json`, `extended.json` (the extended model's fit file), `report.md`
+/// and the plots into `out`.
+pub fn write_all(d: &Diagnosis, out: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: cannot create: {e}", out.display()))?;
+    for (name, v) in [
+        ("diagnosis.json", crate::diagnose::to_json(d)),
+        ("extended.json", crate::diagnose::extended_fit_file(d)),
+    ] {
+        let path = out.join(name);
+        let text = serde_json::to_string_pretty(&v).expect("plain data") + "\n";
+        crate::io::write_atomic(&path, text.as_bytes())
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    write(d, out)
 }

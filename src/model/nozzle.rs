@@ -9,7 +9,7 @@
 //! C in m³/(s·Pa), pressures in Pa absolute, ṁ in kg/s. The model is isothermal (T_u = T0),
 //! so the temperature factor is 1. Flow reverses by symmetry when p_d > p_u.
 
-use crate::constants::RHO0_KG_M3;
+use crate::units::constants::RHO0_KG_M3;
 
 /// Pressure ratio above which the flow is taken as laminar (linear in Δp).
 pub const R_LAMINAR: f64 = 0.999;

@@ -2,9 +2,11 @@
 //! Everything is validated here, at the edge, and converted to SI; errors name the file,
 //! the line and the column.
 
-use crate::constants::P_ATM_PA;
-use crate::motor::Load;
-use crate::units::{parse_column, ColumnNameError, Quantity, Unit};
+use crate::model::motor::Load;
+use crate::model::params::{MotorParams, ParamSet};
+pub use crate::sim::recording::{Column, ExperimentData, Kind, MissingColumn, Recording};
+use crate::units::constants::P_ATM_PA;
+use crate::units::{parse_column, ColumnNameError, Quantity};
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -57,51 +59,16 @@ impl fmt::Display for DataError {
 
 impl std::error::Error for DataError {}
 
-/// One column of a recording, converted to SI.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Column {
-    /// Name as written in the file's header.
-    pub name: String,
-    pub quantity: Quantity,
-    pub unit: Unit,
-    /// Values in SI, one per data row.
-    pub si: Vec<f64>,
-    /// Values as written in the file (kept so exports can copy input columns verbatim).
-    pub raw: Vec<String>,
+impl From<MissingColumn> for DataError {
+    fn from(e: MissingColumn) -> Self {
+        DataError::new(&e.file, e.message()).at(1)
+    }
 }
 
-/// A CSV recording: columns in file order, all of equal length.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Recording {
-    pub file: PathBuf,
-    pub columns: Vec<Column>,
-    /// Line number of each data row (header is line 1).
-    pub lines: Vec<u64>,
-}
+/// The fewest rows a recording may have: a reference polynomial needs at least this many.
+pub const MIN_ROWS: usize = 4;
 
 impl Recording {
-    pub fn rows(&self) -> usize {
-        self.lines.len()
-    }
-    pub fn column(&self, q: Quantity) -> Option<&Column> {
-        self.columns.iter().find(|c| c.quantity == q)
-    }
-    /// The SI values of a column that must be present.
-    pub fn values(&self, q: Quantity) -> Result<&[f64], DataError> {
-        self.column(q).map(|c| c.si.as_slice()).ok_or_else(|| {
-            DataError::new(
-                &self.file,
-                format!(
-                    "missing column for {} (e.g. '{}_{}')",
-                    q.prefix(),
-                    q.prefix(),
-                    q.si_unit().suffix()
-                ),
-            )
-            .at(1)
-        })
-    }
-
     /// Reads and validates a CSV recording. `p_atm_pa` converts gauge pressures.
     pub fn read(path: &Path, p_atm_pa: f64) -> Result<Self, DataError> {
         let text = read_text(path)?;
@@ -291,25 +258,6 @@ impl Recording {
     }
 }
 
-/// The experiment kinds of SPEC §2.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, PartialOrd, Ord)]
-#[serde(rename_all = "snake_case")]
-pub enum Kind {
-    Datasheet,
-    PressureRamp,
-    OutletThrottle,
-}
-
-impl Kind {
-    pub fn id(self) -> &'static str {
-        match self {
-            Kind::Datasheet => "datasheet",
-            Kind::PressureRamp => "pressure_ramp",
-            Kind::OutletThrottle => "outlet_throttle",
-        }
-    }
-}
-
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RigFile {
@@ -362,7 +310,7 @@ fn default_p_atm() -> f64 {
     P_ATM_PA
 }
 fn default_temperature() -> f64 {
-    crate::constants::T0_K
+    crate::units::constants::T0_K
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -388,21 +336,6 @@ enum LoadSection {
     Torque { t_nm: f64 },
 }
 
-/// One experiment as the rig file describes it, with its recording.
-#[derive(Debug, Clone)]
-pub struct ExperimentData {
-    pub kind: Kind,
-    /// File name as given in rig.toml.
-    pub file: String,
-    pub p_supply_pa: Option<f64>,
-    pub load: Load,
-    /// Weight of the whole experiment in the cost (default 1).
-    pub weight: f64,
-    /// Weight per channel prefix (e.g. "flow1"), default 1.
-    pub channel_weights: std::collections::BTreeMap<String, f64>,
-    pub recording: Recording,
-}
-
 /// A dataset: a motor and its recordings.
 #[derive(Debug, Clone)]
 pub struct Dataset {
@@ -417,6 +350,24 @@ pub struct Dataset {
 }
 
 impl Dataset {
+    /// The rig's nominal motor: defaults, overridden by what `[motor]` gives.
+    pub fn nominal_params(&self) -> Result<MotorParams, DataError> {
+        let mut set = ParamSet::default();
+        let given = [
+            ("z", self.motor.vanes.map(f64::from)),
+            ("v_disp", self.motor.displacement_m3),
+            ("eps", self.motor.expansion_ratio),
+        ];
+        for (name, value) in given {
+            if let Some(v) = value {
+                set.set(name, v)
+                    .map_err(|e| DataError::new(&self.dir.join("rig.toml"), e.to_string()))?;
+            }
+        }
+        set.check()
+            .map_err(|e| DataError::new(&self.dir.join("rig.toml"), format!("[motor] gives {e}")))
+    }
+
     /// Reads `<dir>/rig.toml` and every recording it names.
     pub fn load(dir: &Path) -> Result<Self, DataError> {
         let rig_path = dir.join("rig.toml");
@@ -633,7 +584,7 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
             ));
         }
         if let Some(weights) = &ex.weights {
-            let channels = crate::reference::channels_of(ex.kind);
+            let channels = ex.kind.channels();
             for (name, w) in weights {
                 if !channels.iter().any(|q| q.prefix() == name) {
                     let known: Vec<_> = channels.iter().map(|q| q.prefix()).collect();
@@ -683,13 +634,13 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
 fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
     let rec = &ex.recording;
     let need = |q: Quantity| rec.values(q).map(|_| ());
-    if rec.rows() < crate::reference::MIN_POINTS {
+    if rec.rows() < MIN_ROWS {
         return Err(DataError::new(
             &rec.file,
             format!(
                 "{} data rows are too few for a reference response (need at least {})",
                 rec.rows(),
-                crate::reference::MIN_POINTS
+                MIN_ROWS
             ),
         )
         .at(rec.lines.last().copied().unwrap_or(1)));

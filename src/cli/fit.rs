@@ -1,16 +1,16 @@
 //! `vanefit fit` (SPEC §6): options, progress, summary and export.
 
-use super::fit::{
+use crate::data::dataset::Dataset;
+use crate::estimate::fit::{
     fit, fit_file, most_sensitive_experiment, FitOutcome, FitSetup, UncertaintyMethod,
 };
-use super::multistart::{MultiStartConfig, RunObserver, StartResult};
-use super::report;
-use super::space::{Dimension, ParamSpace, DEFAULT_ESTIMATED};
-use crate::cost::{CostModel, CostOptions};
-use crate::dataset::Dataset;
-use crate::effects::EffectSet;
-use crate::motor::Motor;
-use crate::params::spec;
+use crate::estimate::multistart::{MultiStartConfig, RunObserver, StartResult};
+use crate::estimate::space::{Dimension, ParamSpace, DEFAULT_ESTIMATED};
+use crate::model::effects::EffectSet;
+use crate::model::motor::Motor;
+use crate::model::params::spec;
+use crate::objective::cost::{CostModel, CostOptions};
+use crate::report::fit as report;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -118,7 +118,7 @@ fn parse_bounds(text: &str) -> Result<Vec<(String, f64, f64)>, String> {
 /// parameter of the effects switched on), bounds overrides.
 pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, String> {
     let effects = EffectSet::parse_list(&args.effects).map_err(|m| format!("--effects: {m}"))?;
-    let (fixed, _) = crate::cli::params_for(ds, None).map_err(|f| f.0)?;
+    let fixed = ds.nominal_params().map_err(|e| e.to_string())?;
     let mut names: Vec<String> = match &args.estimate {
         Some(list) => list
             .split(',')
@@ -149,7 +149,7 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, Strin
         ));
     }
     // Conductances grow with the motor: scale the AR034-11 defaults with the displacement.
-    let size = fixed.v_disp / crate::params::MotorParams::default().v_disp;
+    let size = fixed.v_disp() / crate::model::params::MotorParams::default().v_disp();
     let dims = names
         .iter()
         .map(|n| {
@@ -286,7 +286,7 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
         }
         println!("{:<12} {:>13.5e} {:>27}  {unit}{note}", d.name, v, interval);
     }
-    let fixed: Vec<String> = crate::params::PARAMS
+    let fixed: Vec<String> = crate::model::params::PARAMS
         .iter()
         .filter(|s| s.effect.is_none_or(|e| setup.space.effects.contains(e)))
         .filter(|s| !setup.space.dims.iter().any(|d| d.name == s.name))

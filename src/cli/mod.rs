@@ -1,14 +1,18 @@
 //! Command line (SPEC §6). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
 //! (clap reports usage errors with status 2 itself).
 
-use crate::dataset::{Dataset, Kind};
-use crate::effects::EffectSet;
-use crate::experiment::Experiment;
-use crate::fitfile::FitFile;
-use crate::motor::Motor;
-use crate::ode::DiffsolBdf;
-use crate::params::{MotorParams, ParamSet};
-use crate::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
+pub mod control;
+pub mod diagnose;
+pub mod fit;
+
+use crate::data::dataset::{Dataset, Kind};
+use crate::data::fitfile::FitFile;
+use crate::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
+use crate::model::effects::EffectSet;
+use crate::model::motor::Motor;
+use crate::model::params::MotorParams;
+use crate::numerics::ode::DiffsolBdf;
+use crate::sim::experiment::Experiment;
 use crate::units::Quantity;
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -38,7 +42,7 @@ pub enum Command {
         out: PathBuf,
     },
     /// Estimate parameters from a dataset (multi-start Nelder-Mead) and export a fit file.
-    Fit(crate::estimate::command::FitArgs),
+    Fit(crate::cli::fit::FitArgs),
     /// Write a synthetic dataset from the simulator.
     Synth {
         out_dataset: PathBuf,
@@ -55,9 +59,9 @@ pub enum Command {
         seed: u64,
     },
     /// Find the physics the model leaves out: locate, explain, model, refit (SPEC §5, §6).
-    Diagnose(crate::diagnose::DiagnoseArgs),
+    Diagnose(crate::cli::diagnose::DiagnoseArgs),
     /// Speed-control studies (paper section 5): throttling, frequency response, closed loop.
-    Control(crate::control::study::ControlArgs),
+    Control(crate::cli::control::ControlArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -74,7 +78,7 @@ impl<E: std::error::Error> From<E> for Failure {
 pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Command::Check { dataset } => check(&dataset),
-        Command::Fit(args) => crate::estimate::command::run(&args).map_err(Failure),
+        Command::Fit(args) => crate::cli::fit::run(&args).map_err(Failure),
         Command::Simulate {
             dataset,
             params,
@@ -93,8 +97,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             noise,
             seed,
         ),
-        Command::Control(args) => crate::control::study::run(args),
-        Command::Diagnose(args) => crate::diagnose::run(&args).map_err(Failure),
+        Command::Control(args) => crate::cli::control::run(args),
+        Command::Diagnose(args) => crate::cli::diagnose::run(&args).map_err(Failure),
     }
 }
 
@@ -106,7 +110,10 @@ fn check(dir: &Path) -> Result<(), Failure> {
         .experiments
         .iter()
         .map(|ex| {
-            crate::reference::experiment_references(ex, &crate::reference::FitOptions::default())
+            crate::objective::reference::experiment_references(
+                ex,
+                &crate::objective::reference::FitOptions::default(),
+            )
         })
         .collect::<Result<Vec<_>, _>>()?;
     println!(
@@ -152,7 +159,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
 
 /// One reference response for `check`: channel, degree, R², σ in the column's unit, valid
 /// range in the abscissa column's unit, and its pieces when the data jump.
-fn print_reference(r: &crate::reference::ChannelReference, p_atm_pa: f64) {
+fn print_reference(r: &crate::objective::reference::ChannelReference, p_atm_pa: f64) {
     let a = &r.abscissa;
     let fit = &r.reference;
     let x_name = if a.log10 {
@@ -207,7 +214,7 @@ fn num(v: f64) -> String {
     }
 }
 
-/// Parameters for a dataset: defaults, then the rig's motor, then the fit file.
+/// Parameters for a dataset: the fit file's, or else the rig's nominal motor.
 pub fn params_for(
     ds: &Dataset,
     fit: Option<&FitFile>,
@@ -215,27 +222,11 @@ pub fn params_for(
     if let Some(f) = fit {
         return Ok((f.params.clone(), f.effects.clone()));
     }
-    let mut set = ParamSet::default();
-    if let Some(z) = ds.motor.vanes {
-        set.set("z", f64::from(z))?;
-    }
-    if let Some(v) = ds.motor.displacement_m3 {
-        set.set("v_disp", v)?;
-    }
-    if let Some(e) = ds.motor.expansion_ratio {
-        set.set("eps", e)?;
-    }
-    let p = set.check().map_err(|e| {
-        Failure(format!(
-            "{}: [motor] gives {e}",
-            ds.dir.join("rig.toml").display()
-        ))
-    })?;
-    Ok((p, EffectSet::empty()))
+    Ok((ds.nominal_params()?, EffectSet::empty()))
 }
 
 /// Terms a diagnosis discovered and wrote into a fit file's `model.discovered` list.
-fn discovered_terms(params: Option<&Path>) -> Result<Vec<crate::motor::ExtraTerm>, Failure> {
+fn discovered_terms(params: Option<&Path>) -> Result<Vec<crate::model::motor::ExtraTerm>, Failure> {
     let Some(path) = params else {
         return Ok(Vec::new());
     };
@@ -284,7 +275,7 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
             text.push('\n');
         }
         let path = out.join(&data.file);
-        crate::fsutil::write_atomic(&path, text.as_bytes())
+        crate::io::write_atomic(&path, text.as_bytes())
             .map_err(|e| Failure(format!("{}: {e}", path.display())))?;
         println!("wrote {}", path.display());
     }

@@ -1,0 +1,5 @@
+//! Data at the file edge: datasets (rig.toml + CSV), fit files, synthetic datasets.
+
+pub mod dataset;
+pub mod fitfile;
+pub mod synth;

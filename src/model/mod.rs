@@ -1,0 +1,10 @@
+//! The motor model (SPEC §1, paper §2): geometry, polytropic cycle, nozzles, friction,
+//! the missing-physics catalog, parameters, and the motor as parameters → state derivatives.
+
+pub mod effects;
+pub mod friction;
+pub mod geometry;
+pub mod motor;
+pub mod nozzle;
+pub mod params;
+pub mod thermo;

@@ -1,0 +1,3 @@
+//! Numerical methods that know nothing of motors: stiff integration.
+
+pub mod ode;

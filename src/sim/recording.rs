@@ -1,0 +1,125 @@
+//! Recordings and experiments in memory: what a rig file and its CSV recordings describe,
+//! converted to SI (the files themselves are read in `data`).
+
+use crate::model::motor::Load;
+use crate::units::{Quantity, Unit};
+use serde::Deserialize;
+use std::fmt;
+use std::path::PathBuf;
+
+/// A channel that an experiment needs is not in its recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MissingColumn {
+    /// The recording.
+    pub file: PathBuf,
+    /// The quantity without a column.
+    pub quantity: Quantity,
+}
+
+impl MissingColumn {
+    /// The message without the file: what is missing and an example column name.
+    pub fn message(&self) -> String {
+        let q = self.quantity;
+        format!(
+            "missing column for {} (e.g. '{}_{}')",
+            q.prefix(),
+            q.prefix(),
+            q.si_unit().suffix()
+        )
+    }
+}
+
+impl fmt::Display for MissingColumn {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:1: {}", self.file.display(), self.message())
+    }
+}
+
+impl std::error::Error for MissingColumn {}
+
+/// One column of a recording, converted to SI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    /// Name as written in the file's header.
+    pub name: String,
+    pub quantity: Quantity,
+    pub unit: Unit,
+    /// Values in SI, one per data row.
+    pub si: Vec<f64>,
+    /// Values as written in the file (kept so exports can copy input columns verbatim).
+    pub raw: Vec<String>,
+}
+
+/// A CSV recording: columns in file order, all of equal length.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    pub file: PathBuf,
+    pub columns: Vec<Column>,
+    /// Line number of each data row (header is line 1).
+    pub lines: Vec<u64>,
+}
+
+impl Recording {
+    pub fn rows(&self) -> usize {
+        self.lines.len()
+    }
+    pub fn column(&self, q: Quantity) -> Option<&Column> {
+        self.columns.iter().find(|c| c.quantity == q)
+    }
+    /// The SI values of a column that must be present.
+    pub fn values(&self, q: Quantity) -> Result<&[f64], MissingColumn> {
+        self.column(q)
+            .map(|c| c.si.as_slice())
+            .ok_or_else(|| MissingColumn {
+                file: self.file.clone(),
+                quantity: q,
+            })
+    }
+}
+
+/// The experiment kinds of SPEC §2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    Datasheet,
+    PressureRamp,
+    OutletThrottle,
+}
+
+impl Kind {
+    pub fn id(self) -> &'static str {
+        match self {
+            Kind::Datasheet => "datasheet",
+            Kind::PressureRamp => "pressure_ramp",
+            Kind::OutletThrottle => "outlet_throttle",
+        }
+    }
+
+    /// The measured output channels of the kind, in the simulator's order.
+    pub fn channels(self) -> &'static [Quantity] {
+        match self {
+            Kind::Datasheet => &[Quantity::Torque, Quantity::Flow1, Quantity::Flow2],
+            Kind::PressureRamp | Kind::OutletThrottle => &[
+                Quantity::Flow1,
+                Quantity::Flow2,
+                Quantity::Speed,
+                Quantity::Torque,
+            ],
+        }
+    }
+}
+
+/// One experiment as the rig file describes it, with its recording.
+#[derive(Debug, Clone)]
+pub struct ExperimentData {
+    pub kind: Kind,
+    /// File name as given in rig.toml.
+    pub file: String,
+    pub p_supply_pa: Option<f64>,
+    pub load: Load,
+    /// Weight of the whole experiment in the cost (default 1).
+    pub weight: f64,
+    /// Weight per channel prefix (e.g. "flow1"), default 1.
+    pub channel_weights: std::collections::BTreeMap<String, f64>,
+    pub recording: Recording,
+}
