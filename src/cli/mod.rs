@@ -225,23 +225,12 @@ pub fn params_for(
     Ok((ds.nominal_params()?, EffectSet::empty()))
 }
 
-/// Terms a diagnosis discovered and wrote into a fit file's `model.discovered` list.
-fn discovered_terms(params: Option<&Path>) -> Result<Vec<crate::model::motor::ExtraTerm>, Failure> {
-    let Some(path) = params else {
-        return Ok(Vec::new());
-    };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| Failure(format!("{}: {e}", path.display())))?;
-    let doc: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| Failure(format!("{}:{}: {e}", path.display(), e.line())))?;
-    crate::diagnose::discovered_terms(&doc).map_err(|m| Failure(format!("{}: {m}", path.display())))
-}
-
 fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure> {
     let ds = Dataset::load(dir)?;
     let fit = params.map(FitFile::read).transpose()?;
     let (p, effects) = params_for(&ds, fit.as_ref())?;
-    let motor = Motor::new(p, effects).with_extra(&discovered_terms(params)?);
+    let extra = fit.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
+    let motor = Motor::new(p, effects).with_extra(&extra);
     let solver = DiffsolBdf::default();
     std::fs::create_dir_all(out)
         .map_err(|e| Failure(format!("{}: cannot create: {e}", out.display())))?;
@@ -300,7 +289,9 @@ fn synth(
     if let Some(list) = effects {
         fx = EffectSet::parse_list(list).map_err(|m| Failure(format!("--effects: {m}")))?;
     }
-    let motor = Motor::new(p, fx.clone());
+    // Discovered terms of the fit file act in the synthetic motor as in `simulate`.
+    let extra = fit.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
+    let motor = Motor::new(p, fx.clone()).with_extra(&extra);
     let plan = SynthPlan::default();
     let experiments = synthesize(
         &motor,
@@ -311,11 +302,12 @@ fn synth(
     )?;
     let description = format!("seed {seed}, noise x{noise}.");
     write_dataset(out, &experiments, &plan, &motor, &fx, &description)?;
-    let truth = FitFile::from_params(
+    let mut truth = FitFile::from_params(
         &out.file_name().unwrap_or_default().to_string_lossy(),
         motor.params.clone(),
         fx,
     );
+    truth.extra = extra;
     truth
         .write(&out.join("truth.json"))
         .map_err(|e| Failure(format!("{}: {e}", out.display())))?;

@@ -3,6 +3,10 @@
 //! names, wrong units and non-physical values are refused with the file and line.
 
 use crate::model::effects::{Effect, EffectSet};
+use crate::model::extra::{
+    balance_name, coefficient_unit, formula, pressure_id, speed_id, BalanceId, ExtraTerm,
+    PressureFactor as P, SpeedFactor as W,
+};
 use crate::model::params::{spec, MotorParams, ParamSet, PARAMS};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
@@ -68,6 +72,8 @@ pub struct FitFile {
     pub starts: Option<Starts>,
     pub seed: Option<u64>,
     pub run: Option<RunInfo>,
+    /// Terms outside the catalog (`model.discovered`, written by `vanefit diagnose`).
+    pub extra: Vec<ExtraTerm>,
 }
 
 impl FitFile {
@@ -83,6 +89,7 @@ impl FitFile {
             starts: None,
             seed: None,
             run: None,
+            extra: Vec::new(),
         }
     }
 
@@ -109,10 +116,11 @@ impl FitFile {
         let mut doc = Map::new();
         doc.insert("format".into(), FORMAT.into());
         doc.insert("dataset".into(), self.dataset.clone().into());
-        doc.insert(
-            "model".into(),
-            serde_json::json!({ "effects": self.effects.ids() }),
-        );
+        let mut model = serde_json::json!({ "effects": self.effects.ids() });
+        if !self.extra.is_empty() {
+            model["discovered"] = Value::Array(self.extra.iter().map(term_to_json).collect());
+        }
+        doc.insert("model".into(), model);
         doc.insert("parameters".into(), Value::Object(parameters));
         doc.insert("cost".into(), self.cost.map_or(Value::Null, Value::from));
         doc.insert(
@@ -180,6 +188,20 @@ impl FitFile {
                 return Err(fail(
                     line_of("\"effects\""),
                     "model.effects must be a list of ids".into(),
+                ))
+            }
+        };
+        let extra = match obj.get("model").and_then(|m| m.get("discovered")) {
+            None | Some(Value::Null) => Vec::new(),
+            Some(Value::Array(items)) => items
+                .iter()
+                .map(term_from_json)
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| fail(line_of("\"discovered\""), e.to_string()))?,
+            Some(_) => {
+                return Err(fail(
+                    line_of("\"discovered\""),
+                    "model.discovered must be a list".into(),
                 ))
             }
         };
@@ -251,8 +273,77 @@ impl FitFile {
             run: obj
                 .get("run")
                 .and_then(|v| serde_json::from_value(v.clone()).ok()),
+            extra,
         })
     }
+}
+
+/// A discovered term in a fit file that cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct TermError(pub String);
+
+/// A discovered term as JSON: `{"balance", "pressure", "speed", "coefficient", "unit",
+/// "formula"}` (ids of [`balance_name`], [`pressure_id`], [`speed_id`]; SI coefficient).
+pub fn term_to_json(t: &ExtraTerm) -> serde_json::Value {
+    serde_json::json!({
+        "balance": balance_name(t.balance),
+        "pressure": pressure_id(t.pressure),
+        "speed": speed_id(t.speed),
+        "coefficient": t.coefficient,
+        "unit": coefficient_unit(t),
+        "formula": formula(t),
+    })
+}
+
+/// Reads a term written by [`term_to_json`] (`unit` and `formula` are informative only).
+pub fn term_from_json(v: &serde_json::Value) -> Result<ExtraTerm, TermError> {
+    let field = |k: &str| {
+        v.get(k)
+            .and_then(serde_json::Value::as_str)
+            .ok_or_else(|| TermError(format!("discovered term needs a string \"{k}\"")))
+    };
+    let balance = match field("balance")? {
+        "torque" => BalanceId::Torque,
+        "mass_v1" => BalanceId::Mass1,
+        "mass_v2" => BalanceId::Mass2,
+        "mass_ve" => BalanceId::MassE,
+        other => return Err(TermError(format!("unknown balance '{other}'"))),
+    };
+    let p = field("pressure")?;
+    let pressure = [
+        P::One,
+        P::P1,
+        P::P2,
+        P::Pe,
+        P::P1Gauge,
+        P::P2Gauge,
+        P::PeGauge,
+        P::P1MinusPe,
+        P::P2MinusPe,
+        P::P1MinusP2,
+    ]
+    .into_iter()
+    .find(|x| pressure_id(*x) == p)
+    .ok_or_else(|| TermError(format!("unknown pressure factor '{p}'")))?;
+    let w = field("speed")?;
+    let speed = [W::One, W::Omega, W::AbsOmega, W::OmegaAbsOmega, W::Sign]
+        .into_iter()
+        .find(|x| speed_id(*x) == w)
+        .ok_or_else(|| TermError(format!("unknown speed factor '{w}'")))?;
+    let coefficient = v
+        .get("coefficient")
+        .and_then(serde_json::Value::as_f64)
+        .filter(|c| c.is_finite())
+        .ok_or_else(|| {
+            TermError("discovered term needs a finite numeric \"coefficient\"".into())
+        })?;
+    Ok(ExtraTerm {
+        balance,
+        pressure,
+        speed,
+        coefficient,
+    })
 }
 
 #[cfg(test)]

@@ -36,8 +36,12 @@
 
 use super::fitting::Fitted;
 use super::target::Target;
+pub use crate::data::fitfile::{term_from_json, term_to_json};
 use crate::estimate::space::ParamSpace;
-use crate::model::effects::Category;
+pub use crate::model::extra::{
+    balance_name, balance_symbol, category, coefficient_unit, feature_name, formula, pressure_id,
+    speed_id,
+};
 use crate::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, SpeedFactor as W};
 use crate::numerics::ode::DiffsolBdf;
 use crate::objective::cost::CostModel;
@@ -129,193 +133,6 @@ fn step(t: &ExtraTerm) -> f64 {
         BalanceId::Torque => TORQUE_STEP / f,
         _ => MASS_STEP / f,
     }
-}
-
-/// The SPEC §5 category of a discovered term: torque → torque_loss; a mass term driven by a
-/// pressure difference between two chambers → internal_leakage; other mass terms at V_1 →
-/// inlet_flow, at V_2 or V_e → outlet_flow.
-pub fn category(t: &ExtraTerm) -> Category {
-    match t.balance {
-        BalanceId::Torque => Category::TorqueLoss,
-        _ if matches!(t.pressure, P::P1MinusPe | P::P2MinusPe | P::P1MinusP2) => {
-            Category::InternalLeakage
-        }
-        BalanceId::Mass1 => Category::InletFlow,
-        BalanceId::Mass2 | BalanceId::MassE => Category::OutletFlow,
-    }
-}
-
-fn pressure_symbol(p: P) -> (&'static str, &'static str) {
-    match p {
-        P::One => ("", ""),
-        P::P1 => ("p1", "Pa"),
-        P::P2 => ("p2", "Pa"),
-        P::Pe => ("pe", "Pa"),
-        P::P1Gauge => ("(p1 - p_atm)", "Pa"),
-        P::P2Gauge => ("(p2 - p_atm)", "Pa"),
-        P::PeGauge => ("(pe - p_atm)", "Pa"),
-        P::P1MinusPe => ("(p1 - pe)", "Pa"),
-        P::P2MinusPe => ("(p2 - pe)", "Pa"),
-        P::P1MinusP2 => ("(p1 - p2)", "Pa"),
-    }
-}
-
-fn speed_symbol(w: W) -> (&'static str, &'static str) {
-    match w {
-        W::One => ("", ""),
-        W::Omega => ("omega", "rad/s"),
-        W::AbsOmega => ("|omega|", "rad/s"),
-        W::OmegaAbsOmega => ("omega*|omega|", "rad2/s2"),
-        W::Sign => ("tanh(omega/w_reg)", ""),
-    }
-}
-
-/// Id of a pressure factor in files.
-pub fn pressure_id(p: P) -> &'static str {
-    match p {
-        P::One => "one",
-        P::P1 => "p1",
-        P::P2 => "p2",
-        P::Pe => "pe",
-        P::P1Gauge => "p1_gauge",
-        P::P2Gauge => "p2_gauge",
-        P::PeGauge => "pe_gauge",
-        P::P1MinusPe => "p1_minus_pe",
-        P::P2MinusPe => "p2_minus_pe",
-        P::P1MinusP2 => "p1_minus_p2",
-    }
-}
-
-/// Id of a speed factor in files.
-pub fn speed_id(w: W) -> &'static str {
-    match w {
-        W::One => "one",
-        W::Omega => "omega",
-        W::AbsOmega => "abs_omega",
-        W::OmegaAbsOmega => "omega_abs_omega",
-        W::Sign => "sign",
-    }
-}
-
-/// A discovered term as JSON: `{"balance", "pressure", "speed", "coefficient", "unit",
-/// "formula"}` (ids of [`balance_name`], [`pressure_id`], [`speed_id`]; SI coefficient).
-pub fn term_to_json(t: &ExtraTerm) -> serde_json::Value {
-    serde_json::json!({
-        "balance": balance_name(t.balance),
-        "pressure": pressure_id(t.pressure),
-        "speed": speed_id(t.speed),
-        "coefficient": t.coefficient,
-        "unit": coefficient_unit(t),
-        "formula": formula(t),
-    })
-}
-
-/// Reads a term written by [`term_to_json`] (`unit` and `formula` are informative only).
-pub fn term_from_json(v: &serde_json::Value) -> Result<ExtraTerm, String> {
-    let field = |k: &str| {
-        v.get(k)
-            .and_then(serde_json::Value::as_str)
-            .ok_or_else(|| format!("discovered term needs a string \"{k}\""))
-    };
-    let balance = match field("balance")? {
-        "torque" => BalanceId::Torque,
-        "mass_v1" => BalanceId::Mass1,
-        "mass_v2" => BalanceId::Mass2,
-        "mass_ve" => BalanceId::MassE,
-        other => return Err(format!("unknown balance '{other}'")),
-    };
-    let p = field("pressure")?;
-    let pressure = [
-        P::One,
-        P::P1,
-        P::P2,
-        P::Pe,
-        P::P1Gauge,
-        P::P2Gauge,
-        P::PeGauge,
-        P::P1MinusPe,
-        P::P2MinusPe,
-        P::P1MinusP2,
-    ]
-    .into_iter()
-    .find(|x| pressure_id(*x) == p)
-    .ok_or_else(|| format!("unknown pressure factor '{p}'"))?;
-    let w = field("speed")?;
-    let speed = [W::One, W::Omega, W::AbsOmega, W::OmegaAbsOmega, W::Sign]
-        .into_iter()
-        .find(|x| speed_id(*x) == w)
-        .ok_or_else(|| format!("unknown speed factor '{w}'"))?;
-    let coefficient = v
-        .get("coefficient")
-        .and_then(serde_json::Value::as_f64)
-        .filter(|c| c.is_finite())
-        .ok_or("discovered term needs a finite numeric \"coefficient\"")?;
-    Ok(ExtraTerm {
-        balance,
-        pressure,
-        speed,
-        coefficient,
-    })
-}
-
-/// The feature as a product of symbols, e.g. `p2*omega`.
-pub fn feature_name(t: &ExtraTerm) -> String {
-    let (p, _) = pressure_symbol(t.pressure);
-    let (w, _) = speed_symbol(t.speed);
-    match (p.is_empty(), w.is_empty()) {
-        (true, true) => "1".into(),
-        (true, false) => w.into(),
-        (false, true) => p.into(),
-        (false, false) => format!("{p}*{w}"),
-    }
-}
-
-/// The SI unit of a term's coefficient.
-pub fn coefficient_unit(t: &ExtraTerm) -> String {
-    let num = match t.balance {
-        BalanceId::Torque => "N*m",
-        _ => "kg/s",
-    };
-    let (_, pu) = pressure_symbol(t.pressure);
-    let (_, wu) = speed_symbol(t.speed);
-    let den: Vec<&str> = [pu, wu].into_iter().filter(|s| !s.is_empty()).collect();
-    if den.is_empty() {
-        num.into()
-    } else {
-        format!("{num}/({})", den.join("*"))
-    }
-}
-
-/// The balance's symbol in a formula.
-pub fn balance_symbol(b: BalanceId) -> &'static str {
-    match b {
-        BalanceId::Torque => "T_loss",
-        BalanceId::Mass1 => "dm1/dt",
-        BalanceId::Mass2 => "dm2/dt",
-        BalanceId::MassE => "dme/dt",
-    }
-}
-
-/// The balance's name in reports and JSON.
-pub fn balance_name(b: BalanceId) -> &'static str {
-    match b {
-        BalanceId::Torque => "torque",
-        BalanceId::Mass1 => "mass_v1",
-        BalanceId::Mass2 => "mass_v2",
-        BalanceId::MassE => "mass_ve",
-    }
-}
-
-/// A term as a formula with its coefficient, e.g.
-/// `T_loss += 1.2e-10 N*m/(Pa*rad/s) * p2*omega`.
-pub fn formula(t: &ExtraTerm) -> String {
-    format!(
-        "{} += {:.4e} {} * {}",
-        balance_symbol(t.balance),
-        t.coefficient,
-        coefficient_unit(t),
-        feature_name(t)
-    )
 }
 
 /// One library term's linearised score.
@@ -548,6 +365,7 @@ pub fn regress(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::effects::Category;
 
     #[test]
     fn library_terms_are_distinct_and_described() {

@@ -1234,29 +1234,15 @@ pub fn summary(d: &Diagnosis) -> String {
 }
 
 /// The extended model as a fit file (SPEC §4, `vanefit.fit/1`). Discovered terms have no
-/// catalog id, so they go in an extra list `model.discovered` (each as
-/// [`discover::term_to_json`]): readers that do not know it ignore it (`fitfile` reads only
-/// `model.effects`) and then simulate without the terms; [`discovered_terms`] reads it.
+/// catalog id, so they go in the extra list `model.discovered` ([`FitFile::extra`]): readers
+/// that do not know it ignore it and then simulate without the terms.
 pub fn extended_fit_file(d: &Diagnosis) -> Value {
     let f = &d.extended.fitted;
     let mut file = FitFile::from_params(&d.dataset, f.params.clone(), f.effects.clone());
     file.estimated = names_for(&f.effects);
     file.cost = Some(f.cost);
-    let mut v = file.to_json();
-    if !f.extra.is_empty() {
-        v["model"]["discovered"] =
-            Value::Array(f.extra.iter().map(discover::term_to_json).collect());
-    }
-    v
-}
-
-/// The discovered terms of a fit file's `model.discovered` (none when absent).
-pub fn discovered_terms(fit_file: &Value) -> Result<Vec<ExtraTerm>, String> {
-    match fit_file.get("model").and_then(|m| m.get("discovered")) {
-        None | Some(Value::Null) => Ok(Vec::new()),
-        Some(Value::Array(items)) => items.iter().map(discover::term_from_json).collect(),
-        Some(_) => Err("model.discovered must be a list".into()),
-    }
+    file.extra = f.extra.clone();
+    file.to_json()
 }
 
 #[cfg(test)]

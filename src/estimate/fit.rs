@@ -218,5 +218,6 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             wall_s: out.wall_s,
             threads: out.run.threads,
         }),
+        extra: Vec::new(),
     }
 }

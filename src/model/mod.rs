@@ -2,6 +2,7 @@
 //! the missing-physics catalog, parameters, and the motor as parameters → state derivatives.
 
 pub mod effects;
+pub mod extra;
 pub mod friction;
 pub mod geometry;
 pub mod motor;

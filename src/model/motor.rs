@@ -12,6 +12,7 @@
 //! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (SPEC §1.5).
 
 use crate::model::effects::{Effect, EffectSet};
+pub use crate::model::extra::{BalanceId, ExtraTerm, PressureFactor, SpeedFactor};
 use crate::model::friction;
 use crate::model::nozzle::{series_flow, Nozzle};
 use crate::model::params::MotorParams;
@@ -124,87 +125,6 @@ pub struct Motor {
     /// Terms found by `vanefit diagnose` outside the catalog (empty: the model as specified).
     pub extra: Vec<ExtraTerm>,
     cycle: Cycle,
-}
-
-/// The balance a discovered term enters (SPEC §5, uncatalogued mismatches).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum BalanceId {
-    /// The torque balance: the term is a loss torque, N·m, added to the friction torque
-    /// (so it also lowers the shaft torque a datasheet measures).
-    Torque,
-    /// Mass balance of V_1: the term is a mass flow INTO V_1, kg/s (negative: a leak out).
-    Mass1,
-    /// Mass balance of V_2, kg/s into V_2.
-    Mass2,
-    /// Mass balance of V_e, kg/s into V_e.
-    MassE,
-}
-
-/// The pressure factor of a discovered term's feature (Pa, or 1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum PressureFactor {
-    One,
-    P1,
-    P2,
-    Pe,
-    /// Gauge pressures p − p_atm.
-    P1Gauge,
-    P2Gauge,
-    PeGauge,
-    P1MinusPe,
-    P2MinusPe,
-    P1MinusP2,
-}
-
-/// The speed factor of a discovered term's feature.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum SpeedFactor {
-    One,
-    /// ω, rad/s.
-    Omega,
-    /// |ω|, rad/s.
-    AbsOmega,
-    /// ω·|ω|, (rad/s)².
-    OmegaAbsOmega,
-    /// tanh(ω/ω_reg), 1: a Coulomb-like sign with the friction's regularisation.
-    Sign,
-}
-
-/// A term outside the catalog: `coefficient · pressure(x) · speed(ω)` added to one balance.
-/// The coefficient is SI: (N·m or kg/s) per unit of the feature.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ExtraTerm {
-    pub balance: BalanceId,
-    pub pressure: PressureFactor,
-    pub speed: SpeedFactor,
-    pub coefficient: f64,
-}
-
-impl ExtraTerm {
-    /// The feature pressure(x)·speed(ω) at state x (SI).
-    pub fn feature(&self, x: &State, p_atm_pa: f64, w_reg: f64) -> f64 {
-        let [p1, p2, pe, omega] = *x;
-        let p = match self.pressure {
-            PressureFactor::One => 1.0,
-            PressureFactor::P1 => p1,
-            PressureFactor::P2 => p2,
-            PressureFactor::Pe => pe,
-            PressureFactor::P1Gauge => p1 - p_atm_pa,
-            PressureFactor::P2Gauge => p2 - p_atm_pa,
-            PressureFactor::PeGauge => pe - p_atm_pa,
-            PressureFactor::P1MinusPe => p1 - pe,
-            PressureFactor::P2MinusPe => p2 - pe,
-            PressureFactor::P1MinusP2 => p1 - p2,
-        };
-        let w = match self.speed {
-            SpeedFactor::One => 1.0,
-            SpeedFactor::Omega => omega,
-            SpeedFactor::AbsOmega => omega.abs(),
-            SpeedFactor::OmegaAbsOmega => omega * omega.abs(),
-            SpeedFactor::Sign => (omega / w_reg).tanh(),
-        };
-        self.coefficient * p * w
-    }
 }
 
 impl Motor {
