@@ -391,3 +391,54 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn motor_given_by_geometry_loads_and_bad_motor_keys_are_located() {
+    // The appendix geometry with port angles for V_fill = 0.76 cm³, ε = 1.071: the rig's
+    // nominal motor gets v_disp and eps from paper eqs. 1–7.
+    let geometry = "[motor]\nname = \"AR034-11\"\nvanes = 5\nlength_m = 0.032\n\
+                    r_stator_m = 0.009\nr_rotor_m = 0.00755\nalpha_dead_deg = 36\n\
+                    alpha_fill_deg = 162.0\nalpha_exp_deg = 169.0\n";
+    let dir = dataset_with("rig.toml", |t| {
+        let start = t.find("[motor]").unwrap();
+        let end = t.find("[conditions]").unwrap();
+        Some(format!("{}{geometry}\n{}", &t[..start], &t[end..]))
+    });
+    let ds = Dataset::load(dir.path()).unwrap();
+    let p = ds.nominal_params().unwrap();
+    assert!(
+        (p.v_disp() - 3.8e-6).abs() < 0.1e-6,
+        "v_disp {}",
+        p.v_disp()
+    );
+    assert!(p.eps() > 1.0 && p.eps() < 1.2, "eps {}", p.eps());
+
+    // A negative displacement is refused by `check` itself, at its key.
+    let dir = dataset_with("rig.toml", |t| {
+        Some(t.replace("displacement_m3 = 3.8e-6", "displacement_m3 = -3.8e-6"))
+    });
+    let e = load_error(&dir);
+    let text = std::fs::read_to_string(dir.path().join("rig.toml")).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("displacement_m3"))
+        .unwrap() as u64
+        + 1;
+    assert_eq!(e.line, Some(line), "{e}");
+    assert_eq!(
+        e.column.as_ref().map(|c| c.1.as_str()),
+        Some("displacement_m3")
+    );
+    assert!(e.to_string().contains("v_disp"), "{e}");
+
+    // An expansion ratio below 1 likewise.
+    let dir = dataset_with("rig.toml", |t| {
+        Some(t.replace("expansion_ratio = 1.071", "expansion_ratio = 0.5"))
+    });
+    let e = load_error(&dir);
+    assert_eq!(
+        e.column.as_ref().map(|c| c.1.as_str()),
+        Some("expansion_ratio"),
+        "{e}"
+    );
+}

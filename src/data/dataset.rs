@@ -2,8 +2,9 @@
 //! Everything is validated here, at the edge, and converted to SI; errors name the file,
 //! the line and the column.
 
+pub use crate::data::motor::MotorSection;
 use crate::model::motor::Load;
-use crate::model::params::{MotorParams, ParamSet};
+use crate::model::params::MotorParams;
 pub use crate::sim::recording::{Column, ExperimentData, Kind, MissingColumn, Recording};
 use crate::units::constants::P_ATM_PA;
 use crate::units::{parse_column, ColumnNameError, Quantity};
@@ -271,23 +272,6 @@ struct RigFile {
     experiment: Vec<ExperimentSection>,
 }
 
-/// The `[motor]` table of rig.toml.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct MotorSection {
-    #[serde(default)]
-    pub name: Option<String>,
-    pub vanes: Option<u32>,
-    pub displacement_m3: Option<f64>,
-    pub expansion_ratio: Option<f64>,
-    #[serde(default)]
-    pub length_m: Option<f64>,
-    #[serde(default)]
-    pub r_stator_m: Option<f64>,
-    #[serde(default)]
-    pub r_rotor_m: Option<f64>,
-}
-
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ConditionsSection {
@@ -350,22 +334,12 @@ pub struct Dataset {
 }
 
 impl Dataset {
-    /// The rig's nominal motor: defaults, overridden by what `[motor]` gives.
+    /// The rig's nominal motor: defaults, overridden by what `[motor]` gives (its volumes,
+    /// or its geometry through paper eqs. 1–7).
     pub fn nominal_params(&self) -> Result<MotorParams, DataError> {
-        let mut set = ParamSet::default();
-        let given = [
-            ("z", self.motor.vanes.map(f64::from)),
-            ("v_disp", self.motor.displacement_m3),
-            ("eps", self.motor.expansion_ratio),
-        ];
-        for (name, value) in given {
-            if let Some(v) = value {
-                set.set(name, v)
-                    .map_err(|e| DataError::new(&self.dir.join("rig.toml"), e.to_string()))?;
-            }
-        }
-        set.check()
-            .map_err(|e| DataError::new(&self.dir.join("rig.toml"), format!("[motor] gives {e}")))
+        self.motor
+            .nominal_params()
+            .map_err(|e| DataError::new(&self.dir.join("rig.toml"), e.to_string()))
     }
 
     /// Reads `<dir>/rig.toml` and every recording it names.
@@ -481,6 +455,7 @@ fn read_text(path: &Path) -> Result<String, DataError> {
 enum Table {
     /// Keys before any table header.
     Top,
+    Motor,
     Conditions,
     /// The k-th `[[experiment]]` (0-based).
     Experiment(usize),
@@ -497,10 +472,12 @@ fn key_location(text: &str, table: Table, key: &str) -> Option<(u64, usize)> {
         if t.starts_with("[[") && t[2..].trim_start().starts_with("experiment") {
             current = Some(Table::Experiment(experiments));
             experiments += 1;
-        } else if t.starts_with("[[") || (t.starts_with('[') && !t.starts_with("[conditions")) {
-            current = None;
         } else if t.starts_with("[conditions") {
             current = Some(Table::Conditions);
+        } else if t.starts_with("[motor") {
+            current = Some(Table::Motor);
+        } else if t.starts_with('[') {
+            current = None;
         } else if current == Some(table) {
             for (at, _) in line.match_indices(key) {
                 let before_ok = line[..at]
@@ -534,6 +511,10 @@ fn located(path: &Path, text: &str, table: Table, key: &str, message: String) ->
 }
 
 fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
+    // The motor is checked here, where its keys can be located, not first by `fit`.
+    if let Err(e) = rig.motor.nominal_params() {
+        return Err(located(path, text, Table::Motor, e.key(), e.to_string()));
+    }
     let c = &rig.conditions;
     if !(c.p_atm_pa.is_finite() && (50e3..=150e3).contains(&c.p_atm_pa)) {
         return Err(located(

@@ -2,4 +2,5 @@
 
 pub mod dataset;
 pub mod fitfile;
+pub mod motor;
 pub mod synth;

@@ -1,0 +1,310 @@
+//! The `[motor]` table of rig.toml: the motor either by its volumes (`displacement_m3`,
+//! `expansion_ratio`, `dead_volume_m3`) or by its geometry (rotor length L, stator and rotor
+//! radii R_S and R_R, vanes z and the port timing angles), from which paper eqs. 1–7
+//! ([`VaneGeometry::derived_volumes`]) give V_disp,nom = z·V_fill, ε = V_exp/V_fill and V_d.
+
+use crate::model::geometry::{PortTiming, VaneGeometry};
+use crate::model::params::{MotorParams, ParamError, ParamSet};
+use serde::Deserialize;
+
+/// The `[motor]` table of rig.toml (every key optional: defaults are motor AR034-11's).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MotorSection {
+    /// Catalogue name of the motor.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Number of vanes z.
+    pub vanes: Option<u32>,
+    /// Nominal displacement z·V_fill, m³ (paper eq. 7).
+    pub displacement_m3: Option<f64>,
+    /// Expansion ratio ε = V_exp/V_fill (paper eq. 6).
+    pub expansion_ratio: Option<f64>,
+    /// Dead volume per compartment V_d, m³.
+    #[serde(default)]
+    pub dead_volume_m3: Option<f64>,
+    /// Rotor length L, m.
+    #[serde(default)]
+    pub length_m: Option<f64>,
+    /// Stator radius R_S, m.
+    #[serde(default)]
+    pub r_stator_m: Option<f64>,
+    /// Rotor radius R_R, m.
+    #[serde(default)]
+    pub r_rotor_m: Option<f64>,
+    /// Angle of the leading vane when a compartment opens to the inlet (its dead volume), °.
+    #[serde(default)]
+    pub alpha_dead_deg: Option<f64>,
+    /// Angle of the leading vane at inlet cut-off (the filling volume), °.
+    #[serde(default)]
+    pub alpha_fill_deg: Option<f64>,
+    /// Angle of the leading vane when the exhaust opens (the expanded volume), °.
+    #[serde(default)]
+    pub alpha_exp_deg: Option<f64>,
+}
+
+/// A `[motor]` table that does not describe a motor; each names the key to blame.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MotorSpecError {
+    /// Part of the geometry is given, but not all of it.
+    #[error("[motor] gives part of the geometry; '{missing}' is missing (a geometry needs vanes, length_m, r_stator_m, r_rotor_m, alpha_dead_deg, alpha_fill_deg and alpha_exp_deg)")]
+    IncompleteGeometry {
+        /// The first key that is missing.
+        missing: &'static str,
+    },
+    /// Both the geometry and a volume it determines are given.
+    #[error("[motor] gives both the geometry and '{key}'; give one or the other (the geometry determines displacement_m3, expansion_ratio and dead_volume_m3)")]
+    GeometryAndVolume {
+        /// The volume key given besides the geometry.
+        key: &'static str,
+    },
+    /// A length or an angle that cannot be.
+    #[error("[motor] {key} = {value} {reason}")]
+    BadGeometry {
+        /// The key.
+        key: &'static str,
+        /// Its value as given.
+        value: f64,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// The resulting parameters fail their check.
+    #[error("[motor] gives {0}")]
+    Param(#[from] ParamError),
+}
+
+impl MotorSpecError {
+    /// The rig.toml key the error is about (to locate it in the file).
+    pub fn key(&self) -> &str {
+        match self {
+            MotorSpecError::IncompleteGeometry { .. } => "length_m",
+            MotorSpecError::GeometryAndVolume { key } => key,
+            MotorSpecError::BadGeometry { key, .. } => key,
+            MotorSpecError::Param(e) => match e.name.as_str() {
+                "z" => "vanes",
+                "v_disp" => "displacement_m3",
+                "eps" => "expansion_ratio",
+                "v_dead" => "dead_volume_m3",
+                other => other,
+            },
+        }
+    }
+}
+
+/// The geometry keys, in the order they are asked for.
+const GEOMETRY_KEYS: [&str; 6] = [
+    "length_m",
+    "r_stator_m",
+    "r_rotor_m",
+    "alpha_dead_deg",
+    "alpha_fill_deg",
+    "alpha_exp_deg",
+];
+
+impl MotorSection {
+    fn geometry_values(&self) -> [Option<f64>; 6] {
+        [
+            self.length_m,
+            self.r_stator_m,
+            self.r_rotor_m,
+            self.alpha_dead_deg,
+            self.alpha_fill_deg,
+            self.alpha_exp_deg,
+        ]
+    }
+
+    /// The geometry and port timing, when the table gives them (`None` when it gives no
+    /// geometry key at all).
+    pub fn geometry(&self) -> Result<Option<(VaneGeometry, PortTiming)>, MotorSpecError> {
+        let values = self.geometry_values();
+        if values.iter().all(Option::is_none) {
+            return Ok(None);
+        }
+        let mut got = [0.0; 6];
+        for (k, v) in values.iter().enumerate() {
+            got[k] = v.ok_or(MotorSpecError::IncompleteGeometry {
+                missing: GEOMETRY_KEYS[k],
+            })?;
+        }
+        let vanes = self
+            .vanes
+            .ok_or(MotorSpecError::IncompleteGeometry { missing: "vanes" })?;
+        for key in ["displacement_m3", "expansion_ratio", "dead_volume_m3"] {
+            let given = match key {
+                "displacement_m3" => self.displacement_m3,
+                "expansion_ratio" => self.expansion_ratio,
+                _ => self.dead_volume_m3,
+            };
+            if given.is_some() {
+                return Err(MotorSpecError::GeometryAndVolume { key });
+            }
+        }
+        let [length_m, r_stator_m, r_rotor_m, dead, fill, exp] = got;
+        check_geometry(length_m, r_stator_m, r_rotor_m, [dead, fill, exp])?;
+        let geometry = VaneGeometry {
+            length_m,
+            r_stator_m,
+            r_rotor_m,
+            vanes,
+        };
+        let timing = PortTiming {
+            alpha_dead_rad: dead.to_radians(),
+            alpha_fill_rad: fill.to_radians(),
+            alpha_exp_rad: exp.to_radians(),
+        };
+        Ok(Some((geometry, timing)))
+    }
+
+    /// The nominal motor: defaults, overridden by the table's vanes and volumes (given
+    /// directly, or derived from the geometry by paper eqs. 5–7), checked.
+    pub fn nominal_params(&self) -> Result<MotorParams, MotorSpecError> {
+        let mut set = ParamSet::default();
+        let volumes = match self.geometry()? {
+            Some((g, timing)) => {
+                let d = g.derived_volumes(&timing);
+                [Some(d.v_disp_m3), Some(d.eps), Some(d.v_dead_m3)]
+            }
+            None => [
+                self.displacement_m3,
+                self.expansion_ratio,
+                self.dead_volume_m3,
+            ],
+        };
+        let given = [
+            ("z", self.vanes.map(f64::from)),
+            ("v_disp", volumes[0]),
+            ("eps", volumes[1]),
+            ("v_dead", volumes[2]),
+        ];
+        for (name, value) in given {
+            if let Some(v) = value {
+                set.set(name, v)?;
+            }
+        }
+        Ok(set.check()?)
+    }
+}
+
+/// Lengths positive, the rotor inside the stator, the ports in the order dead < fill < exp
+/// within one turn.
+fn check_geometry(
+    length_m: f64,
+    r_stator_m: f64,
+    r_rotor_m: f64,
+    angles_deg: [f64; 3],
+) -> Result<(), MotorSpecError> {
+    let bad = |key, value, reason| Err(MotorSpecError::BadGeometry { key, value, reason });
+    for (key, value) in [
+        ("length_m", length_m),
+        ("r_stator_m", r_stator_m),
+        ("r_rotor_m", r_rotor_m),
+    ] {
+        if !(value.is_finite() && value > 0.0) {
+            return bad(key, value, "must be a length > 0 m");
+        }
+    }
+    if r_rotor_m >= r_stator_m {
+        return bad("r_rotor_m", r_rotor_m, "must be smaller than r_stator_m");
+    }
+    let [dead, fill, exp] = angles_deg;
+    for (key, value) in [
+        ("alpha_dead_deg", dead),
+        ("alpha_fill_deg", fill),
+        ("alpha_exp_deg", exp),
+    ] {
+        if !(value.is_finite() && (0.0..=360.0).contains(&value)) {
+            return bad(key, value, "must be an angle from 0 to 360 degrees");
+        }
+    }
+    if fill <= dead {
+        return bad("alpha_fill_deg", fill, "must be larger than alpha_dead_deg");
+    }
+    if exp < fill {
+        return bad(
+            "alpha_exp_deg",
+            exp,
+            "must not be smaller than alpha_fill_deg",
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The appendix motor by its geometry, with port angles that give its volumes.
+    fn ar034_by_geometry() -> MotorSection {
+        let g = VaneGeometry::ar034_11();
+        let v_fill = 3.8e-6 / 5.0;
+        MotorSection {
+            vanes: Some(5),
+            length_m: Some(g.length_m),
+            r_stator_m: Some(g.r_stator_m),
+            r_rotor_m: Some(g.r_rotor_m),
+            alpha_dead_deg: Some((0.5 * g.gamma()).to_degrees()),
+            alpha_fill_deg: Some(g.alpha_at_volume(v_fill).unwrap().to_degrees()),
+            alpha_exp_deg: Some(g.alpha_at_volume(1.071 * v_fill).unwrap().to_degrees()),
+            ..MotorSection::default()
+        }
+    }
+
+    #[test]
+    fn geometry_gives_the_appendix_volumes() {
+        let p = ar034_by_geometry().nominal_params().unwrap();
+        assert!((p.v_disp() - 3.8e-6).abs() < 1e-12, "{}", p.v_disp());
+        assert!((p.eps() - 1.071).abs() < 1e-9, "{}", p.eps());
+        // Recomputed independently: the dead volume is the working volume at α_dead (eq. 5).
+        let g = VaneGeometry::ar034_11();
+        assert!((p.v_dead() - g.v_working(0.5 * g.gamma())).abs() < 1e-18);
+    }
+
+    #[test]
+    fn volumes_given_directly_are_used_as_given() {
+        let m = MotorSection {
+            vanes: Some(7),
+            displacement_m3: Some(5e-6),
+            expansion_ratio: Some(1.2),
+            ..MotorSection::default()
+        };
+        let p = m.nominal_params().unwrap();
+        assert_eq!((p.z(), p.v_disp(), p.eps()), (7.0, 5e-6, 1.2));
+        assert_eq!(
+            MotorSection::default().nominal_params().unwrap(),
+            MotorParams::default()
+        );
+    }
+
+    #[test]
+    fn bad_tables_name_their_key() {
+        let mut m = ar034_by_geometry();
+        m.alpha_exp_deg = None;
+        let e = m.nominal_params().unwrap_err();
+        assert_eq!(
+            e,
+            MotorSpecError::IncompleteGeometry {
+                missing: "alpha_exp_deg"
+            }
+        );
+        let mut m = ar034_by_geometry();
+        m.displacement_m3 = Some(3.8e-6);
+        assert_eq!(m.nominal_params().unwrap_err().key(), "displacement_m3");
+        let mut m = ar034_by_geometry();
+        m.r_rotor_m = Some(0.01);
+        assert_eq!(m.nominal_params().unwrap_err().key(), "r_rotor_m");
+        let m = MotorSection {
+            displacement_m3: Some(-1e-6),
+            ..MotorSection::default()
+        };
+        let e = m.nominal_params().unwrap_err();
+        assert_eq!(e.key(), "displacement_m3");
+        assert!(e
+            .to_string()
+            .starts_with("[motor] gives parameter 'v_disp'"));
+        let m = MotorSection {
+            expansion_ratio: Some(0.5),
+            ..MotorSection::default()
+        };
+        assert_eq!(m.nominal_params().unwrap_err().key(), "expansion_ratio");
+    }
+}
