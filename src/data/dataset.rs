@@ -9,21 +9,44 @@ pub use crate::sim::recording::{Column, ExperimentData, Kind, MissingColumn, Rec
 use crate::units::constants::P_ATM_PA;
 use crate::units::{parse_column, ColumnNameError, Quantity};
 use serde::Deserialize;
-use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// A located problem with input data.
-#[derive(Debug, Clone, PartialEq)]
+/// A located problem with input data (the data layer's error): shown as
+/// `file:line:column (column 'name'): message`, with whatever of the location is known.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", located_text(.file, *.line, .column.as_ref(), .message))]
 pub struct DataError {
+    /// The file at fault.
     pub file: PathBuf,
     /// 1-based line, where known.
     pub line: Option<u64>,
     /// 1-based column index and its name, where known.
     pub column: Option<(usize, String)>,
+    /// What is wrong.
     pub message: String,
 }
 
+fn located_text(
+    file: &Path,
+    line: Option<u64>,
+    column: Option<&(usize, String)>,
+    message: &str,
+) -> String {
+    let mut s = file.display().to_string();
+    if let Some(line) = line {
+        s += &format!(":{line}");
+        if let Some((c, _)) = column {
+            s += &format!(":{c}");
+        }
+    }
+    if let Some((_, name)) = column {
+        s += &format!(" (column '{name}')");
+    }
+    s + ": " + message
+}
+
 impl DataError {
+    /// An error about a whole file (no line known yet).
     pub fn new(file: &Path, message: impl Into<String>) -> Self {
         Self {
             file: file.to_path_buf(),
@@ -41,24 +64,6 @@ impl DataError {
         self
     }
 }
-
-impl fmt::Display for DataError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file.display())?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
-            if let Some((c, _)) = &self.column {
-                write!(f, ":{c}")?;
-            }
-        }
-        if let Some((_, name)) = &self.column {
-            write!(f, " (column '{name}')")?;
-        }
-        write!(f, ": {}", self.message)
-    }
-}
-
-impl std::error::Error for DataError {}
 
 impl From<MissingColumn> for DataError {
     fn from(e: MissingColumn) -> Self {

@@ -10,29 +10,22 @@ use crate::model::extra::{
 use crate::model::params::{spec, MotorParams, ParamSet, PARAMS};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
-use std::fmt;
 use std::path::{Path, PathBuf};
 
+/// The format tag of fit files (SPEC §4).
 pub const FORMAT: &str = "vanefit.fit/1";
 
-/// A problem with a fit file.
-#[derive(Debug, Clone, PartialEq)]
+/// A problem with a fit file, shown as `file:line: message` (or `file: message`).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}{}: {}", .file.display(), .line.map(|l| format!(":{l}")).unwrap_or_default(), .message)]
 pub struct FitFileError {
+    /// The fit file.
     pub file: PathBuf,
+    /// 1-based line, where known.
     pub line: Option<usize>,
+    /// What is wrong.
     pub message: String,
 }
-
-impl fmt::Display for FitFileError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.line {
-            Some(l) => write!(f, "{}:{l}: {}", self.file.display(), self.message),
-            None => write!(f, "{}: {}", self.file.display(), self.message),
-        }
-    }
-}
-
-impl std::error::Error for FitFileError {}
 
 /// One parameter's entry.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -30,7 +30,6 @@ use crate::numerics::ode::StiffSolver;
 use crate::objective::reference::{experiment_references, ChannelReference, FitOptions};
 use crate::sim::experiment::{Experiment, SimError};
 use crate::units::Quantity;
-use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Cost given to a failed simulation or a non-finite cost (dimensionless, like J).
@@ -56,35 +55,15 @@ impl Default for CostOptions {
     }
 }
 
-/// Why a cost model could not be built.
-#[derive(Debug, Clone, PartialEq)]
+/// Why a cost model could not be built (the objective layer's error).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CostError {
     /// A recording cannot give a reference response.
-    Data(DataError),
+    #[error(transparent)]
+    Data(#[from] DataError),
     /// An experiment's inputs cannot drive a simulation.
-    Sim(SimError),
-}
-
-impl fmt::Display for CostError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            CostError::Data(e) => e.fmt(f),
-            CostError::Sim(e) => e.fmt(f),
-        }
-    }
-}
-
-impl std::error::Error for CostError {}
-
-impl From<DataError> for CostError {
-    fn from(e: DataError) -> Self {
-        CostError::Data(e)
-    }
-}
-impl From<SimError> for CostError {
-    fn from(e: SimError) -> Self {
-        CostError::Sim(e)
-    }
+    #[error(transparent)]
+    Sim(#[from] SimError),
 }
 
 /// One channel's part of the cost.

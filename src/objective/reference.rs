@@ -40,7 +40,6 @@
 use crate::data::dataset::{DataError, ExperimentData, Kind, Recording};
 use crate::units::{Quantity, Unit};
 use nalgebra::{DMatrix, DVector};
-use std::fmt;
 
 /// Highest polynomial degree tried.
 pub const MAX_DEGREE: usize = 8;
@@ -77,16 +76,35 @@ impl Default for FitOptions {
 }
 
 /// Why a reference could not be fitted.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FitError(pub String);
-
-impl fmt::Display for FitError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FitError {
+    /// The polynomial of this degree is not determined by the points.
+    #[error("degree {0} is not determined by the data")]
+    Undetermined(usize),
+    /// Abscissa and ordinates differ in length.
+    #[error("{0} abscissa values but {1} ordinates")]
+    LengthMismatch(usize, usize),
+    /// Fewer points than the fit needs.
+    #[error("{got} points are too few (need at least {min})")]
+    TooFew {
+        /// Points given.
+        got: usize,
+        /// Points needed.
+        min: usize,
+    },
+    /// A point (1-based) with a NaN or infinite coordinate.
+    #[error("point {0} is not finite")]
+    NotFinite(usize),
+    /// Every abscissa is the same.
+    #[error("abscissa does not span a range")]
+    NoRange,
+    /// Leave-one-out cross-validation has no degree to score.
+    #[error("no degree can be cross-validated")]
+    NoDegree,
+    /// The selected degree could not be fitted.
+    #[error("degree selection failed")]
+    SelectionFailed,
 }
-
-impl std::error::Error for FitError {}
 
 /// Chebyshev polynomials T_0 … T_{m−1} at u, by the recurrence T_{k+1} = 2u·T_k − T_{k−1}.
 fn chebyshev_row(u: f64, m: usize, out: &mut [f64]) {
@@ -145,8 +163,7 @@ impl Piece {
     pub fn fit(x: &[f64], y: &[f64], degree: usize) -> Result<Piece, FitError> {
         check_points(x, y, degree + 2)?;
         let qr = QrFit::new(x, y, degree + 1)?;
-        qr.piece(degree)
-            .ok_or_else(|| FitError(format!("degree {degree} is not determined by the data")))
+        qr.piece(degree).ok_or(FitError::Undetermined(degree))
     }
 }
 
@@ -160,20 +177,13 @@ fn scale(x: f64, lo: f64, hi: f64) -> f64 {
 
 fn check_points(x: &[f64], y: &[f64], min: usize) -> Result<(), FitError> {
     if x.len() != y.len() {
-        return Err(FitError(format!(
-            "{} abscissa values but {} ordinates",
-            x.len(),
-            y.len()
-        )));
+        return Err(FitError::LengthMismatch(x.len(), y.len()));
     }
     if x.len() < min {
-        return Err(FitError(format!(
-            "{} points are too few (need at least {min})",
-            x.len()
-        )));
+        return Err(FitError::TooFew { got: x.len(), min });
     }
     if let Some(i) = (0..x.len()).find(|&i| !(x[i].is_finite() && y[i].is_finite())) {
-        return Err(FitError(format!("point {} is not finite", i + 1)));
+        return Err(FitError::NotFinite(i + 1));
     }
     Ok(())
 }
@@ -199,7 +209,7 @@ impl<'a> QrFit<'a> {
         let m = m.min(n).max(1);
         let (lo, hi) = min_max(x);
         if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
-            return Err(FitError("abscissa does not span a range".into()));
+            return Err(FitError::NoRange);
         }
         let mut a = DMatrix::<f64>::zeros(n, m);
         let mut row = vec![0.0; m];
@@ -313,7 +323,7 @@ fn select(x: &[f64], y: &[f64], max_degree: usize) -> Result<Selected, FitError>
     let cap = degree_cap(n, max_degree).max(1);
     let qr = QrFit::new(x, y, cap + 1)?;
     if qr.rank < 2 {
-        return Err(FitError("abscissa does not span a range".into()));
+        return Err(FitError::NoRange);
     }
     let scale2 = y.iter().map(|v| v * v).sum::<f64>() / n as f64;
     // (degree, mean squared LOO residual)
@@ -324,7 +334,7 @@ fn select(x: &[f64], y: &[f64], max_degree: usize) -> Result<Selected, FitError>
         }
     }
     let Some(&(_, best)) = scores.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-        return Err(FitError("no degree can be cross-validated".into()));
+        return Err(FitError::NoDegree);
     };
     // One standard error of a mean of n squared Gaussian residuals is √(2/n) of that mean.
     // (The Gaussian value, not the sample one: where the residuals are lack of fit rather
@@ -337,9 +347,7 @@ fn select(x: &[f64], y: &[f64], max_degree: usize) -> Result<Selected, FitError>
         .find(|s| s.1 <= threshold)
         .map(|s| s.0)
         .unwrap_or(1);
-    let piece = qr
-        .piece(degree)
-        .ok_or_else(|| FitError("degree selection failed".into()))?;
+    let piece = qr.piece(degree).ok_or(FitError::SelectionFailed)?;
     Ok(Selected {
         piece,
         best_press: best * n as f64,

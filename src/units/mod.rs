@@ -196,12 +196,19 @@ impl Unit {
     }
 }
 
-/// Why a column name was not understood.
-#[derive(Debug, Clone, PartialEq)]
+/// Why a column name was not understood (the units layer's error).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ColumnNameError {
     /// The quantity is known but the unit is not.
-    UnknownUnit { quantity: Quantity, unit: String },
+    #[error("unknown unit '{unit}' for {}", quantity.prefix())]
+    UnknownUnit {
+        /// The quantity the name starts with.
+        quantity: Quantity,
+        /// The unit suffix that is not known.
+        unit: String,
+    },
     /// No known quantity.
+    #[error("unknown column (expected a quantity and its unit, e.g. 'speed_rpm')")]
     UnknownColumn,
 }
 
