@@ -23,21 +23,29 @@ use std::path::{Path, PathBuf};
     version,
     about = "Estimate pneumatic vane motor parameters and find missing physics"
 )]
+/// The parsed command line.
 pub struct Cli {
     #[command(subcommand)]
+    /// The command to run.
     pub command: Command,
 }
 
 #[derive(Subcommand, Debug)]
+/// The commands of SPEC §6.
 pub enum Command {
     /// Validate a dataset and print a summary.
-    Check { dataset: PathBuf },
+    Check {
+        /// Dataset folder (rig.toml and recordings).
+        dataset: PathBuf,
+    },
     /// Simulate every experiment of a dataset under a parameter set.
     Simulate {
+        /// Dataset folder (rig.toml and recordings).
         dataset: PathBuf,
         /// Fit file (vanefit.fit/1); omitted: the default motor.
         #[arg(long)]
         params: Option<PathBuf>,
+        /// Output folder: one CSV per recording, same rows and column names.
         #[arg(long)]
         out: PathBuf,
     },
@@ -45,6 +53,7 @@ pub enum Command {
     Fit(crate::cli::fit::FitArgs),
     /// Write a synthetic dataset from the simulator.
     Synth {
+        /// Folder to write the dataset to.
         out_dataset: PathBuf,
         /// Fit file with the true parameters; omitted: the default motor.
         #[arg(long)]
@@ -55,6 +64,7 @@ pub enum Command {
         /// Sensor noise as a multiple of a typical rig's (0 for none).
         #[arg(long, default_value_t = 1.0)]
         noise: f64,
+        /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },

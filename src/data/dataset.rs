@@ -328,13 +328,21 @@ enum LoadSection {
 /// A dataset: a motor and its recordings.
 #[derive(Debug, Clone)]
 pub struct Dataset {
+    /// The dataset folder.
     pub dir: PathBuf,
+    /// The folder's name, used as the dataset's name.
     pub name: String,
+    /// Written by `vanefit synth` (rig.toml `synthetic = true`).
     pub synthetic: bool,
+    /// Free text from rig.toml.
     pub description: Option<String>,
+    /// The `[motor]` table.
     pub motor: MotorSection,
+    /// Atmospheric pressure of the rig, Pa (absolute).
     pub p_atm_pa: f64,
+    /// Supply air temperature, K.
     pub temperature_k: f64,
+    /// The experiments in rig.toml order.
     pub experiments: Vec<ExperimentData>,
 }
 

@@ -30,40 +30,56 @@ pub struct FitFileError {
 /// One parameter's entry.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ParamEntry {
+    /// Value in SI.
     pub value: f64,
+    /// SI unit (checked on reading; no conversion is done).
     pub unit: String,
+    /// Whether the fit estimated it (otherwise it was fixed).
     pub estimated: bool,
+    /// 95% interval, where computed.
     pub ci95: Option<[f64; 2]>,
 }
 
 /// Number of starts and how many converged.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct Starts {
+    /// Starts run.
     pub total: usize,
+    /// Starts that converged to the best minimum.
     pub converged: usize,
 }
 
 /// Cost evaluations, wall time and threads of the run that made the fit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct RunInfo {
+    /// Cost evaluations of the whole run.
     pub evaluations: u64,
+    /// Wall time, s.
     pub wall_s: f64,
+    /// Worker threads.
     pub threads: usize,
 }
 
 /// A complete fit file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitFile {
+    /// Name of the dataset that was fitted.
     pub dataset: String,
+    /// Catalog effects switched on.
     pub effects: EffectSet,
+    /// Every parameter's value (estimated or fixed), SI.
     pub params: MotorParams,
     /// Names of the estimated parameters.
     pub estimated: Vec<String>,
     /// 95% intervals by name (absent: not computed).
     pub ci95: Vec<(String, [f64; 2])>,
+    /// Final cost, where a fit made the file.
     pub cost: Option<f64>,
+    /// Start counts of the fit.
     pub starts: Option<Starts>,
+    /// Seed of the start design.
     pub seed: Option<u64>,
+    /// Evaluations, wall time and threads of the fit.
     pub run: Option<RunInfo>,
     /// Terms outside the catalog (`model.discovered`, written by `vanefit diagnose`).
     pub extra: Vec<ExtraTerm>,

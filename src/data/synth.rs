@@ -19,9 +19,13 @@ use std::path::{Path, PathBuf};
 /// Standard deviations of the simulated sensors, SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorNoise {
+    /// Flow sensors, kg/s.
     pub flow_kg_s: f64,
+    /// Speed sensor, rad/s.
     pub speed_rad_s: f64,
+    /// Torque sensor, N·m.
     pub torque_nm: f64,
+    /// Pressure sensor, Pa.
     pub pressure_pa: f64,
     /// Relative noise of the conductance setting (log-normal).
     pub conductance_rel: f64,
@@ -38,6 +42,7 @@ impl SensorNoise {
             conductance_rel: 5e-3,
         }
     }
+    /// No noise at all.
     pub fn none() -> Self {
         Self {
             flow_kg_s: 0.0,
@@ -62,11 +67,17 @@ impl SensorNoise {
 /// The conditions of the three reference experiments.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SynthPlan {
+    /// Atmospheric pressure, Pa.
     pub p_atm_pa: f64,
+    /// Supply pressure, Pa (absolute).
     pub p_supply_pa: f64,
+    /// Speeds of the datasheet characteristic.
     pub datasheet_points: usize,
+    /// Length of the supply-pressure ramp, s.
     pub ramp_duration_s: f64,
+    /// Length of the outlet-throttle ramp, s.
     pub throttle_duration_s: f64,
+    /// Sampling rate of the transient recordings, Hz.
     pub sample_rate_hz: f64,
     /// Brake on the rig for the ramps.
     pub brake: Load,

@@ -69,8 +69,11 @@ pub enum CostError {
 /// One channel's part of the cost.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChannelCost {
+    /// The experiment's kind.
     pub experiment_kind: Kind,
+    /// Its recording's file name.
     pub file: String,
+    /// The measured channel.
     pub channel: Quantity,
     /// Column name as written in the recording.
     pub column: String,
@@ -98,9 +101,13 @@ pub struct CostValue {
 /// Residuals of one channel, for diagnosis. All values SI, one entry per compared row.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChannelResiduals {
+    /// The experiment's kind.
     pub experiment_kind: Kind,
+    /// Its recording's file name.
     pub file: String,
+    /// The measured channel.
     pub channel: Quantity,
+    /// The channel's column name in the recording.
     pub column: String,
     /// Indices of the compared rows in the recording (0-based data rows).
     pub rows: Vec<usize>,
@@ -108,6 +115,7 @@ pub struct ChannelResiduals {
     pub x: Vec<f64>,
     /// Reference polynomial at x (the measurement as described by its reference).
     pub measured: Vec<f64>,
+    /// Simulated values, SI, one per row.
     pub simulated: Vec<f64>,
     /// (simulated − measured)/σ.
     pub normalized: Vec<f64>,

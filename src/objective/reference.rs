@@ -124,6 +124,7 @@ pub struct Piece {
     pub x_min: f64,
     /// Largest abscissa of the fitted points (SI).
     pub x_max: f64,
+    /// Polynomial degree.
     pub degree: usize,
     /// Chebyshev coefficients c_k of y(x) = Σ c_k·T_k(u), u = (2x − x_min − x_max)/(x_max − x_min);
     /// y in the channel's SI unit.
@@ -642,9 +643,11 @@ impl InteriorFit {
 /// What a reference's abscissa is: a recorded column, possibly on a log10 scale.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Abscissa {
+    /// The recorded quantity.
     pub quantity: Quantity,
     /// The column's name as written in the file.
     pub column: String,
+    /// The unit of the column.
     pub unit: Unit,
     /// The abscissa is log10 of the SI value (the outlet throttle's conductance).
     pub log10: bool,
@@ -694,15 +697,19 @@ pub fn channels_of(kind: Kind) -> &'static [Quantity] {
 /// The reference of one measured channel of one experiment.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChannelReference {
+    /// The experiment's kind.
     pub kind: Kind,
     /// Recording file name as given in rig.toml.
     pub file: String,
+    /// The measured channel.
     pub quantity: Quantity,
     /// Column name as written in the file.
     pub column: String,
     /// The column's unit (for reports; the reference itself is SI).
     pub unit: Unit,
+    /// What the channel is described against.
     pub abscissa: Abscissa,
+    /// The fitted polynomial(s).
     pub reference: Reference,
 }
 

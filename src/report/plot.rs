@@ -35,10 +35,12 @@ pub struct Series {
     /// (x, y) in the chart's units. Non-finite points, and non-positive ones on a log axis,
     /// are skipped (a line is broken there).
     pub points: Vec<(f64, f64)>,
+    /// Line or points, and colour.
     pub style: Style,
 }
 
 impl Series {
+    /// A line through the points.
     pub fn line(name: &str, points: Vec<(f64, f64)>) -> Self {
         Self {
             name: name.to_string(),
@@ -47,6 +49,7 @@ impl Series {
         }
     }
 
+    /// Markers at the points.
     pub fn points(name: &str, points: Vec<(f64, f64)>) -> Self {
         Self {
             name: name.to_string(),
@@ -60,9 +63,13 @@ impl Series {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Legend {
     #[default]
+    /// Top right corner.
     UpperRight,
+    /// Top left corner.
     UpperLeft,
+    /// Bottom right corner.
     LowerRight,
+    /// Bottom left corner.
     LowerLeft,
     /// No legend.
     Hidden,
@@ -71,15 +78,23 @@ pub enum Legend {
 /// A chart with one pair of axes.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Chart {
+    /// Title above the chart.
     pub title: String,
+    /// Label of the x axis, with its unit.
     pub x_label: String,
+    /// Label of the y axis, with its unit.
     pub y_label: String,
+    /// Logarithmic x axis.
     pub log_x: bool,
+    /// Logarithmic y axis.
     pub log_y: bool,
     /// Axis ranges; `None` fits the data (with a small margin on linear axes).
     pub x_range: Option<(f64, f64)>,
+    /// Fixed y range (None: from the data).
     pub y_range: Option<(f64, f64)>,
+    /// Where the legend goes.
     pub legend: Legend,
+    /// The curves.
     pub series: Vec<Series>,
 }
 
@@ -112,6 +127,7 @@ const COLOURS: [RGBColor; 8] = [
 ];
 
 impl Chart {
+    /// An empty chart with its title and axis labels.
     pub fn new(title: &str, x_label: &str, y_label: &str) -> Self {
         Self {
             title: title.to_string(),
@@ -127,16 +143,19 @@ impl Chart {
         self
     }
 
+    /// With a logarithmic x axis.
     pub fn log_x(mut self) -> Self {
         self.log_x = true;
         self
     }
 
+    /// With a logarithmic y axis.
     pub fn log_y(mut self) -> Self {
         self.log_y = true;
         self
     }
 
+    /// With the legend at `at`.
     pub fn legend(mut self, at: Legend) -> Self {
         self.legend = at;
         self
@@ -195,11 +214,14 @@ impl Chart {
 /// Several charts on a grid, filled row by row.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Figure {
+    /// The charts, row by row.
     pub panels: Vec<Chart>,
+    /// Charts per row.
     pub columns: usize,
 }
 
 impl Figure {
+    /// A figure of `panels` in rows of `columns`.
     pub fn new(panels: Vec<Chart>, columns: usize) -> Self {
         Self { panels, columns }
     }

@@ -29,6 +29,7 @@ pub enum Quantity {
 }
 
 impl Quantity {
+    /// Every quantity.
     pub const ALL: [Quantity; 8] = [
         Quantity::Time,
         Quantity::Speed,
@@ -81,27 +82,40 @@ impl Quantity {
 /// A unit that a column may carry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Unit {
+    /// Seconds.
     S,
+    /// Revolutions per minute.
     Rpm,
+    /// Radians per second.
     RadS,
+    /// Newton metres.
     Nm,
+    /// Grams per second.
     GS,
+    /// Kilograms per second.
     KgS,
     /// Free-air (ANR) volume flow in l/min, converted with ρ0.
     LMinAnr,
     /// Free-air (ANR) volume flow in l/s, converted with ρ0.
     LSAnr,
+    /// Megapascal, absolute.
     Mpa,
+    /// Bar, absolute.
     BarAbs,
     /// Gauge pressure in bar, relative to the rig's p_atm.
     BarG,
+    /// Pascal, absolute.
     Pa,
+    /// Kilopascal, absolute.
     Kpa,
+    /// Sonic conductance, m³/(s·Pa).
     M3SPa,
+    /// Sonic conductance, dm³/(s·bar) (ISO 6358 catalogues).
     Dm3SBar,
 }
 
 impl Unit {
+    /// The column-name suffix of the unit, e.g. `rpm`.
     pub fn suffix(self) -> &'static str {
         match self {
             Unit::S => "s",
