@@ -90,7 +90,7 @@ pub struct ChannelCost {
 /// The cost of one parameter set.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CostValue {
-    /// J of eq. [1], or [`FAILURE_PENALTY`]; always finite.
+    /// J of eq. \[1\], or [`FAILURE_PENALTY`]; always finite.
     pub total: f64,
     /// Why the simulation failed or the cost was not finite, if it did.
     pub failed: Option<String>,
@@ -202,7 +202,7 @@ impl CostModel {
         })
     }
 
-    /// J of eq. [1] for a motor; never NaN, infinite or an error (see the module docs).
+    /// J of eq. \[1\] for a motor; never NaN, infinite or an error (see the module docs).
     pub fn evaluate(&self, motor: &Motor, solver: &dyn StiffSolver) -> CostValue {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let mut channels = Vec::new();
