@@ -48,6 +48,7 @@
 //! exponential for the second-order valve); the motor is integrated sample to sample by the
 //! stiff solver, the state carried across.
 
+use super::error::UnknownAntiWindup;
 use super::{ControlError, RAD_S_PER_RPM};
 use crate::model::effects::Effect;
 use crate::model::motor::{idx, Boundary, Load, Motor, State};
@@ -179,15 +180,13 @@ pub enum AntiWindup {
 }
 
 impl std::str::FromStr for AntiWindup {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownAntiWindup;
+    fn from_str(s: &str) -> Result<Self, UnknownAntiWindup> {
         match s {
             "none" => Ok(Self::None),
             "conditional" => Ok(Self::Conditional),
             "back-calculation" => Ok(Self::BackCalculation),
-            _ => Err(format!(
-                "unknown anti-windup '{s}' (known: conditional, back-calculation, none)"
-            )),
+            _ => Err(UnknownAntiWindup(s.to_string())),
         }
     }
 }
@@ -380,11 +379,10 @@ impl Loop {
         );
         let x_hi = speed_at(hi)?;
         if x_hi[idx::OMEGA] < setpoint_rad_s {
-            return Err(ControlError(format!(
-                "set-point {:.0} rpm is above the speed at full command ({:.0} rpm)",
-                setpoint_rad_s / RAD_S_PER_RPM,
-                x_hi[idx::OMEGA] / RAD_S_PER_RPM
-            )));
+            return Err(ControlError::AboveFullCommand {
+                setpoint_rpm: setpoint_rad_s / RAD_S_PER_RPM,
+                full_rpm: x_hi[idx::OMEGA] / RAD_S_PER_RPM,
+            });
         }
         let mut x = x_hi;
         for _ in 0..60 {
@@ -402,12 +400,10 @@ impl Loop {
         }
         let rel = (x[idx::OMEGA] - setpoint_rad_s).abs() / setpoint_rad_s.abs().max(1.0);
         if rel > 0.01 {
-            return Err(ControlError(format!(
-                "no steady open-loop speed near {:.0} rpm (nearest {:.0} rpm): the speed jumps \
-                 there as the supply pressure rises",
-                setpoint_rad_s / RAD_S_PER_RPM,
-                x[idx::OMEGA] / RAD_S_PER_RPM
-            )));
+            return Err(ControlError::NoSteadySpeed {
+                setpoint_rpm: setpoint_rad_s / RAD_S_PER_RPM,
+                nearest_rpm: x[idx::OMEGA] / RAD_S_PER_RPM,
+            });
         }
         Ok(LoopStart {
             x,
@@ -477,7 +473,7 @@ impl Loop {
             };
             let xs = solver
                 .solve(&rhs, t, x, &[t + ts])
-                .map_err(|e| ControlError(format!("closed loop at t = {t:.3} s: {e}")))?;
+                .map_err(|source| ControlError::LoopStep { t_s: t, source })?;
             x = xs[0];
             valve = self.valve.advance(&v0, p_cmd, ts);
             integral = next;

@@ -49,14 +49,11 @@ pub fn operating_point(motor: &Motor, bc: &Boundary) -> Result<OperatingPoint, C
     let w = x[idx::OMEGA];
     let w_min = min_running_speed_rad_s(motor);
     if w.is_nan() || w < w_min {
-        return Err(ControlError(format!(
-            "operating point at {:.3} MPa supply: the motor is stalled (speed {:.1} rpm, below \
-             {:.0} rpm); the linearised model is valid only while the motor turns — raise the \
-             supply pressure or reduce the load",
-            bc.p_port1_pa / 1e6,
-            w / super::RAD_S_PER_RPM,
-            w_min / super::RAD_S_PER_RPM
-        )));
+        return Err(ControlError::Stalled {
+            p_supply_mpa: bc.p_port1_pa / 1e6,
+            speed_rpm: w / super::RAD_S_PER_RPM,
+            min_rpm: w_min / super::RAD_S_PER_RPM,
+        });
     }
     Ok(OperatingPoint { bc: *bc, x })
 }
@@ -104,14 +101,12 @@ impl LinearModel {
         let e = Vector4::new(0.0, 0.0, 0.0, -1.0 / motor.params.inertia());
         let lin = Self { a, b, e, op: *op };
         if let Some(p) = lin.poles().iter().find(|p| p.re >= 0.0 || p.re.is_nan()) {
-            return Err(ControlError(format!(
-                "operating point at {:.3} MPa supply, {:.0} rpm is not stable (pole {:.3e}{:+.3e}i \
-                 1/s); no frequency response there",
-                op.bc.p_port1_pa / 1e6,
-                op.speed_rad_s() / super::RAD_S_PER_RPM,
-                p.re,
-                p.im
-            )));
+            return Err(ControlError::Unstable {
+                p_supply_mpa: op.bc.p_port1_pa / 1e6,
+                speed_rpm: op.speed_rad_s() / super::RAD_S_PER_RPM,
+                re: p.re,
+                im: p.im,
+            });
         }
         Ok(lin)
     }
@@ -422,6 +417,6 @@ mod tests {
         // Barely above atmosphere: the motor cannot overcome Coulomb friction.
         let bc = Boundary::supplied(1.05e5, 101_325.0, Load::ViscousBrake { c_nm_s_rad: 1e-4 });
         let e = operating_point(&m, &bc).unwrap_err();
-        assert!(e.0.contains("stalled"), "{e}");
+        assert!(e.to_string().contains("stalled"), "{e}");
     }
 }

@@ -189,10 +189,9 @@ pub fn open_loop_start(
     let p_break = match p_break {
         Some(p) if w_top > 2.0 * w_lo => p,
         _ => {
-            return Err(ControlError(format!(
-                "the motor does not start on a ramp to {:.3} MPa under this load",
-                p_max_pa / 1e6
-            )))
+            return Err(ControlError::NoStart {
+                p_max_mpa: p_max_pa / 1e6,
+            })
         }
     };
     let grid = super::linear::log_grid(w_lo, 0.999 * w_top, n.max(10));
@@ -205,7 +204,7 @@ pub fn open_loop_start(
         }
     }
     if curve.is_empty() {
-        return Err(ControlError("no steady speed on the ramp".into()));
+        return Err(ControlError::NoSteadyOnRamp);
     }
     // Where p_eq first reaches `p` at or after grid index `from`, interpolated; the top
     // speed if never.
