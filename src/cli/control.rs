@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 #[derive(Args, Debug)]
 pub struct ControlArgs {
     #[command(subcommand)]
-    pub study: Study,
+    study: Study,
 }
 
 /// The studies.
@@ -68,57 +68,59 @@ pub enum Study {
 pub struct CommonArgs {
     /// Fit file (vanefit.fit/1); omitted: the default motor.
     #[arg(long)]
-    pub params: Option<PathBuf>,
+    params: Option<PathBuf>,
     /// Effects to switch on (comma-separated ids), overriding the fit file's.
     #[arg(long)]
-    pub effects: Option<String>,
+    effects: Option<String>,
     /// Output folder (created); default `./control-<study>`.
     #[arg(long)]
-    pub out: Option<PathBuf>,
+    out: Option<PathBuf>,
     /// Eddy-current brake on the shaft, N*m*s/rad (default 1e-4; 0 for min-speed, which the
     /// paper reports without load).
     #[arg(long)]
-    pub brake_nm_s_rad: Option<f64>,
+    brake_nm_s_rad: Option<f64>,
 }
 
+/// `throttle-inlet` / `throttle-outlet` arguments.
 #[derive(Args, Debug)]
 pub struct ThrottleArgs {
     #[command(flatten)]
-    pub common: CommonArgs,
+    common: CommonArgs,
     /// Constant supply pressure, MPa absolute.
     #[arg(long, default_value_t = 0.73)]
-    pub p_supply_mpa: f64,
+    p_supply_mpa: f64,
     /// Smallest throttle conductance, m3/(s*Pa).
     #[arg(long, default_value_t = 3e-10)]
-    pub c_min_m3_s_pa: f64,
+    c_min_m3_s_pa: f64,
     /// Largest throttle conductance, m3/(s*Pa).
     #[arg(long, default_value_t = 1e-7)]
-    pub c_max_m3_s_pa: f64,
+    c_max_m3_s_pa: f64,
     /// Number of conductances (log-spaced).
     #[arg(long, default_value_t = 40)]
-    pub points: usize,
+    points: usize,
     /// Throttles for the torque-speed curves, comma-separated m3/(s*Pa); "none" for no
     /// throttle.
     #[arg(long, default_value = "none,1e-8,4e-9,2e-9,1e-9")]
-    pub curves_m3_s_pa: String,
+    curves_m3_s_pa: String,
 }
 
+/// `bode` arguments.
 #[derive(Args, Debug)]
 pub struct BodeArgs {
     #[command(flatten)]
-    pub common: CommonArgs,
+    common: CommonArgs,
     #[command(flatten)]
-    pub valve: ValveArgs,
+    valve: ValveArgs,
     /// Mean supply pressure of the operating point, MPa absolute.
     #[arg(long, default_value_t = 0.35)]
-    pub p_mean_mpa: f64,
+    p_mean_mpa: f64,
     #[arg(long, default_value_t = 0.01)]
-    pub f_min_hz: f64,
+    f_min_hz: f64,
     #[arg(long, default_value_t = 100.0)]
-    pub f_max_hz: f64,
+    f_max_hz: f64,
     /// Number of frequencies (log-spaced); the two-lag fit uses all of them.
     #[arg(long, default_value_t = 200)]
-    pub points: usize,
+    points: usize,
 }
 
 /// The pressure control valve.
@@ -128,13 +130,13 @@ pub struct ValveArgs {
     /// first order unless the valve_dynamics effect is on (then second order with
     /// valve_zeta).
     #[arg(long)]
-    pub valve_tau_s: Option<f64>,
+    valve_tau_s: Option<f64>,
     /// Command for full pressure, V.
     #[arg(long, default_value_t = 10.0)]
-    pub valve_u_max_v: f64,
+    valve_u_max_v: f64,
     /// Gauge pressure at full command, bar.
     #[arg(long, default_value_t = 6.0)]
-    pub valve_p_max_bar_g: f64,
+    valve_p_max_bar_g: f64,
 }
 
 /// Controller settings other than the gains.
@@ -142,13 +144,13 @@ pub struct ValveArgs {
 pub struct PiArgs {
     /// Sample time, ms.
     #[arg(long, default_value_t = 1.0)]
-    pub ts_ms: f64,
+    ts_ms: f64,
     /// Speed unit of the controller's error, rpm (1000: error in krpm, command in V).
     #[arg(long, default_value_t = 1000.0)]
-    pub speed_unit_rpm: f64,
+    speed_unit_rpm: f64,
     /// conditional, back-calculation or none.
     #[arg(long, default_value = "conditional")]
-    pub anti_windup: String,
+    anti_windup: String,
 }
 
 /// PI gains (paper: G(s) = (0.85 s + 4)/s).
@@ -156,108 +158,112 @@ pub struct PiArgs {
 pub struct GainArgs {
     /// Proportional gain, V per speed unit.
     #[arg(long, default_value_t = 0.85)]
-    pub kp: f64,
+    kp: f64,
     /// Integral gain, V per speed unit per s.
     #[arg(long, default_value_t = 4.0)]
-    pub ki: f64,
+    ki: f64,
 }
 
+/// `step` arguments.
 #[derive(Args, Debug)]
 pub struct StepArgs {
     #[command(flatten)]
-    pub common: CommonArgs,
+    common: CommonArgs,
     #[command(flatten)]
-    pub valve: ValveArgs,
+    valve: ValveArgs,
     #[command(flatten)]
-    pub pi: PiArgs,
+    pi: PiArgs,
     #[command(flatten)]
-    pub gains: GainArgs,
+    gains: GainArgs,
     /// Set-point before the step, rpm (the loop starts settled there).
     #[arg(long, default_value_t = 3000.0)]
-    pub from_rpm: f64,
+    from_rpm: f64,
     /// Set-point after the step, rpm.
     #[arg(long, default_value_t = 4500.0)]
-    pub to_rpm: f64,
+    to_rpm: f64,
     #[arg(long, default_value_t = 0.5)]
-    pub t_step_s: f64,
+    t_step_s: f64,
     #[arg(long, default_value_t = 8.0)]
-    pub duration_s: f64,
+    duration_s: f64,
 }
 
+/// `disturbance` arguments.
 #[derive(Args, Debug)]
 pub struct DisturbanceArgs {
     #[command(flatten)]
-    pub common: CommonArgs,
+    common: CommonArgs,
     #[command(flatten)]
-    pub valve: ValveArgs,
+    valve: ValveArgs,
     #[command(flatten)]
-    pub pi: PiArgs,
+    pi: PiArgs,
     #[command(flatten)]
-    pub gains: GainArgs,
+    gains: GainArgs,
     /// Speed set-point, rpm.
     #[arg(long, default_value_t = 4000.0)]
-    pub rpm: f64,
+    rpm: f64,
     /// Extra load torque switched on at --t-step-s, N*m.
     #[arg(long, default_value_t = 0.03)]
-    pub load_step_nm: f64,
+    load_step_nm: f64,
     #[arg(long, default_value_t = 0.5)]
-    pub t_step_s: f64,
+    t_step_s: f64,
     #[arg(long, default_value_t = 8.0)]
-    pub duration_s: f64,
+    duration_s: f64,
 }
 
+/// `min-speed` arguments.
 #[derive(Args, Debug)]
 pub struct MinSpeedArgs {
     #[command(flatten)]
-    pub common: CommonArgs,
+    common: CommonArgs,
     #[command(flatten)]
-    pub valve: ValveArgs,
+    valve: ValveArgs,
     #[command(flatten)]
-    pub pi: PiArgs,
+    pi: PiArgs,
     #[command(flatten)]
-    pub gains: GainArgs,
+    gains: GainArgs,
     /// Top of the pressure ramp, MPa absolute (the paper's 0.73).
     #[arg(long, default_value_t = 0.73)]
-    pub p_max_mpa: f64,
+    p_max_mpa: f64,
     /// Duration of the simulated pressure ramp, s (the paper's rig: 60 s).
     #[arg(long, default_value_t = 60.0)]
-    pub ramp_s: f64,
+    ramp_s: f64,
     /// Each closed-loop candidate set-point is this fraction of the previous one.
     #[arg(long, default_value_t = 0.8)]
-    pub factor: f64,
+    factor: f64,
     /// Lowest set-point tried, rpm (default: 5·max(w_reg, 1 rad/s), about 48 rpm, below
     /// which the model's friction regularisation, not physics, sets the behaviour).
     #[arg(long)]
-    pub floor_rpm: Option<f64>,
+    floor_rpm: Option<f64>,
     /// Duration of each stage of the set-point staircase, s (its last 2 s judge whether the
     /// set-point is held).
     #[arg(long, default_value_t = 5.0)]
-    pub stage_s: f64,
+    stage_s: f64,
 }
 
+/// `design` arguments.
 #[derive(Args, Debug)]
 pub struct DesignArgs {
     #[command(flatten)]
-    pub common: CommonArgs,
+    common: CommonArgs,
     #[command(flatten)]
-    pub valve: ValveArgs,
+    valve: ValveArgs,
     #[command(flatten)]
-    pub pi: PiArgs,
+    pi: PiArgs,
     /// Requested phase margin, degrees.
     #[arg(long, default_value_t = 60.0)]
-    pub pm_deg: f64,
+    pm_deg: f64,
     /// Requested crossover (bandwidth), Hz; omitted: the highest crossover at which a PI
     /// gives the phase margin with 15° of its own lag.
     #[arg(long)]
-    pub crossover_hz: Option<f64>,
+    crossover_hz: Option<f64>,
     /// Mean supply pressure of the operating point, MPa absolute.
     #[arg(long, default_value_t = 0.35)]
-    pub p_mean_mpa: f64,
+    p_mean_mpa: f64,
     /// Set-point step of the check simulation, rpm (from the operating point's speed).
     #[arg(long, default_value_t = 300.0)]
-    pub step_rpm: f64,
+    step_rpm: f64,
     #[arg(long, default_value_t = 5.0)]
-    pub duration_s: f64,
+    duration_s: f64,
 }
 
 /// Runs `vanefit control <study>`.

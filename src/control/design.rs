@@ -104,9 +104,17 @@ pub fn margins(lin: &LinearModel, valve: &Valve, pi: &PiController) -> Margins {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Target {
     /// Phase margin only (degrees); the crossover follows from the 15° rule.
-    PhaseMargin { pm_deg: f64 },
+    PhaseMargin {
+        /// Phase margin, degrees.
+        pm_deg: f64,
+    },
     /// Crossover frequency (rad/s) and phase margin (degrees).
-    Bandwidth { crossover_rad_s: f64, pm_deg: f64 },
+    Bandwidth {
+        /// Crossover, rad/s.
+        crossover_rad_s: f64,
+        /// Phase margin, degrees.
+        pm_deg: f64,
+    },
 }
 
 /// Phase lag the PI may add at crossover when only a phase margin is asked for, degrees.

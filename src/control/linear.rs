@@ -25,11 +25,14 @@ use std::f64::consts::PI;
 /// A steady operating point: the boundary and the state that balances it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OperatingPoint {
+    /// The boundary (supply, exhaust, load).
     pub bc: Boundary,
+    /// The steady state there.
     pub x: State,
 }
 
 impl OperatingPoint {
+    /// Its speed, rad/s.
     pub fn speed_rad_s(&self) -> f64 {
         self.x[idx::OMEGA]
     }
@@ -67,6 +70,7 @@ pub struct LinearModel {
     pub b: Vector4<f64>,
     /// ∂f/∂T_load: rad/s² per N·m on the speed (−1/J), 0 on the pressures.
     pub e: Vector4<f64>,
+    /// Where the motor is linearised.
     pub op: OperatingPoint,
 }
 
@@ -196,11 +200,14 @@ pub fn unwrapped_phase_deg(g: &[Complex<f64>]) -> Vec<f64> {
 pub struct TwoLags {
     /// Static gain, in the units of the data fitted ((rad/s)/Pa for the motor).
     pub k: f64,
+    /// Slow time constant T1, s.
     pub t1_s: f64,
+    /// Fast time constant T2, s.
     pub t2_s: f64,
 }
 
 impl TwoLags {
+    /// The response K/((1 + jωT1)(1 + jωT2)) at ω (rad/s).
     pub fn at(&self, w_rad_s: f64) -> Complex<f64> {
         let s = Complex::new(0.0, w_rad_s);
         Complex::new(self.k, 0.0) / ((s * self.t1_s + 1.0) * (s * self.t2_s + 1.0))
@@ -210,12 +217,15 @@ impl TwoLags {
 /// Result of [`fit_two_lags`], with the fit error over the fitted band.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LagFit {
+    /// The fitted lags.
     pub lags: TwoLags,
-    /// RMS and largest magnitude error, dB.
+    /// RMS magnitude error, dB.
     pub rms_mag_db: f64,
+    /// Largest magnitude error, dB.
     pub max_mag_db: f64,
-    /// RMS and largest phase error, degrees.
+    /// RMS phase error, degrees.
     pub rms_phase_deg: f64,
+    /// Largest phase error, degrees.
     pub max_phase_deg: f64,
 }
 

@@ -36,8 +36,9 @@ use crate::sim::steady;
 pub struct Jump {
     /// Supply pressure at which it happens, Pa absolute.
     pub p_pa: f64,
-    /// Speed before (0 for the breakaway from standstill) and after, rad/s.
+    /// Speed before, rad/s (0 for the breakaway from standstill).
     pub from_rad_s: f64,
+    /// Speed after, rad/s.
     pub to_rad_s: f64,
 }
 
@@ -253,10 +254,15 @@ pub const HOLD_WINDOW_S: f64 = 2.0;
 /// One closed-loop attempt to hold a set-point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HoldAttempt {
+    /// The set-point, rad/s.
     pub setpoint_rad_s: f64,
+    /// Mean speed over the hold window, rad/s.
     pub mean_rad_s: f64,
+    /// Lowest speed over the hold window, rad/s.
     pub min_rad_s: f64,
+    /// Highest speed over the hold window, rad/s.
     pub max_rad_s: f64,
+    /// Whether the set-point counts as held (see the module doc).
     pub held: bool,
 }
 

@@ -23,6 +23,7 @@ pub enum Port {
 }
 
 impl Port {
+    /// `inlet` or `outlet`, as in the study names and messages.
     pub fn name(self) -> &'static str {
         match self {
             Port::Inlet => "inlet",
@@ -46,6 +47,7 @@ impl Port {
 pub struct ThrottlePoint {
     /// Throttle conductance, m³/(s·Pa).
     pub c_m3_s_pa: f64,
+    /// Steady speed, rad/s.
     pub speed_rad_s: f64,
     /// Shaft torque T − T_f, N·m (equal to the load torque in steady state).
     pub torque_nm: f64,
@@ -105,6 +107,7 @@ pub const W_CURVE_START_RAD_S: f64 = 5.0;
 /// A point of a torque–speed characteristic.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TorquePoint {
+    /// Imposed speed, rad/s.
     pub speed_rad_s: f64,
     /// Shaft torque T − T_f, N·m.
     pub torque_nm: f64,
