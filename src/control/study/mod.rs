@@ -230,3 +230,56 @@ impl LoopOptions {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::throttle::{study, ThrottleOptions};
+    use super::*;
+    use crate::control::throttle::Port;
+    use crate::model::extra::{BalanceId, ExtraTerm, PressureFactor, SpeedFactor};
+
+    /// The free speed and the throttled speeds of a throttling study under a fit file.
+    fn throttle_speeds(fit: &FitFile, dir: &std::path::Path) -> (f64, Vec<f64>) {
+        let path = dir.join(format!("{}.json", fit.extra.len()));
+        fit.write(&path).unwrap();
+        let plant = MotorOptions {
+            params: Some(path),
+            ..MotorOptions::default()
+        }
+        .check(1e-4)
+        .unwrap();
+        let settings = ThrottleOptions {
+            port: Port::Inlet,
+            p_supply_mpa: 0.6,
+            c_min_m3_s_pa: 1e-9,
+            c_max_m3_s_pa: 1e-8,
+            points: 3,
+            curves_m3_s_pa: "none".into(),
+        }
+        .check()
+        .unwrap();
+        let r = study(&plant, &settings).unwrap();
+        let speeds = r.speed.iter().map(|p| p.speed_rad_s).collect();
+        (r.free_speed_rad_s, speeds)
+    }
+
+    #[test]
+    fn discovered_terms_of_the_fit_file_act_in_the_studies() {
+        let dir = tempfile::tempdir().unwrap();
+        let plain = FitFile::from_params("demo", MotorParams::default(), EffectSet::empty());
+        let mut with_term = plain.clone();
+        // An extra viscous loss, 5e-5 N*m*s/rad: about 0.05 N*m at 1000 rad/s.
+        with_term.extra = vec![ExtraTerm {
+            balance: BalanceId::Torque,
+            pressure: PressureFactor::One,
+            speed: SpeedFactor::Omega,
+            coefficient: 5e-5,
+        }];
+        let (free0, speeds0) = throttle_speeds(&plain, dir.path());
+        let (free1, speeds1) = throttle_speeds(&with_term, dir.path());
+        assert!(free1 < 0.99 * free0, "free speed {free1} vs {free0} rad/s");
+        for (w1, w0) in speeds1.iter().zip(&speeds0) {
+            assert!(w1 < w0, "throttled speed {w1} vs {w0} rad/s");
+        }
+    }
+}
