@@ -254,22 +254,7 @@ pub fn fit_two_lags(w_rad_s: &[f64], g: &[Complex<f64>], guess: TwoLags) -> LagF
     let mut c = cost(&r);
     let mut lambda = 1e-3;
     for _ in 0..200 {
-        // Analytic Jacobian of ln G_fit: d/dlnK = 1, d/dlnT = −jwT/(1 + jwT).
-        let mut jtj = nalgebra::Matrix3::<f64>::zeros();
-        let mut jtr = nalgebra::Vector3::<f64>::zeros();
-        for (w, ri) in w_rad_s.iter().zip(&r) {
-            let d = |lnt: f64| {
-                let jwt = Complex::new(0.0, w * lnt.exp());
-                -jwt / (jwt + 1.0)
-            };
-            let cols = [Complex::new(1.0, 0.0), d(th[1]), d(th[2])];
-            for a in 0..3 {
-                jtr[a] += cols[a].re * ri.re + cols[a].im * ri.im;
-                for b in 0..3 {
-                    jtj[(a, b)] += cols[a].re * cols[b].re + cols[a].im * cols[b].im;
-                }
-            }
-        }
+        let (jtj, jtr) = normal_equations(w_rad_s, &r, &th);
         let mut improved = false;
         while lambda < 1e12 {
             let mut m = jtj;
@@ -316,6 +301,32 @@ pub fn fit_two_lags(w_rad_s: &[f64], g: &[Complex<f64>], guess: TwoLags) -> LagF
             .map(|z| z.im.to_degrees().abs())
             .fold(0.0, f64::max),
     }
+}
+
+/// JᵀJ and Jᵀr of the complex log residuals `r` at parameters `th` = (ln K, ln T1, ln T2),
+/// real and imaginary parts as separate rows, with the analytic Jacobian of ln G_fit:
+/// d/dlnK = 1, d/dlnT = −jωT/(1 + jωT).
+fn normal_equations(
+    w_rad_s: &[f64],
+    r: &[Complex<f64>],
+    th: &[f64; 3],
+) -> (nalgebra::Matrix3<f64>, nalgebra::Vector3<f64>) {
+    let mut jtj = nalgebra::Matrix3::<f64>::zeros();
+    let mut jtr = nalgebra::Vector3::<f64>::zeros();
+    for (w, ri) in w_rad_s.iter().zip(r) {
+        let d = |lnt: f64| {
+            let jwt = Complex::new(0.0, w * lnt.exp());
+            -jwt / (jwt + 1.0)
+        };
+        let cols = [Complex::new(1.0, 0.0), d(th[1]), d(th[2])];
+        for a in 0..3 {
+            jtr[a] += cols[a].re * ri.re + cols[a].im * ri.im;
+            for b in 0..3 {
+                jtj[(a, b)] += cols[a].re * cols[b].re + cols[a].im * cols[b].im;
+            }
+        }
+    }
+    (jtj, jtr)
 }
 
 /// A start for [`fit_two_lags`] from the model: K = static gain, T1 and T2 = 1/|λ| of the two
