@@ -5,9 +5,10 @@
 //! `step` (Fig. 19), `disturbance` (Fig. 20), `min-speed` (§5.2's 2900 vs 365 rpm) and
 //! `design` (PI gains for a phase margin or crossover, checked by simulation).
 //!
-//! CSV columns carry their unit in the name, as the data files do (SPEC §3): speeds in rpm,
-//! pressures in MPa absolute, conductances in m3/(s*Pa), torques in N*m, flows in g/s,
-//! commands in V.
+//! This module holds only the command line: the clap arguments, the dispatch and the printed
+//! summaries. Each study runs as options → `check()` → `control::study::<study>::study` →
+//! `report::control::<study>::write` → summary; the output folder is created after the
+//! motor options are checked and before the others, as before the split.
 
 use crate::cli::Failure;
 use crate::control::closed_loop::Loop;
