@@ -48,6 +48,7 @@
 //! exponential for the second-order valve); the motor is integrated sample to sample by the
 //! stiff solver, the state carried across.
 
+use super::error::UnknownAntiWindup;
 use super::{ControlError, RAD_S_PER_RPM};
 use crate::model::effects::Effect;
 use crate::model::motor::{idx, Boundary, Load, Motor, State};
@@ -59,14 +60,23 @@ use nalgebra::{Complex, Matrix2, Vector2};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ValveDynamics {
     /// τ·ṗ + p = p_cmd.
-    FirstOrder { tau_s: f64 },
+    FirstOrder {
+        /// Time constant τ, s.
+        tau_s: f64,
+    },
     /// τ²·p̈ + 2ζτ·ṗ + p = p_cmd.
-    SecondOrder { tau_s: f64, zeta: f64 },
+    SecondOrder {
+        /// Time constant τ = 1/ω_n, s.
+        tau_s: f64,
+        /// Damping ratio ζ.
+        zeta: f64,
+    },
 }
 
 /// The electro-pneumatic pressure control valve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Valve {
+    /// How the output pressure follows the set pressure.
     pub dynamics: ValveDynamics,
     /// Command for full pressure, V (default 10).
     pub u_max_v: f64,
@@ -79,7 +89,9 @@ pub struct Valve {
 /// Output pressure and its rate, Pa and Pa/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ValveState {
+    /// Output pressure, Pa absolute.
     pub p_pa: f64,
+    /// Its rate, Pa/s.
     pub dp_pa_s: f64,
 }
 
@@ -179,15 +191,13 @@ pub enum AntiWindup {
 }
 
 impl std::str::FromStr for AntiWindup {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownAntiWindup;
+    fn from_str(s: &str) -> Result<Self, UnknownAntiWindup> {
         match s {
             "none" => Ok(Self::None),
             "conditional" => Ok(Self::Conditional),
             "back-calculation" => Ok(Self::BackCalculation),
-            _ => Err(format!(
-                "unknown anti-windup '{s}' (known: conditional, back-calculation, none)"
-            )),
+            _ => Err(UnknownAntiWindup(s.to_string())),
         }
     }
 }
@@ -203,9 +213,11 @@ pub struct PiController {
     pub ts_s: f64,
     /// Speed unit of the error, rpm (1000: error in krpm).
     pub speed_unit_rpm: f64,
-    /// Output limits, V.
+    /// Lower output limit, V.
     pub u_min_v: f64,
+    /// Upper output limit, V.
     pub u_max_v: f64,
+    /// What the integrator does while the output is saturated.
     pub anti_windup: AntiWindup,
 }
 
@@ -263,11 +275,14 @@ impl PiController {
 /// its time on (times increasing).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Steps {
+    /// Value before the first step.
     pub initial: f64,
+    /// (time s, value) of each step, times increasing.
     pub steps: Vec<(f64, f64)>,
 }
 
 impl Steps {
+    /// `v` throughout.
     pub fn constant(v: f64) -> Self {
         Self {
             initial: v,
@@ -275,6 +290,7 @@ impl Steps {
         }
     }
 
+    /// `initial`, then `value` from `t_s` (s) on.
     pub fn step(initial: f64, t_s: f64, value: f64) -> Self {
         Self {
             initial,
@@ -282,6 +298,8 @@ impl Steps {
         }
     }
 
+    /// The value at time `t` (s); a step counts from 1e-12 s before its time, so that a
+    /// sample at the step's time sees it despite rounding.
     pub fn at(&self, t: f64) -> f64 {
         self.steps
             .iter()
@@ -294,7 +312,9 @@ impl Steps {
 /// The loop: valve, controller and the load on the motor.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Loop {
+    /// The pressure control valve feeding port 1.
     pub valve: Valve,
+    /// The speed controller.
     pub pi: PiController,
     /// Base load (e.g. the eddy-current brake).
     pub load: Load,
@@ -303,6 +323,7 @@ pub struct Loop {
 /// What the loop is asked to do.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scenario {
+    /// Length, s.
     pub duration_s: f64,
     /// Speed set-point, rad/s.
     pub setpoint_rad_s: Steps,
@@ -314,8 +335,11 @@ pub struct Scenario {
 /// Recorded signals, one entry per controller sample (t = 0, T_s, 2T_s, …).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Trace {
+    /// Sample times, s.
     pub t_s: Vec<f64>,
+    /// Speed set-point, rad/s.
     pub setpoint_rad_s: Vec<f64>,
+    /// Measured speed, rad/s.
     pub speed_rad_s: Vec<f64>,
     /// Controller output (held over the following sample), V.
     pub command_v: Vec<f64>,
@@ -332,8 +356,11 @@ pub struct Trace {
 /// Where the loop starts.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LoopStart {
+    /// The motor's state.
     pub x: State,
+    /// The valve's state.
     pub valve: ValveState,
+    /// The controller's integral state, V.
     pub integral_v: f64,
 }
 
@@ -380,11 +407,10 @@ impl Loop {
         );
         let x_hi = speed_at(hi)?;
         if x_hi[idx::OMEGA] < setpoint_rad_s {
-            return Err(ControlError(format!(
-                "set-point {:.0} rpm is above the speed at full command ({:.0} rpm)",
-                setpoint_rad_s / RAD_S_PER_RPM,
-                x_hi[idx::OMEGA] / RAD_S_PER_RPM
-            )));
+            return Err(ControlError::AboveFullCommand {
+                setpoint_rpm: setpoint_rad_s / RAD_S_PER_RPM,
+                full_rpm: x_hi[idx::OMEGA] / RAD_S_PER_RPM,
+            });
         }
         let mut x = x_hi;
         for _ in 0..60 {
@@ -402,12 +428,10 @@ impl Loop {
         }
         let rel = (x[idx::OMEGA] - setpoint_rad_s).abs() / setpoint_rad_s.abs().max(1.0);
         if rel > 0.01 {
-            return Err(ControlError(format!(
-                "no steady open-loop speed near {:.0} rpm (nearest {:.0} rpm): the speed jumps \
-                 there as the supply pressure rises",
-                setpoint_rad_s / RAD_S_PER_RPM,
-                x[idx::OMEGA] / RAD_S_PER_RPM
-            )));
+            return Err(ControlError::NoSteadySpeed {
+                setpoint_rpm: setpoint_rad_s / RAD_S_PER_RPM,
+                nearest_rpm: x[idx::OMEGA] / RAD_S_PER_RPM,
+            });
         }
         Ok(LoopStart {
             x,
@@ -477,7 +501,7 @@ impl Loop {
             };
             let xs = solver
                 .solve(&rhs, t, x, &[t + ts])
-                .map_err(|e| ControlError(format!("closed loop at t = {t:.3} s: {e}")))?;
+                .map_err(|source| ControlError::LoopStep { t_s: t, source })?;
             x = xs[0];
             valve = self.valve.advance(&v0, p_cmd, ts);
             integral = next;
@@ -548,11 +572,16 @@ pub fn tail_mean_error(tr: &Trace, fraction: f64) -> f64 {
 /// back within `band` (rad/s) of the set-point for good.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DisturbanceMetrics {
+    /// Largest set-point − speed after the step, rad/s.
     pub max_drop_rad_s: f64,
+    /// Time after the step until the error stays within the band, s (NaN if never).
     pub recovery_time_s: f64,
+    /// Mean error (set-point − speed) over the last 10 % of the trace, rad/s.
     pub final_error_rad_s: f64,
 }
 
+/// Disturbance figures of the trace for a load step at `t_step` (s), recovery band
+/// `band_rad_s`.
 pub fn disturbance_metrics(tr: &Trace, t_step: f64, band_rad_s: f64) -> DisturbanceMetrics {
     let idx: Vec<usize> = (0..tr.t_s.len()).filter(|k| tr.t_s[*k] >= t_step).collect();
     let err = |k: usize| tr.setpoint_rad_s[k] - tr.speed_rad_s[k];

@@ -104,9 +104,17 @@ pub fn margins(lin: &LinearModel, valve: &Valve, pi: &PiController) -> Margins {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Target {
     /// Phase margin only (degrees); the crossover follows from the 15° rule.
-    PhaseMargin { pm_deg: f64 },
+    PhaseMargin {
+        /// Phase margin, degrees.
+        pm_deg: f64,
+    },
     /// Crossover frequency (rad/s) and phase margin (degrees).
-    Bandwidth { crossover_rad_s: f64, pm_deg: f64 },
+    Bandwidth {
+        /// Crossover, rad/s.
+        crossover_rad_s: f64,
+        /// Phase margin, degrees.
+        pm_deg: f64,
+    },
 }
 
 /// Phase lag the PI may add at crossover when only a phase margin is asked for, degrees.
@@ -132,12 +140,9 @@ pub fn design_pi(
             let ph = unwrapped(&p, &w);
             let k = (1..ph.len())
                 .find(|&k| ph[k - 1] >= goal && ph[k] < goal)
-                .ok_or_else(|| {
-                    ControlError(format!(
-                        "the plant's phase never reaches {:.0}°: no crossover for a {pm_deg:.0}° \
-                         phase margin",
-                        goal.to_degrees()
-                    ))
+                .ok_or_else(|| ControlError::NoPhaseCrossing {
+                    goal_deg: goal.to_degrees(),
+                    pm_deg,
                 })?;
             // Refine by bisection in log w on the (continuous) phase near the grid crossing.
             let (mut a, mut b) = (w[k - 1].ln(), w[k].ln());
@@ -164,30 +169,28 @@ pub fn design_pi(
         }
     };
     if !(wc > 0.0 && wc.is_finite() && pm > 0.0 && pm < 90.0) {
-        return Err(ControlError(format!(
-            "design target needs a crossover > 0 and a phase margin in (0°, 90°) \
-             (got {wc} rad/s, {pm}°)"
-        )));
+        return Err(ControlError::BadTarget {
+            crossover_rad_s: wc,
+            pm_deg: pm,
+        });
     }
     // Phase of P at wc, unwrapped from low frequency.
     let w = super::linear::log_grid(W_LO.min(wc / 10.0), wc, 400);
     let theta = *unwrapped(&p, &w).last().expect("grid not empty");
     let phi_c = (-180.0 + pm).to_radians() - theta;
     if phi_c >= 0.0 {
-        return Err(ControlError(format!(
-            "a PI cannot give {pm:.0}° phase margin at {wc:.3} rad/s: the plant's phase there is \
-             {:.1}°, the PI would have to add lead; choose a higher crossover or a smaller \
-             phase margin",
-            theta.to_degrees()
-        )));
+        return Err(ControlError::NeedsLead {
+            pm_deg: pm,
+            crossover_rad_s: wc,
+            phase_deg: theta.to_degrees(),
+        });
     }
     if phi_c <= -std::f64::consts::FRAC_PI_2 {
-        return Err(ControlError(format!(
-            "a PI cannot give {pm:.0}° phase margin at {wc:.3} rad/s: the plant's phase there is \
-             {:.1}° and a PI lags by less than 90°; choose a lower crossover or a smaller phase \
-             margin",
-            theta.to_degrees()
-        )));
+        return Err(ControlError::NeedsTooMuchLag {
+            pm_deg: pm,
+            crossover_rad_s: wc,
+            phase_deg: theta.to_degrees(),
+        });
     }
     let ti = 1.0 / (wc * (-phi_c).tan());
     let kp = 1.0 / (p(wc).norm() * (1.0 + 1.0 / (wc * ti).powi(2)).sqrt());
@@ -252,7 +255,7 @@ mod tests {
             },
         )
         .unwrap_err();
-        assert!(e.0.contains("cannot"), "{e}");
+        assert!(e.to_string().contains("cannot"), "{e}");
     }
 
     /// The closed-loop simulation of the nonlinear motor confirms the design: a larger phase

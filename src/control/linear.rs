@@ -25,11 +25,14 @@ use std::f64::consts::PI;
 /// A steady operating point: the boundary and the state that balances it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OperatingPoint {
+    /// The boundary (supply, exhaust, load).
     pub bc: Boundary,
+    /// The steady state there.
     pub x: State,
 }
 
 impl OperatingPoint {
+    /// Its speed, rad/s.
     pub fn speed_rad_s(&self) -> f64 {
         self.x[idx::OMEGA]
     }
@@ -49,14 +52,11 @@ pub fn operating_point(motor: &Motor, bc: &Boundary) -> Result<OperatingPoint, C
     let w = x[idx::OMEGA];
     let w_min = min_running_speed_rad_s(motor);
     if w.is_nan() || w < w_min {
-        return Err(ControlError(format!(
-            "operating point at {:.3} MPa supply: the motor is stalled (speed {:.1} rpm, below \
-             {:.0} rpm); the linearised model is valid only while the motor turns — raise the \
-             supply pressure or reduce the load",
-            bc.p_port1_pa / 1e6,
-            w / super::RAD_S_PER_RPM,
-            w_min / super::RAD_S_PER_RPM
-        )));
+        return Err(ControlError::Stalled {
+            p_supply_mpa: bc.p_port1_pa / 1e6,
+            speed_rpm: w / super::RAD_S_PER_RPM,
+            min_rpm: w_min / super::RAD_S_PER_RPM,
+        });
     }
     Ok(OperatingPoint { bc: *bc, x })
 }
@@ -70,6 +70,7 @@ pub struct LinearModel {
     pub b: Vector4<f64>,
     /// ∂f/∂T_load: rad/s² per N·m on the speed (−1/J), 0 on the pressures.
     pub e: Vector4<f64>,
+    /// Where the motor is linearised.
     pub op: OperatingPoint,
 }
 
@@ -104,14 +105,12 @@ impl LinearModel {
         let e = Vector4::new(0.0, 0.0, 0.0, -1.0 / motor.params.inertia());
         let lin = Self { a, b, e, op: *op };
         if let Some(p) = lin.poles().iter().find(|p| p.re >= 0.0 || p.re.is_nan()) {
-            return Err(ControlError(format!(
-                "operating point at {:.3} MPa supply, {:.0} rpm is not stable (pole {:.3e}{:+.3e}i \
-                 1/s); no frequency response there",
-                op.bc.p_port1_pa / 1e6,
-                op.speed_rad_s() / super::RAD_S_PER_RPM,
-                p.re,
-                p.im
-            )));
+            return Err(ControlError::Unstable {
+                p_supply_mpa: op.bc.p_port1_pa / 1e6,
+                speed_rpm: op.speed_rad_s() / super::RAD_S_PER_RPM,
+                re: p.re,
+                im: p.im,
+            });
         }
         Ok(lin)
     }
@@ -201,11 +200,14 @@ pub fn unwrapped_phase_deg(g: &[Complex<f64>]) -> Vec<f64> {
 pub struct TwoLags {
     /// Static gain, in the units of the data fitted ((rad/s)/Pa for the motor).
     pub k: f64,
+    /// Slow time constant T1, s.
     pub t1_s: f64,
+    /// Fast time constant T2, s.
     pub t2_s: f64,
 }
 
 impl TwoLags {
+    /// The response K/((1 + jωT1)(1 + jωT2)) at ω (rad/s).
     pub fn at(&self, w_rad_s: f64) -> Complex<f64> {
         let s = Complex::new(0.0, w_rad_s);
         Complex::new(self.k, 0.0) / ((s * self.t1_s + 1.0) * (s * self.t2_s + 1.0))
@@ -215,12 +217,15 @@ impl TwoLags {
 /// Result of [`fit_two_lags`], with the fit error over the fitted band.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LagFit {
+    /// The fitted lags.
     pub lags: TwoLags,
-    /// RMS and largest magnitude error, dB.
+    /// RMS magnitude error, dB.
     pub rms_mag_db: f64,
+    /// Largest magnitude error, dB.
     pub max_mag_db: f64,
-    /// RMS and largest phase error, degrees.
+    /// RMS phase error, degrees.
     pub rms_phase_deg: f64,
+    /// Largest phase error, degrees.
     pub max_phase_deg: f64,
 }
 
@@ -249,22 +254,7 @@ pub fn fit_two_lags(w_rad_s: &[f64], g: &[Complex<f64>], guess: TwoLags) -> LagF
     let mut c = cost(&r);
     let mut lambda = 1e-3;
     for _ in 0..200 {
-        // Analytic Jacobian of ln G_fit: d/dlnK = 1, d/dlnT = −jwT/(1 + jwT).
-        let mut jtj = nalgebra::Matrix3::<f64>::zeros();
-        let mut jtr = nalgebra::Vector3::<f64>::zeros();
-        for (w, ri) in w_rad_s.iter().zip(&r) {
-            let d = |lnt: f64| {
-                let jwt = Complex::new(0.0, w * lnt.exp());
-                -jwt / (jwt + 1.0)
-            };
-            let cols = [Complex::new(1.0, 0.0), d(th[1]), d(th[2])];
-            for a in 0..3 {
-                jtr[a] += cols[a].re * ri.re + cols[a].im * ri.im;
-                for b in 0..3 {
-                    jtj[(a, b)] += cols[a].re * cols[b].re + cols[a].im * cols[b].im;
-                }
-            }
-        }
+        let (jtj, jtr) = normal_equations(w_rad_s, &r, &th);
         let mut improved = false;
         while lambda < 1e12 {
             let mut m = jtj;
@@ -311,6 +301,32 @@ pub fn fit_two_lags(w_rad_s: &[f64], g: &[Complex<f64>], guess: TwoLags) -> LagF
             .map(|z| z.im.to_degrees().abs())
             .fold(0.0, f64::max),
     }
+}
+
+/// JᵀJ and Jᵀr of the complex log residuals `r` at parameters `th` = (ln K, ln T1, ln T2),
+/// real and imaginary parts as separate rows, with the analytic Jacobian of ln G_fit:
+/// d/dlnK = 1, d/dlnT = −jωT/(1 + jωT).
+fn normal_equations(
+    w_rad_s: &[f64],
+    r: &[Complex<f64>],
+    th: &[f64; 3],
+) -> (nalgebra::Matrix3<f64>, nalgebra::Vector3<f64>) {
+    let mut jtj = nalgebra::Matrix3::<f64>::zeros();
+    let mut jtr = nalgebra::Vector3::<f64>::zeros();
+    for (w, ri) in w_rad_s.iter().zip(r) {
+        let d = |lnt: f64| {
+            let jwt = Complex::new(0.0, w * lnt.exp());
+            -jwt / (jwt + 1.0)
+        };
+        let cols = [Complex::new(1.0, 0.0), d(th[1]), d(th[2])];
+        for a in 0..3 {
+            jtr[a] += cols[a].re * ri.re + cols[a].im * ri.im;
+            for b in 0..3 {
+                jtj[(a, b)] += cols[a].re * cols[b].re + cols[a].im * cols[b].im;
+            }
+        }
+    }
+    (jtj, jtr)
 }
 
 /// A start for [`fit_two_lags`] from the model: K = static gain, T1 and T2 = 1/|λ| of the two
@@ -422,6 +438,6 @@ mod tests {
         // Barely above atmosphere: the motor cannot overcome Coulomb friction.
         let bc = Boundary::supplied(1.05e5, 101_325.0, Load::ViscousBrake { c_nm_s_rad: 1e-4 });
         let e = operating_point(&m, &bc).unwrap_err();
-        assert!(e.0.contains("stalled"), "{e}");
+        assert!(e.to_string().contains("stalled"), "{e}");
     }
 }

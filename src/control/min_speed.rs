@@ -36,8 +36,9 @@ use crate::sim::steady;
 pub struct Jump {
     /// Supply pressure at which it happens, Pa absolute.
     pub p_pa: f64,
-    /// Speed before (0 for the breakaway from standstill) and after, rad/s.
+    /// Speed before, rad/s (0 for the breakaway from standstill).
     pub from_rad_s: f64,
+    /// Speed after, rad/s.
     pub to_rad_s: f64,
 }
 
@@ -189,10 +190,9 @@ pub fn open_loop_start(
     let p_break = match p_break {
         Some(p) if w_top > 2.0 * w_lo => p,
         _ => {
-            return Err(ControlError(format!(
-                "the motor does not start on a ramp to {:.3} MPa under this load",
-                p_max_pa / 1e6
-            )))
+            return Err(ControlError::NoStart {
+                p_max_mpa: p_max_pa / 1e6,
+            })
         }
     };
     let grid = super::linear::log_grid(w_lo, 0.999 * w_top, n.max(10));
@@ -205,7 +205,7 @@ pub fn open_loop_start(
         }
     }
     if curve.is_empty() {
-        return Err(ControlError("no steady speed on the ramp".into()));
+        return Err(ControlError::NoSteadyOnRamp);
     }
     // Where p_eq first reaches `p` at or after grid index `from`, interpolated; the top
     // speed if never.
@@ -254,10 +254,15 @@ pub const HOLD_WINDOW_S: f64 = 2.0;
 /// One closed-loop attempt to hold a set-point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HoldAttempt {
+    /// The set-point, rad/s.
     pub setpoint_rad_s: f64,
+    /// Mean speed over the hold window, rad/s.
     pub mean_rad_s: f64,
+    /// Lowest speed over the hold window, rad/s.
     pub min_rad_s: f64,
+    /// Highest speed over the hold window, rad/s.
     pub max_rad_s: f64,
+    /// Whether the set-point counts as held (see the module doc).
     pub held: bool,
 }
 

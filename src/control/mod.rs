@@ -10,7 +10,10 @@
 //!   (Figs. 18–20).
 //! * [`design`]: margins of the loop and PI gains for a phase margin or crossover.
 //! * [`min_speed`]: lowest speed without control (pressure-ramp start-up) and with control.
-//! * [`study`]: `vanefit control <study>`, CSV and SVG output.
+//! * [`study`]: the studies of `vanefit control <study>`: their checked settings and a
+//!   `study` function each that returns the results (no printing, no files; the CSV tables
+//!   and SVG figures are `report::control`'s).
+//! * [`error`]: why a study could not be done.
 //!
 //! The motor is integrated with `ode::DiffsolBdf`, which steps and interpolates itself and so
 //! serves the many short sample-to-sample intervals of the closed loop.
@@ -22,35 +25,18 @@
 
 pub mod closed_loop;
 pub mod design;
+pub mod error;
 pub mod linear;
 pub mod min_speed;
+pub mod study;
 pub mod throttle;
 
-use std::fmt;
-
-/// Why a control study could not be done.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ControlError(pub String);
-
-impl fmt::Display for ControlError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for ControlError {}
-
-impl From<crate::sim::steady::SteadyError> for ControlError {
-    fn from(e: crate::sim::steady::SteadyError) -> Self {
-        ControlError(e.to_string())
-    }
-}
-
-impl From<crate::numerics::ode::SolveError> for ControlError {
-    fn from(e: crate::numerics::ode::SolveError) -> Self {
-        ControlError(e.to_string())
-    }
-}
+pub use error::{ControlError, SettingsError};
 
 /// rad/s per rpm.
 pub const RAD_S_PER_RPM: f64 = std::f64::consts::PI / 30.0;
+
+/// A speed in rpm from rad/s.
+pub fn rpm(w_rad_s: f64) -> f64 {
+    w_rad_s / RAD_S_PER_RPM
+}

@@ -23,6 +23,7 @@ pub enum Port {
 }
 
 impl Port {
+    /// `inlet` or `outlet`, as in the study names and messages.
     pub fn name(self) -> &'static str {
         match self {
             Port::Inlet => "inlet",
@@ -46,6 +47,7 @@ impl Port {
 pub struct ThrottlePoint {
     /// Throttle conductance, m³/(s·Pa).
     pub c_m3_s_pa: f64,
+    /// Steady speed, rad/s.
     pub speed_rad_s: f64,
     /// Shaft torque T − T_f, N·m (equal to the load torque in steady state).
     pub torque_nm: f64,
@@ -80,11 +82,10 @@ pub fn speed_vs_conductance(
                 |g| steady::free(motor, &bc, &g),
             )
             .or_else(|_| steady::free(motor, &bc, &cold))
-            .map_err(|e| {
-                ControlError(format!(
-                    "{} throttle C = {c:.3e} m3/(s*Pa): {e}",
-                    port.name()
-                ))
+            .map_err(|source| ControlError::Throttled {
+                port: port.name(),
+                c_m3_s_pa: c,
+                source,
             })?;
         let b = motor.balance(&x, &bc);
         out[i] = Some(ThrottlePoint {
@@ -106,6 +107,7 @@ pub const W_CURVE_START_RAD_S: f64 = 5.0;
 /// A point of a torque–speed characteristic.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TorquePoint {
+    /// Imposed speed, rad/s.
     pub speed_rad_s: f64,
     /// Shaft torque T − T_f, N·m.
     pub torque_nm: f64,
@@ -137,13 +139,11 @@ pub fn torque_speed(
             W_CURVE_START_RAD_S + (w_max_rad_s - W_CURVE_START_RAD_S) * k as f64 / (n - 1) as f64;
         let x = steady::at_speed(motor, &bc, w, &guess)
             .or_else(|_| steady::at_speed(motor, &bc, w, &steady::initial_guess(&bc)))
-            .map_err(|e| {
-                ControlError(format!(
-                    "torque-speed curve, {} throttle {}: at {:.0} rpm: {e}",
-                    port.name(),
-                    c.map_or("none".to_string(), |c| format!("{c:.3e} m3/(s*Pa)")),
-                    w / super::RAD_S_PER_RPM
-                ))
+            .map_err(|source| ControlError::TorqueSpeed {
+                port: port.name(),
+                c_m3_s_pa: c,
+                speed_rpm: w / super::RAD_S_PER_RPM,
+                source,
             })?;
         let b = motor.balance(&x, &bc);
         let p = TorquePoint {

@@ -1,5 +1,6 @@
-//! Reports: SVG charts and the written results of fits and diagnoses.
+//! Reports: SVG charts and the written results of fits, diagnoses and control studies.
 
+pub mod control;
 pub mod diagnose;
 pub mod fit;
 pub mod plot;
