@@ -207,3 +207,42 @@ impl fmt::Display for ChowTest {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn progress_lines_read_as_before() {
+        let t = super::super::discover::library()[0];
+        let formula = super::super::discover::formula(&t);
+        let line = |on_top_of| {
+            Progress::Proposed(Proposal {
+                term: &t,
+                delta_bic: -12.34,
+                on_top_of,
+            })
+            .to_string()
+        };
+        assert_eq!(
+            line(None),
+            format!("  proposed {formula} (linearised dBIC -12.3)")
+        );
+        assert_eq!(
+            line(Some("sensor_lag")),
+            format!("  on top of sensor_lag: proposed {formula} (linearised dBIC -12.3)")
+        );
+        let chow = ChowTest {
+            joint: 3793.04,
+            separate: 3764.9,
+            lr: 28.14,
+            df: 16.0,
+            p_value: 0.0308,
+        };
+        assert_eq!(
+            Progress::ConcealmentResult(chow).to_string(),
+            "concealment: chi2 joint 3793.0 vs separate 3764.9: LR 28.1, df 16, p 3.08e-2"
+        );
+        assert_eq!(Progress::PairsStart(3).to_string(), "refitting 3 pair(s)");
+    }
+}
