@@ -434,10 +434,7 @@ fn full_results_table() {
         "uncatalogued torque",
         "uncatalogued leak",
     ];
-    let opts = DiagnoseOptions {
-        progress: false,
-        ..DiagnoseOptions::full(4, 1)
-    };
+    let opts = DiagnoseOptions::full(4, 1);
     let mut md = String::from(
         "| case | detected | ΔBIC | truth | recovered | noise ratio before → after | each experiment fitted alone (limit) | wall s | ok |\n|---|---|---|---|---|---|---|---|---|\n",
     );

@@ -1,7 +1,8 @@
 //! `vanefit diagnose` (SPEC §6).
 
+use crate::cli::Failure;
 use crate::data::dataset::Dataset;
-use crate::diagnose::{diagnose, summary, DiagnoseOptions};
+use crate::diagnose::{diagnose_observed, summary, DiagnoseObserver, DiagnoseOptions, Progress};
 use std::path::PathBuf;
 
 /// `vanefit diagnose` options (SPEC §6).
@@ -20,13 +21,24 @@ pub struct DiagnoseArgs {
     pub out: PathBuf,
 }
 
-/// `vanefit diagnose`.
-pub fn run(args: &DiagnoseArgs) -> Result<(), String> {
-    if args.starts == 0 {
-        return Err("--starts must be at least 1".into());
+/// Prints a diagnosis's progress on stderr, one line per event with the time since the
+/// start: `[  21.5 s] concealment: ...`.
+struct StderrProgress;
+
+impl DiagnoseObserver for StderrProgress {
+    fn progress(&self, elapsed_s: f64, event: &Progress<'_>) {
+        eprintln!("[{elapsed_s:6.1} s] {event}");
     }
-    let ds = Dataset::load(&args.dataset).map_err(|e| e.to_string())?;
-    let d = diagnose(&ds, &DiagnoseOptions::full(args.starts, args.seed))?;
+}
+
+/// `vanefit diagnose`.
+pub fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
+    if args.starts == 0 {
+        return Err(Failure("--starts must be at least 1".into()));
+    }
+    let ds = Dataset::load(&args.dataset)?;
+    let opts = DiagnoseOptions::full(args.starts, args.seed);
+    let d = diagnose_observed(&ds, &opts, &StderrProgress)?;
     crate::report::diagnose::write_all(&d, &args.out)?;
     println!("{}", summary(&d));
     println!(

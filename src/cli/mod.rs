@@ -108,7 +108,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             seed,
         ),
         Command::Control(args) => crate::cli::control::run(args),
-        Command::Diagnose(args) => crate::cli::diagnose::run(&args).map_err(Failure),
+        Command::Diagnose(args) => crate::cli::diagnose::run(&args),
     }
 }
 

@@ -41,6 +41,7 @@ use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::Abscissa;
+use crate::sim::experiment::SimError;
 use crate::units::{Quantity, Unit};
 
 /// Family-wise false-alarm rate of the location tests.
@@ -49,17 +50,25 @@ pub const LOCATION_ALPHA: f64 = 0.01;
 /// One channel of one experiment: simulation against data at the compared rows, SI.
 #[derive(Debug, Clone)]
 pub struct ChannelData {
+    /// The experiment's kind.
     pub kind: Kind,
+    /// Its recording.
     pub file: String,
+    /// The measured quantity.
     pub quantity: Quantity,
+    /// The recording's column name.
     pub column: String,
+    /// The column's unit (for display).
     pub unit: Unit,
+    /// The abscissa the channel is compared against.
     pub abscissa: Abscissa,
     /// Abscissa of each compared row (SI; log10 SI for the outlet throttle).
     pub x: Vec<f64>,
+    /// Recorded values at the rows, SI.
     pub data: Vec<f64>,
     /// The reference polynomial at the rows (for plots).
     pub reference: Vec<f64>,
+    /// Simulated values at the rows, SI.
     pub sim: Vec<f64>,
     /// Noise standard deviation (SI) from [`Target`].
     pub sigma: f64,
@@ -99,8 +108,8 @@ pub fn channel_data(
     target: &Target,
     motor: &Motor,
     solver: &dyn StiffSolver,
-) -> Result<Vec<ChannelData>, String> {
-    let res: Vec<ChannelResiduals> = cost.residuals(motor, solver).map_err(|e| e.to_string())?;
+) -> Result<Vec<ChannelData>, SimError> {
+    let res: Vec<ChannelResiduals> = cost.residuals(motor, solver)?;
     let mut out = Vec::with_capacity(res.len());
     for ((r, reference), t) in res.into_iter().zip(cost.references()).zip(&target.channels) {
         debug_assert_eq!(r.rows, t.rows);
@@ -140,9 +149,13 @@ pub fn chi2_data(channels: &[ChannelData]) -> (f64, usize) {
 /// Where a model misses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Location {
+    /// The experiment's kind.
     pub kind: Kind,
+    /// Its recording.
     pub file: String,
+    /// The channel's column name.
     pub column: String,
+    /// The channel's quantity.
     pub quantity: Quantity,
     /// Abscissa range, SI of the abscissa quantity (rad/s, Pa, m³/(s·Pa)), ascending.
     pub x_range: [f64; 2],

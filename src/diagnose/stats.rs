@@ -236,6 +236,7 @@ pub fn trend_test(x: &[f64], r: &[f64], degree: usize) -> Option<(f64, f64)> {
 pub struct Region {
     /// First and last index (inclusive) in the sorted order.
     pub first: usize,
+    /// Last index (inclusive).
     pub last: usize,
     /// Largest |mean normalised residual| of any flagged window in the region (σ units),
     /// with its sign.

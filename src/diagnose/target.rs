@@ -29,6 +29,7 @@
 //! σ² = mean(d_i²)/6 over the rest. As in the references, σ is at least max|y|/4096 (a
 //! 12-bit converter's resolution), so noise-free data do not get an infinite weight.
 
+use super::error::DiagnoseError;
 use crate::data::dataset::{Dataset, Kind};
 use crate::estimate::objective::{Evaluation, Objective};
 use crate::model::motor::Motor;
@@ -40,7 +41,9 @@ use crate::units::Quantity;
 /// One compared channel: rows, recorded values there, noise.
 #[derive(Debug, Clone)]
 pub struct ChannelTarget {
+    /// The recording.
     pub file: String,
+    /// The compared quantity.
     pub quantity: Quantity,
     /// Recording rows compared (the cost's rows).
     pub rows: Vec<usize>,
@@ -53,6 +56,7 @@ pub struct ChannelTarget {
 /// Every compared channel of a dataset, in the cost's channel order.
 #[derive(Debug, Clone)]
 pub struct Target {
+    /// The channels, in the cost's channel order.
     pub channels: Vec<ChannelTarget>,
 }
 
@@ -79,7 +83,9 @@ pub fn noise_sigma(y: &[f64]) -> f64 {
 /// What [`smooth_inputs`] did to one recorded input column.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InputSmoothing {
+    /// The recording.
     pub file: String,
+    /// The input column.
     pub column: String,
     /// Noise of the recorded column (SI; relative for a conductance, whose log10 is smoothed).
     pub noise: f64,
@@ -168,20 +174,17 @@ pub fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
 impl Target {
     /// The compared rows of every channel of `cost` (built from `ds`), the recorded values
     /// there and each channel's noise.
-    pub fn new(cost: &CostModel, ds: &Dataset) -> Result<Self, String> {
+    pub fn new(cost: &CostModel, ds: &Dataset) -> Result<Self, DiagnoseError> {
         let mut channels = Vec::new();
         for ex in cost.experiments() {
             let data = ds
                 .experiments
                 .iter()
                 .find(|e| e.file == ex.file)
-                .ok_or_else(|| format!("{}: not in the dataset", ex.file))?;
+                .ok_or_else(|| DiagnoseError::NotInDataset(ex.file.clone()))?;
             let abscissa = ex.abscissa();
             for r in cost.references().filter(|r| r.file == ex.file) {
-                let values = data
-                    .recording
-                    .values(r.quantity)
-                    .map_err(|e| e.to_string())?;
+                let values = data.recording.values(r.quantity)?;
                 let rows: Vec<usize> = (0..abscissa.len())
                     .filter(|&i| r.reference.eval(abscissa[i]).is_some())
                     .collect();
@@ -236,8 +239,11 @@ impl Target {
 /// The likelihood of eq. \[1\] as an estimation objective: cost = χ²/n (≈ 1 for a correct
 /// model), failures give the cost module's penalty.
 pub struct Likelihood<'a> {
+    /// The cost model, which simulates the compared rows.
     pub cost: &'a CostModel,
+    /// The recorded data and noise at those rows.
     pub target: &'a Target,
+    /// The ODE solver.
     pub solver: DiffsolBdf,
 }
 

@@ -7,11 +7,41 @@
 //! * `ranking.svg`: ΔBIC of every refitted model.
 
 use crate::diagnose::analysis::ChannelData;
-use crate::diagnose::{discover, num, summary, Diagnosis, ModelKind};
-use crate::report::plot::{Chart, Figure, Legend, Series};
+use crate::diagnose::{discover, num, summary, Candidate, Concealment, Diagnosis, ModelKind};
+use crate::report::plot::{Chart, Figure, Legend, PlotError, Series};
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+/// Why the report of a diagnosis could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// A plot could not be drawn or written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// The output folder cannot be created.
+    #[error("{}: cannot create: {source}", path.display())]
+    CreateDir {
+        /// The folder.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A file cannot be written.
+    #[error("{}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+/// Writes `bytes` to `path` atomically.
+fn write_file(path: PathBuf, bytes: &[u8]) -> Result<(), ReportError> {
+    crate::io::write_atomic(&path, bytes).map_err(|source| ReportError::Write { path, source })
+}
+
+/// The abscissa's axis label.
 fn x_label(ch: &ChannelData) -> String {
     if ch.abscissa.log10 {
         format!("{} (log scale)", ch.abscissa.column)
@@ -40,6 +70,7 @@ fn curve(ch: &ChannelData, y: &[f64], p_atm: f64, as_display: bool) -> Vec<(f64,
     v
 }
 
+/// A recording's file name without its extension.
 fn stem(file: &str) -> String {
     Path::new(file)
         .file_stem()
@@ -48,8 +79,30 @@ fn stem(file: &str) -> String {
 }
 
 /// Writes the plots and `report.md`.
-pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
-    let p_atm = d.p_atm_pa;
+pub fn write(d: &Diagnosis, out: &Path) -> Result<(), ReportError> {
+    let figures = write_figures(d, out)?;
+    let mut md = String::new();
+    overview(&mut md, d);
+    inputs(&mut md, d);
+    locations(&mut md, d);
+    concealment(&mut md, d);
+    candidates(&mut md, d);
+    selected(&mut md, d);
+    let _ = writeln!(md, "## Plots\n");
+    for (file, o, r) in &figures {
+        let _ = writeln!(md, "### {file}\n\n![overlay]({o})\n\n![residuals]({r})\n");
+    }
+    let _ = writeln!(md, "## Run\n\n| phase | s |\n|---|---|");
+    for (p, s) in &d.phases {
+        let _ = writeln!(md, "| {p} | {s:.1} |");
+    }
+    let _ = writeln!(md, "| total | {:.1} |", d.wall_s);
+    write_file(out.join("report.md"), md.as_bytes())
+}
+
+/// Writes the overlay and residual figures of each experiment and the ranking; returns
+/// (file, overlay figure, residual figure) of each experiment with channels.
+fn write_figures(d: &Diagnosis, out: &Path) -> Result<Vec<(String, String, String)>, ReportError> {
     let mut files: Vec<String> = d.baseline_channels.iter().map(|c| c.file.clone()).collect();
     files.dedup();
     let ext_label = if d.selected.is_empty() {
@@ -59,42 +112,18 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
     };
     let mut figures: Vec<(String, String, String)> = Vec::new();
     for file in &files {
-        let mut overlays = Vec::new();
-        let mut residuals = Vec::new();
-        for (b, e) in d
+        let (overlays, residuals): (Vec<Chart>, Vec<Chart>) = d
             .baseline_channels
             .iter()
             .zip(&d.extended_channels)
             .filter(|(b, _)| &b.file == file)
-        {
-            let mut chart = Chart::new(&format!("{file}: {}", b.column), &x_label(b), &b.column)
-                .with(Series::points("data", curve(b, &b.data, p_atm, true)))
-                .with(Series::line("baseline", curve(b, &b.sim, p_atm, true)))
-                .with(Series::line(&ext_label, curve(e, &e.sim, p_atm, true)))
-                .legend(Legend::UpperLeft);
-            if b.abscissa.log10 {
-                chart = chart.log_x();
-            }
-            overlays.push(chart);
-            let mut chart = Chart::new(
-                &format!("{file}: {} residual / noise", b.column),
-                &x_label(b),
-                "(simulation - data) / sigma",
-            )
-            .with(Series::points(
-                "baseline",
-                curve(b, &b.normalized(), p_atm, false),
-            ))
-            .with(Series::points(
-                &ext_label,
-                curve(e, &e.normalized(), p_atm, false),
-            ))
-            .legend(Legend::UpperLeft);
-            if b.abscissa.log10 {
-                chart = chart.log_x();
-            }
-            residuals.push(chart);
-        }
+            .map(|(b, e)| {
+                (
+                    overlay_chart(file, b, e, &ext_label, d.p_atm_pa),
+                    residual_chart(file, b, e, &ext_label, d.p_atm_pa),
+                )
+            })
+            .unzip();
         if overlays.is_empty() {
             continue;
         }
@@ -102,12 +131,8 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
         let cols = overlays.len().min(3);
         let o = format!("overlay.{s}.svg");
         let r = format!("residuals.{s}.svg");
-        Figure::new(overlays, cols)
-            .write_svg(&out.join(&o))
-            .map_err(|e| e.to_string())?;
-        Figure::new(residuals, cols)
-            .write_svg(&out.join(&r))
-            .map_err(|e| e.to_string())?;
+        Figure::new(overlays, cols).write_svg(&out.join(&o))?;
+        Figure::new(residuals, cols).write_svg(&out.join(&r))?;
         figures.push((file.clone(), o, r));
     }
     let mut ranking = Chart::new("Refitted models", "rank", "dBIC against the baseline")
@@ -119,12 +144,47 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
         ));
     }
     if !d.candidates.is_empty() {
-        ranking
-            .write_svg(&out.join("ranking.svg"))
-            .map_err(|e| e.to_string())?;
+        ranking.write_svg(&out.join("ranking.svg"))?;
     }
+    Ok(figures)
+}
 
-    let mut md = String::new();
+/// A channel's recorded data, the baseline (`b`) and the extended model (`e`).
+fn overlay_chart(file: &str, b: &ChannelData, e: &ChannelData, ext: &str, p_atm: f64) -> Chart {
+    let chart = Chart::new(&format!("{file}: {}", b.column), &x_label(b), &b.column)
+        .with(Series::points("data", curve(b, &b.data, p_atm, true)))
+        .with(Series::line("baseline", curve(b, &b.sim, p_atm, true)))
+        .with(Series::line(ext, curve(e, &e.sim, p_atm, true)))
+        .legend(Legend::UpperLeft);
+    if b.abscissa.log10 {
+        chart.log_x()
+    } else {
+        chart
+    }
+}
+
+/// A channel's residuals in noise units, of the baseline (`b`) and the extended model (`e`).
+fn residual_chart(file: &str, b: &ChannelData, e: &ChannelData, ext: &str, p_atm: f64) -> Chart {
+    let chart = Chart::new(
+        &format!("{file}: {} residual / noise", b.column),
+        &x_label(b),
+        "(simulation - data) / sigma",
+    )
+    .with(Series::points(
+        "baseline",
+        curve(b, &b.normalized(), p_atm, false),
+    ))
+    .with(Series::points(ext, curve(e, &e.normalized(), p_atm, false)))
+    .legend(Legend::UpperLeft);
+    if b.abscissa.log10 {
+        chart.log_x()
+    } else {
+        chart
+    }
+}
+
+/// Title, summary, the verdict and how to read the numbers.
+fn overview(md: &mut String, d: &Diagnosis) {
     let _ = writeln!(md, "# Diagnosis of `{}`\n", d.dataset);
     let _ = writeln!(md, "{}\n", summary(d));
     let _ = writeln!(
@@ -148,37 +208,44 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
          (against the reference polynomials) at the fitted parameters.\n",
         d.baseline.fitted.n_points
     );
+}
 
-    if !d.inputs.is_empty() {
+/// How the recorded inputs of the transients were smoothed.
+fn inputs(md: &mut String, d: &Diagnosis) {
+    if d.inputs.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "Recorded inputs of the transients (errors in variables: the simulation is driven \
+         by their smooth in time where it fits to within noise):\n\n\
+         | file | column | noise | RMS change | smooth |\n|---|---|---|---|---|"
+    );
+    for i in &d.inputs {
+        let rel = i.column.starts_with("c_port2");
+        let size = |v: f64| {
+            if rel {
+                format!("{:.2}%", 100.0 * v)
+            } else {
+                format!("{} Pa", num(v))
+            }
+        };
         let _ = writeln!(
             md,
-            "Recorded inputs of the transients (errors in variables: the simulation is driven \
-             by their smooth in time where it fits to within noise):\n\n\
-             | file | column | noise | RMS change | smooth |\n|---|---|---|---|---|"
+            "| {} | {} | {} | {} | {} |",
+            i.file,
+            i.column,
+            size(i.noise),
+            size(i.rms_change),
+            i.degree
+                .map_or("kept as recorded".into(), |g| format!("degree {g}"))
         );
-        for i in &d.inputs {
-            let rel = i.column.starts_with("c_port2");
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} |",
-                i.file,
-                i.column,
-                if rel {
-                    format!("{:.2}%", 100.0 * i.noise)
-                } else {
-                    format!("{} Pa", num(i.noise))
-                },
-                if rel {
-                    format!("{:.2}%", 100.0 * i.rms_change)
-                } else {
-                    format!("{} Pa", num(i.rms_change))
-                },
-                i.degree
-                    .map_or("kept as recorded".into(), |g| format!("degree {g}"))
-            );
-        }
-        let _ = writeln!(md);
     }
+    let _ = writeln!(md);
+}
+
+/// Where the baseline misses, and each channel's noise ratio before and after.
+fn locations(md: &mut String, d: &Diagnosis) {
     let _ = writeln!(md, "## Where the baseline misses\n");
     if d.locations.is_empty() {
         let _ = writeln!(
@@ -222,68 +289,76 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
         );
     }
     let _ = writeln!(md);
+}
 
+/// The concealment test: the statistic, each experiment's ratios and parameters.
+fn concealment(md: &mut String, d: &Diagnosis) {
     let _ = writeln!(md, "## Concealment\n");
-    match &d.concealment {
-        None => {
-            let _ = writeln!(md, "Not tested (one experiment, or switched off).\n");
+    let Some(c) = &d.concealment else {
+        let _ = writeln!(md, "Not tested (one experiment, or switched off).\n");
+        return;
+    };
+    let _ = writeln!(
+        md,
+        "Each experiment fitted alone against the joint fit: χ²_joint − Σχ²_alone = \
+         {:.1} on at most {} degrees of freedom, p = {:.2e} ({}). Held-out: each \
+         experiment predicted by the base model fitted to the others (a held-out ratio \
+         well above 1 can also mean that the other experiments leave a parameter open: \
+         compare models by it rather than reading it alone).\n",
+        c.lr,
+        c.df,
+        c.p_value,
+        if c.disagree() {
+            "the experiments disagree: a plain fit conceals a mismatch"
+        } else {
+            "the parameters agree"
         }
-        Some(c) => {
-            let _ = writeln!(
-                md,
-                "Each experiment fitted alone against the joint fit: χ²_joint − Σχ²_alone = \
-                 {:.1} on at most {} degrees of freedom, p = {:.2e} ({}). Held-out: each \
-                 experiment predicted by the base model fitted to the others (a held-out ratio \
-                 well above 1 can also mean that the other experiments leave a parameter open: \
-                 compare models by it rather than reading it alone).\n",
-                c.lr,
-                c.df,
-                c.p_value,
-                if c.disagree() {
-                    "the experiments disagree: a plain fit conceals a mismatch"
-                } else {
-                    "the parameters agree"
-                }
-            );
-            let _ = writeln!(
-                md,
-                "| experiment | noise ratio, joint fit | fitted alone (limit) | predicted from the others |\n|---|---|---|---|"
-            );
-            for e in &c.experiments {
-                let _ = writeln!(
-                    md,
-                    "| {} | {:.3} | {:.3} ({:.3}) | {} |",
-                    e.file,
-                    e.joint_ratio,
-                    e.alone_ratio,
-                    e.alone_limit,
-                    e.held_out_ratio.map_or("-".into(), |v| format!("{v:.3}"))
-                );
-            }
-            let _ = write!(md, "\n| parameter | joint |");
-            for e in &c.experiments {
-                let _ = write!(md, " {} alone |", e.file);
-            }
-            let _ = write!(md, "\n|---|---|");
-            for _ in &c.experiments {
-                let _ = write!(md, "---|");
-            }
-            let _ = writeln!(md);
-            for n in &d.estimated {
-                let _ = write!(
-                    md,
-                    "| {n} | {} |",
-                    num(d.baseline.fitted.params.get(n).unwrap_or(f64::NAN))
-                );
-                for e in &c.experiments {
-                    let _ = write!(md, " {} |", num(e.alone_params.get(n).unwrap_or(f64::NAN)));
-                }
-                let _ = writeln!(md);
-            }
-            let _ = writeln!(md);
-        }
+    );
+    let _ = writeln!(
+        md,
+        "| experiment | noise ratio, joint fit | fitted alone (limit) | predicted from the others |\n|---|---|---|---|"
+    );
+    for e in &c.experiments {
+        let _ = writeln!(
+            md,
+            "| {} | {:.3} | {:.3} ({:.3}) | {} |",
+            e.file,
+            e.joint_ratio,
+            e.alone_ratio,
+            e.alone_limit,
+            e.held_out_ratio.map_or("-".into(), |v| format!("{v:.3}"))
+        );
     }
+    separate_parameters(md, d, c);
+}
 
+/// The estimated parameters of the joint fit and of each experiment fitted alone.
+fn separate_parameters(md: &mut String, d: &Diagnosis, c: &Concealment) {
+    let _ = write!(md, "\n| parameter | joint |");
+    for e in &c.experiments {
+        let _ = write!(md, " {} alone |", e.file);
+    }
+    let _ = write!(md, "\n|---|---|");
+    for _ in &c.experiments {
+        let _ = write!(md, "---|");
+    }
+    let _ = writeln!(md);
+    for n in &d.estimated {
+        let _ = write!(
+            md,
+            "| {n} | {} |",
+            num(d.baseline.fitted.params.get(n).unwrap_or(f64::NAN))
+        );
+        for e in &c.experiments {
+            let _ = write!(md, " {} |", num(e.alone_params.get(n).unwrap_or(f64::NAN)));
+        }
+        let _ = writeln!(md);
+    }
+    let _ = writeln!(md);
+}
+
+/// Every refitted model, the effects not tried and the term library's ranking.
+fn candidates(md: &mut String, d: &Diagnosis) {
     let _ = writeln!(md, "## Candidates\n");
     let _ = writeln!(
         md,
@@ -293,23 +368,8 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
         md,
         "| model | kind | k | cost | χ² | ΔBIC | noise ratio | held-out noise ratio |\n|---|---|---|---|---|---|---|---|"
     );
-    let row = |md: &mut String, c: &crate::diagnose::Candidate| {
-        let _ = writeln!(
-            md,
-            "| {} | {:?} | {} | {:.4} | {:.1} | {:.1} | {:.3} | {} |",
-            c.label,
-            c.kind,
-            c.fitted.k,
-            c.fitted.cost,
-            c.fitted.chi2,
-            c.delta_bic,
-            c.noise_ratio,
-            c.held_out.map_or("-".into(), |v| format!("{v:.3}"))
-        );
-    };
-    row(&mut md, &d.baseline);
-    for c in &d.candidates {
-        row(&mut md, c);
+    for c in std::iter::once(&d.baseline).chain(&d.candidates) {
+        candidate_row(md, c);
     }
     let _ = writeln!(md);
     for s in &d.skipped {
@@ -333,73 +393,80 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), String> {
         }
         let _ = writeln!(md);
     }
+}
 
+/// One row of the candidates' table.
+fn candidate_row(md: &mut String, c: &Candidate) {
+    let _ = writeln!(
+        md,
+        "| {} | {:?} | {} | {:.4} | {:.1} | {:.1} | {:.3} | {} |",
+        c.label,
+        c.kind,
+        c.fitted.k,
+        c.fitted.cost,
+        c.fitted.chi2,
+        c.delta_bic,
+        c.noise_ratio,
+        c.held_out.map_or("-".into(), |v| format!("{v:.3}"))
+    );
+}
+
+/// The selected extensions and the locations they leave.
+fn selected(md: &mut String, d: &Diagnosis) {
     let _ = writeln!(md, "## Selected\n");
     if d.selected.is_empty() {
         let _ = writeln!(md, "Nothing: the base model is kept.\n");
-    } else {
-        for s in &d.selected {
-            let params: Vec<String> = s
-                .parameters
-                .iter()
-                .map(|(n, v, u)| format!("{n} = {} {u}", num(*v)))
-                .collect();
-            let _ = writeln!(
-                md,
-                "* **{}** ({}): {}; ΔBIC {:.1}{}",
-                s.effect,
-                s.category.id(),
-                params.join(", "),
-                s.delta_bic,
-                s.term
-                    .as_ref()
-                    .map_or(String::new(), |t| format!("; `{}`", discover::formula(t)))
-            );
-        }
-        let _ = writeln!(md);
-        if d.extended.kind != ModelKind::Baseline {
-            let _ = writeln!(
-                md,
-                "Locations left after the extension: {}.\n",
-                if d.extended_locations.is_empty() {
-                    "none".to_string()
-                } else {
-                    d.extended_locations
-                        .iter()
-                        .map(|l| format!("{} {} ({:.1}σ)", l.kind.id(), l.column, l.severity))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                }
-            );
-        }
+        return;
     }
-
-    let _ = writeln!(md, "## Plots\n");
-    for (file, o, r) in &figures {
-        let _ = writeln!(md, "### {file}\n\n![overlay]({o})\n\n![residuals]({r})\n");
+    for s in &d.selected {
+        let params: Vec<String> = s
+            .parameters
+            .iter()
+            .map(|(n, v, u)| format!("{n} = {} {u}", num(*v)))
+            .collect();
+        let _ = writeln!(
+            md,
+            "* **{}** ({}): {}; ΔBIC {:.1}{}",
+            s.effect,
+            s.category.id(),
+            params.join(", "),
+            s.delta_bic,
+            s.term
+                .as_ref()
+                .map_or(String::new(), |t| format!("; `{}`", discover::formula(t)))
+        );
     }
-
-    let _ = writeln!(md, "## Run\n\n| phase | s |\n|---|---|");
-    for (p, s) in &d.phases {
-        let _ = writeln!(md, "| {p} | {s:.1} |");
+    let _ = writeln!(md);
+    if d.extended.kind != ModelKind::Baseline {
+        let _ = writeln!(
+            md,
+            "Locations left after the extension: {}.\n",
+            if d.extended_locations.is_empty() {
+                "none".to_string()
+            } else {
+                d.extended_locations
+                    .iter()
+                    .map(|l| format!("{} {} ({:.1}σ)", l.kind.id(), l.column, l.severity))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        );
     }
-    let _ = writeln!(md, "| total | {:.1} |", d.wall_s);
-    let path = out.join("report.md");
-    crate::io::write_atomic(&path, md.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Writes `diagnosis.json`, `extended.json` (the extended model's fit file), `report.md`
 /// and the plots into `out`.
-pub fn write_all(d: &Diagnosis, out: &Path) -> Result<(), String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("{}: cannot create: {e}", out.display()))?;
+pub fn write_all(d: &Diagnosis, out: &Path) -> Result<(), ReportError> {
+    std::fs::create_dir_all(out).map_err(|source| ReportError::CreateDir {
+        path: out.to_path_buf(),
+        source,
+    })?;
     for (name, v) in [
         ("diagnosis.json", crate::diagnose::to_json(d)),
         ("extended.json", crate::diagnose::extended_fit_file(d)),
     ] {
-        let path = out.join(name);
         let text = serde_json::to_string_pretty(&v).expect("plain data") + "\n";
-        crate::io::write_atomic(&path, text.as_bytes())
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        write_file(out.join(name), text.as_bytes())?;
     }
     write(d, out)
 }

@@ -1,0 +1,138 @@
+//! What every phase of a diagnosis shares: the dataset, the cost and likelihood built on it,
+//! the options, the observer and the clock.
+
+use super::analysis::{self, ChannelData};
+use super::error::DiagnoseError;
+use super::fitting::{FitJob, Fitted};
+use super::models::names_for;
+use super::observe::{DiagnoseObserver, Progress};
+use super::target::Target;
+use super::DiagnoseOptions;
+use crate::data::dataset::Dataset;
+use crate::model::effects::EffectSet;
+use crate::model::motor::ExtraTerm;
+use crate::model::params::MotorParams;
+use crate::numerics::ode::DiffsolBdf;
+use crate::objective::cost::{CostModel, CostOptions};
+use crate::sim::experiment::SimError;
+use std::cell::{Cell, RefCell};
+use std::time::Instant;
+
+/// The state shared by the phases (read-only but for the phase clock).
+pub(crate) struct Context<'a> {
+    /// The dataset with the inputs of transients smoothed.
+    pub ds: &'a Dataset,
+    /// How thorough the diagnosis is.
+    pub opts: &'a DiagnoseOptions,
+    /// The project's cost on `ds` (its rows are the compared rows).
+    pub cost: CostModel,
+    /// The recorded data and noise at the compared rows (what every fit maximises).
+    pub target: Target,
+    /// The ODE solver of the analyses (each fit has its own).
+    pub solver: DiffsolBdf,
+    /// The rig's nominal motor (the first baseline start).
+    pub nominal: MotorParams,
+    /// Names estimated in the base model.
+    pub base_names: Vec<String>,
+    observer: &'a dyn DiagnoseObserver,
+    t0: Instant,
+    phase_start: Cell<Instant>,
+    phases: RefCell<Vec<(String, f64)>>,
+}
+
+impl<'a> Context<'a> {
+    /// Builds the cost and the likelihood target of `ds`; `t0` is the diagnosis's start.
+    pub fn new(
+        ds: &'a Dataset,
+        opts: &'a DiagnoseOptions,
+        observer: &'a dyn DiagnoseObserver,
+        t0: Instant,
+    ) -> Result<Self, DiagnoseError> {
+        let phase_start = Cell::new(Instant::now());
+        let solver = DiffsolBdf::default();
+        let cost = CostModel::new(ds, CostOptions::default())?;
+        let target = Target::new(&cost, ds)?;
+        let nominal = ds.nominal_params()?;
+        Ok(Self {
+            ds,
+            opts,
+            cost,
+            target,
+            solver,
+            nominal,
+            base_names: names_for(&EffectSet::empty()),
+            observer,
+            t0,
+            phase_start,
+            phases: RefCell::new(Vec::new()),
+        })
+    }
+
+    /// Tells the observer.
+    pub fn say(&self, event: Progress<'_>) {
+        self.observer
+            .progress(self.t0.elapsed().as_secs_f64(), &event);
+    }
+
+    /// Ends the phase `name` (its time counts from the end of the previous one).
+    pub fn end_phase(&self, name: &str) {
+        let seconds = self.phase_start.get().elapsed().as_secs_f64();
+        self.phases.borrow_mut().push((name.to_string(), seconds));
+        self.phase_start.set(Instant::now());
+        self.observer.phase(name, seconds);
+    }
+
+    /// (phase, seconds) so far.
+    pub fn phases(&self) -> Vec<(String, f64)> {
+        self.phases.borrow().clone()
+    }
+
+    /// Seconds since the diagnosis started.
+    pub fn elapsed_s(&self) -> f64 {
+        self.t0.elapsed().as_secs_f64()
+    }
+
+    /// Worker threads (None: one per core).
+    pub fn threads(&self) -> Option<usize> {
+        self.opts.threads
+    }
+
+    /// The baseline fit: the nominal motor plus Latin-hypercube starts.
+    pub fn base_job(&self) -> FitJob {
+        FitJob {
+            label: "baseline".into(),
+            effects: EffectSet::empty(),
+            extra: Vec::new(),
+            names: self.base_names.clone(),
+            starts: vec![self.nominal.clone()],
+            lhs: self.opts.starts - 1,
+            max_iters: self.opts.baseline_iters,
+            seed: self.opts.seed,
+        }
+    }
+
+    /// A warm refit of a model from given starts, with the refit budget.
+    pub fn refit_job(
+        &self,
+        label: String,
+        effects: EffectSet,
+        extra: Vec<ExtraTerm>,
+        starts: Vec<MotorParams>,
+    ) -> FitJob {
+        FitJob {
+            label,
+            names: names_for(&effects),
+            effects,
+            extra,
+            starts,
+            lhs: 0,
+            max_iters: self.opts.refit_iters,
+            seed: self.opts.seed,
+        }
+    }
+
+    /// A fitted model's channels against the data.
+    pub fn channels(&self, f: &Fitted) -> Result<Vec<ChannelData>, SimError> {
+        analysis::channel_data(&self.cost, &self.target, &f.motor(), &self.solver)
+    }
+}

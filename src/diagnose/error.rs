@@ -1,0 +1,38 @@
+//! Why a diagnosis failed.
+
+use crate::data::dataset::DataError;
+use crate::objective::cost::CostError;
+use crate::sim::experiment::SimError;
+use crate::sim::recording::MissingColumn;
+
+/// Why a diagnosis could not be made. Every message is the wrapped error's own (the data
+/// layer's are located "file:line:column" messages).
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnoseError {
+    /// A recording or the rig description is unusable (e.g. no nominal motor).
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// The cost model cannot be built from the dataset.
+    #[error(transparent)]
+    Cost(#[from] CostError),
+    /// A simulation of a fitted model failed.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// A channel the cost compares has no column in its recording.
+    #[error(transparent)]
+    MissingColumn(#[from] MissingColumn),
+    /// An experiment of the cost model is not in the dataset it was built from.
+    #[error("{0}: not in the dataset")]
+    NotInDataset(String),
+    /// A fit, the term regression or the worker pool failed (their message).
+    #[error("{0}")]
+    Fit(String),
+}
+
+impl From<String> for DiagnoseError {
+    /// The message of a fit or of the term regression ([`super::fitting`], [`super::discover`]
+    /// report failures as text).
+    fn from(message: String) -> Self {
+        DiagnoseError::Fit(message)
+    }
+}

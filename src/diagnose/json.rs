@@ -1,0 +1,86 @@
+//! The machine-readable outputs of a diagnosis: `diagnosis.json` (SPEC §6) and the
+//! extended model's fit file.
+
+use super::analysis::Location;
+use super::models::names_for;
+use super::{discover, Diagnosis, ModelKind, FORMAT};
+use crate::data::fitfile::FitFile;
+use serde_json::{json, Value};
+
+/// `diagnosis.json` (SPEC §6). Uncatalogued entries of `selected` also carry `balance`,
+/// `feature` and `formula`.
+pub fn to_json(d: &Diagnosis) -> Value {
+    let loc = |l: &Location| {
+        json!({
+            "experiment": l.kind.id(),
+            "channel": l.column,
+            "x_range": [l.x_range[0], l.x_range[1]],
+            "severity": round(l.severity),
+        })
+    };
+    let candidates: Vec<Value> = d
+        .candidates
+        .iter()
+        .filter(|c| matches!(c.kind, ModelKind::Single | ModelKind::Uncatalogued))
+        .filter(|c| c.label != "uncatalogued (2 terms)")
+        .map(|c| {
+            json!({
+                "effect": c.label,
+                "cost": c.fitted.cost,
+                "delta_bic": round(c.delta_bic),
+            })
+        })
+        .collect();
+    let selected: Vec<Value> = d
+        .selected
+        .iter()
+        .map(|s| {
+            let params: serde_json::Map<String, Value> = s
+                .parameters
+                .iter()
+                .map(|(n, v, _)| (n.clone(), json!(v)))
+                .collect();
+            let mut o = serde_json::Map::new();
+            o.insert("effect".into(), json!(s.effect));
+            o.insert("category".into(), json!(s.category.id()));
+            o.insert("parameters".into(), Value::Object(params));
+            o.insert("delta_bic".into(), json!(round(s.delta_bic)));
+            if let Some(t) = &s.term {
+                o.insert("balance".into(), json!(discover::balance_name(t.balance)));
+                o.insert("feature".into(), json!(discover::feature_name(t)));
+                o.insert("formula".into(), json!(discover::formula(t)));
+            }
+            Value::Object(o)
+        })
+        .collect();
+    json!({
+        "format": FORMAT,
+        "mismatch": d.mismatch,
+        "baseline": { "cost": d.baseline.fitted.cost, "noise_ratio": round(d.baseline.noise_ratio) },
+        "locations": d.locations.iter().map(loc).collect::<Vec<_>>(),
+        "candidates": candidates,
+        "selected": selected,
+        "extended": { "cost": d.extended.fitted.cost, "noise_ratio": round(d.extended.noise_ratio) },
+    })
+}
+
+/// Four decimals: enough for ratios and ΔBIC, and stable in diffs.
+fn round(v: f64) -> f64 {
+    if v.is_finite() {
+        (v * 1e4).round() / 1e4
+    } else {
+        v
+    }
+}
+
+/// The extended model as a fit file (SPEC §4, `vanefit.fit/1`). Discovered terms have no
+/// catalog id, so they go in the extra list `model.discovered` ([`FitFile::extra`]): readers
+/// that do not know it ignore it and then simulate without the terms.
+pub fn extended_fit_file(d: &Diagnosis) -> Value {
+    let f = &d.extended.fitted;
+    let mut file = FitFile::from_params(&d.dataset, f.params.clone(), f.effects.clone());
+    file.estimated = names_for(&f.effects);
+    file.cost = Some(f.cost);
+    file.extra = f.extra.clone();
+    file.to_json()
+}

@@ -1,0 +1,131 @@
+//! The refitted models of a diagnosis: their names, labels and scores.
+
+use super::context::Context;
+use super::error::DiagnoseError;
+use super::fitting::{self, FitJob, Fitted};
+use super::observe::Progress;
+use super::{analysis, Candidate, ModelKind};
+use crate::data::dataset::Dataset;
+use crate::estimate::space::DEFAULT_ESTIMATED;
+use crate::model::effects::EffectSet;
+
+/// Every refitted model so far, scored against the baseline's BIC.
+pub(crate) struct Models {
+    /// BIC of the baseline (after the null refit).
+    pub base_bic: f64,
+    /// The refitted models.
+    pub all: Vec<Candidate>,
+}
+
+impl Models {
+    /// No models yet, against a baseline of BIC `base_bic`.
+    pub fn new(base_bic: f64) -> Self {
+        Self {
+            base_bic,
+            all: Vec::new(),
+        }
+    }
+
+    /// Best ΔBIC first (stable: ties keep their order).
+    pub fn sort(&mut self) {
+        self.all.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+    }
+
+    /// A fit with its ΔBIC and noise ratio.
+    pub fn score(
+        &self,
+        cx: &Context,
+        label: &str,
+        kind: ModelKind,
+        f: Fitted,
+    ) -> Result<Candidate, DiagnoseError> {
+        let ch = cx.channels(&f)?;
+        Ok(Candidate {
+            label: label.to_string(),
+            kind,
+            delta_bic: f.bic() - self.base_bic,
+            noise_ratio: analysis::noise_ratio(&ch),
+            fitted: f,
+            held_out: None,
+        })
+    }
+
+    /// Runs the fits and scores each, reporting it; a failed fit is reported as `what`
+    /// failed (None: the job's label) and left out.
+    pub fn refit(
+        &self,
+        cx: &Context,
+        jobs: &[(ModelKind, FitJob)],
+        what: Option<&str>,
+    ) -> Result<Vec<Candidate>, DiagnoseError> {
+        let only: Vec<FitJob> = jobs.iter().map(|(_, j)| j.clone()).collect();
+        let mut out = Vec::new();
+        for ((kind, job), r) in
+            jobs.iter()
+                .zip(fitting::run_jobs(&cx.cost, &cx.target, &only, cx.threads()))
+        {
+            match r {
+                Ok(f) => {
+                    let c = self.score(cx, &job.label, *kind, f)?;
+                    cx.say(Progress::Scored(&c));
+                    out.push(c);
+                }
+                Err(e) => cx.say(Progress::Failed {
+                    what: what.unwrap_or(&job.label),
+                    error: &e.to_string(),
+                }),
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Names estimated in a model: the base model's (SPEC §1.7) and the effects' parameters.
+pub(crate) fn names_for(effects: &EffectSet) -> Vec<String> {
+    let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    for e in effects.iter() {
+        names.extend(e.parameters().iter().map(|s| s.to_string()));
+    }
+    names
+}
+
+/// Number of parts (catalog effects and discovered terms) of a model.
+pub(crate) fn parts(f: &Fitted) -> usize {
+    f.effects.iter().count() + f.extra.len()
+}
+
+/// Label and kind of a model made of catalog effects and `terms` discovered terms.
+pub(crate) fn label_of(effects: &EffectSet, terms: usize) -> (String, ModelKind) {
+    let mut parts: Vec<String> = effects.ids();
+    let n_effects = parts.len();
+    match terms {
+        0 => {}
+        1 => parts.push("uncatalogued".into()),
+        _ => parts.push(format!("uncatalogued ({terms} terms)")),
+    }
+    let kind = match (n_effects, terms) {
+        (0, 0) => ModelKind::Baseline,
+        (1, 0) => ModelKind::Single,
+        (_, 0) => ModelKind::Pair,
+        (0, _) => ModelKind::Uncatalogued,
+        _ => ModelKind::CatalogAndUncatalogued,
+    };
+    if parts.is_empty() {
+        return ("baseline".into(), kind);
+    }
+    (parts.join("+"), kind)
+}
+
+/// A dataset with the experiments whose index passes `keep`.
+pub(crate) fn subset(ds: &Dataset, keep: impl Fn(usize) -> bool) -> Dataset {
+    Dataset {
+        experiments: ds
+            .experiments
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| keep(*i))
+            .map(|(_, e)| e.clone())
+            .collect(),
+        ..ds.clone()
+    }
+}

@@ -1,0 +1,230 @@
+//! What a diagnosis is asked to do and what it finds.
+
+use super::analysis::{ChannelData, Location};
+use super::fitting::Fitted;
+use super::{discover, target, CONCEALMENT_ALPHA};
+use crate::data::dataset::Kind;
+use crate::model::effects::{Category, Effect};
+use crate::model::motor::ExtraTerm;
+use crate::model::params::MotorParams;
+
+/// How thorough a diagnosis is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Starts of the baseline fit (≥ 1; the first is the nominal motor).
+    pub starts: usize,
+    /// Seed of the Latin-hypercube start designs.
+    pub seed: u64,
+    /// Worker threads (None: one per core). Results do not depend on it.
+    pub threads: Option<usize>,
+    /// Iteration budget per start of the baseline fit.
+    pub baseline_iters: u64,
+    /// Iteration budget per start of every warm refit.
+    pub refit_iters: u64,
+    /// Given starts per candidate: the effect off, then points of its search range.
+    pub effect_starts: usize,
+    /// Try pairs whenever the best single effect is significant (otherwise only when its
+    /// residuals still show structure).
+    pub pairs_always: bool,
+    /// Fit experiments separately and predict each from the others.
+    pub concealment: bool,
+    /// Held-out prediction of this many best candidates (plus the selected model).
+    pub held_out_top: usize,
+    /// Look for uncatalogued terms.
+    pub discover: bool,
+}
+
+impl DiagnoseOptions {
+    /// The command line's settings.
+    pub fn full(starts: usize, seed: u64) -> Self {
+        Self {
+            starts: starts.max(1),
+            seed,
+            threads: None,
+            baseline_iters: 3000,
+            refit_iters: 2000,
+            effect_starts: 3,
+            pairs_always: true,
+            concealment: true,
+            held_out_top: 3,
+            discover: true,
+        }
+    }
+
+    /// Reduced effort for tests: one baseline start, a smaller refit budget, pairs only when
+    /// needed, held-out prediction of the selected model only.
+    pub fn quick(seed: u64) -> Self {
+        Self {
+            starts: 1,
+            baseline_iters: 3000,
+            refit_iters: 1500,
+            effect_starts: 3,
+            pairs_always: false,
+            held_out_top: 0,
+            ..Self::full(1, seed)
+        }
+    }
+}
+
+/// What kind of model a refit is (the order is the simplicity order of the selection).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ModelKind {
+    /// The base model (SPEC §1.7).
+    Baseline,
+    /// One catalog effect.
+    Single,
+    /// Two catalog effects.
+    Pair,
+    /// The base model with discovered terms.
+    Uncatalogued,
+    /// Catalog effect(s) with discovered terms.
+    CatalogAndUncatalogued,
+}
+
+/// A refitted model with its scores.
+#[derive(Debug, Clone)]
+pub struct Candidate {
+    /// Effect id, "a+b" for a pair, "uncatalogued" or "a+uncatalogued".
+    pub label: String,
+    /// Its place in the simplicity order.
+    pub kind: ModelKind,
+    /// The fit.
+    pub fitted: Fitted,
+    /// BIC(this) − BIC(baseline).
+    pub delta_bic: f64,
+    /// Noise ratio against the data (see [`super::analysis`]).
+    pub noise_ratio: f64,
+    /// √(mean over experiments of the squared noise ratio of each experiment predicted by
+    /// a fit to the others), when computed.
+    pub held_out: Option<f64>,
+}
+
+/// One experiment in the concealment test.
+#[derive(Debug, Clone)]
+pub struct ExperimentCheck {
+    /// The experiment's kind.
+    pub kind: Kind,
+    /// Its recording.
+    pub file: String,
+    /// Noise ratio of the joint baseline on this experiment.
+    pub joint_ratio: f64,
+    /// Noise ratio of the base model fitted to this experiment alone.
+    pub alone_ratio: f64,
+    /// [`super::noise_ratio_limit`] of this experiment's channels: below it, the separate
+    /// fit "looks acceptable".
+    pub alone_limit: f64,
+    /// χ² (against the references) of the fit to this experiment alone.
+    pub alone_chi2: f64,
+    /// The separate fit's parameters.
+    pub alone_params: MotorParams,
+    /// Noise ratio of this experiment predicted by the base model fitted to the others.
+    pub held_out_ratio: Option<f64>,
+}
+
+/// Separate against joint fits.
+#[derive(Debug, Clone)]
+pub struct Concealment {
+    /// Each experiment fitted alone.
+    pub experiments: Vec<ExperimentCheck>,
+    /// Likelihood ratio statistic χ²_joint − Σ χ²_alone.
+    pub lr: f64,
+    /// Its degrees of freedom, k·(E − 1) (an upper bound).
+    pub df: f64,
+    /// P(χ²(df) > lr).
+    pub p_value: f64,
+}
+
+impl Concealment {
+    /// The parameters disagree between experiments (p below [`CONCEALMENT_ALPHA`]).
+    pub fn disagree(&self) -> bool {
+        self.p_value < CONCEALMENT_ALPHA
+    }
+}
+
+/// One selected extension (SPEC §6 `selected`).
+#[derive(Debug, Clone)]
+pub struct Selected {
+    /// Catalog id, or "uncatalogued".
+    pub effect: String,
+    /// Category of the physics (SPEC §5).
+    pub category: Category,
+    /// Parameter names, SI values and units.
+    pub parameters: Vec<(String, f64, String)>,
+    /// BIC of the model with this entry minus BIC without it (entries in order: the deltas
+    /// add up to the extended model's ΔBIC against the baseline).
+    pub delta_bic: f64,
+    /// The discovered term (uncatalogued only).
+    pub term: Option<ExtraTerm>,
+}
+
+/// A catalog effect that was not tried, and why.
+#[derive(Debug, Clone)]
+pub struct Skipped {
+    /// The effect.
+    pub effect: Effect,
+    /// Why it cannot show in this dataset.
+    pub reason: String,
+}
+
+/// The outcome of a diagnosis.
+#[derive(Debug, Clone)]
+pub struct Diagnosis {
+    /// Dataset name.
+    pub dataset: String,
+    /// Ambient pressure of the rig, Pa.
+    pub p_atm_pa: f64,
+    /// The base model misses the data (SPEC §6 `mismatch`).
+    pub mismatch: bool,
+    /// The fitted base model.
+    pub baseline: Candidate,
+    /// Channels of the baseline against the data.
+    pub baseline_channels: Vec<ChannelData>,
+    /// Where the baseline misses, worst first.
+    pub locations: Vec<Location>,
+    /// Every refitted model, best ΔBIC first.
+    pub candidates: Vec<Candidate>,
+    /// Catalog effects not tried.
+    pub skipped: Vec<Skipped>,
+    /// The chosen extensions, in order.
+    pub selected: Vec<Selected>,
+    /// The chosen model (the baseline when nothing is selected).
+    pub extended: Candidate,
+    /// Channels of the extended model against the data.
+    pub extended_channels: Vec<ChannelData>,
+    /// Locations left after the extension.
+    pub extended_locations: Vec<Location>,
+    /// The concealment test, when run.
+    pub concealment: Option<Concealment>,
+    /// Regression of the baseline's misfit over the term library.
+    pub regression: Option<discover::Regression>,
+    /// Noise ratio that noise alone would exceed with probability 0.1% (see
+    /// [`super::noise_ratio_limit`]).
+    pub noise_ratio_limit: f64,
+    /// Names estimated in the baseline.
+    pub estimated: Vec<String>,
+    /// How the recorded inputs of transient experiments were smoothed.
+    pub inputs: Vec<target::InputSmoothing>,
+    /// (phase, seconds).
+    pub phases: Vec<(String, f64)>,
+    /// Wall time of the whole diagnosis, s.
+    pub wall_s: f64,
+    /// Worker threads used.
+    pub threads: usize,
+}
+
+impl Diagnosis {
+    /// Noise ratio of the baseline and of the extended model.
+    pub fn noise_ratios(&self) -> (f64, f64) {
+        (self.baseline.noise_ratio, self.extended.noise_ratio)
+    }
+
+    /// Total ΔBIC of the extended model against the baseline.
+    pub fn delta_bic(&self) -> f64 {
+        self.extended.delta_bic
+    }
+
+    /// A candidate by label.
+    pub fn candidate(&self, label: &str) -> Option<&Candidate> {
+        self.candidates.iter().find(|c| c.label == label)
+    }
+}

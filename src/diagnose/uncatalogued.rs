@@ -1,0 +1,103 @@
+//! Phase 5, uncatalogued terms ([`super::discover`]): sparse regression of the misfit over
+//! the term library, on the baseline and on the best significant catalog model; each
+//! proposed term is put into the model and refitted.
+
+use super::context::Context;
+use super::discover::{self, Regression};
+use super::error::DiagnoseError;
+use super::fitting::{FitJob, Fitted};
+use super::models::{label_of, names_for, Models};
+use super::observe::{Progress, Proposal};
+use super::{ModelKind, SELECT_DELTA_BIC};
+
+/// Regresses the baseline's misfit, refits the proposed models into `models` and returns the
+/// baseline's regression (None when discovery is off).
+pub(crate) fn search(
+    cx: &Context,
+    baseline: &Fitted,
+    models: &mut Models,
+) -> Result<Option<Regression>, DiagnoseError> {
+    if !cx.opts.discover {
+        return Ok(None);
+    }
+    cx.say(Progress::RegressionStart);
+    let reg = discover::regress(&cx.cost, &cx.target, baseline, &cx.base_names, cx.threads())?;
+    let mut jobs = on_the_baseline(cx, baseline, &reg);
+    jobs.extend(on_the_best_catalog_model(cx, models)?);
+    if !jobs.is_empty() {
+        cx.say(Progress::DiscoveredStart(jobs.len()));
+    }
+    let found = models.refit(cx, &jobs, Some("discovered-term refit"))?;
+    models.all.extend(found);
+    Ok(Some(reg))
+}
+
+/// The base model with the first proposed term, and with every proposed term when there
+/// are several (full baseline budget: the coefficients start from their linearised values).
+fn on_the_baseline(cx: &Context, baseline: &Fitted, reg: &Regression) -> Vec<(ModelKind, FitJob)> {
+    let mut jobs = Vec::new();
+    let Some(first) = reg.selected.first() else {
+        return jobs;
+    };
+    for t in &reg.selected {
+        cx.say(Progress::Proposed(Proposal {
+            term: &t.term,
+            delta_bic: t.delta_bic,
+            on_top_of: None,
+        }));
+    }
+    jobs.push((
+        ModelKind::Uncatalogued,
+        FitJob {
+            label: "uncatalogued".into(),
+            extra: vec![first.term],
+            starts: vec![baseline.params.clone()],
+            ..cx.base_job()
+        },
+    ));
+    if reg.selected.len() > 1 {
+        jobs.push((
+            ModelKind::Uncatalogued,
+            FitJob {
+                label: "uncatalogued (2 terms)".into(),
+                extra: reg.selected.iter().map(|t| t.term).collect(),
+                starts: vec![baseline.params.clone()],
+                ..cx.base_job()
+            },
+        ));
+    }
+    jobs
+}
+
+/// The best catalog model, when significant, with the first term its own misfit proposes.
+fn on_the_best_catalog_model(
+    cx: &Context,
+    models: &Models,
+) -> Result<Option<(ModelKind, FitJob)>, DiagnoseError> {
+    let Some(bc) = models
+        .all
+        .iter()
+        .filter(|c| c.kind <= ModelKind::Pair)
+        .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
+        .filter(|c| c.delta_bic < -SELECT_DELTA_BIC)
+    else {
+        return Ok(None);
+    };
+    let names = names_for(&bc.fitted.effects);
+    let reg = discover::regress(&cx.cost, &cx.target, &bc.fitted, &names, cx.threads())?;
+    let Some(first) = reg.selected.first() else {
+        return Ok(None);
+    };
+    cx.say(Progress::Proposed(Proposal {
+        term: &first.term,
+        delta_bic: first.delta_bic,
+        on_top_of: Some(&bc.label),
+    }));
+    let job = cx.refit_job(
+        label_of(&bc.fitted.effects, 1).0,
+        bc.fitted.effects.clone(),
+        vec![first.term],
+        vec![bc.fitted.params.clone()],
+    );
+    Ok(Some((ModelKind::CatalogAndUncatalogued, job)))
+}
