@@ -1,7 +1,6 @@
 //! The reference experiments of SPEC §2 as first-class types: each knows its inputs (from the
 //! rig and its recording) and simulates the channels that were measured, one value per row.
 
-use crate::model::effects::Effect;
 use crate::model::motor::{idx, Boundary, Load, Motor, State};
 use crate::numerics::ode::StiffSolver;
 use crate::sim::recording::{ExperimentData, Kind, MissingColumn};
@@ -245,10 +244,9 @@ impl Experiment {
             out[2].push(x[idx::OMEGA]);
             out[3].push(b.torque_load_nm);
         }
-        if motor.effects.contains(Effect::SensorLag) {
-            for ch in out.iter_mut().take(3) {
-                *ch = first_order_lag(times, ch, motor.params.tau_sensor());
-            }
+        // What the flow and speed sensors record (a lag where `sensor_lag` is on).
+        for ch in out.iter_mut().take(3) {
+            *ch = motor.measured(times, std::mem::take(ch));
         }
         let [flow1, flow2, speed, torque] = out;
         Ok(Simulated {
@@ -262,37 +260,5 @@ impl Experiment {
     }
 }
 
-/// A sensor's first-order lag y_m' = (y − y_m)/τ applied to samples of y, exact when y is
-/// linear between samples (first-order hold); the sensor starts settled at y(t_0).
-pub fn first_order_lag(times: &[f64], y: &[f64], tau: f64) -> Vec<f64> {
-    let mut out = Vec::with_capacity(y.len());
-    let Some(&first) = y.first() else { return out };
-    let mut ym = first;
-    out.push(ym);
-    for k in 1..y.len() {
-        let h = times[k] - times[k - 1];
-        let a = (-h / tau).exp();
-        let ramp = (y[k] - y[k - 1]) * (1.0 - tau / h * (1.0 - a));
-        ym = a * ym + (1.0 - a) * y[k - 1] + ramp;
-        out.push(ym);
-    }
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sensor_lag_of_a_ramp_trails_by_tau() {
-        // For y = t the settled lag output is t − τ(1 − e^{−t/τ}).
-        let times: Vec<f64> = (0..200).map(|k| f64::from(k) * 0.05).collect();
-        let y = times.clone();
-        let tau = 0.7;
-        let ym = first_order_lag(&times, &y, tau);
-        for (t, v) in times.iter().zip(&ym) {
-            let exact = t - tau * (1.0 - (-t / tau).exp());
-            assert!((v - exact).abs() < 1e-12, "t {t}: {v} vs {exact}");
-        }
-    }
-}
+/// A sensor's first-order lag (defined with the `sensor_lag` effect).
+pub use crate::model::effects::sensor_lag::first_order_lag;
