@@ -300,10 +300,7 @@ pub fn noise_ratio_limit(channels: &[ChannelData]) -> f64 {
 
 /// The catalog effects tried on a dataset, and those skipped with the reason.
 pub fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
-    let transient = ds
-        .experiments
-        .iter()
-        .any(|e| matches!(e.kind, Kind::PressureRamp | Kind::OutletThrottle));
+    let transient = ds.experiments.iter().any(|e| e.kind.is_transient());
     let mut tried = Vec::new();
     let mut skipped = Vec::new();
     for e in Effect::ALL {
