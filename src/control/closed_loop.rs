@@ -50,7 +50,6 @@
 
 use super::error::UnknownAntiWindup;
 use super::{ControlError, RAD_S_PER_RPM};
-use crate::model::effects::Effect;
 use crate::model::motor::{idx, Boundary, Load, Motor, State};
 use crate::numerics::ode::StiffSolver;
 use crate::sim::steady;
@@ -100,16 +99,13 @@ impl Valve {
     /// `valve_zeta` when the `valve_dynamics` effect is on, otherwise first order with
     /// `valve_tau` (default 0.05 s); 0–10 V → 0–6 bar gauge.
     pub fn for_motor(motor: &Motor, p_atm_pa: f64) -> Self {
-        let p = &motor.params;
-        let dynamics = if motor.effects.contains(Effect::ValveDynamics) {
-            ValveDynamics::SecondOrder {
-                tau_s: p.valve_tau(),
-                zeta: p.valve_zeta(),
-            }
-        } else {
-            ValveDynamics::FirstOrder {
-                tau_s: p.valve_tau(),
-            }
+        let valve = motor.supply_valve();
+        let dynamics = match valve.zeta {
+            Some(zeta) => ValveDynamics::SecondOrder {
+                tau_s: valve.tau_s,
+                zeta,
+            },
+            None => ValveDynamics::FirstOrder { tau_s: valve.tau_s },
         };
         Self {
             dynamics,

@@ -5,6 +5,7 @@
 pub use crate::data::motor::MotorSection;
 use crate::model::motor::Load;
 use crate::model::params::MotorParams;
+use crate::sim::experiment::InputCheck;
 pub use crate::sim::recording::{Column, ExperimentData, Kind, MissingColumn, Recording};
 use crate::units::constants::P_ATM_PA;
 use crate::units::{parse_column, ColumnNameError, Quantity};
@@ -624,10 +625,44 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
     Ok(())
 }
 
+/// Runs one of the input checks of an experiment's kind.
+fn check_input(ex: &ExperimentData, check: InputCheck) -> Result<(), DataError> {
+    let rec = &ex.recording;
+    match check {
+        InputCheck::Column(q) => rec.values(q).map(|_| ()).map_err(DataError::from),
+        InputCheck::Spans(q, min_relative_span) => rec.check_spans(q, min_relative_span),
+        InputCheck::Supply => {
+            if ex.p_supply_pa.is_none() && rec.column(Quantity::PPort1).is_none() {
+                return Err(DataError::new(
+                    &rec.file,
+                    format!(
+                        "{} needs p_supply_mpa in rig.toml or a p_port1 column",
+                        ex.kind.id()
+                    ),
+                ));
+            }
+            Ok(())
+        }
+        InputCheck::Positive(q, what) => {
+            let v = rec.values(q)?;
+            if let Some(k) = v.iter().position(|v| *v <= 0.0) {
+                let i = rec
+                    .columns
+                    .iter()
+                    .position(|c| c.quantity == q)
+                    .unwrap_or(0);
+                return Err(DataError::new(&rec.file, format!("{what} must be > 0"))
+                    .at(rec.lines[k])
+                    .col(i, &rec.columns[i].name));
+            }
+            Ok(())
+        }
+    }
+}
+
 /// Checks that an experiment has the columns its kind needs.
 fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
     let rec = &ex.recording;
-    let need = |q: Quantity| rec.values(q).map(|_| ());
     if rec.rows() < MIN_ROWS {
         return Err(DataError::new(
             &rec.file,
@@ -639,58 +674,11 @@ fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
         )
         .at(rec.lines.last().copied().unwrap_or(1)));
     }
-    let outputs: &[Quantity] = match ex.kind {
-        Kind::Datasheet => {
-            need(Quantity::Speed)?;
-            rec.check_spans(Quantity::Speed, 0.05)?;
-            if ex.p_supply_pa.is_none() && rec.column(Quantity::PPort1).is_none() {
-                return Err(DataError::new(
-                    &rec.file,
-                    "datasheet needs p_supply_mpa in rig.toml or a p_port1 column",
-                ));
-            }
-            &[Quantity::Torque, Quantity::Flow1, Quantity::Flow2]
-        }
-        Kind::PressureRamp => {
-            need(Quantity::Time)?;
-            need(Quantity::PPort1)?;
-            rec.check_spans(Quantity::PPort1, 0.05)?;
-            &[
-                Quantity::Flow1,
-                Quantity::Flow2,
-                Quantity::Speed,
-                Quantity::Torque,
-            ]
-        }
-        Kind::OutletThrottle => {
-            need(Quantity::Time)?;
-            need(Quantity::CPort2)?;
-            if ex.p_supply_pa.is_none() && rec.column(Quantity::PPort1).is_none() {
-                return Err(DataError::new(
-                    &rec.file,
-                    "outlet_throttle needs p_supply_mpa in rig.toml or a p_port1 column",
-                ));
-            }
-            let c = rec.values(Quantity::CPort2)?;
-            if let Some(k) = c.iter().position(|v| *v <= 0.0) {
-                let i = rec
-                    .columns
-                    .iter()
-                    .position(|c| c.quantity == Quantity::CPort2)
-                    .unwrap_or(0);
-                return Err(DataError::new(&rec.file, "conductance must be > 0")
-                    .at(rec.lines[k])
-                    .col(i, &rec.columns[i].name));
-            }
-            rec.check_spans(Quantity::CPort2, 0.05)?;
-            &[
-                Quantity::Flow1,
-                Quantity::Flow2,
-                Quantity::Speed,
-                Quantity::Torque,
-            ]
-        }
-    };
+    let kind = ex.kind.model();
+    for check in kind.inputs() {
+        check_input(ex, *check)?;
+    }
+    let outputs = kind.channels();
     if !outputs.iter().any(|q| rec.column(*q).is_some()) {
         let names: Vec<_> = outputs.iter().map(|q| q.prefix()).collect();
         return Err(DataError::new(

@@ -99,7 +99,7 @@ pub use types::{
     Skipped,
 };
 
-use crate::data::dataset::{Dataset, Kind};
+use crate::data::dataset::Dataset;
 use crate::model::effects::Effect;
 use crate::model::params::{spec, MotorParams};
 use context::Context;
@@ -172,28 +172,19 @@ pub fn diagnose_observed(
 
 /// The catalog effects tried on a dataset, and those skipped with the reason.
 pub fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
-    let transient = ds
-        .experiments
-        .iter()
-        .any(|e| matches!(e.kind, Kind::PressureRamp | Kind::OutletThrottle));
+    let transient = ds.experiments.iter().any(|e| e.kind.is_transient());
     let mut tried = Vec::new();
     let mut skipped = Vec::new();
     for e in Effect::ALL {
-        match e {
-            Effect::ValveDynamics => skipped.push(Skipped {
+        use crate::model::effects::ShowsIn;
+        match e.shows_in() {
+            ShowsIn::Never { reason } => skipped.push(Skipped {
                 effect: e,
-                reason: "the recorded port-1 pressure is the valve's output and drives the \
-                         simulation; the datasheet and outlet-throttle supplies are constant \
-                         and the pressure ramp is ~10^3 times slower than a valve, so valve \
-                         dynamics cannot show in these experiments (and the model has no \
-                         valve)"
-                    .into(),
+                reason: reason.into(),
             }),
-            Effect::SensorLag if !transient => skipped.push(Skipped {
+            ShowsIn::TransientOnly { reason } if !transient => skipped.push(Skipped {
                 effect: e,
-                reason: "a sensor lag shows only in transient recordings; this dataset has \
-                         steady-state experiments only"
-                    .into(),
+                reason: reason.into(),
             }),
             _ => tried.push(e),
         }
@@ -204,14 +195,7 @@ pub fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
 /// The "off" value of an effect parameter (the nested base model, or as near as the search
 /// range allows), given the base parameters.
 fn off_value(name: &str, base: &MotorParams) -> f64 {
-    let s = spec(name).expect("effect parameter");
-    match name {
-        "t_static" => base.t_coulomb().clamp(s.search.0, s.search.1),
-        "w_stribeck" => s.default,
-        "w_seal" => s.default,
-        "w_fill" => s.search.1,
-        _ => s.search.0,
-    }
+    spec(name).expect("effect parameter").off_value(base)
 }
 #[cfg(test)]
 mod tests {

@@ -2,7 +2,8 @@
 //! added to one balance of the motor. `vanefit diagnose` finds them; fit files carry them in
 //! `model.discovered`, and every command that reads a fit file applies them.
 
-use crate::model::effects::Category;
+use crate::model::effects::{Category, Term};
+use crate::model::params::MotorParams;
 use crate::numerics::ode::State;
 use PressureFactor as P;
 use SpeedFactor as W;
@@ -85,6 +86,20 @@ impl ExtraTerm {
             SpeedFactor::Sign => (omega / w_reg).tanh(),
         };
         self.coefficient * p * w
+    }
+}
+
+impl Term for ExtraTerm {
+    /// coefficient·feature(x) added to its balance (the catalog effects' hook).
+    fn add_to_balances(
+        &self,
+        _own: &[f64],
+        params: &MotorParams,
+        x: &State,
+        p_atm_pa: f64,
+        acc: &mut [f64; 4],
+    ) {
+        acc[self.balance as usize] += self.feature(x, p_atm_pa, params.w_reg());
     }
 }
 

@@ -11,14 +11,12 @@
 //! plus the displacement flows of the ideal motor (`thermo`).
 //! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (SPEC §1.5).
 
-use crate::model::effects::{Effect, EffectSet};
+use crate::model::effects::{CatalogEffect, Effect, EffectSet, SupplyValve, Term};
 pub use crate::model::extra::{BalanceId, ExtraTerm, PressureFactor, SpeedFactor};
-use crate::model::friction;
 use crate::model::nozzle::{series_flow, Nozzle};
 use crate::model::params::MotorParams;
 use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
 use crate::units::constants::RT0;
-use std::f64::consts::PI;
 
 /// Number of ODE states, and the state vector [p_1 (Pa), p_2 (Pa), p_e (Pa), ω (rad/s)].
 pub use crate::numerics::ode::{State, N_STATES};
@@ -163,36 +161,38 @@ impl Motor {
         Nozzle::new(c, self.params.b_crit())
     }
 
-    /// Leakage conductance multiplier (`speed_dependent_leakage`):
-    /// 1 + g/(1 + (ω/ω_seal)²), 1 in the base model.
+    /// The effects switched on, each with its own parameter values, in registry order.
+    fn active(&self) -> impl Iterator<Item = (&'static dyn CatalogEffect, &[f64])> + '_ {
+        self.effects
+            .iter()
+            .map(|e| (e.model(), self.params.effect_values(e)))
+    }
+
+    /// Leakage conductance multiplier: the product of the effects' [`Term::leak_factor`]s
+    /// (`speed_dependent_leakage`), 1 in the base model.
     fn leak_factor(&self, omega: f64) -> f64 {
-        if self.effects.contains(Effect::SpeedDependentLeakage) {
-            let p = &self.params;
-            1.0 + p.g_seal() / (1.0 + (omega / p.w_seal()).powi(2))
-        } else {
-            1.0
-        }
+        let factors = self
+            .active()
+            .filter_map(|(m, own)| m.leak_factor(own, omega));
+        factors.reduce(|a, f| a * f).unwrap_or(1.0)
     }
 
-    /// Pressure a compartment is filled to (`incomplete_filling`):
-    /// p_e + (p_inlet − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²); p_inlet in the base model.
+    /// Pressure a compartment is filled to: p_inlet through every effect's
+    /// [`Term::filling_pressure`] (`incomplete_filling`); p_inlet in the base model.
     fn filling_pressure(&self, p_inlet: f64, p_e: f64, omega: f64) -> f64 {
-        if self.effects.contains(Effect::IncompleteFilling) {
-            let eta = 1.0 / (1.0 + (omega / self.params.w_fill()).powi(2));
-            p_e + (p_inlet - p_e) * eta
-        } else {
-            p_inlet
-        }
+        self.active().fold(p_inlet, |p, (m, own)| {
+            m.filling_pressure(own, p, p_e, omega)
+        })
     }
 
-    /// Mass carried back in the dead volume (`dead_volume_carryover`), kg/s:
-    /// p_discharge·V_carry·z·|ω|/(2π·RT).
+    /// Mass carried back to the inlet side, kg/s: the sum of the effects'
+    /// [`Term::carryover_kg_s`] (`dead_volume_carryover`), 0 in the base model.
     fn carryover(&self, p_discharge: f64, omega: f64) -> f64 {
-        if self.effects.contains(Effect::DeadVolumeCarryover) {
-            p_discharge * self.params.v_carry() * self.cycle.vanes * omega.abs() / (2.0 * PI * RT0)
-        } else {
-            0.0
-        }
+        let vanes = self.cycle.vanes;
+        let flows = self
+            .active()
+            .filter_map(|(m, own)| m.carryover_kg_s(own, p_discharge, omega, vanes));
+        flows.reduce(|a, f| a + f).unwrap_or(0.0)
     }
 
     /// All friction torques at speed ω, N·m (base Coulomb + viscous, or the effects).
@@ -210,26 +210,43 @@ impl Motor {
         self.friction_parts(0.0, p_inlet, p_e).0
     }
 
-    /// The friction as dry·tanh(ω/ω_reg) + wet: the magnitude of the dry part (Coulomb, with
-    /// the Stribeck excess and the pressure term where switched on) and the odd, smooth rest
-    /// (viscous d·ω and c₂·ω·|ω|), N·m.
+    /// The friction as dry·tanh(ω/ω_reg) + wet: the magnitude of the dry part and the odd,
+    /// smooth rest, N·m. The base T_c passes through every effect's [`Term::coulomb_nm`]
+    /// (`pressure_dependent_friction`), then [`Term::dry_nm`] (`breakaway_friction`); the
+    /// viscous d·ω through [`Term::wet_nm`] (`vane_friction_speed_squared`).
     fn friction_parts(&self, omega: f64, p_inlet: f64, p_e: f64) -> (f64, f64) {
         let p = &self.params;
-        let mut t_coulomb = p.t_coulomb();
-        if self.effects.contains(Effect::PressureDependentFriction) {
-            t_coulomb += p.k_fric_p() * (p_inlet - p_e).max(0.0);
-        }
-        let dry = if self.effects.contains(Effect::BreakawayFriction) {
-            let t_static = p.t_static() + (t_coulomb - p.t_coulomb());
-            friction::stribeck_dry(omega, t_coulomb, t_static, p.w_stribeck())
-        } else {
-            t_coulomb
-        };
-        let mut wet = p.visc() * omega;
-        if self.effects.contains(Effect::VaneFrictionSpeedSquared) {
-            wet += p.c_w2() * omega * omega.abs();
-        }
+        let t_base = p.t_coulomb();
+        let t_coulomb = self
+            .active()
+            .fold(t_base, |t, (m, own)| m.coulomb_nm(own, t, p_inlet, p_e));
+        let dry = self
+            .active()
+            .fold(t_coulomb, |d, (m, own)| m.dry_nm(own, d, t_base, omega));
+        let wet = self
+            .active()
+            .fold(p.visc() * omega, |w, (m, own)| m.wet_nm(own, w, omega));
         (dry, wet)
+    }
+
+    /// What the sensors record of a channel y sampled at `times`: y through every effect's
+    /// [`Term::measure`] (`sensor_lag`); y itself in the base model.
+    pub fn measured(&self, times: &[f64], y: Vec<f64>) -> Vec<f64> {
+        self.active()
+            .fold(y, |y, (m, own)| m.measure(own, times, y))
+    }
+
+    /// The pressure control valve in front of the motor (`valve_dynamics`: first order with
+    /// `valve_tau`, second order with `valve_zeta` when switched on). Every catalog entry is
+    /// asked, switched on or not, because the valve exists without the effect.
+    pub fn supply_valve(&self) -> SupplyValve {
+        Effect::ALL
+            .into_iter()
+            .find_map(|e| {
+                let own = self.params.effect_values(e);
+                e.model().supply_valve(own, self.effects.contains(e))
+            })
+            .expect("the catalog describes the supply valve (valve_dynamics)")
     }
 
     /// Torque of the ideal motor with the forward/reverse blend of SPEC §1.2, N·m.
@@ -255,8 +272,11 @@ impl Motor {
         let leak_12_kg_s = self.nozzle(p.c_12() * leak).flow(p1, p2);
         let (p_in, p_dis) = if omega >= 0.0 { (p1, p2) } else { (p2, p1) };
         let mut extra = [0.0; 4];
+        for (m, own) in self.active() {
+            m.add_to_balances(own, p, x, bc.p_atm_pa, &mut extra);
+        }
         for t in &self.extra {
-            extra[t.balance as usize] += t.feature(x, bc.p_atm_pa, p.w_reg());
+            t.add_to_balances(&[], p, x, bc.p_atm_pa, &mut extra);
         }
         let displacement = displacement_flows(
             &self.cycle,

@@ -4,7 +4,7 @@
 //! Every parameter is SI. The names are the contract used in fit files and on the command
 //! line; they must not change.
 
-use crate::model::effects::Effect;
+use crate::model::effects::{Effect, N_EFFECTS, PARAM_LISTS};
 use std::fmt;
 
 /// What values a parameter may take.
@@ -20,85 +20,215 @@ pub enum Domain {
     Integer(u32, u32),
 }
 
+/// Which value switches an effect's parameter off: the nested base model, or as near as
+/// the search range allows (the diagnosis starts each candidate there).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OffValue {
+    /// A base-model parameter: never switched off (its default stands in).
+    NotAnEffect,
+    /// The lower end of the search range.
+    SearchLower,
+    /// The upper end of the search range.
+    SearchUpper,
+    /// The default (the parameter does not matter once the others are off).
+    Default,
+    /// The base model's value of the named parameter, clamped into the search range.
+    BaseClamped(&'static str),
+}
+
 /// Static description of one named parameter.
 #[derive(Debug, Clone, Copy)]
 pub struct ParamSpec {
+    /// The name in fit files and on the command line.
     pub name: &'static str,
+    /// The SI unit, as fit files write it.
     pub unit: &'static str,
+    /// Default value (motor AR034-11), SI.
     pub default: f64,
+    /// Values the parameter may take.
     pub domain: Domain,
     /// Search range for estimation (lo, hi) in SI; log-spaced for positive parameters.
     pub search: (f64, f64),
     /// The effect that adds this parameter, or `None` for the base model.
     pub effect: Option<Effect>,
+    /// The value that switches the effect off.
+    pub off: OffValue,
+    /// What the parameter means, for reports.
     pub meaning: &'static str,
 }
 
-macro_rules! params {
-    ($( $field:ident : $unit:literal = $default:expr, $domain:expr, ($lo:expr, $hi:expr), $effect:expr, $meaning:literal; )*) => {
-        /// Checked motor parameters, SI units. The only way to build them is
-        /// [`ParamSet::check`] (or a default), so every value has passed its check; read them
-        /// through the accessor of the same name.
-        #[derive(Debug, Clone, PartialEq)]
-        pub struct MotorParams { $( $field: f64, )* }
+impl ParamSpec {
+    /// The value that switches this parameter's effect off, given the base parameters.
+    pub fn off_value(&self, base: &MotorParams) -> f64 {
+        let (lo, hi) = self.search;
+        match self.off {
+            OffValue::NotAnEffect | OffValue::Default => self.default,
+            OffValue::SearchLower => lo,
+            OffValue::SearchUpper => hi,
+            OffValue::BaseClamped(name) => base.get(name).unwrap_or(self.default).clamp(lo, hi),
+        }
+    }
+}
 
-        /// Every parameter, in a fixed order (the order of fit files and reports).
-        pub const PARAMS: &[ParamSpec] = &[
+macro_rules! base_params {
+    ($( $field:ident : $unit:literal = $default:expr, $domain:expr, ($lo:expr, $hi:expr), $meaning:literal; )*) => {
+        #[allow(non_camel_case_types)]
+        enum Base { $( $field, )* }
+
+        /// The base model's parameters (SPEC §1.6), first in [`PARAMS`].
+        pub const BASE_PARAMS: &[ParamSpec] = &[
             $( ParamSpec { name: stringify!($field), unit: $unit, default: $default, domain: $domain,
-                           search: ($lo, $hi), effect: $effect, meaning: $meaning }, )*
+                           search: ($lo, $hi), effect: None, off: OffValue::NotAnEffect,
+                           meaning: $meaning }, )*
         ];
 
         impl MotorParams {
             $(
                 #[doc = concat!($meaning, ", ", $unit, ".")]
-                pub fn $field(&self) -> f64 { self.$field }
+                pub fn $field(&self) -> f64 { self.values[Base::$field as usize] }
             )*
-            /// Value of a named parameter (`None` for an unknown name).
-            pub fn get(&self, name: &str) -> Option<f64> {
-                match name { $( stringify!($field) => Some(self.$field), )* _ => None }
-            }
-            fn set_unchecked(&mut self, name: &str, value: f64) -> bool {
-                match name { $( stringify!($field) => { self.$field = value; true } )* _ => false }
-            }
-            fn defaults() -> Self {
-                Self { $( $field: $default, )* }
-            }
         }
     };
 }
 
 use Domain::{Integer, Interval, NonNegative, Positive};
-params! {
-    c_in1: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), None, "sonic conductance of the inlet duct (port 1 to volume 1)";
-    c_out2: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), None, "sonic conductance of the outlet duct (volume 2 to port 2)";
-    c_ext: "m3/(s*Pa)" = 1.170707e-8, Positive, (1e-9, 1e-7), None, "sonic conductance of the exhaust path (volume e to atmosphere)";
-    c_1e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), None, "leakage conductance volume 1 to volume e";
-    c_2e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), None, "leakage conductance volume 2 to volume e";
-    c_12: "m3/(s*Pa)" = 7.616275e-10, NonNegative, (1e-12, 1e-8), None, "leakage conductance volume 1 to volume 2";
-    b_crit: "1" = 0.5, Interval(0.05, 0.95), (0.2, 0.6), None, "critical pressure ratio of every nozzle";
-    z: "1" = 5.0, Integer(2, 16), (5.0, 5.0), None, "number of vanes";
-    v_disp: "m3" = 3.8e-6, Positive, (1e-7, 1e-3), None, "nominal displacement z*V_fill";
-    eps: "1" = 1.071, Interval(1.0, 2.0), (1.0, 1.5), None, "expansion ratio V_exp/V_fill";
-    v_dead: "m3" = 0.10e-6, NonNegative, (0.0, 1e-6), None, "dead volume per compartment";
-    n_poly: "1" = 1.3, Interval(1.0, 1.4), (1.0, 1.4), None, "polytropic index";
-    vol1: "m3" = 2e-6, Positive, (1e-7, 1e-4), None, "lumped volume at the port-1 inlet of the stator";
-    vol2: "m3" = 2e-6, Positive, (1e-7, 1e-4), None, "lumped volume at the port-2 inlet of the stator";
-    vole: "m3" = 2e-6, Positive, (1e-7, 1e-4), None, "lumped volume at the exhaust inlet of the stator";
-    inertia: "kg*m2" = 2e-4, Positive, (1e-6, 1e-2), None, "inertia of rotor, coupling and brake";
-    t_coulomb: "N*m" = 0.02, NonNegative, (1e-3, 0.2), None, "Coulomb friction torque";
-    visc: "N*m*s/rad" = 6e-5, NonNegative, (1e-6, 1e-3), None, "viscous friction coefficient";
-    w_reg: "rad/s" = 0.2, Positive, (0.01, 5.0), None, "friction regularisation speed";
-    t_static: "N*m" = 0.06, NonNegative, (1e-3, 0.5), Some(Effect::BreakawayFriction), "static (breakaway) friction torque";
-    w_stribeck: "rad/s" = 30.0, Positive, (1.0, 500.0), Some(Effect::BreakawayFriction), "Stribeck speed";
-    c_w2: "N*m*s2/rad2" = 1e-8, NonNegative, (1e-10, 1e-6), Some(Effect::VaneFrictionSpeedSquared), "speed-squared friction coefficient";
-    g_seal: "1" = 1.0, NonNegative, (0.01, 10.0), Some(Effect::SpeedDependentLeakage), "extra leakage at standstill, relative";
-    w_seal: "rad/s" = 300.0, Positive, (10.0, 5000.0), Some(Effect::SpeedDependentLeakage), "speed at which vane sealing halves the extra leakage";
-    v_carry: "m3" = 0.05e-6, NonNegative, (1e-9, 1e-6), Some(Effect::DeadVolumeCarryover), "volume carried back at discharge pressure per compartment";
-    w_fill: "rad/s" = 3000.0, Positive, (100.0, 1e5), Some(Effect::IncompleteFilling), "speed at which filling reaches half the pressure difference";
-    k_fric_p: "N*m/Pa" = 3e-8, NonNegative, (1e-10, 1e-6), Some(Effect::PressureDependentFriction), "Coulomb friction per Pa of p_1 - p_e";
-    tau_sensor: "s" = 0.5, Positive, (1e-3, 10.0), Some(Effect::SensorLag), "first-order lag of the flow and speed sensors";
-    valve_tau: "s" = 0.05, Positive, (1e-3, 1.0), Some(Effect::ValveDynamics), "time constant of the pressure control valve";
-    valve_zeta: "1" = 0.7, Positive, (0.1, 3.0), Some(Effect::ValveDynamics), "damping ratio of the second-order valve";
+base_params! {
+    c_in1: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "sonic conductance of the inlet duct (port 1 to volume 1)";
+    c_out2: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "sonic conductance of the outlet duct (volume 2 to port 2)";
+    c_ext: "m3/(s*Pa)" = 1.170707e-8, Positive, (1e-9, 1e-7), "sonic conductance of the exhaust path (volume e to atmosphere)";
+    c_1e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leakage conductance volume 1 to volume e";
+    c_2e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leakage conductance volume 2 to volume e";
+    c_12: "m3/(s*Pa)" = 7.616275e-10, NonNegative, (1e-12, 1e-8), "leakage conductance volume 1 to volume 2";
+    b_crit: "1" = 0.5, Interval(0.05, 0.95), (0.2, 0.6), "critical pressure ratio of every nozzle";
+    z: "1" = 5.0, Integer(2, 16), (5.0, 5.0), "number of vanes";
+    v_disp: "m3" = 3.8e-6, Positive, (1e-7, 1e-3), "nominal displacement z*V_fill";
+    eps: "1" = 1.071, Interval(1.0, 2.0), (1.0, 1.5), "expansion ratio V_exp/V_fill";
+    v_dead: "m3" = 0.10e-6, NonNegative, (0.0, 1e-6), "dead volume per compartment";
+    n_poly: "1" = 1.3, Interval(1.0, 1.4), (1.0, 1.4), "polytropic index";
+    vol1: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume at the port-1 inlet of the stator";
+    vol2: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume at the port-2 inlet of the stator";
+    vole: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume at the exhaust inlet of the stator";
+    inertia: "kg*m2" = 2e-4, Positive, (1e-6, 1e-2), "inertia of rotor, coupling and brake";
+    t_coulomb: "N*m" = 0.02, NonNegative, (1e-3, 0.2), "Coulomb friction torque";
+    visc: "N*m*s/rad" = 6e-5, NonNegative, (1e-6, 1e-3), "viscous friction coefficient";
+    w_reg: "rad/s" = 0.2, Positive, (0.01, 5.0), "friction regularisation speed";
+}
+
+/// Number of parameters: the base model's and every catalog effect's.
+pub const N_PARAMS: usize = count_params();
+
+const fn count_params() -> usize {
+    let mut n = BASE_PARAMS.len();
+    let mut e = 0;
+    while e < N_EFFECTS {
+        n += PARAM_LISTS[e].len();
+        e += 1;
+    }
+    n
+}
+
+/// The base parameters, then each effect's in registry order.
+const fn assemble() -> [ParamSpec; N_PARAMS] {
+    let mut out = [BASE_PARAMS[0]; N_PARAMS];
+    let mut k = 0;
+    while k < BASE_PARAMS.len() {
+        out[k] = BASE_PARAMS[k];
+        k += 1;
+    }
+    let mut e = 0;
+    while e < N_EFFECTS {
+        let list = PARAM_LISTS[e];
+        let mut j = 0;
+        while j < list.len() {
+            out[k] = list[j];
+            k += 1;
+            j += 1;
+        }
+        e += 1;
+    }
+    out
+}
+
+/// Where each effect's parameters start in [`PARAMS`].
+const fn offsets() -> [usize; N_EFFECTS] {
+    let mut out = [0; N_EFFECTS];
+    let mut k = BASE_PARAMS.len();
+    let mut e = 0;
+    while e < N_EFFECTS {
+        out[e] = k;
+        k += PARAM_LISTS[e].len();
+        e += 1;
+    }
+    out
+}
+
+const ALL_PARAMS: [ParamSpec; N_PARAMS] = assemble();
+const EFFECT_OFFSETS: [usize; N_EFFECTS] = offsets();
+
+/// Every parameter, in a fixed order (the order of fit files and reports): the base
+/// model's, then each catalog effect's in registry order.
+pub const PARAMS: &[ParamSpec] = &ALL_PARAMS;
+
+const fn default_values() -> [f64; N_PARAMS] {
+    let mut out = [0.0; N_PARAMS];
+    let mut k = 0;
+    while k < N_PARAMS {
+        out[k] = ALL_PARAMS[k].default;
+        k += 1;
+    }
+    out
+}
+
+/// Checked motor parameters, SI units. The only way to build them is [`ParamSet::check`]
+/// (or a default), so every value has passed its check; read them through the accessor of
+/// the same name (base parameters here, each effect's in its file) or [`MotorParams::get`].
+#[derive(Clone, PartialEq)]
+pub struct MotorParams {
+    /// One value per entry of [`PARAMS`], in its order.
+    values: [f64; N_PARAMS],
+}
+
+impl fmt::Debug for MotorParams {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut s = f.debug_struct("MotorParams");
+        for (spec, v) in PARAMS.iter().zip(&self.values) {
+            s.field(spec.name, v);
+        }
+        s.finish()
+    }
+}
+
+impl MotorParams {
+    /// Value of a named parameter (`None` for an unknown name).
+    pub fn get(&self, name: &str) -> Option<f64> {
+        position(name).map(|i| self.values[i])
+    }
+
+    /// The values of an effect's own parameters, in the order of its specs.
+    pub fn effect_values(&self, e: Effect) -> &[f64] {
+        let start = EFFECT_OFFSETS[e.index()];
+        &self.values[start..start + e.specs().len()]
+    }
+
+    fn set_unchecked(&mut self, name: &str, value: f64) -> bool {
+        match position(name) {
+            Some(i) => {
+                self.values[i] = value;
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn defaults() -> Self {
+        Self {
+            values: default_values(),
+        }
+    }
+}
+
+fn position(name: &str) -> Option<usize> {
+    PARAMS.iter().position(|p| p.name == name)
 }
 
 /// Looks up a parameter's description by name.
@@ -116,7 +246,7 @@ impl Default for MotorParams {
 impl MotorParams {
     /// Number of vanes as a count.
     pub fn vanes(&self) -> u32 {
-        self.z.round() as u32
+        self.z().round() as u32
     }
 
     /// Returns a copy with one parameter changed, checked.
@@ -170,17 +300,16 @@ impl ParamSet {
     /// Checks every value against its domain and the cross-constraints of the model.
     pub fn check(self) -> Result<MotorParams, ParamError> {
         let p = self.values;
-        for spec in PARAMS {
-            let v = p.get(spec.name).expect("every spec names a field");
-            check_domain(spec, v)?;
+        for (spec, v) in PARAMS.iter().zip(&p.values) {
+            check_domain(spec, *v)?;
         }
-        let v_fill = p.v_disp / p.z.round();
-        if p.v_dead >= v_fill {
+        let v_fill = p.v_disp() / p.z().round();
+        if p.v_dead() >= v_fill {
             return Err(ParamError {
                 name: "v_dead".into(),
                 message: format!(
                     "dead volume {:.3e} m3 must be smaller than the filling volume v_disp/z = {v_fill:.3e} m3",
-                    p.v_dead
+                    p.v_dead()
                 ),
             });
         }
@@ -238,6 +367,18 @@ mod tests {
             .unwrap_err()
             .message
             .contains("unknown"));
+    }
+
+    #[test]
+    fn the_fit_file_order_is_fixed() {
+        let names: Vec<_> = PARAMS.iter().map(|p| p.name).collect();
+        let expected = "c_in1 c_out2 c_ext c_1e c_2e c_12 b_crit z v_disp eps v_dead n_poly \
+                        vol1 vol2 vole inertia t_coulomb visc w_reg t_static w_stribeck c_w2 \
+                        g_seal w_seal v_carry w_fill k_fric_p tau_sensor valve_tau valve_zeta";
+        assert_eq!(names.join(" "), expected);
+        let p = MotorParams::default().with("g_seal", 2.5).unwrap();
+        assert_eq!(p.g_seal(), 2.5);
+        assert_eq!(p.effect_values(Effect::SpeedDependentLeakage), &[2.5, 300.0]);
     }
 
     #[test]

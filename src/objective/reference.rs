@@ -38,6 +38,7 @@
 //!   [`Reference::eval`] returns `None`.
 
 use crate::data::dataset::{DataError, ExperimentData, Kind, Recording};
+use crate::sim::experiment::AbscissaSpec;
 use crate::units::{Quantity, Unit};
 use nalgebra::{DMatrix, DVector};
 
@@ -657,11 +658,7 @@ impl Abscissa {
     /// The abscissa of an experiment kind: speed (datasheet), port-1 pressure (pressure
     /// ramp), log10 of the port-2 conductance (outlet throttle).
     pub fn of(kind: Kind, rec: &Recording) -> Result<Abscissa, DataError> {
-        let (quantity, log10) = match kind {
-            Kind::Datasheet => (Quantity::Speed, false),
-            Kind::PressureRamp => (Quantity::PPort1, false),
-            Kind::OutletThrottle => (Quantity::CPort2, true),
-        };
+        let AbscissaSpec { quantity, log10 } = kind.model().abscissa();
         rec.values(quantity)?;
         let c = rec.column(quantity).expect("checked above");
         Ok(Abscissa {
@@ -691,7 +688,7 @@ impl Abscissa {
 
 /// The measured output channels of an experiment kind, in the simulator's order.
 pub fn channels_of(kind: Kind) -> &'static [Quantity] {
-    kind.channels()
+    kind.model().channels()
 }
 
 /// The reference of one measured channel of one experiment.

@@ -3,12 +3,11 @@
 
 use crate::model::motor::Load;
 use crate::units::{Quantity, Unit};
-use serde::Deserialize;
-use std::fmt;
 use std::path::PathBuf;
 
 /// A channel that an experiment needs is not in its recording.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}:1: {}", .file.display(), missing_message(*.quantity))]
 pub struct MissingColumn {
     /// The recording.
     pub file: PathBuf,
@@ -19,23 +18,19 @@ pub struct MissingColumn {
 impl MissingColumn {
     /// The message without the file: what is missing and an example column name.
     pub fn message(&self) -> String {
-        let q = self.quantity;
-        format!(
-            "missing column for {} (e.g. '{}_{}')",
-            q.prefix(),
-            q.prefix(),
-            q.si_unit().suffix()
-        )
+        missing_message(self.quantity)
     }
 }
 
-impl fmt::Display for MissingColumn {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:1: {}", self.file.display(), self.message())
-    }
+/// "missing column for q (e.g. 'q_unit')".
+fn missing_message(q: Quantity) -> String {
+    format!(
+        "missing column for {} (e.g. '{}_{}')",
+        q.prefix(),
+        q.prefix(),
+        q.si_unit().suffix()
+    )
 }
-
-impl std::error::Error for MissingColumn {}
 
 /// One column of a recording, converted to SI.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,37 +72,8 @@ impl Recording {
     }
 }
 
-/// The experiment kinds of SPEC §2.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, PartialOrd, Ord)]
-#[serde(rename_all = "snake_case")]
-pub enum Kind {
-    Datasheet,
-    PressureRamp,
-    OutletThrottle,
-}
-
-impl Kind {
-    pub fn id(self) -> &'static str {
-        match self {
-            Kind::Datasheet => "datasheet",
-            Kind::PressureRamp => "pressure_ramp",
-            Kind::OutletThrottle => "outlet_throttle",
-        }
-    }
-
-    /// The measured output channels of the kind, in the simulator's order.
-    pub fn channels(self) -> &'static [Quantity] {
-        match self {
-            Kind::Datasheet => &[Quantity::Torque, Quantity::Flow1, Quantity::Flow2],
-            Kind::PressureRamp | Kind::OutletThrottle => &[
-                Quantity::Flow1,
-                Quantity::Flow2,
-                Quantity::Speed,
-                Quantity::Torque,
-            ],
-        }
-    }
-}
+/// The experiment kinds of SPEC §2 (defined by the registry of `sim::experiment`).
+pub use crate::sim::experiment::Kind;
 
 /// One experiment as the rig file describes it, with its recording.
 #[derive(Debug, Clone)]

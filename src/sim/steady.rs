@@ -5,19 +5,11 @@
 
 use crate::model::motor::{idx, Boundary, Motor, State, N_STATES};
 use nalgebra::{SMatrix, SVector};
-use std::fmt;
 
 /// What the steady solver could not do.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("no steady state: {0}")]
 pub struct SteadyError(pub String);
-
-impl fmt::Display for SteadyError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "no steady state: {}", self.0)
-    }
-}
-
-impl std::error::Error for SteadyError {}
 
 /// Typical magnitude of each state (for steps and convergence).
 const SCALE: State = [1e5, 1e5, 1e5, 100.0];

@@ -1,0 +1,91 @@
+//! `breakaway_friction` (SPEC §5, torque loss): static friction above Coulomb at standstill,
+//! decaying to Coulomb with speed (Stribeck). The dry friction becomes
+//! T_c + (T_s − T_c)·exp(−(ω/ω_s)²), N·m, where T_s keeps its excess over the base T_c when
+//! other hooks raise T_c (e.g. `pressure_dependent_friction`).
+
+use super::{Category, CatalogEffect, Effect, Term};
+use crate::model::friction;
+use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+
+/// The effect (see the module documentation).
+pub struct BreakawayFriction;
+
+const T_STATIC: usize = 0;
+const W_STRIBECK: usize = 1;
+
+/// Its parameters: T_s and ω_s. Off: T_s = T_c (clamped into its search range) leaves the
+/// base model's friction; ω_s then does not matter and stays at its default.
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "t_static",
+        unit: "N*m",
+        default: 0.06,
+        domain: Domain::NonNegative,
+        search: (1e-3, 0.5),
+        effect: Some(Effect::BreakawayFriction),
+        off: OffValue::BaseClamped("t_coulomb"),
+        meaning: "static (breakaway) friction torque",
+    },
+    ParamSpec {
+        name: "w_stribeck",
+        unit: "rad/s",
+        default: 30.0,
+        domain: Domain::Positive,
+        search: (1.0, 500.0),
+        effect: Some(Effect::BreakawayFriction),
+        off: OffValue::Default,
+        meaning: "Stribeck speed",
+    },
+];
+
+impl Term for BreakawayFriction {
+    /// T_c + (T_s + (T_c − T_c,base) − T_c)·exp(−(ω/ω_s)²), with T_c = `dry`.
+    fn dry_nm(&self, own: &[f64], dry: f64, t_coulomb_base: f64, omega: f64) -> f64 {
+        let t_static = own[T_STATIC] + (dry - t_coulomb_base);
+        friction::stribeck_dry(omega, dry, t_static, own[W_STRIBECK])
+    }
+}
+
+impl CatalogEffect for BreakawayFriction {
+    fn id(&self) -> &'static str {
+        "breakaway_friction"
+    }
+    fn category(&self) -> Category {
+        Category::TorqueLoss
+    }
+    fn physics(&self) -> &'static str {
+        "static friction above Coulomb at standstill (Stribeck)"
+    }
+    fn specs(&self) -> &'static [ParamSpec] {
+        PARAMS
+    }
+}
+
+impl MotorParams {
+    /// Static (breakaway) friction torque T_s, N·m (`breakaway_friction`).
+    pub fn t_static(&self) -> f64 {
+        self.effect_values(Effect::BreakawayFriction)[T_STATIC]
+    }
+    /// Stribeck speed ω_s, rad/s (`breakaway_friction`).
+    pub fn w_stribeck(&self) -> f64 {
+        self.effect_values(Effect::BreakawayFriction)[W_STRIBECK]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn off_is_the_base_model() {
+        super::super::testing::reproduces_base(Effect::BreakawayFriction, &[], 0.0);
+    }
+
+    #[test]
+    fn hook_is_the_stribeck_curve() {
+        let own = [0.05, 5.0];
+        let d = BreakawayFriction.dry_nm(&own, 0.02, 0.02, 3.0);
+        assert_eq!(d, 0.02 + (0.05 - 0.02) * (-(3.0f64 / 5.0).powi(2)).exp());
+        assert_eq!(BreakawayFriction.dry_nm(&own, 0.02, 0.02, 0.0), 0.05);
+    }
+}

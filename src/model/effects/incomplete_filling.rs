@@ -1,0 +1,67 @@
+//! `incomplete_filling` (SPEC §5, inlet flow): at speed a compartment does not reach the
+//! port pressure before cut-off; it is filled to p_e + (p_inlet − p_e)·η(ω),
+//! η = 1/(1 + (ω/ω_f)²).
+
+use super::{Category, CatalogEffect, Effect, Term};
+use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+
+/// The effect (see the module documentation).
+pub struct IncompleteFilling;
+
+const W_FILL: usize = 0;
+
+/// Its parameter ω_f; off at the top of its search range (filling complete at every speed
+/// reached).
+pub const PARAMS: &[ParamSpec] = &[ParamSpec {
+    name: "w_fill",
+    unit: "rad/s",
+    default: 3000.0,
+    domain: Domain::Positive,
+    search: (100.0, 1e5),
+    effect: Some(Effect::IncompleteFilling),
+    off: OffValue::SearchUpper,
+    meaning: "speed at which filling reaches half the pressure difference",
+}];
+
+impl Term for IncompleteFilling {
+    /// p_e + (p_fill − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²).
+    fn filling_pressure(&self, own: &[f64], p_fill: f64, p_e: f64, omega: f64) -> f64 {
+        let eta = 1.0 / (1.0 + (omega / own[W_FILL]).powi(2));
+        p_e + (p_fill - p_e) * eta
+    }
+}
+
+impl CatalogEffect for IncompleteFilling {
+    fn id(&self) -> &'static str {
+        "incomplete_filling"
+    }
+    fn category(&self) -> Category {
+        Category::InletFlow
+    }
+    fn physics(&self) -> &'static str {
+        "the compartment does not reach port pressure before cut-off at speed"
+    }
+    fn specs(&self) -> &'static [ParamSpec] {
+        PARAMS
+    }
+}
+
+impl MotorParams {
+    /// Speed ω_f at which filling reaches half the pressure difference, rad/s
+    /// (`incomplete_filling`).
+    pub fn w_fill(&self) -> f64 {
+        self.effect_values(Effect::IncompleteFilling)[W_FILL]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn far_off_is_the_base_model_and_hook_is_half_at_w_fill() {
+        super::super::testing::reproduces_base(Effect::IncompleteFilling, &[("w_fill", 1e150)], 1e-12);
+        let p = IncompleteFilling.filling_pressure(&[1000.0], 6e5, 1e5, 1000.0);
+        assert_eq!(p, 1e5 + 5e5 * 0.5);
+    }
+}

@@ -1,0 +1,64 @@
+//! `pressure_dependent_friction` (SPEC §5, torque loss): the supply pressure presses the
+//! vanes out, so the Coulomb friction grows by k·max(p_inlet − p_e, 0), N·m.
+
+use super::{Category, CatalogEffect, Effect, Term};
+use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+
+/// The effect (see the module documentation).
+pub struct PressureDependentFriction;
+
+const K_FRIC_P: usize = 0;
+
+/// Its parameter k; off at the bottom of its search range.
+pub const PARAMS: &[ParamSpec] = &[ParamSpec {
+    name: "k_fric_p",
+    unit: "N*m/Pa",
+    default: 3e-8,
+    domain: Domain::NonNegative,
+    search: (1e-10, 1e-6),
+    effect: Some(Effect::PressureDependentFriction),
+    off: OffValue::SearchLower,
+    meaning: "Coulomb friction per Pa of p_1 - p_e",
+}];
+
+impl Term for PressureDependentFriction {
+    /// T_c + k·max(p_inlet − p_e, 0).
+    fn coulomb_nm(&self, own: &[f64], t_coulomb: f64, p_inlet: f64, p_e: f64) -> f64 {
+        t_coulomb + own[K_FRIC_P] * (p_inlet - p_e).max(0.0)
+    }
+}
+
+impl CatalogEffect for PressureDependentFriction {
+    fn id(&self) -> &'static str {
+        "pressure_dependent_friction"
+    }
+    fn category(&self) -> Category {
+        Category::TorqueLoss
+    }
+    fn physics(&self) -> &'static str {
+        "vanes are pressed out by supply pressure"
+    }
+    fn specs(&self) -> &'static [ParamSpec] {
+        PARAMS
+    }
+}
+
+impl MotorParams {
+    /// Coulomb friction per Pa of p_1 − p_e, N·m/Pa (`pressure_dependent_friction`).
+    pub fn k_fric_p(&self) -> f64 {
+        self.effect_values(Effect::PressureDependentFriction)[K_FRIC_P]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_is_the_base_model_and_hook_is_the_formula() {
+        super::super::testing::reproduces_base(Effect::PressureDependentFriction, &[("k_fric_p", 0.0)], 0.0);
+        let h = PressureDependentFriction;
+        assert_eq!(h.coulomb_nm(&[1e-8], 0.02, 6e5, 1e5), 0.02 + 1e-8 * 5e5);
+        assert_eq!(h.coulomb_nm(&[1e-8], 0.02, 1e5, 2e5), 0.02);
+    }
+}

@@ -1,0 +1,99 @@
+//! `valve_dynamics` (SPEC §5, supply): the pressure control valve is slower or of higher
+//! order than first order: τ²·p̈ + 2ζτ·ṗ + p = p_cmd instead of τ·ṗ + p = p_cmd. The valve
+//! exists in the control studies without the effect too (first order with τ); the reference
+//! experiments are driven by the recorded valve output, so it never shows in them.
+
+use super::{Category, CatalogEffect, Effect, ShowsIn, SupplyValve, Term};
+use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+
+/// The effect (see the module documentation).
+pub struct ValveDynamics;
+
+const VALVE_TAU: usize = 0;
+const VALVE_ZETA: usize = 1;
+
+/// Its parameters τ and ζ; off at the bottom of their search ranges.
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "valve_tau",
+        unit: "s",
+        default: 0.05,
+        domain: Domain::Positive,
+        search: (1e-3, 1.0),
+        effect: Some(Effect::ValveDynamics),
+        off: OffValue::SearchLower,
+        meaning: "time constant of the pressure control valve",
+    },
+    ParamSpec {
+        name: "valve_zeta",
+        unit: "1",
+        default: 0.7,
+        domain: Domain::Positive,
+        search: (0.1, 3.0),
+        effect: Some(Effect::ValveDynamics),
+        off: OffValue::SearchLower,
+        meaning: "damping ratio of the second-order valve",
+    },
+];
+
+impl Term for ValveDynamics {
+    /// Second order with τ and ζ when switched on, otherwise first order with τ.
+    fn supply_valve(&self, own: &[f64], switched_on: bool) -> Option<SupplyValve> {
+        Some(SupplyValve {
+            tau_s: own[VALVE_TAU],
+            zeta: switched_on.then(|| own[VALVE_ZETA]),
+        })
+    }
+}
+
+impl CatalogEffect for ValveDynamics {
+    fn id(&self) -> &'static str {
+        "valve_dynamics"
+    }
+    fn category(&self) -> Category {
+        Category::Supply
+    }
+    fn physics(&self) -> &'static str {
+        "pressure control valve slower or higher-order than first order"
+    }
+    fn specs(&self) -> &'static [ParamSpec] {
+        PARAMS
+    }
+    fn shows_in(&self) -> ShowsIn {
+        ShowsIn::Never {
+            reason: "the recorded port-1 pressure is the valve's output and drives the \
+                     simulation; the datasheet and outlet-throttle supplies are constant \
+                     and the pressure ramp is ~10^3 times slower than a valve, so valve \
+                     dynamics cannot show in these experiments (and the model has no \
+                     valve)",
+        }
+    }
+}
+
+impl MotorParams {
+    /// Time constant τ of the pressure control valve, s (`valve_dynamics`).
+    pub fn valve_tau(&self) -> f64 {
+        self.effect_values(Effect::ValveDynamics)[VALVE_TAU]
+    }
+    /// Damping ratio ζ of the second-order valve, 1 (`valve_dynamics`).
+    pub fn valve_zeta(&self) -> f64 {
+        self.effect_values(Effect::ValveDynamics)[VALVE_ZETA]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::effects::EffectSet;
+    use crate::model::motor::Motor;
+
+    #[test]
+    fn off_is_the_base_model_and_the_valve_follows_the_switch() {
+        super::super::testing::reproduces_base(Effect::ValveDynamics, &[], 0.0);
+        let p = MotorParams::default();
+        let off = Motor::new(p.clone(), EffectSet::empty()).supply_valve();
+        assert_eq!(off, SupplyValve { tau_s: 0.05, zeta: None });
+        let on = Motor::new(p, EffectSet::empty().with(Effect::ValveDynamics)).supply_valve();
+        assert_eq!(on.zeta, Some(0.7));
+    }
+}

@@ -1,0 +1,65 @@
+//! `vane_friction_speed_squared` (SPEC §5, torque loss): vane-tip friction from the
+//! centrifugal force, and windage: c₂·ω·|ω|, N·m, added to the smooth part of the friction.
+
+use super::{Category, CatalogEffect, Effect, Term};
+use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+
+/// The effect (see the module documentation).
+pub struct VaneFrictionSpeedSquared;
+
+const C_W2: usize = 0;
+
+/// Its parameter c₂; off at the bottom of its search range (c₂ = 0 is outside the log-space
+/// search).
+pub const PARAMS: &[ParamSpec] = &[ParamSpec {
+    name: "c_w2",
+    unit: "N*m*s2/rad2",
+    default: 1e-8,
+    domain: Domain::NonNegative,
+    search: (1e-10, 1e-6),
+    effect: Some(Effect::VaneFrictionSpeedSquared),
+    off: OffValue::SearchLower,
+    meaning: "speed-squared friction coefficient",
+}];
+
+impl Term for VaneFrictionSpeedSquared {
+    /// wet + c₂·ω·|ω|.
+    fn wet_nm(&self, own: &[f64], wet: f64, omega: f64) -> f64 {
+        wet + own[C_W2] * omega * omega.abs()
+    }
+}
+
+impl CatalogEffect for VaneFrictionSpeedSquared {
+    fn id(&self) -> &'static str {
+        "vane_friction_speed_squared"
+    }
+    fn category(&self) -> Category {
+        Category::TorqueLoss
+    }
+    fn physics(&self) -> &'static str {
+        "vane-tip friction from centrifugal force, windage"
+    }
+    fn specs(&self) -> &'static [ParamSpec] {
+        PARAMS
+    }
+}
+
+impl MotorParams {
+    /// Speed-squared friction coefficient c₂, N·m·s²/rad² (`vane_friction_speed_squared`).
+    pub fn c_w2(&self) -> f64 {
+        self.effect_values(Effect::VaneFrictionSpeedSquared)[C_W2]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_is_the_base_model_and_hook_is_odd() {
+        super::super::testing::reproduces_base(Effect::VaneFrictionSpeedSquared, &[("c_w2", 0.0)], 0.0);
+        let t = VaneFrictionSpeedSquared.wet_nm(&[2e-8], 0.0, 100.0);
+        assert_eq!(t, 2e-8 * 100.0 * 100.0);
+        assert_eq!(VaneFrictionSpeedSquared.wet_nm(&[2e-8], 0.0, -100.0), -t);
+    }
+}

@@ -1,0 +1,111 @@
+//! The datasheet experiment (SPEC §2): steady states at imposed speeds and supply
+//! pressures, one per row; measured torque and flows against speed.
+
+use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, Setting, SimError, Simulated};
+use crate::model::motor::{idx, Boundary, Load, Motor, State};
+use crate::numerics::ode::StiffSolver;
+use crate::sim::recording::ExperimentData;
+use crate::sim::steady;
+use crate::units::Quantity;
+use std::sync::Arc;
+
+/// The kind (see the module documentation).
+pub struct Datasheet;
+
+impl ExperimentKind for Datasheet {
+    fn id(&self) -> &'static str {
+        "datasheet"
+    }
+    fn inputs(&self) -> &'static [InputCheck] {
+        &[
+            InputCheck::Column(Quantity::Speed),
+            InputCheck::Spans(Quantity::Speed, 0.05),
+            InputCheck::Supply,
+        ]
+    }
+    fn channels(&self) -> &'static [Quantity] {
+        &[Quantity::Torque, Quantity::Flow1, Quantity::Flow2]
+    }
+    fn abscissa(&self) -> AbscissaSpec {
+        AbscissaSpec {
+            quantity: Quantity::Speed,
+            log10: false,
+        }
+    }
+    fn is_transient(&self) -> bool {
+        false
+    }
+    fn build(&self, data: &ExperimentData) -> Result<Arc<dyn Drive>, SimError> {
+        let rec = &data.recording;
+        let speeds = rec.values(Quantity::Speed).map_err(missing(data))?.to_vec();
+        let p_supply = match data.p_supply_pa {
+            Some(p) => vec![p; rec.rows()],
+            None => rec
+                .column(Quantity::PPort1)
+                .map(|c| c.si.clone())
+                .unwrap_or_default(),
+        };
+        Ok(Arc::new(SteadySweep { speeds, p_supply }))
+    }
+}
+
+/// Steady states at imposed speeds (rad/s) and supply pressures (Pa), one per row.
+#[derive(Debug, Clone)]
+struct SteadySweep {
+    speeds: Vec<f64>,
+    p_supply: Vec<f64>,
+}
+
+impl Drive for SteadySweep {
+    fn abscissa(&self) -> Vec<f64> {
+        self.speeds.clone()
+    }
+
+    fn simulate(
+        &self,
+        setting: &Setting<'_>,
+        motor: &Motor,
+        _solver: &dyn StiffSolver,
+    ) -> Result<Simulated, SimError> {
+        let (speeds, p_supply) = (&self.speeds, &self.p_supply);
+        let n = speeds.len();
+        let (mut torque, mut flow1, mut flow2) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        // Sweep in speed order so that each solve starts from its neighbour's solution.
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|a, b| speeds[*a].total_cmp(&speeds[*b]));
+        let mut results = vec![[0.0; 3]; n];
+        let mut guess: Option<State> = None;
+        for &i in &order {
+            let bc = Boundary::supplied(p_supply[i], setting.p_atm_pa, Load::None);
+            let g = guess.unwrap_or_else(|| steady::initial_guess(&bc));
+            let x = steady::at_speed(motor, &bc, speeds[i], &g)
+                .or_else(|_| steady::at_speed(motor, &bc, speeds[i], &steady::initial_guess(&bc)))
+                .map_err(|e| setting.fail(format!("row {}: {e}", i + 1)))?;
+            let b = motor.balance(&x, &bc);
+            // At standstill the brake holds the rotor against the full dry friction.
+            let torque = if speeds[i] == 0.0 {
+                b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
+            } else {
+                b.torque_shaft_nm()
+            };
+            results[i] = [torque, b.flow_port1_kg_s, b.flow_port2_kg_s];
+            guess = Some(x);
+        }
+        for r in results {
+            torque.push(r[0]);
+            flow1.push(r[1]);
+            flow2.push(r[2]);
+        }
+        Ok(Simulated {
+            outputs: vec![
+                (Quantity::Torque, torque),
+                (Quantity::Flow1, flow1),
+                (Quantity::Flow2, flow2),
+            ],
+        })
+    }
+}

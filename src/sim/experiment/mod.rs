@@ -1,0 +1,242 @@
+//! The reference experiments of SPEC §2 as first-class types: each knows its inputs (from the
+//! rig and its recording) and simulates the channels that were measured, one value per row.
+//!
+//! Every experiment kind lives in its own file and implements [`ExperimentKind`]: its id
+//! (as rig.toml writes it), the inputs it reads from a recording and how they are checked,
+//! the channels it measures, its abscissa, whether it is transient, and how it builds the
+//! [`Drive`] that simulates it. Adding a kind is its file plus one line in the
+//! [`registry!`] below (which also adds the [`Kind`] variant that rig.toml names).
+
+use crate::model::motor::{Load, Motor};
+use crate::numerics::ode::StiffSolver;
+use crate::sim::recording::{ExperimentData, MissingColumn};
+use crate::units::Quantity;
+use serde::Deserialize;
+use std::fmt;
+use std::sync::Arc;
+
+mod transient;
+
+/// Why a simulation failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("simulating {experiment}: {message}")]
+pub struct SimError {
+    /// Recording file name as given in rig.toml.
+    pub experiment: String,
+    /// What failed (the lower layer's message, with its context).
+    pub message: String,
+}
+
+/// Simulated channels of one experiment, SI, one value per recorded row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Simulated {
+    pub outputs: Vec<(Quantity, Vec<f64>)>,
+}
+
+impl Simulated {
+    pub fn channel(&self, q: Quantity) -> Option<&[f64]> {
+        self.outputs
+            .iter()
+            .find(|(k, _)| *k == q)
+            .map(|(_, v)| v.as_slice())
+    }
+}
+
+/// A check of a recording's inputs, run in order by the data layer (which words the
+/// errors).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum InputCheck {
+    /// The column must be present.
+    Column(Quantity),
+    /// The column must span at least this fraction of its largest magnitude.
+    Spans(Quantity, f64),
+    /// A supply pressure must be given: `p_supply_mpa` in rig.toml or a p_port1 column.
+    Supply,
+    /// Every value of the column must be > 0; `what` names it in the error.
+    Positive(Quantity, &'static str),
+}
+
+/// The abscissa of an experiment kind's reference responses: a recorded column, possibly
+/// on a log10 scale.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AbscissaSpec {
+    /// The quantity of the column.
+    pub quantity: Quantity,
+    /// The abscissa is log10 of the SI value.
+    pub log10: bool,
+}
+
+/// What the simulation of one experiment needs besides its drive.
+#[derive(Debug, Clone, Copy)]
+pub struct Setting<'a> {
+    /// Recording file name as given in rig.toml (for errors).
+    pub file: &'a str,
+    /// Load on the shaft.
+    pub load: Load,
+    /// Atmosphere, Pa.
+    pub p_atm_pa: f64,
+}
+
+impl Setting<'_> {
+    /// An error of this experiment's simulation.
+    pub fn fail(&self, message: String) -> SimError {
+        SimError {
+            experiment: self.file.to_string(),
+            message,
+        }
+    }
+}
+
+/// How an experiment drives the motor, built from its recording: simulates every row.
+pub trait Drive: fmt::Debug + Send + Sync {
+    /// The abscissa of each recorded row, SI, as the reference responses use it (for
+    /// transient experiments the smoothed input that drove the simulation).
+    fn abscissa(&self) -> Vec<f64>;
+    /// The measured channels simulated at every row.
+    fn simulate(
+        &self,
+        setting: &Setting<'_>,
+        motor: &Motor,
+        solver: &dyn StiffSolver,
+    ) -> Result<Simulated, SimError>;
+}
+
+/// An experiment kind of SPEC §2.
+pub trait ExperimentKind: Sync {
+    /// The id in rig.toml and reports.
+    fn id(&self) -> &'static str;
+    /// The inputs it reads from a recording (and rig.toml), as checks run in order.
+    fn inputs(&self) -> &'static [InputCheck];
+    /// The measured output channels, in the simulator's order.
+    fn channels(&self) -> &'static [Quantity];
+    /// The abscissa of its reference responses.
+    fn abscissa(&self) -> AbscissaSpec;
+    /// Whether it is a transient (time-driven) experiment.
+    fn is_transient(&self) -> bool;
+    /// Its drive, from a recording that passed the checks of [`ExperimentKind::inputs`].
+    fn build(&self, data: &ExperimentData) -> Result<Arc<dyn Drive>, SimError>;
+}
+
+/// One line per kind: `file::Type;` declares the module `file` (which must define the unit
+/// struct `Type` implementing [`ExperimentKind`]) and the variant `Kind::Type`, whose
+/// snake_case name is the id in rig.toml.
+macro_rules! registry {
+    ($( $file:ident :: $ty:ident ; )*) => {
+        $( pub mod $file; )*
+
+        /// The experiment kinds of SPEC §2 (rig.toml `kind = "…"`).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, PartialOrd, Ord)]
+        #[serde(rename_all = "snake_case")]
+        pub enum Kind {
+            $(
+                #[doc = concat!("See [`", stringify!($file), "`].")]
+                $ty,
+            )*
+        }
+
+        impl Kind {
+            /// Every kind, in registry order.
+            pub const ALL: &'static [Kind] = &[$( Kind::$ty, )*];
+
+            /// The kind's definition.
+            pub fn model(self) -> &'static dyn ExperimentKind {
+                match self {
+                    $( Kind::$ty => &$file::$ty, )*
+                }
+            }
+        }
+    };
+}
+
+registry! {
+    datasheet::Datasheet;
+    pressure_ramp::PressureRamp;
+    outlet_throttle::OutletThrottle;
+}
+
+impl Kind {
+    /// The id in rig.toml and reports.
+    pub fn id(self) -> &'static str {
+        self.model().id()
+    }
+
+    /// The measured output channels of the kind, in the simulator's order.
+    pub fn channels(self) -> &'static [Quantity] {
+        self.model().channels()
+    }
+
+    /// Whether the kind is a transient (time-driven) experiment.
+    pub fn is_transient(self) -> bool {
+        self.model().is_transient()
+    }
+}
+
+/// A reference experiment ready to simulate.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// The kind.
+    pub kind: Kind,
+    /// Recording file name as given in rig.toml.
+    pub file: String,
+    /// Load on the shaft.
+    pub load: Load,
+    /// Atmosphere, Pa.
+    pub p_atm_pa: f64,
+    drive: Arc<dyn Drive>,
+}
+
+impl Experiment {
+    /// Builds the experiment's inputs from its recording (validated by `dataset`).
+    pub fn new(data: &ExperimentData, p_atm_pa: f64) -> Result<Self, SimError> {
+        Ok(Self {
+            kind: data.kind,
+            file: data.file.clone(),
+            load: data.load,
+            p_atm_pa,
+            drive: data.kind.model().build(data)?,
+        })
+    }
+
+    /// The abscissa of each recorded row, SI, as the reference responses use it: imposed
+    /// speed (rad/s) for the datasheet, port-1 pressure (Pa) for the pressure ramp, log10 of
+    /// the port-2 conductance (log10 m³/(s·Pa)) for the outlet throttle. For transient
+    /// experiments it is the smoothed input that drove the simulation, not the noisy samples.
+    pub fn abscissa(&self) -> Vec<f64> {
+        self.drive.abscissa()
+    }
+
+    /// Simulates every row of the recording.
+    pub fn simulate(&self, motor: &Motor, solver: &dyn StiffSolver) -> Result<Simulated, SimError> {
+        let setting = Setting {
+            file: &self.file,
+            load: self.load,
+            p_atm_pa: self.p_atm_pa,
+        };
+        self.drive.simulate(&setting, motor, solver)
+    }
+}
+
+/// The error of a missing column while building an experiment from `data`.
+fn missing(data: &ExperimentData) -> impl Fn(MissingColumn) -> SimError + '_ {
+    |e: MissingColumn| SimError {
+        experiment: data.file.clone(),
+        message: e.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_the_rig_file_names() {
+        #[derive(Deserialize)]
+        struct K {
+            kind: Kind,
+        }
+        for k in Kind::ALL {
+            let parsed: K = toml::from_str(&format!("kind = \"{}\"", k.id())).unwrap();
+            assert_eq!(parsed.kind, *k);
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! The drive shared by the transient kinds: supply pressure and port-2 conductance
+//! schedules in time, integrated from a steady start.
+
+use super::{Drive, Setting, SimError, Simulated};
+use crate::model::motor::{idx, Boundary, Motor, State};
+use crate::numerics::ode::StiffSolver;
+use crate::sim::schedule::Schedule;
+use crate::sim::steady;
+use crate::units::Quantity;
+
+/// Transient driven by supply pressure and port-2 conductance schedules.
+#[derive(Debug, Clone)]
+pub(super) struct Transient {
+    /// Time of each recorded row, s.
+    pub times: Vec<f64>,
+    /// Supply pressure at port 1, Pa.
+    pub p_supply: Schedule,
+    /// log10 of the port-2 conductance (m³/(s·Pa)), if a throttle is fitted; it is then
+    /// the abscissa, otherwise the supply pressure is.
+    pub log10_c_port2: Option<Schedule>,
+}
+
+impl Transient {
+    /// Boundary conditions at time t.
+    fn boundary_at(&self, setting: &Setting<'_>, t: f64) -> Boundary {
+        let mut bc = Boundary::supplied(
+            self.p_supply.at(t).max(setting.p_atm_pa * 0.5),
+            setting.p_atm_pa,
+            setting.load,
+        );
+        bc.c_port2_m3_s_pa = self
+            .log10_c_port2
+            .as_ref()
+            .map(|s| (s.at(t) * std::f64::consts::LN_10).exp());
+        bc
+    }
+}
+
+impl Drive for Transient {
+    fn abscissa(&self) -> Vec<f64> {
+        let input = self.log10_c_port2.as_ref().unwrap_or(&self.p_supply);
+        self.times.iter().map(|t| input.at(*t)).collect()
+    }
+
+    fn simulate(
+        &self,
+        setting: &Setting<'_>,
+        motor: &Motor,
+        solver: &dyn StiffSolver,
+    ) -> Result<Simulated, SimError> {
+        let times = &self.times;
+        let t0 = times[0];
+        let bc0 = self.boundary_at(setting, t0);
+        let x0 = steady::free(motor, &bc0, &steady::initial_guess(&bc0))
+            .map_err(|e| setting.fail(format!("initial state: {e}")))?;
+        let rhs = |t: f64, x: &State| motor.derivatives(x, &self.boundary_at(setting, t));
+        let states = solver
+            .solve(&rhs, t0, x0, times)
+            .map_err(|e| setting.fail(e.to_string()))?;
+        let n = times.len();
+        let mut out: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
+        for (t, x) in times.iter().zip(&states) {
+            let bc = self.boundary_at(setting, *t);
+            let b = motor.balance(x, &bc);
+            out[0].push(b.flow_port1_kg_s);
+            out[1].push(b.flow_port2_kg_s);
+            out[2].push(x[idx::OMEGA]);
+            out[3].push(b.torque_load_nm);
+        }
+        // What the flow and speed sensors record (a lag where `sensor_lag` is on).
+        for ch in out.iter_mut().take(3) {
+            *ch = motor.measured(times, std::mem::take(ch));
+        }
+        let [flow1, flow2, speed, torque] = out;
+        Ok(Simulated {
+            outputs: vec![
+                (Quantity::Flow1, flow1),
+                (Quantity::Flow2, flow2),
+                (Quantity::Speed, speed),
+                (Quantity::Torque, torque),
+            ],
+        })
+    }
+}
+
+/// The measured channels of the transient kinds, in the simulator's order.
+pub(super) const CHANNELS: &[Quantity] = &[
+    Quantity::Flow1,
+    Quantity::Flow2,
+    Quantity::Speed,
+    Quantity::Torque,
+];
