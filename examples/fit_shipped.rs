@@ -1,0 +1,47 @@
+//! Fits the shipped dataset through the library and prints the parameter table.
+//!
+//! `cargo run --release --example fit_shipped [starts]` (default 8 starts; the command line's
+//! `vanefit fit` does the same with 32 starts, results files and plots).
+
+use std::path::Path;
+use vanefit::data::dataset::Dataset;
+use vanefit::estimate::fit::{fit, FitSetup, UncertaintyMethod};
+use vanefit::estimate::multistart::Silent;
+use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, DEFAULT_ESTIMATED};
+use vanefit::model::effects::EffectSet;
+use vanefit::model::params::spec;
+use vanefit::objective::cost::{CostModel, CostOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let starts = match std::env::args().nth(1) {
+        Some(s) => s.parse()?,
+        None => 8,
+    };
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("measurements/ar034-synthetic");
+    let ds = Dataset::load(&dir)?;
+    let cost = CostModel::new(&ds, CostOptions::default())?;
+    let space = ParamSpace::new(DEFAULT_ESTIMATED, ds.nominal_params()?, EffectSet::empty())?;
+    let setup = FitSetup {
+        space,
+        multistart: MultiStartConfig {
+            starts,
+            seed: 1,
+            ..MultiStartConfig::default()
+        },
+        uncertainty: UncertaintyMethod::Curvature,
+        results_file: None,
+        resume: false,
+    };
+    let engine = Engine::with_threads(None)?;
+    let out = fit(&engine, &cost, &setup, &Silent)?;
+    println!("{}: cost {:.4} after {} evaluations", ds.name, out.cost, out.evaluations);
+    println!("{:<10} {:>12} {:>25}  unit", "parameter", "value", "95% interval");
+    for iv in &out.intervals {
+        let ci = iv.ci95().map_or("not identifiable".into(), |[lo, hi]| {
+            format!("[{lo:.4e}, {hi:.4e}]")
+        });
+        let unit = spec(&iv.name).map_or("", |s| s.unit);
+        println!("{:<10} {:>12.5e} {:>25}  {unit}", iv.name, iv.value, ci);
+    }
+    Ok(())
+}
