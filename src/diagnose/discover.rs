@@ -37,6 +37,8 @@
 use super::fitting::Fitted;
 use super::target::Target;
 pub use crate::data::fitfile::{term_from_json, term_to_json};
+use crate::estimate::derivatives::central_column;
+use crate::estimate::engine::Engine;
 use crate::estimate::space::ParamSpace;
 pub use crate::model::extra::{
     balance_name, balance_symbol, category, coefficient_unit, feature_name, formula, pressure_id,
@@ -46,7 +48,6 @@ use crate::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, Spee
 use crate::numerics::ode::DiffsolBdf;
 use crate::objective::cost::CostModel;
 use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
 
 /// Linearised ΔBIC a library term must reach to be refitted.
 pub const DISCOVERY_DELTA_BIC: f64 = -10.0;
@@ -180,7 +181,7 @@ pub fn regress(
     target: &Target,
     model: &Fitted,
     names: &[String],
-    threads: Option<usize>,
+    engine: &Engine,
 ) -> Result<Regression, String> {
     let solver = DiffsolBdf::default();
     let motor = model.motor();
@@ -236,19 +237,9 @@ pub fn regress(
             Col::Extra(_) => 2.0 * 0.05,
             Col::Library(_, d) => 2.0 * d,
         };
-        Some(
-            plus.iter()
-                .zip(&minus)
-                .map(|(a, b)| (a - b) / denom)
-                .collect(),
-        )
+        Some(central_column(&plus, &minus, denom))
     };
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(k) = threads {
-        builder = builder.num_threads(k);
-    }
-    let pool = builder.build().map_err(|e| e.to_string())?;
-    let columns: Vec<Option<Vec<f64>>> = pool.install(|| cols.par_iter().map(column).collect());
+    let columns: Vec<Option<Vec<f64>>> = engine.map(&cols, column);
 
     // Orthonormal basis of the nuisance columns (SVD, dropping directions with singular
     // value below 1e-8 of the largest: parameters these data cannot see).

@@ -65,6 +65,7 @@ pub mod target;
 
 use crate::data::dataset::{Dataset, Kind};
 use crate::data::fitfile::FitFile;
+use crate::estimate::engine::Engine;
 use crate::estimate::space::DEFAULT_ESTIMATED;
 use crate::model::effects::{Category, Effect, EffectSet};
 use crate::model::motor::ExtraTerm;
@@ -419,7 +420,9 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
     let target = Target::new(&cost, ds)?;
     let nominal = ds.nominal_params().map_err(|e| e.to_string())?;
     let base_names = names_for(&EffectSet::empty());
-    let threads = opts.threads;
+    // The one thread pool of the diagnosis; every fit and regression runs on it.
+    let engine = Engine::with_threads(opts.threads).map_err(|e| e.to_string())?;
+    let threads = &engine;
 
     // 1. Baseline.
     say(&format!(
@@ -817,27 +820,14 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
                 ));
             }
         }
-        let results: Vec<Result<Fitted, String>> = {
-            let mut builder = rayon::ThreadPoolBuilder::new();
-            if let Some(k) = threads {
-                builder = builder.num_threads(k);
-            }
-            let pool = builder.build().map_err(|e| e.to_string())?;
-            use rayon::prelude::*;
-            pool.install(|| {
-                tasks
-                    .par_iter()
-                    .map(|(m, i, job)| {
-                        let (c, t) = if m.is_none() {
-                            (&cost_only[*i], &target_only[*i])
-                        } else {
-                            (&cost_without[*i], &target_without[*i])
-                        };
-                        fitting::run_job(c, t, job, threads)
-                    })
-                    .collect()
-            })
-        };
+        let results = threads.map(&tasks, |(m, i, job)| {
+            let (c, t) = if m.is_none() {
+                (&cost_only[*i], &target_only[*i])
+            } else {
+                (&cost_without[*i], &target_without[*i])
+            };
+            fitting::run_job(c, t, job, threads)
+        });
         let mut checks: Vec<ExperimentCheck> = Vec::new();
         let mut held_ms: Vec<Vec<f64>> = vec![Vec::new(); held.len()];
         for ((m, i, _), r) in tasks.iter().zip(results) {
@@ -948,7 +938,7 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
         inputs,
         phases,
         wall_s: t0.elapsed().as_secs_f64(),
-        threads: threads.unwrap_or_else(rayon::current_num_threads),
+        threads: threads.threads(),
     };
     say(&format!("done in {:.1} s", d.wall_s));
     Ok(d)
