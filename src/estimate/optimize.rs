@@ -310,3 +310,55 @@ where
     }
     search
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quadratic bowl as an argmin problem.
+    struct Bowl;
+
+    impl CostFunction for Bowl {
+        type Param = Vec<f64>;
+        type Output = f64;
+        fn cost(&self, x: &Vec<f64>) -> Result<f64, Error> {
+            Ok((x[0] - 1.0).powi(2) + 10.0 * (x[1] + 2.0).powi(2) + (x[2] * 0.5).powi(2))
+        }
+    }
+
+    #[test]
+    fn every_restart_rule_finds_a_quadratic_minimum() {
+        let halving = Restart::Halving {
+            rounds: 12,
+            min_edge: 0.02,
+            gain: 1e-7,
+        };
+        for restart in [halving, Restart::Curvature { max_restarts: 20 }] {
+            let settings = NelderMeadSettings {
+                sd_tolerance: 1e-10,
+                step: 0.5,
+                layout: Layout::Inward,
+                adaptive: true,
+                restart,
+            };
+            let x0 = vec![0.0, 0.0, 1.0];
+            let f0 = Bowl.cost(&x0).unwrap();
+            let s = minimize(&Bowl, x0, f0, settings, 3000, 200);
+            let x = s.x();
+            assert!(s.cost() < 1e-6, "{restart:?}: {} at {x:?}", s.cost());
+            assert!((x[0] - 1.0).abs() < 1e-2 && (x[1] + 2.0).abs() < 1e-2);
+            assert_eq!(s.status(), Status::Converged);
+        }
+    }
+
+    #[test]
+    fn axis_simplices_point_inward_or_forward() {
+        let inward = axis_simplex(&[1.0, -1.0], 0.5, Layout::Inward);
+        assert_eq!(
+            inward,
+            vec![vec![1.0, -1.0], vec![0.5, -1.0], vec![1.0, -0.5]]
+        );
+        let forward = axis_simplex(&[1.0, -1.0], 0.5, Layout::Forward);
+        assert_eq!(forward[1], vec![1.5, -1.0]);
+    }
+}

@@ -133,3 +133,47 @@ impl MultiStartSettings {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_bad_value_has_its_own_error() {
+        let ok = MultiStartConfig::default();
+        assert!(ok.check().is_ok());
+        let bad = |c: MultiStartConfig| c.check().unwrap_err().to_string();
+        assert_eq!(
+            bad(MultiStartConfig {
+                starts: 0,
+                ..ok.clone()
+            }),
+            "--starts must be at least 1"
+        );
+        assert!(bad(MultiStartConfig {
+            stage_iters: 0,
+            ..ok.clone()
+        })
+        .contains("stage"));
+        assert!(bad(MultiStartConfig {
+            sd_tolerance: -1.0,
+            ..ok.clone()
+        })
+        .contains("sd"));
+        assert!(bad(MultiStartConfig {
+            initial_step: 0.0,
+            ..ok.clone()
+        })
+        .contains("step"));
+        assert!(bad(MultiStartConfig {
+            kill_factor: f64::NAN,
+            ..ok.clone()
+        })
+        .contains("kill"));
+        assert!(bad(MultiStartConfig {
+            kill_margin: f64::NAN,
+            ..ok
+        })
+        .contains("margin"));
+    }
+}
