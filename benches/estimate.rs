@@ -8,7 +8,8 @@ use std::hint::black_box;
 use std::path::Path;
 use vanefit::data::dataset::Dataset;
 use vanefit::estimate::fit::DataObjective;
-use vanefit::estimate::multistart::{self, MultiStartConfig, Silent};
+use vanefit::estimate::multistart::{self, Silent};
+use vanefit::estimate::{Engine, MultiStartConfig};
 use vanefit::estimate::{Objective, ParamSpace, DEFAULT_ESTIMATED};
 use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
@@ -39,14 +40,18 @@ fn bench(c: &mut Criterion) {
         let cfg = MultiStartConfig {
             starts: 4,
             seed: 1,
-            threads: Some(threads),
             max_iters: 300,
             kill_factor: f64::INFINITY,
             ..MultiStartConfig::default()
         };
+        let cfg = cfg.check().unwrap();
+        let engine = Engine::with_threads(Some(threads)).unwrap();
         group.bench_function(format!("{threads}_threads"), |b| {
             b.iter(|| {
-                black_box(multistart::run(&objective, &space, &cfg, &Silent, None, false).unwrap())
+                black_box(
+                    multistart::run(&engine, &objective, &space, &cfg, &Silent, None, false)
+                        .unwrap(),
+                )
             })
         });
     }

@@ -20,7 +20,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("measurements/ar034-synthetic");
     let ds = Dataset::load(&dir)?;
     let cost = CostModel::new(&ds, CostOptions::default())?;
-    let space = ParamSpace::new(DEFAULT_ESTIMATED, ds.nominal_params()?, EffectSet::empty())?;
+    let space = ParamSpace::new(&DEFAULT_ESTIMATED, ds.nominal_params()?, EffectSet::empty())?;
     let setup = FitSetup {
         space,
         multistart: MultiStartConfig {

@@ -2,8 +2,24 @@
 //! same result whatever the thread count, and a resumed run ends where an uninterrupted one
 //! would.
 
-use vanefit::estimate::multistart::{self, cluster, Ending, ResultsFile, Silent};
-use vanefit::estimate::{Evaluation, MultiStartConfig, Objective, ParamSpace, DEFAULT_ESTIMATED};
+use vanefit::estimate::multistart::{self, cluster, Ending, MultiStartOutcome, Silent};
+use vanefit::estimate::{
+    Engine, Evaluation, MultiStartConfig, Objective, ParamSpace, ResultsFile, DEFAULT_ESTIMATED,
+};
+
+/// Runs a multi-start on a fresh engine of `threads` workers.
+fn run(
+    threads: usize,
+    obj: &dyn Objective,
+    s: &ParamSpace,
+    cfg: &MultiStartConfig,
+    file: Option<&ResultsFile>,
+    resume: bool,
+) -> MultiStartOutcome {
+    let engine = Engine::with_threads(Some(threads)).unwrap();
+    let cfg = cfg.check().unwrap();
+    multistart::run(&engine, obj, s, &cfg, &Silent, file, resume).unwrap()
+}
 use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
 use vanefit::model::params::MotorParams;
@@ -77,7 +93,7 @@ fn recovers_the_bottom_of_a_bowl() {
         max_iters: 4000,
         ..Default::default()
     };
-    let out = multistart::run(&obj, &s, &cfg, &Silent, None, false).unwrap();
+    let out = run(2, &obj, &s, &cfg, None, false);
     let best = s.params(&out.best().theta).unwrap();
     for n in DEFAULT_ESTIMATED {
         let (a, b) = (best.get(n).unwrap(), truth().get(n).unwrap());
@@ -90,18 +106,17 @@ fn recovers_the_bottom_of_a_bowl() {
 fn same_seed_same_result_whatever_the_thread_count() {
     let obj = Bowl { truth: truth() };
     let s = space();
-    let run = |threads| {
-        let cfg = MultiStartConfig {
-            starts: 6,
-            seed: 11,
-            threads: Some(threads),
-            stage_iters: 40,
-            max_iters: 400,
-            ..Default::default()
-        };
-        multistart::run(&obj, &s, &cfg, &Silent, None, false).unwrap()
+    let cfg = MultiStartConfig {
+        starts: 6,
+        seed: 11,
+        stage_iters: 40,
+        max_iters: 400,
+        ..Default::default()
     };
-    let (one, two) = (run(1), run(2));
+    let (one, two) = (
+        run(1, &obj, &s, &cfg, None, false),
+        run(2, &obj, &s, &cfg, None, false),
+    );
     assert_eq!(one.results, two.results);
     assert_eq!(one.threads, 1);
     assert_eq!(two.threads, 2);
@@ -124,7 +139,7 @@ fn resumed_run_ends_where_an_uninterrupted_one_would() {
         ..Default::default()
     };
     let file = ResultsFile::new(&path);
-    let full = multistart::run(&obj, &s, &cfg, &Silent, Some(&file), false).unwrap();
+    let full = run(2, &obj, &s, &cfg, Some(&file), false);
     assert!(
         full.results
             .iter()
@@ -137,7 +152,7 @@ fn resumed_run_ends_where_an_uninterrupted_one_would() {
     let torn = &text.lines().nth(4).unwrap()[..20];
     kept.push(torn);
     std::fs::write(&path, kept.join("\n")).unwrap();
-    let resumed = multistart::run(&obj, &s, &cfg, &Silent, Some(&file), true).unwrap();
+    let resumed = run(2, &obj, &s, &cfg, Some(&file), true);
     assert_eq!(full.results, resumed.results);
 }
 
@@ -152,7 +167,7 @@ fn double_well_has_two_minima_and_the_deeper_one_wins() {
         kill_factor: 1e9,
         ..Default::default()
     };
-    let out = multistart::run(&obj, &s, &cfg, &Silent, None, false).unwrap();
+    let out = run(2, &obj, &s, &cfg, None, false);
     let clusters = cluster(&out.results, &s, 0.02);
     assert_eq!(clusters.len(), 2, "{clusters:?}");
     assert_eq!(clusters.iter().map(|c| c.members.len()).sum::<usize>(), 16);
@@ -179,13 +194,21 @@ fn profile_and_curvature_intervals_match_the_closed_form_of_a_bowl() {
     )
     .unwrap();
     let problem = Problem::new(&obj, &s, false);
+    let engine = Engine::with_threads(Some(2)).unwrap();
     let theta = s.theta(&truth);
     let cov = curvature_covariance(&problem, &theta, 1e-3).unwrap();
     // χ² = Σ (Δ ln p / 0.05)²: the 95% interval of each is ln p ± 1.96·0.05 (1.96² = 3.84).
     let half = 0.05 * vanefit::estimate::uncertainty::CHI2_95.sqrt();
     for iv in curvature_intervals(&problem, &theta, Some(&cov))
         .into_iter()
-        .chain(profile_intervals(&problem, &theta, 0.0, Some(&cov), 400))
+        .chain(profile_intervals(
+            &engine,
+            &problem,
+            &theta,
+            0.0,
+            Some(&cov),
+            400,
+        ))
     {
         let v = truth.get(&iv.name).unwrap();
         let (lo, hi) = (iv.lo.unwrap(), iv.hi.unwrap());
@@ -215,8 +238,9 @@ fn a_parameter_the_cost_ignores_is_not_identifiable() {
     // b_crit does not enter the bowl: its profile is flat on both sides.
     let s = ParamSpace::new(&["c_in1", "b_crit"], truth.clone(), EffectSet::empty()).unwrap();
     let problem = Problem::new(&obj, &s, false);
+    let engine = Engine::with_threads(Some(2)).unwrap();
     let theta = s.theta(&truth);
-    let ivs = profile_intervals(&problem, &theta, 0.0, None, 200);
+    let ivs = profile_intervals(&engine, &problem, &theta, 0.0, None, 200);
     assert!(ivs[0].identifiable(), "{ivs:?}");
     assert!(!ivs[1].identifiable());
     assert_eq!((ivs[1].lo, ivs[1].hi), (None, None));
@@ -261,7 +285,7 @@ fn no_nan_or_infinity_reaches_the_optimizer() {
         kill_factor: f64::INFINITY,
         ..Default::default()
     };
-    let out = multistart::run(&Broken, &s, &cfg, &Silent, None, false).unwrap();
+    let out = run(2, &Broken, &s, &cfg, None, false);
     let x = s.params(&out.best().theta).unwrap().c_in1().log10();
     assert!((x + 8.5).abs() < 1e-3, "log10 c_in1 = {x}");
 }

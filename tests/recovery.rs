@@ -5,7 +5,8 @@
 use vanefit::data::dataset::Dataset;
 use vanefit::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
 use vanefit::estimate::fit::{fit, FitSetup, UncertaintyMethod};
-use vanefit::estimate::multistart::{MultiStartConfig, Silent};
+use vanefit::estimate::multistart::Silent;
+use vanefit::estimate::{Engine, MultiStartConfig};
 use vanefit::estimate::{ParamSpace, DEFAULT_ESTIMATED};
 use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
@@ -72,7 +73,7 @@ fn fit_back(ds: &Dataset, uncertainty: UncertaintyMethod) -> vanefit::estimate::
         results_file: None,
         resume: false,
     };
-    fit(&cost, &setup, &Silent).unwrap()
+    fit(&Engine::with_threads(None).unwrap(), &cost, &setup, &Silent).unwrap()
 }
 
 #[test]

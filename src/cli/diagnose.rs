@@ -2,6 +2,7 @@
 
 use crate::cli::Failure;
 use crate::data::dataset::Dataset;
+use crate::estimate::Engine;
 use crate::diagnose::{diagnose_observed, summary, DiagnoseObserver, DiagnoseOptions, Progress};
 use std::path::PathBuf;
 
@@ -38,7 +39,8 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
     }
     let ds = Dataset::load(&args.dataset)?;
     let opts = DiagnoseOptions::full(args.starts, args.seed);
-    let d = diagnose_observed(&ds, &opts, &StderrProgress)?;
+    let engine = Engine::with_threads(opts.threads)?;
+    let d = diagnose_observed(&ds, &opts, &engine, &StderrProgress)?;
     crate::report::diagnose::write_all(&d, &args.out)?;
     println!("{}", summary(&d));
     println!(

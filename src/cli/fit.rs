@@ -1,20 +1,79 @@
 //! `vanefit fit` (SPEC §6): options, progress, summary and export.
 
-use crate::data::dataset::Dataset;
+use crate::data::dataset::{DataError, Dataset};
+use crate::estimate::engine::Engine;
+use crate::estimate::error::EstimateError;
 use crate::estimate::fit::{
     fit, fit_file, most_sensitive_experiment, FitOutcome, FitSetup, UncertaintyMethod,
 };
-use crate::estimate::multistart::{MultiStartConfig, RunObserver, StartResult};
-use crate::estimate::space::{Dimension, ParamSpace, DEFAULT_ESTIMATED};
+use crate::estimate::multistart::{RunObserver, StartResult};
+use crate::estimate::settings::MultiStartConfig;
+use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::spec;
-use crate::objective::cost::{CostModel, CostOptions};
+use crate::objective::cost::{CostError, CostModel, CostOptions};
 use crate::report::fit as report;
+use crate::report::plot::PlotError;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
+/// Why `vanefit fit` failed (the messages users and tests see).
+#[derive(Debug, thiserror::Error)]
+pub enum FitCommandError {
+    /// `--starts 0`.
+    #[error("--starts must be at least 1")]
+    NoStarts,
+    /// `--threads 0`.
+    #[error("--threads must be at least 1")]
+    NoThreads,
+    /// An item of `--bounds` or `--start-range` is not `name=lo:hi`.
+    #[error("{option}: '{item}' is not name=lo:hi")]
+    Range {
+        /// The option.
+        option: &'static str,
+        /// The bad item.
+        item: String,
+    },
+    /// `--bounds` names a parameter that is not estimated.
+    #[error("--bounds: '{0}' is not estimated")]
+    NotEstimated(String),
+    /// `--start-spread` must exceed 1.
+    #[error("--start-spread {0}: must be a number > 1")]
+    StartSpread(f64),
+    /// `--effects` names an unknown effect.
+    #[error("--effects: {0}")]
+    Effects(String),
+    /// A dimension of the search space is bad.
+    #[error("--estimate/--bounds/--start-range: {0}")]
+    Dimension(SpaceError),
+    /// The search space is bad.
+    #[error("{0}")]
+    Space(#[from] SpaceError),
+    /// The dataset could not be read.
+    #[error("{0}")]
+    Data(#[from] DataError),
+    /// The dataset's cost could not be set up.
+    #[error("{0}")]
+    Cost(#[from] CostError),
+    /// The estimation failed.
+    #[error("{0}")]
+    Estimate(#[from] EstimateError),
+    /// The fit file could not be written.
+    #[error("{}: {source}", path.display())]
+    Write {
+        /// The fit file.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+    /// A plot could not be drawn.
+    #[error("{0}")]
+    Plot(#[from] PlotError),
+}
+
+/// Options of `vanefit fit`.
 #[derive(Args, Debug, Clone)]
 pub struct FitArgs {
     /// Dataset folder (rig.toml and recordings).
@@ -65,10 +124,14 @@ pub struct FitArgs {
     pub out: PathBuf,
 }
 
+/// `--uncertainty`: how 95% intervals are computed.
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Uncertainty {
+    /// Profile likelihood.
     Profile,
+    /// Curvature of χ² only.
     Curvature,
+    /// No intervals.
     None,
 }
 
@@ -99,12 +162,18 @@ fn progress() -> Progress {
     Progress(bar)
 }
 
-/// Parses `name=lo:hi,...` into dimensions.
-fn parse_bounds(text: &str) -> Result<Vec<(String, f64, f64)>, String> {
+/// Parses `name=lo:hi,...` (the value of `option`) into dimensions.
+fn parse_bounds(
+    text: &str,
+    option: &'static str,
+) -> Result<Vec<(String, f64, f64)>, FitCommandError> {
     text.split(',')
         .filter(|s| !s.trim().is_empty())
         .map(|item| {
-            let bad = || format!("--bounds: '{item}' is not name=lo:hi");
+            let bad = || FitCommandError::Range {
+                option,
+                item: item.to_string(),
+            };
             let (name, range) = item.split_once('=').ok_or_else(bad)?;
             let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
             let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
@@ -116,9 +185,9 @@ fn parse_bounds(text: &str) -> Result<Vec<(String, f64, f64)>, String> {
 
 /// The search space of a fit from the options: estimated names (default set plus every
 /// parameter of the effects switched on), bounds overrides.
-pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, String> {
-    let effects = EffectSet::parse_list(&args.effects).map_err(|m| format!("--effects: {m}"))?;
-    let fixed = ds.nominal_params().map_err(|e| e.to_string())?;
+pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, FitCommandError> {
+    let effects = EffectSet::parse_list(&args.effects).map_err(FitCommandError::Effects)?;
+    let fixed = ds.nominal_params()?;
     let mut names: Vec<String> = match &args.estimate {
         Some(list) => list
             .split(',')
@@ -134,19 +203,13 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, Strin
             }
         }
     }
-    let overrides = parse_bounds(args.bounds.as_deref().unwrap_or(""))?;
-    for (n, _, _) in &overrides {
-        if !names.contains(n) {
-            return Err(format!("--bounds: '{n}' is not estimated"));
-        }
+    let overrides = parse_bounds(args.bounds.as_deref().unwrap_or(""), "--bounds")?;
+    if let Some((n, _, _)) = overrides.iter().find(|(n, _, _)| !names.contains(n)) {
+        return Err(FitCommandError::NotEstimated(n.clone()));
     }
-    let starts = parse_bounds(args.start_range.as_deref().unwrap_or(""))
-        .map_err(|m| m.replace("--bounds", "--start-range"))?;
+    let starts = parse_bounds(args.start_range.as_deref().unwrap_or(""), "--start-range")?;
     if !(args.start_spread.is_finite() && args.start_spread > 1.0) {
-        return Err(format!(
-            "--start-spread {}: must be a number > 1",
-            args.start_spread
-        ));
+        return Err(FitCommandError::StartSpread(args.start_spread));
     }
     // Conductances grow with the motor: scale the AR034-11 defaults with the displacement.
     let size = fixed.v_disp() / crate::model::params::MotorParams::default().v_disp();
@@ -178,8 +241,8 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, Strin
             }
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| format!("--estimate/--bounds/--start-range: {e}"))?;
-    ParamSpace::from_dims(dims, fixed, effects).map_err(|e| e.to_string())
+        .map_err(FitCommandError::Dimension)?;
+    Ok(ParamSpace::from_dims(dims, fixed, effects)?)
 }
 
 /// Where the run's side files go: `<out without .json>.<suffix>`.
@@ -188,22 +251,22 @@ pub fn side_path(out: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(format!("{}.{suffix}", stem.display()))
 }
 
-pub fn run(args: &FitArgs) -> Result<(), String> {
+/// Runs `vanefit fit`: fit, fit file, summary, plots.
+pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
     if args.starts == 0 {
-        return Err("--starts must be at least 1".into());
+        return Err(FitCommandError::NoStarts);
     }
     if args.threads == Some(0) {
-        return Err("--threads must be at least 1".into());
+        return Err(FitCommandError::NoThreads);
     }
-    let ds = Dataset::load(&args.dataset).map_err(|e| e.to_string())?;
+    let ds = Dataset::load(&args.dataset)?;
     let space = space_from_args(&ds, args)?;
-    let cost = CostModel::new(&ds, CostOptions::default()).map_err(|e| e.to_string())?;
+    let cost = CostModel::new(&ds, CostOptions::default())?;
     let setup = FitSetup {
         space,
         multistart: MultiStartConfig {
             starts: args.starts,
             seed: args.seed,
-            threads: args.threads,
             max_iters: args.max_iters,
             keep_traces: args.trace,
             ..MultiStartConfig::default()
@@ -216,17 +279,22 @@ pub fn run(args: &FitArgs) -> Result<(), String> {
         results_file: Some(side_path(&args.out, "starts.jsonl")),
         resume: args.resume,
     };
-    let outcome = fit(&cost, &setup, &progress()).map_err(|e| e.to_string())?;
+    // The one thread pool of the run.
+    let engine = Engine::with_threads(args.threads)?;
+    let outcome = fit(&engine, &cost, &setup, &progress())?;
     let file = fit_file(&ds.name, &setup, &outcome, args.seed);
     file.write(&args.out)
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+        .map_err(|source| FitCommandError::Write {
+            path: args.out.clone(),
+            source,
+        })?;
     print_summary(&ds, &setup, &outcome, &args.out);
     if !args.no_plots {
         let best = Motor::new(outcome.params.clone(), setup.space.effects.clone());
         let waterfall = side_path(&args.out, "waterfall.svg");
-        report::waterfall(&outcome.run.results, &waterfall).map_err(|e| e.to_string())?;
-        let written = report::overlays(&ds, &cost, &[("fit", &best)], &args.out.with_extension(""))
-            .map_err(|e| e.to_string())?;
+        report::waterfall(&outcome.run.results, &waterfall)?;
+        let written =
+            report::overlays(&ds, &cost, &[("fit", &best)], &args.out.with_extension(""))?;
         println!(
             "plots: {} and {}",
             waterfall.display(),

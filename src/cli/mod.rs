@@ -88,7 +88,7 @@ impl<E: std::error::Error> From<E> for Failure {
 pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Command::Check { dataset } => check(&dataset),
-        Command::Fit(args) => crate::cli::fit::run(&args).map_err(Failure),
+        Command::Fit(args) => Ok(crate::cli::fit::run(&args)?),
         Command::Simulate {
             dataset,
             params,

@@ -168,27 +168,14 @@ fn fit_tasks(cx: &Context, split: &Split, tasks: &[Task]) -> Result<Vec<Fitted>,
         target_only,
         target_without,
     } = split;
-    let results: Vec<Result<Fitted, String>> = {
-        let mut builder = rayon::ThreadPoolBuilder::new();
-        if let Some(k) = threads {
-            builder = builder.num_threads(k);
-        }
-        let pool = builder.build().map_err(|e| e.to_string())?;
-        use rayon::prelude::*;
-        pool.install(|| {
-            tasks
-                .par_iter()
-                .map(|(m, i, job)| {
-                    let (c, t) = if m.is_none() {
-                        (&cost_only[*i], &target_only[*i])
-                    } else {
-                        (&cost_without[*i], &target_without[*i])
-                    };
-                    fitting::run_job(c, t, job, threads)
-                })
-                .collect()
-        })
-    };
+    let results = threads.map(tasks, |(m, i, job)| {
+        let (c, t) = if m.is_none() {
+            (&cost_only[*i], &target_only[*i])
+        } else {
+            (&cost_without[*i], &target_without[*i])
+        };
+        fitting::run_job(c, t, job, threads)
+    });
     results
         .into_iter()
         .map(|r| r.map_err(DiagnoseError::from))

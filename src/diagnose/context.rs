@@ -9,6 +9,7 @@ use super::observe::{DiagnoseObserver, Progress};
 use super::target::Target;
 use super::DiagnoseOptions;
 use crate::data::dataset::Dataset;
+use crate::estimate::Engine;
 use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
 use crate::model::params::MotorParams;
@@ -34,6 +35,8 @@ pub(crate) struct Context<'a> {
     pub nominal: MotorParams,
     /// Names estimated in the base model.
     pub base_names: Vec<String>,
+    /// The one thread pool every fit and regression of the diagnosis runs on.
+    pub engine: &'a Engine,
     observer: &'a dyn DiagnoseObserver,
     t0: Instant,
     phase_start: Cell<Instant>,
@@ -45,6 +48,7 @@ impl<'a> Context<'a> {
     pub fn new(
         ds: &'a Dataset,
         opts: &'a DiagnoseOptions,
+        engine: &'a Engine,
         observer: &'a dyn DiagnoseObserver,
         t0: Instant,
     ) -> Result<Self, DiagnoseError> {
@@ -61,6 +65,7 @@ impl<'a> Context<'a> {
             solver,
             nominal,
             base_names: names_for(&EffectSet::empty()),
+            engine,
             observer,
             t0,
             phase_start,
@@ -92,9 +97,9 @@ impl<'a> Context<'a> {
         self.t0.elapsed().as_secs_f64()
     }
 
-    /// Worker threads (None: one per core).
-    pub fn threads(&self) -> Option<usize> {
-        self.opts.threads
+    /// The thread pool of the diagnosis.
+    pub fn threads(&self) -> &Engine {
+        self.engine
     }
 
     /// The baseline fit: the nominal motor plus Latin-hypercube starts.

@@ -37,7 +37,9 @@
 use super::fitting::Fitted;
 use super::target::Target;
 pub use crate::data::fitfile::{term_from_json, term_to_json};
-use crate::estimate::space::ParamSpace;
+use crate::estimate::derivatives::central_column;
+use crate::estimate::engine::Engine;
+use crate::estimate::space::{ParamSpace, SpaceError};
 pub use crate::model::extra::{
     balance_name, balance_symbol, category, coefficient_unit, feature_name, formula, pressure_id,
     speed_id,
@@ -46,7 +48,6 @@ use crate::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, Spee
 use crate::numerics::ode::DiffsolBdf;
 use crate::objective::cost::CostModel;
 use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
 
 /// Linearised ΔBIC a library term must reach to be refitted.
 pub const DISCOVERY_DELTA_BIC: f64 = -10.0;
@@ -135,6 +136,20 @@ fn step(t: &ExtraTerm) -> f64 {
     }
 }
 
+/// Why the term regression could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum RegressError {
+    /// The model whose residual is regressed does not simulate.
+    #[error("the model to regress does not simulate")]
+    NoSimulation,
+    /// The estimated names do not make a parameter space.
+    #[error("{0}")]
+    Space(#[from] SpaceError),
+    /// The least-squares problem of the selected terms has no solution.
+    #[error("{0}")]
+    Solve(String),
+}
+
 /// One library term's linearised score.
 #[derive(Debug, Clone)]
 pub struct TermScore {
@@ -180,12 +195,12 @@ pub fn regress(
     target: &Target,
     model: &Fitted,
     names: &[String],
-    threads: Option<usize>,
-) -> Result<Regression, String> {
+    engine: &Engine,
+) -> Result<Regression, RegressError> {
     let solver = DiffsolBdf::default();
     let motor = model.motor();
     let sim = outputs(cost, target, &motor, &solver)
-        .ok_or_else(|| "the model to regress does not simulate".to_string())?;
+        .ok_or(RegressError::NoSimulation)?;
     let data: Vec<f64> = target
         .channels
         .iter()
@@ -194,8 +209,7 @@ pub fn regress(
     let r: Vec<f64> = data.iter().zip(&sim).map(|(d, s)| d - s).collect();
     let n = r.len();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-    let space = ParamSpace::new(&name_refs, model.params.clone(), model.effects.clone())
-        .map_err(|e| e.to_string())?;
+    let space = ParamSpace::new(&name_refs, model.params.clone(), model.effects.clone())?;
     let theta = space.theta(&model.params);
     let h = 1e-2;
     // Nuisance: estimated parameters (θ) and any discovered terms already in the model.
@@ -236,19 +250,9 @@ pub fn regress(
             Col::Extra(_) => 2.0 * 0.05,
             Col::Library(_, d) => 2.0 * d,
         };
-        Some(
-            plus.iter()
-                .zip(&minus)
-                .map(|(a, b)| (a - b) / denom)
-                .collect(),
-        )
+        Some(central_column(&plus, &minus, denom))
     };
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(k) = threads {
-        builder = builder.num_threads(k);
-    }
-    let pool = builder.build().map_err(|e| e.to_string())?;
-    let columns: Vec<Option<Vec<f64>>> = pool.install(|| cols.par_iter().map(column).collect());
+    let columns: Vec<Option<Vec<f64>>> = engine.map(&cols, column);
 
     // Orthonormal basis of the nuisance columns (SVD, dropping directions with singular
     // value below 1e-8 of the largest: parameters these data cannot see).
@@ -342,7 +346,7 @@ pub fn regress(
         let beta = a
             .svd(true, true)
             .solve(&r0, 1e-10)
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| RegressError::Solve(e.to_string()))?;
         for (k, &i) in chosen.iter().enumerate() {
             let b = beta[nuis.len() + k];
             selected.push(TermScore {

@@ -1,6 +1,9 @@
 //! Why a diagnosis failed.
 
+use super::discover::RegressError;
+use super::fitting::FitError;
 use crate::data::dataset::DataError;
+use crate::estimate::EstimateError;
 use crate::objective::cost::CostError;
 use crate::sim::experiment::SimError;
 use crate::sim::recording::MissingColumn;
@@ -24,15 +27,13 @@ pub enum DiagnoseError {
     /// An experiment of the cost model is not in the dataset it was built from.
     #[error("{0}: not in the dataset")]
     NotInDataset(String),
-    /// A fit, the term regression or the worker pool failed (their message).
-    #[error("{0}")]
-    Fit(String),
-}
-
-impl From<String> for DiagnoseError {
-    /// The message of a fit or of the term regression ([`super::fitting`], [`super::discover`]
-    /// report failures as text).
-    fn from(message: String) -> Self {
-        DiagnoseError::Fit(message)
-    }
+    /// A fit failed.
+    #[error(transparent)]
+    Fit(#[from] FitError),
+    /// The regression of the misfit on the term library failed.
+    #[error(transparent)]
+    Regression(#[from] RegressError),
+    /// The worker pool could not be built.
+    #[error(transparent)]
+    Engine(#[from] EstimateError),
 }

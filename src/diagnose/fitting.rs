@@ -9,38 +9,71 @@
 //! term, the coefficient in units of its starting value.
 
 use super::target::{Likelihood, Target};
-use crate::estimate::multistart::{self, MultiStartConfig, Silent};
-use crate::estimate::objective::Objective;
-use crate::estimate::space::ParamSpace;
+use crate::estimate::engine::Engine;
+use crate::estimate::error::EstimateError;
+use crate::estimate::multistart::{self, Silent};
+use crate::estimate::objective::{Coordinates, Objective, Problem};
+use crate::estimate::optimize::{self, Layout, NelderMeadSettings, Restart};
+use crate::estimate::settings::MultiStartConfig;
+use crate::estimate::space::{ParamSpace, SpaceError};
 use crate::model::effects::EffectSet;
 use crate::model::motor::{ExtraTerm, Motor};
 use crate::model::params::MotorParams;
 use crate::numerics::ode::DiffsolBdf;
 use crate::objective::cost::CostModel;
-use argmin::core::{CostFunction, Error, Executor, State};
-use argmin::solver::neldermead::NelderMead;
-use rayon::prelude::*;
 use std::time::Instant;
 
+/// Why a fit could not run (every message starts with the fit's label).
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    /// The job has no start point.
+    #[error("{0}: no start point")]
+    NoStart(String),
+    /// The estimated names do not make a parameter space.
+    #[error("{0}")]
+    Space(#[from] SpaceError),
+    /// The multi-start failed.
+    #[error("{label}: {source}")]
+    Run {
+        /// The fit.
+        label: String,
+        /// What failed.
+        source: EstimateError,
+    },
+    /// A discovered term starts at zero (its coefficient is searched relative to its start).
+    #[error("{0}: a discovered term needs a non-zero start")]
+    ZeroTerm(String),
+    /// The best point breaks a model constraint.
+    #[error("{0}: best point is not valid")]
+    InvalidBest(String),
+}
+
+/// The diagnosis still reports errors as text.
 /// A fitted model.
 #[derive(Debug, Clone)]
 pub struct Fitted {
+    /// Effects switched on.
     pub effects: EffectSet,
     /// Discovered terms with their fitted coefficients.
     pub extra: Vec<ExtraTerm>,
+    /// Fitted parameters.
     pub params: MotorParams,
     /// The project's fitting cost J (`cost::CostModel::evaluate`) at these parameters.
     pub cost: f64,
     /// χ² against the recorded data ([`super::target`], eq. 1), which the fit minimises.
     pub chi2: f64,
+    /// Data points behind χ².
     pub n_points: usize,
     /// Number of estimated parameters (coefficients of discovered terms included).
     pub k: usize,
+    /// Cost evaluations.
     pub evaluations: u64,
+    /// Wall time, s.
     pub wall_s: f64,
 }
 
 impl Fitted {
+    /// The fitted motor, discovered terms included.
     pub fn motor(&self) -> Motor {
         Motor::new(self.params.clone(), self.effects.clone()).with_extra(&self.extra)
     }
@@ -54,7 +87,9 @@ impl Fitted {
 /// One fit to run.
 #[derive(Debug, Clone)]
 pub struct FitJob {
+    /// Name in messages.
     pub label: String,
+    /// Effects switched on.
     pub effects: EffectSet,
     /// Discovered terms; their coefficients are the starting values (must be non-zero).
     pub extra: Vec<ExtraTerm>,
@@ -65,23 +100,66 @@ pub struct FitJob {
     pub starts: Vec<MotorParams>,
     /// Latin-hypercube starts on top of the given ones (catalog models only).
     pub lhs: usize,
+    /// Iteration budget of each start.
     pub max_iters: u64,
+    /// Seed of the Latin hypercube.
     pub seed: u64,
 }
 
-/// J of the project's cost at a motor.
-fn project_cost(cost: &CostModel, motor: &Motor, solver: &DiffsolBdf) -> f64 {
-    cost.evaluate(motor, solver).total
+/// The search coordinates of a model with discovered terms: θ of the space, then each
+/// term's coefficient over its starting value (so every coordinate starts near 1).
+struct TermSpace<'a> {
+    space: &'a ParamSpace,
+    terms: &'a [ExtraTerm],
 }
 
-/// Runs one fit of `target` (built on `cost`) with `threads` worker threads (None: one per
-/// core).
+impl Coordinates for TermSpace<'_> {
+    fn motor(&self, x: &[f64]) -> Option<Motor> {
+        let p = self.space.params(&x[..self.space.len()]).ok()?;
+        let terms: Vec<ExtraTerm> = self
+            .terms
+            .iter()
+            .zip(&x[self.space.len()..])
+            .map(|(t, v)| ExtraTerm {
+                coefficient: v * t.coefficient,
+                ..*t
+            })
+            .collect();
+        Some(Motor::new(p, self.space.effects.clone()).with_extra(&terms))
+    }
+}
+
+/// The refit of a model with discovered terms: restarted Nelder–Mead from an inward axis
+/// simplex of edge 0.3 with Gao–Han coefficients, converged at a spread of 1e-7; a fresh
+/// simplex of half the edge (at least 0.02) after every stage until one gains at most 1e-7
+/// relative, at most 12 stages.
+const REFIT: NelderMeadSettings = NelderMeadSettings {
+    sd_tolerance: 1e-7,
+    step: 0.3,
+    layout: Layout::Inward,
+    adaptive: true,
+    restart: Restart::Halving {
+        rounds: 12,
+        min_edge: 0.02,
+        gain: 1e-7,
+    },
+};
+
+/// The result of a search: the motor at the best point, the number of coordinates and the
+/// evaluations used.
+struct Found {
+    motor: Motor,
+    k: usize,
+    evaluations: u64,
+}
+
+/// Runs one fit of `target` (built on `cost`) on the engine's threads.
 pub fn run_job(
     cost: &CostModel,
     target: &Target,
     job: &FitJob,
-    threads: Option<usize>,
-) -> Result<Fitted, String> {
+    engine: &Engine,
+) -> Result<Fitted, FitError> {
     let t0 = Instant::now();
     let solver = DiffsolBdf::default();
     let objective = Likelihood {
@@ -93,198 +171,107 @@ pub fn run_job(
     let first = job
         .starts
         .first()
-        .ok_or_else(|| format!("{}: no start point", job.label))?;
-    let space =
-        ParamSpace::new(&names, first.clone(), job.effects.clone()).map_err(|e| e.to_string())?;
-    let finish = |motor: Motor, k: usize, evaluations: u64| -> Result<Fitted, String> {
-        let e = objective.evaluate(&motor);
-        Ok(Fitted {
-            effects: job.effects.clone(),
-            extra: motor.extra.clone(),
-            params: motor.params.clone(),
-            cost: project_cost(cost, &motor, &solver),
-            chi2: e.chi2,
-            n_points: e.n_points,
-            k,
-            evaluations: evaluations + 2,
-            wall_s: t0.elapsed().as_secs_f64(),
-        })
+        .ok_or_else(|| FitError::NoStart(job.label.clone()))?;
+    let space = ParamSpace::new(&names, first.clone(), job.effects.clone())?;
+    let found = if job.extra.is_empty() {
+        catalog_fit(engine, &objective, &space, job)?
+    } else {
+        term_fit(&objective, &space, job)?
     };
-    if job.extra.is_empty() {
-        let cfg = MultiStartConfig {
-            starts: job.starts.len() + job.lhs,
-            seed: job.seed,
-            threads,
-            max_iters: job.max_iters,
-            given_starts: job.starts.iter().map(|p| space.theta(p)).collect(),
-            ..MultiStartConfig::default()
-        };
-        let run = multistart::run(&objective, &space, &cfg, &Silent, None, false)
-            .map_err(|e| format!("{}: {e}", job.label))?;
-        let best = run.best();
-        let params = space
-            .params(&best.theta)
-            .map_err(|e| format!("{}: best parameters: {e}", job.label))?;
-        return finish(
-            Motor::new(params, job.effects.clone()),
-            space.len(),
-            run.evaluations,
-        );
-    }
-    // Discovered terms: θ of the space, then each coefficient over its starting value.
-    let scales: Vec<f64> = job.extra.iter().map(|t| t.coefficient).collect();
-    if scales.iter().any(|s| *s == 0.0 || !s.is_finite()) {
-        return Err(format!(
-            "{}: a discovered term needs a non-zero start",
-            job.label
-        ));
-    }
-    let build = |x: &[f64]| -> Option<Motor> {
-        let p = space.params(&x[..space.len()]).ok()?;
-        let terms: Vec<ExtraTerm> = job
-            .extra
-            .iter()
-            .zip(&x[space.len()..])
-            .zip(&scales)
-            .map(|((t, v), s)| ExtraTerm {
-                coefficient: v * s,
-                ..*t
-            })
-            .collect();
-        Some(Motor::new(p, job.effects.clone()).with_extra(&terms))
-    };
-    let f = |x: &[f64]| -> f64 {
-        match build(x) {
-            Some(m) => objective.evaluate(&m).cost,
-            None => crate::estimate::objective::INVALID_PARAMS_COST,
-        }
-    };
-    let mut best: Option<(Vec<f64>, f64)> = None;
-    let mut evaluations = 0;
-    for p in &job.starts {
-        let mut x0 = space.theta(p);
-        x0.extend(std::iter::repeat_n(1.0, scales.len()));
-        let (x, fx, e) = nelder_mead(&f, &x0, 0.3, job.max_iters);
-        evaluations += e;
-        if best.as_ref().is_none_or(|(_, b)| fx < *b) {
-            best = Some((x, fx));
-        }
-    }
-    let (x, _) = best.expect("at least one start");
-    let motor = build(&x).ok_or_else(|| format!("{}: best point is not valid", job.label))?;
-    finish(motor, x.len(), evaluations)
+    let e = objective.evaluate(&found.motor);
+    Ok(Fitted {
+        effects: job.effects.clone(),
+        extra: found.motor.extra.clone(),
+        cost: cost.evaluate(&found.motor, &solver).total,
+        params: found.motor.params,
+        chi2: e.chi2,
+        n_points: e.n_points,
+        k: found.k,
+        evaluations: found.evaluations + 2,
+        wall_s: t0.elapsed().as_secs_f64(),
+    })
 }
 
-/// Runs several fits at once, results in job order. Each fit's starts may also use the
-/// pool's threads (so the last, longest fits do not leave a core idle); results do not
+/// A catalog model: the project's multi-start with the job's points as given starts.
+fn catalog_fit(
+    engine: &Engine,
+    objective: &Likelihood<'_>,
+    space: &ParamSpace,
+    job: &FitJob,
+) -> Result<Found, FitError> {
+    let run_error = |source| FitError::Run {
+        label: job.label.clone(),
+        source,
+    };
+    let cfg = MultiStartConfig {
+        starts: job.starts.len() + job.lhs,
+        seed: job.seed,
+        max_iters: job.max_iters,
+        given_starts: job.starts.iter().map(|p| space.theta(p)).collect(),
+        ..MultiStartConfig::default()
+    };
+    let settings = cfg.check().map_err(run_error)?;
+    let run = multistart::run(engine, objective, space, &settings, &Silent, None, false)
+        .map_err(run_error)?;
+    let params = space
+        .params(&run.best().theta)
+        .map_err(|e| run_error(EstimateError::BestParameters(e)))?;
+    Ok(Found {
+        motor: Motor::new(params, job.effects.clone()),
+        k: space.len(),
+        evaluations: run.evaluations,
+    })
+}
+
+/// A model with discovered terms ([`TermSpace`]): [`REFIT`] from every start point in turn,
+/// keeping the best.
+fn term_fit(
+    objective: &Likelihood<'_>,
+    space: &ParamSpace,
+    job: &FitJob,
+) -> Result<Found, FitError> {
+    if job
+        .extra
+        .iter()
+        .any(|t| t.coefficient == 0.0 || !t.coefficient.is_finite())
+    {
+        return Err(FitError::ZeroTerm(job.label.clone()));
+    }
+    let coordinates = TermSpace {
+        space,
+        terms: &job.extra,
+    };
+    let problem = Problem::new(objective, &coordinates, false);
+    let stage = job.max_iters.max(400) / 2;
+    let mut best: Option<(Vec<f64>, f64)> = None;
+    for p in &job.starts {
+        let mut x0 = space.theta(p);
+        x0.extend(std::iter::repeat_n(1.0, job.extra.len()));
+        let f0 = problem.evaluate(&x0).cost;
+        let search = optimize::minimize(&problem, x0, f0, REFIT, job.max_iters, stage);
+        if best.as_ref().is_none_or(|(_, b)| search.cost() < *b) {
+            best = Some((search.x().to_vec(), search.cost()));
+        }
+    }
+    let (x, _) = best.ok_or_else(|| FitError::NoStart(job.label.clone()))?;
+    let motor = coordinates
+        .motor(&x)
+        .ok_or_else(|| FitError::InvalidBest(job.label.clone()))?;
+    Ok(Found {
+        k: x.len(),
+        motor,
+        evaluations: problem.evaluations(),
+    })
+}
+
+/// Runs several fits at once on the engine, results in job order. Each fit's starts use the
+/// same threads (so the last, longest fits do not leave a core idle); results do not
 /// depend on the number of threads.
 pub fn run_jobs(
     cost: &CostModel,
     target: &Target,
     jobs: &[FitJob],
-    threads: Option<usize>,
-) -> Vec<Result<Fitted, String>> {
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(k) = threads {
-        builder = builder.num_threads(k);
-    }
-    match builder.build() {
-        Ok(pool) => pool.install(|| {
-            jobs.par_iter()
-                .map(|j| run_job(cost, target, j, threads))
-                .collect()
-        }),
-        Err(e) => jobs
-            .iter()
-            .map(|_| Err(format!("thread pool: {e}")))
-            .collect(),
-    }
-}
-
-struct Closure<'a>(
-    &'a (dyn Fn(&[f64]) -> f64 + Sync),
-    &'a std::sync::atomic::AtomicU64,
-);
-
-impl CostFunction for Closure<'_> {
-    type Param = Vec<f64>;
-    type Output = f64;
-    fn cost(&self, p: &Self::Param) -> Result<f64, Error> {
-        self.1.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        Ok((self.0)(p))
-    }
-}
-
-/// Restarted Nelder–Mead (argmin) from x0 with an axis simplex of edge `step`, with the
-/// dimension-adaptive coefficients of Gao and Han (2012); a fresh simplex of half the edge
-/// is started at the best point until one gains nothing (relative 1e-7) or the iteration
-/// budget is spent. Returns (x, f(x), evaluations).
-pub fn nelder_mead(
-    f: &(dyn Fn(&[f64]) -> f64 + Sync),
-    x0: &[f64],
-    step: f64,
-    max_iters: u64,
-) -> (Vec<f64>, f64, u64) {
-    let n = x0.len().max(2) as f64;
-    let mut x = x0.to_vec();
-    let mut fx = f(&x);
-    let counter = std::sync::atomic::AtomicU64::new(1);
-    let mut used = 0;
-    let mut edge = step;
-    for _ in 0..12 {
-        if used >= max_iters {
-            break;
-        }
-        let mut simplex = vec![x.clone()];
-        for i in 0..x.len() {
-            let mut v = x.clone();
-            v[i] += if x[i] > 0.0 { -edge } else { edge };
-            simplex.push(v);
-        }
-        let solver = NelderMead::new(simplex)
-            .with_sd_tolerance(1e-7)
-            .and_then(|s| s.with_gamma(1.0 + 2.0 / n))
-            .and_then(|s| s.with_sigma(1.0 - 1.0 / n))
-            .expect("valid Nelder-Mead coefficients");
-        let iters = (max_iters - used).min(max_iters.max(400) / 2);
-        let Ok(res) = Executor::new(Closure(f, &counter), solver)
-            .configure(|s| s.max_iters(iters))
-            .ctrlc(false)
-            .run()
-        else {
-            break;
-        };
-        let state = res.state();
-        used += state.get_iter();
-        let before = fx;
-        if let Some(p) = state.get_best_param() {
-            if state.get_best_cost() < fx {
-                x = p.clone();
-                fx = state.get_best_cost();
-            }
-        }
-        if before - fx <= 1e-7 * (1.0 + fx.abs()) {
-            break;
-        }
-        edge = (edge * 0.5).max(0.02);
-    }
-    (x, fx, counter.into_inner())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn nelder_mead_finds_a_quadratic_minimum() {
-        let f =
-            |x: &[f64]| (x[0] - 1.0).powi(2) + 10.0 * (x[1] + 2.0).powi(2) + (x[2] * 0.5).powi(2);
-        let (x, fx, e) = nelder_mead(&f, &[0.0, 0.0, 1.0], 0.5, 3000);
-        assert!(fx < 1e-6, "{fx} at {x:?}");
-        assert!(
-            (x[0] - 1.0).abs() < 1e-2 && (x[1] + 2.0).abs() < 1e-2,
-            "{x:?}"
-        );
-        assert!(e > 10);
-    }
+    engine: &Engine,
+) -> Vec<Result<Fitted, FitError>> {
+    engine.map(jobs, |j| run_job(cost, target, j, engine))
 }

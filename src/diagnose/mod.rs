@@ -100,6 +100,7 @@ pub use types::{
 };
 
 use crate::data::dataset::Dataset;
+use crate::estimate::Engine;
 use crate::model::effects::Effect;
 use crate::model::params::{spec, MotorParams};
 use context::Context;
@@ -112,21 +113,24 @@ pub const SELECT_DELTA_BIC: f64 = 10.0;
 pub const CONCEALMENT_ALPHA: f64 = 1e-3;
 /// The format of `diagnosis.json`.
 pub const FORMAT: &str = "vanefit.diagnosis/1";
-/// Runs a diagnosis of a dataset, silently.
+/// Runs a diagnosis of a dataset, silently, on a thread pool of `opts.threads` threads.
 pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis, DiagnoseError> {
-    diagnose_observed(recorded, opts, &Silent)
+    let engine = Engine::with_threads(opts.threads)?;
+    diagnose_observed(recorded, opts, &engine, &Silent)
 }
 
 /// Runs a diagnosis of a dataset, telling `observer` how it goes: the phases of the module
-/// documentation, one after the other.
+/// documentation, one after the other, every fit on `engine` (the thread count of
+/// `opts` is not used: the engine has its own).
 pub fn diagnose_observed(
     recorded: &Dataset,
     opts: &DiagnoseOptions,
+    engine: &Engine,
     observer: &dyn DiagnoseObserver,
 ) -> Result<Diagnosis, DiagnoseError> {
     let t0 = Instant::now();
     let (smoothed, inputs) = target::smooth_inputs(recorded);
-    let cx = Context::new(&smoothed, opts, observer, t0)?;
+    let cx = Context::new(&smoothed, opts, engine, observer, t0)?;
     let fitted = baseline::fit(&cx)?;
     cx.end_phase("baseline fit");
     let refits = candidates::refit_singles(&cx, fitted)?;
@@ -164,7 +168,7 @@ pub fn diagnose_observed(
         inputs,
         phases: cx.phases(),
         wall_s: cx.elapsed_s(),
-        threads: opts.threads.unwrap_or_else(rayon::current_num_threads),
+        threads: engine.threads(),
     };
     cx.say(Progress::Done { wall_s: d.wall_s });
     Ok(d)

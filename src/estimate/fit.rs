@@ -2,10 +2,12 @@
 //! export. It joins the data's cost (`cost::CostModel`) to the estimator through the
 //! [`Objective`] trait.
 
-use super::multistart::{
-    self, cluster, Cluster, MultiStartConfig, MultiStartOutcome, ResultsFile, RunError, RunObserver,
-};
+use super::engine::Engine;
+use super::error::EstimateError;
+use super::history::ResultsFile;
+use super::multistart::{self, cluster, Cluster, MultiStartOutcome, RunObserver};
 use super::objective::{Evaluation, Objective, Problem};
+use super::settings::MultiStartConfig;
 use super::space::ParamSpace;
 use super::uncertainty::{self, Interval};
 use crate::data::dataset::Kind;
@@ -19,7 +21,9 @@ use std::time::Instant;
 
 /// The data's cost as an estimation objective.
 pub struct DataObjective<'a> {
+    /// The cost of the dataset.
     pub cost: &'a CostModel,
+    /// The ODE solver of the simulations.
     pub solver: Box<dyn crate::numerics::ode::StiffSolver + 'a>,
 }
 
@@ -46,30 +50,46 @@ pub enum UncertaintyMethod {
     Profile,
     /// Curvature of χ² only (fast).
     Curvature,
+    /// No intervals.
     None,
 }
 
 /// Everything a fit needs besides the data.
 pub struct FitSetup {
+    /// What is estimated.
     pub space: ParamSpace,
+    /// The multi-start (checked by [`fit`]).
     pub multistart: MultiStartConfig,
+    /// How intervals are computed.
     pub uncertainty: UncertaintyMethod,
+    /// Where finished starts are recorded.
     pub results_file: Option<PathBuf>,
+    /// Continue from the results file.
     pub resume: bool,
 }
 
 /// The outcome of a fit.
 #[derive(Debug, Clone)]
 pub struct FitOutcome {
+    /// The estimate.
     pub params: MotorParams,
+    /// The estimate in optimizer coordinates.
     pub theta: Vec<f64>,
+    /// Cost at the estimate.
     pub cost: f64,
+    /// χ² at the estimate.
     pub chi2: f64,
+    /// Data points behind χ².
     pub n_points: usize,
+    /// 95% intervals (empty when not asked for).
     pub intervals: Vec<Interval>,
+    /// Local minima found by the starts.
     pub clusters: Vec<Cluster>,
+    /// Every start.
     pub run: MultiStartOutcome,
+    /// Cost evaluations in all.
     pub evaluations: u64,
+    /// Wall time, s.
     pub wall_s: f64,
 }
 
@@ -80,12 +100,14 @@ impl FitOutcome {
     }
 }
 
-/// Fits the space's parameters to the cost.
+/// Fits the space's parameters to the cost on the engine's threads.
 pub fn fit(
+    engine: &Engine,
     cost: &CostModel,
     setup: &FitSetup,
     observer: &dyn RunObserver,
-) -> Result<FitOutcome, RunError> {
+) -> Result<FitOutcome, EstimateError> {
+    let settings = setup.multistart.check()?;
     let t0 = Instant::now();
     let objective = DataObjective {
         cost,
@@ -93,9 +115,10 @@ pub fn fit(
     };
     let file = setup.results_file.as_deref().map(ResultsFile::new);
     let run = multistart::run(
+        engine,
         &objective,
         &setup.space,
-        &setup.multistart,
+        &settings,
         observer,
         file.as_ref(),
         setup.resume,
@@ -104,16 +127,13 @@ pub fn fit(
     let problem = Problem::new(&objective, &setup.space, false);
     // With intervals, the estimate is the maximum-likelihood point (χ² polished from the best
     // start), so that value and interval belong together; without, the best start's point.
-    let (theta, intervals) = match intervals(&problem, &best.theta, setup.uncertainty) {
+    let (theta, intervals) = match intervals(engine, &problem, &best.theta, setup.uncertainty) {
         Some((theta_ml, iv)) => (theta_ml, iv),
         None => (best.theta.clone(), Vec::new()),
     };
     let at = problem.evaluate(&theta);
     let clusters = cluster(&run.results, &setup.space, 0.02);
-    let params = setup
-        .space
-        .params(&theta)
-        .map_err(|e| RunError(format!("best parameters: {e}")))?;
+    let params = setup.space.params(&theta)?;
     Ok(FitOutcome {
         params,
         cost: at.cost,
@@ -130,6 +150,7 @@ pub fn fit(
 
 /// The maximum-likelihood point and the intervals around it (`None` when not asked for).
 fn intervals(
+    engine: &Engine,
     problem: &Problem<'_>,
     theta: &[f64],
     method: UncertaintyMethod,
@@ -143,7 +164,9 @@ fn intervals(
         UncertaintyMethod::Curvature => {
             uncertainty::curvature_intervals(problem, &theta_ml, cov.as_ref())
         }
-        _ => uncertainty::profile_intervals(problem, &theta_ml, chi2_min, cov.as_ref(), 300),
+        _ => {
+            uncertainty::profile_intervals(engine, problem, &theta_ml, chi2_min, cov.as_ref(), 300)
+        }
     };
     Some((theta_ml, intervals))
 }

@@ -1,12 +1,26 @@
-//! Estimation: parameter space and transforms (`space`), the argmin objective (`objective`),
-//! the multi-start runner (`multistart`) and parameter uncertainty (`uncertainty`).
+//! Estimation, one folder per concern as in pyPESTO: the parameter space and its transforms
+//! (`space`), the problem argmin sees (`objective`), the one optimizer (`optimize`: restarted
+//! Nelder–Mead) and its finite differences (`derivatives`), the parallel engine passed in by
+//! the caller (`engine`), run settings (`settings`), the multi-start runner (`multistart`)
+//! and its results file (`history`), profile-likelihood intervals (`uncertainty`), and the fit
+//! of a dataset (`fit`). Progress goes to a [`RunObserver`]; nothing here prints.
 
+pub mod derivatives;
+pub mod engine;
+pub mod error;
 pub mod fit;
+pub mod history;
 pub mod multistart;
 pub mod objective;
+pub mod optimize;
+pub mod settings;
 pub mod space;
 pub mod uncertainty;
 
-pub use multistart::{MultiStartConfig, MultiStartOutcome, RunObserver, StartResult};
-pub use objective::{Evaluation, Objective, Problem};
+pub use engine::Engine;
+pub use error::EstimateError;
+pub use history::ResultsFile;
+pub use multistart::{MultiStartOutcome, RunObserver, StartResult};
+pub use objective::{Coordinates, Evaluation, Objective, Problem};
+pub use settings::{MultiStartConfig, MultiStartSettings};
 pub use space::{Dimension, ParamSpace, DEFAULT_ESTIMATED};

@@ -1,6 +1,11 @@
-//! The objective as argmin sees it: optimizer coordinates θ → parameters → motor → cost.
-//! Kept apart from the model (which knows nothing of optimizers) and from the solver (which
-//! knows nothing of motors), as argmin keeps `problem` apart from `solver`.
+//! The objective as argmin sees it: search coordinates x → motor → cost, behind argmin's
+//! [`CostFunction`] over a plain parameter vector. Kept apart from the model (which knows
+//! nothing of optimizers) and from the solver (which knows nothing of motors), as argmin
+//! keeps `problem` apart from `solver`.
+//!
+//! What the coordinates mean is a [`Coordinates`]: a [`ParamSpace`] (θ of named parameters,
+//! the fit of a dataset), or a space extended by coefficients of discovered terms (the
+//! refits of a diagnosis). Both give the same [`Problem`], so both use the same optimizer.
 
 use super::space::ParamSpace;
 use crate::model::motor::Motor;
@@ -29,20 +34,39 @@ pub struct Evaluation {
 /// Anything that scores a motor against data (the cost of the data module, or a test model
 /// with a known answer).
 pub trait Objective: Sync {
+    /// The cost and χ² of one motor.
     fn evaluate(&self, motor: &Motor) -> Evaluation;
 }
 
-/// argmin's view of an objective over a parameter space.
-pub struct Problem<'a> {
+/// What a point of the search coordinates is: a motor, or `None` where the point breaks a
+/// model constraint (penalised with [`INVALID_PARAMS_COST`]).
+pub trait Coordinates: Sync {
+    /// The motor at `x`.
+    fn motor(&self, x: &[f64]) -> Option<Motor>;
+}
+
+impl Coordinates for ParamSpace {
+    fn motor(&self, theta: &[f64]) -> Option<Motor> {
+        self.params(theta)
+            .ok()
+            .map(|p| Motor::new(p, self.effects.clone()))
+    }
+}
+
+/// argmin's view of an objective over search coordinates (by default a parameter space).
+pub struct Problem<'a, C: Coordinates + ?Sized = ParamSpace> {
+    /// Scores motors.
     pub objective: &'a dyn Objective,
-    pub space: &'a ParamSpace,
+    /// Maps the search coordinates to motors.
+    pub space: &'a C,
     evaluations: AtomicU64,
     /// Every cost seen, in order, when a trace is kept.
     trace: Option<Mutex<Vec<f64>>>,
 }
 
-impl<'a> Problem<'a> {
-    pub fn new(objective: &'a dyn Objective, space: &'a ParamSpace, keep_trace: bool) -> Self {
+impl<'a, C: Coordinates + ?Sized> Problem<'a, C> {
+    /// A problem that counts its evaluations and, with `keep_trace`, records every cost.
+    pub fn new(objective: &'a dyn Objective, space: &'a C, keep_trace: bool) -> Self {
         Self {
             objective,
             space,
@@ -54,11 +78,9 @@ impl<'a> Problem<'a> {
     /// Evaluates the objective at θ (never NaN, never an error).
     pub fn evaluate(&self, theta: &[f64]) -> Evaluation {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
-        let e = match self.space.params(theta) {
-            Ok(p) => self
-                .objective
-                .evaluate(&Motor::new(p, self.space.effects.clone())),
-            Err(_) => Evaluation {
+        let e = match self.space.motor(theta) {
+            Some(m) => self.objective.evaluate(&m),
+            None => Evaluation {
                 cost: INVALID_PARAMS_COST,
                 chi2: INVALID_PARAMS_COST,
                 n_points: 0,
@@ -76,10 +98,12 @@ impl<'a> Problem<'a> {
         e
     }
 
+    /// Evaluations so far.
     pub fn evaluations(&self) -> u64 {
         self.evaluations.load(Ordering::Relaxed)
     }
 
+    /// The costs recorded since the last call (`None` without a trace).
     pub fn take_trace(&self) -> Option<Vec<f64>> {
         self.trace
             .as_ref()
@@ -95,7 +119,7 @@ fn finite_or_penalty(v: f64) -> f64 {
     }
 }
 
-impl CostFunction for Problem<'_> {
+impl<C: Coordinates + ?Sized> CostFunction for Problem<'_, C> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, theta: &Self::Param) -> Result<f64, Error> {
@@ -105,15 +129,18 @@ impl CostFunction for Problem<'_> {
 
 /// A problem over a sub-space: some coordinates held at given values (profile likelihood).
 pub struct Profiled<'a> {
+    /// The problem over every coordinate.
     pub inner: &'a Problem<'a>,
     /// Full θ; the free coordinates are overwritten by the optimizer's.
     pub template: Vec<f64>,
+    /// Indices of the free coordinates.
     pub free: Vec<usize>,
     /// Optimize χ² instead of the weighted cost.
     pub use_chi2: bool,
 }
 
 impl Profiled<'_> {
+    /// The full θ of the free coordinates' values.
     pub fn full(&self, free_theta: &[f64]) -> Vec<f64> {
         let mut t = self.template.clone();
         for (i, v) in self.free.iter().zip(free_theta) {

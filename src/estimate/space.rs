@@ -8,40 +8,39 @@
 
 use crate::model::effects::EffectSet;
 use crate::model::params::{spec, Domain, MotorParams, ParamSet};
-use std::fmt;
 
 /// One estimated parameter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dimension {
+    /// Parameter name (SPEC §1.7).
     pub name: String,
+    /// Lower bound, SI.
     pub lo: f64,
+    /// Upper bound, SI.
     pub hi: f64,
+    /// Placed on a log scale (positive parameters).
     pub log_scale: bool,
-    /// Where start points are drawn, inside [lo, hi] (default: all of it).
+    /// Where start points are drawn, inside [lo, hi] (default: all of it): lower end, SI.
     pub start_lo: f64,
+    /// Upper end of the start range, SI.
     pub start_hi: f64,
 }
 
 /// Parameters that are estimated, on top of fixed values.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParamSpace {
+    /// The estimated parameters, in θ order.
     pub dims: Vec<Dimension>,
     /// Values of everything not estimated (and the template for the estimated ones).
     pub fixed: MotorParams,
+    /// Effects switched on.
     pub effects: EffectSet,
 }
 
 /// An error in the estimation set-up (unknown name, bad bounds).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
 pub struct SpaceError(pub String);
-
-impl fmt::Display for SpaceError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for SpaceError {}
 
 /// The base model's estimated parameters by default (SPEC §1.7): six conductances and the
 /// two friction terms.
@@ -158,6 +157,8 @@ impl ParamSpace {
         Self::from_dims(dims, fixed, effects)
     }
 
+    /// Estimates `dims` over `fixed`; every parameter once, effects' parameters only with
+    /// their effect switched on, at least one.
     pub fn from_dims(
         dims: Vec<Dimension>,
         fixed: MotorParams,
@@ -186,14 +187,17 @@ impl ParamSpace {
         })
     }
 
+    /// Number of estimated parameters.
     pub fn len(&self) -> usize {
         self.dims.len()
     }
 
+    /// Nothing estimated (never, for a checked space).
     pub fn is_empty(&self) -> bool {
         self.dims.is_empty()
     }
 
+    /// Names of the estimated parameters, in θ order.
     pub fn names(&self) -> Vec<String> {
         self.dims.iter().map(|d| d.name.clone()).collect()
     }

@@ -7,11 +7,11 @@
 //! polynomial equal differences against the data). The 95% profile interval of parameter j
 //! is where min over the others of χ² rises by χ²₁(0.95) = 3.841 above its minimum.
 
+use super::derivatives::hessian;
+use super::engine::Engine;
 use super::objective::{Problem, Profiled};
-use argmin::core::{Executor, State};
-use argmin::solver::neldermead::NelderMead;
+use super::optimize::{Layout, NelderMeadSettings, Restart, RestartedNelderMead};
 use nalgebra::DMatrix;
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// χ²₁ quantile at 95%.
@@ -23,7 +23,9 @@ const THETA_EDGE: f64 = 15.0;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
+    /// Profile likelihood.
     Profile,
+    /// Curvature of χ² at the optimum.
     Curvature,
 }
 
@@ -31,52 +33,49 @@ pub enum Method {
 /// before the search bound: the data do not pin the parameter down on that side.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Interval {
+    /// Parameter name.
     pub name: String,
+    /// Estimate, SI.
     pub value: f64,
+    /// Lower end, SI (`None`: open).
     pub lo: Option<f64>,
+    /// Upper end, SI (`None`: open).
     pub hi: Option<f64>,
+    /// How it was obtained.
     pub method: Method,
 }
 
 impl Interval {
+    /// Both sides are pinned down.
     pub fn identifiable(&self) -> bool {
         self.lo.is_some() && self.hi.is_some()
     }
+    /// `[lo, hi]` when identifiable.
     pub fn ci95(&self) -> Option<[f64; 2]> {
         Some([self.lo?, self.hi?])
     }
 }
 
-fn nelder_mead(
-    problem: Profiled<'_>,
-    start: Vec<f64>,
-    step: f64,
-    max_iters: u64,
-) -> (Vec<f64>, f64) {
+/// The profile polish: one Nelder–Mead simplex (argmin's coefficients) on a forward axis
+/// simplex of edge 0.05, converged when the costs' spread is below 1e-9.
+const POLISH: NelderMeadSettings = NelderMeadSettings {
+    sd_tolerance: 1e-9,
+    step: 0.05,
+    layout: Layout::Forward,
+    adaptive: false,
+    restart: Restart::Never,
+};
+
+/// Minimises the profiled χ² from `start` in at most `max_iters` iterations; (start, ∞) if
+/// the optimizer fails.
+fn polish(problem: Profiled<'_>, start: Vec<f64>, max_iters: u64) -> (Vec<f64>, f64) {
     if start.is_empty() {
         let c = argmin::core::CostFunction::cost(&problem, &start).unwrap_or(f64::INFINITY);
         return (start, c);
     }
-    let mut simplex = vec![start.clone()];
-    for i in 0..start.len() {
-        let mut v = start.clone();
-        v[i] += step;
-        simplex.push(v);
-    }
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-9)
-        .expect("tolerance >= 0");
-    match Executor::new(problem, solver)
-        .configure(|s| s.max_iters(max_iters))
-        .ctrlc(false)
-        .run()
-    {
-        Ok(res) => (
-            res.state.get_best_param().cloned().unwrap_or(start),
-            res.state.get_best_cost(),
-        ),
-        Err(_) => (start, f64::INFINITY),
-    }
+    let mut search = RestartedNelderMead::new(start, f64::INFINITY, POLISH);
+    search.advance(&problem, max_iters);
+    (search.x().to_vec(), search.cost())
 }
 
 /// Minimises χ² from θ (a short polish after a cost fit whose weights differ from χ²'s).
@@ -89,7 +88,7 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
         use_chi2: true,
     };
     let start0 = problem.evaluate(theta).chi2;
-    let (t, c) = nelder_mead(p, theta.to_vec(), 0.05, max_iters);
+    let (t, c) = polish(p, theta.to_vec(), max_iters);
     if c <= start0 {
         (t, c)
     } else {
@@ -100,26 +99,8 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
 /// Covariance of θ from the curvature of χ²: Σ = 2·H⁻¹, H by central differences.
 /// `None` when H is not positive definite (a flat or ill-posed direction).
 pub fn curvature_covariance(problem: &Problem<'_>, theta: &[f64], h: f64) -> Option<DMatrix<f64>> {
-    let k = theta.len();
     let chi2 = |t: &[f64]| problem.evaluate(t).chi2;
-    let f0 = chi2(theta);
-    let shifted = |i: usize, di: f64, j: usize, dj: f64| {
-        let mut t = theta.to_vec();
-        t[i] += di;
-        t[j] += dj;
-        chi2(&t)
-    };
-    let mut hess = DMatrix::zeros(k, k);
-    for i in 0..k {
-        hess[(i, i)] = (shifted(i, h, i, 0.0) - 2.0 * f0 + shifted(i, -h, i, 0.0)) / (h * h);
-        for j in 0..i {
-            let v = (shifted(i, h, j, h) - shifted(i, h, j, -h) - shifted(i, -h, j, h)
-                + shifted(i, -h, j, -h))
-                / (4.0 * h * h);
-            hess[(i, j)] = v;
-            hess[(j, i)] = v;
-        }
-    }
+    let hess = hessian(&chi2, theta, chi2(theta), h);
     let chol = hess.cholesky()?;
     Some(chol.inverse() * 2.0)
 }
@@ -172,7 +153,7 @@ impl Profile<'_> {
             free: self.others.clone(),
             use_chi2: true,
         };
-        let (free, c) = nelder_mead(p, start, 0.05, self.max_iters);
+        let (free, c) = polish(p, start, self.max_iters);
         for (i, v) in self.others.iter().zip(&free) {
             template[*i] = *v;
         }
@@ -226,6 +207,7 @@ impl Profile<'_> {
 /// Profile-likelihood intervals for every estimated parameter (in parallel), starting from
 /// the χ² optimum `theta_hat` and using the curvature covariance (if any) to size steps.
 pub fn profile_intervals(
+    engine: &Engine,
     problem: &Problem<'_>,
     theta_hat: &[f64],
     chi2_min: f64,
@@ -233,33 +215,31 @@ pub fn profile_intervals(
     max_iters: u64,
 ) -> Vec<Interval> {
     let k = theta_hat.len();
-    (0..k)
-        .into_par_iter()
-        .map(|j| {
-            let d = &problem.space.dims[j];
-            let step = cov
-                .map(|c| c[(j, j)])
-                .filter(|v| v.is_finite() && *v > 0.0)
-                .map_or(0.3, |v| v.sqrt().clamp(0.02, 2.0));
-            let profile = Profile {
-                problem,
-                j,
-                others: (0..k).filter(|i| *i != j).collect(),
-                max_iters,
-            };
-            let lo = profile
-                .crossing(theta_hat, chi2_min, -1.0, step)
-                .map(|t| d.value(t));
-            let hi = profile
-                .crossing(theta_hat, chi2_min, 1.0, step)
-                .map(|t| d.value(t));
-            Interval {
-                name: d.name.clone(),
-                value: d.value(theta_hat[j]),
-                lo,
-                hi,
-                method: Method::Profile,
-            }
-        })
-        .collect()
+    let coordinates: Vec<usize> = (0..k).collect();
+    engine.map(&coordinates, |&j| {
+        let d = &problem.space.dims[j];
+        let step = cov
+            .map(|c| c[(j, j)])
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .map_or(0.3, |v| v.sqrt().clamp(0.02, 2.0));
+        let profile = Profile {
+            problem,
+            j,
+            others: (0..k).filter(|i| *i != j).collect(),
+            max_iters,
+        };
+        let lo = profile
+            .crossing(theta_hat, chi2_min, -1.0, step)
+            .map(|t| d.value(t));
+        let hi = profile
+            .crossing(theta_hat, chi2_min, 1.0, step)
+            .map(|t| d.value(t));
+        Interval {
+            name: d.name.clone(),
+            value: d.value(theta_hat[j]),
+            lo,
+            hi,
+            method: Method::Profile,
+        }
+    })
 }

@@ -5,7 +5,7 @@ use crate::data::dataset::Dataset;
 use crate::model::motor::Motor;
 use crate::numerics::ode::DiffsolBdf;
 use crate::objective::cost::{ChannelResiduals, CostModel};
-use crate::objective::reference::Abscissa;
+use crate::objective::reference::{Abscissa, ChannelReference};
 use crate::report::plot::{Chart, Figure, PlotError, Series};
 use std::path::{Path, PathBuf};
 
@@ -73,33 +73,7 @@ pub fn overlays(
             if ax.log10 {
                 chart = chart.log_x();
             }
-            for (k, (name, res)) in runs.iter().enumerate() {
-                let Some(ch) = res
-                    .iter()
-                    .find(|c| c.file == ex.file && c.channel == reference.quantity)
-                else {
-                    continue;
-                };
-                let mut pairs: Vec<(f64, f64, f64)> =
-                    ch.x.iter()
-                        .zip(&ch.measured)
-                        .zip(&ch.simulated)
-                        .map(|((x, m), s)| (*x, *m, *s))
-                        .collect();
-                pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-                if k == 0 {
-                    let line = pairs
-                        .iter()
-                        .map(|(x, m, _)| (ax.display(*x, p_atm), reference.display(*m, p_atm)))
-                        .collect();
-                    chart = chart.with(Series::line("reference polynomial", line));
-                }
-                let line = pairs
-                    .iter()
-                    .map(|(x, _, s)| (ax.display(*x, p_atm), reference.display(*s, p_atm)))
-                    .collect();
-                chart = chart.with(Series::line(name, line));
-            }
+            chart = with_simulations(chart, &runs, &ex.file, reference, p_atm);
             panels.push(chart);
         }
         if panels.is_empty() {
@@ -117,6 +91,47 @@ pub fn overlays(
     Ok(written)
 }
 
+/// Adds to `chart` the reference polynomial (once) and each model's simulation of the
+/// channel `reference` of experiment `file`, sorted along the abscissa.
+fn with_simulations(
+    mut chart: Chart,
+    runs: &[(&str, Vec<ChannelResiduals>)],
+    file: &str,
+    reference: &ChannelReference,
+    p_atm: f64,
+) -> Chart {
+    let ax = &reference.abscissa;
+    for (k, (name, res)) in runs.iter().enumerate() {
+        let Some(ch) = res
+            .iter()
+            .find(|c| c.file == file && c.channel == reference.quantity)
+        else {
+            continue;
+        };
+        let mut pairs: Vec<(f64, f64, f64)> =
+            ch.x.iter()
+                .zip(&ch.measured)
+                .zip(&ch.simulated)
+                .map(|((x, m), s)| (*x, *m, *s))
+                .collect();
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if k == 0 {
+            let line = pairs
+                .iter()
+                .map(|(x, m, _)| (ax.display(*x, p_atm), reference.display(*m, p_atm)))
+                .collect();
+            chart = chart.with(Series::line("reference polynomial", line));
+        }
+        let line = pairs
+            .iter()
+            .map(|(x, _, s)| (ax.display(*x, p_atm), reference.display(*s, p_atm)))
+            .collect();
+        chart = chart.with(Series::line(name, line));
+    }
+    chart
+}
+
+/// The abscissa's axis title.
 fn axis_label(ax: &Abscissa) -> String {
     if ax.log10 {
         format!("{} (log scale)", ax.column)

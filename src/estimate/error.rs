@@ -1,0 +1,62 @@
+//! Errors of the estimate layer: bad run settings (one variant per bad value, checked once
+//! by [`super::settings::MultiStartConfig::check`]), the thread pool, the results file.
+
+use crate::model::params::ParamError;
+use std::path::PathBuf;
+
+/// An error of an estimation run.
+#[derive(Debug, thiserror::Error)]
+pub enum EstimateError {
+    /// No start point asked for.
+    #[error("--starts must be at least 1")]
+    NoStarts,
+    /// A round of zero iterations would never end.
+    #[error("stage iterations must be at least 1")]
+    NoStageIterations,
+    /// argmin needs a finite tolerance ≥ 0.
+    #[error("sd tolerance {0}: must be a finite number >= 0")]
+    SdTolerance(f64),
+    /// The first simplex needs a finite edge > 0.
+    #[error("initial step {0}: must be a finite number > 0")]
+    InitialStep(f64),
+    /// The early-stop rule compares against `factor`·best + `margin`.
+    #[error("kill factor {0}: must be a number >= 0")]
+    KillFactor(f64),
+    /// See [`EstimateError::KillFactor`].
+    #[error("kill margin {0}: must not be NaN")]
+    KillMargin(f64),
+    /// A given start point has the wrong number of coordinates.
+    #[error("given start {index}: {got} coordinates, the space has {want}")]
+    GivenStart {
+        /// Index of the start.
+        index: usize,
+        /// Its length.
+        got: usize,
+        /// The space's dimension.
+        want: usize,
+    },
+    /// rayon could not build the worker threads.
+    #[error("thread pool: {0}")]
+    ThreadPool(#[from] rayon::ThreadPoolBuildError),
+    /// Reading or writing the results file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The results file.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+    /// A line of the results file is unreadable or belongs elsewhere.
+    #[error("{}:{line}: {message}", path.display())]
+    ResultsLine {
+        /// The results file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The best point breaks a model constraint (it cannot: penalised points never win).
+    #[error("best parameters: {0}")]
+    BestParameters(#[from] ParamError),
+}

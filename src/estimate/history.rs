@@ -1,0 +1,119 @@
+//! The history of a run (pyPESTO's `history`): an append-only results file of finished
+//! starts (JSON lines after a header naming the run), read back to resume.
+
+use super::error::EstimateError;
+use super::settings::MultiStartSettings;
+use super::space::ParamSpace;
+use super::StartResult;
+use serde::{Deserialize, Serialize};
+use std::io::{BufRead, Write};
+use std::path::{Path, PathBuf};
+
+/// Header line of a results file: what run it belongs to.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct Header {
+    format: String,
+    seed: u64,
+    starts: usize,
+    parameters: Vec<String>,
+    effects: Vec<String>,
+}
+
+const RESULTS_FORMAT: &str = "vanefit.starts/1";
+
+/// Append-only file of finished starts (JSON lines).
+pub struct ResultsFile {
+    path: PathBuf,
+}
+
+impl ResultsFile {
+    /// The results file at `path` (nothing is read or written yet).
+    pub fn new(path: &Path) -> Self {
+        Self {
+            path: path.to_path_buf(),
+        }
+    }
+
+    fn header(space: &ParamSpace, cfg: &MultiStartSettings) -> Header {
+        Header {
+            format: RESULTS_FORMAT.into(),
+            seed: cfg.seed(),
+            starts: cfg.starts(),
+            parameters: space.names(),
+            effects: space.effects.ids(),
+        }
+    }
+
+    fn io(&self, source: std::io::Error) -> EstimateError {
+        EstimateError::Io {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    fn bad_line(&self, line: usize, message: String) -> EstimateError {
+        EstimateError::ResultsLine {
+            path: self.path.clone(),
+            line,
+            message,
+        }
+    }
+
+    /// Reads finished starts of a matching earlier run (empty if there is no file).
+    pub(crate) fn load(
+        &self,
+        space: &ParamSpace,
+        cfg: &MultiStartSettings,
+    ) -> Result<Vec<StartResult>, EstimateError> {
+        let file = match std::fs::File::open(&self.path) {
+            Ok(f) => f,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+            Err(e) => return Err(self.io(e)),
+        };
+        let mut lines = std::io::BufReader::new(file).lines();
+        let Some(first) = lines.next() else {
+            return Ok(Vec::new());
+        };
+        let first = first.map_err(|e| self.bad_line(1, e.to_string()))?;
+        let header: Header =
+            serde_json::from_str(&first).map_err(|e| self.bad_line(1, e.to_string()))?;
+        if header != Self::header(space, cfg) {
+            return Err(self.bad_line(1, "belongs to a different run (seed, starts, parameters or effects differ); remove it or drop --resume".into()));
+        }
+        let mut out = Vec::new();
+        for (i, line) in lines.enumerate() {
+            let line = line.map_err(|e| self.bad_line(i + 2, e.to_string()))?;
+            // A line cut short by an interruption is simply not finished.
+            if let Ok(r) = serde_json::from_str::<StartResult>(&line) {
+                if r.index < cfg.starts() && !out.iter().any(|o: &StartResult| o.index == r.index) {
+                    out.push(r);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Starts the file with the run's header.
+    pub(crate) fn create(
+        &self,
+        space: &ParamSpace,
+        cfg: &MultiStartSettings,
+    ) -> Result<(), EstimateError> {
+        let header = serde_json::to_string(&Self::header(space, cfg)).expect("plain data");
+        crate::io::write_atomic(&self.path, (header + "\n").as_bytes()).map_err(|e| self.io(e))
+    }
+
+    /// Appends finished starts and syncs them to disk.
+    pub(crate) fn append(&self, results: &[StartResult]) -> Result<(), EstimateError> {
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&self.path)
+            .map_err(|e| self.io(e))?;
+        let mut text = String::new();
+        for r in results {
+            text += &(serde_json::to_string(r).expect("plain data") + "\n");
+        }
+        f.write_all(text.as_bytes()).map_err(|e| self.io(e))?;
+        f.sync_data().map_err(|e| self.io(e))
+    }
+}

@@ -1,0 +1,179 @@
+//! Run settings as linfa's `ParamGuard` keeps them: an unchecked [`MultiStartConfig`] with
+//! public fields and defaults, turned by [`MultiStartConfig::check`] into a
+//! [`MultiStartSettings`] whose fields are private, so a run never sees a bad value.
+
+use super::error::EstimateError;
+use super::optimize::{Layout, NelderMeadSettings, Restart};
+
+/// Settings of a multi-start run as given (unchecked).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultiStartConfig {
+    /// Number of starts (given ones first, then a Latin hypercube).
+    pub starts: usize,
+    /// Seed of the start design.
+    pub seed: u64,
+    /// Nelder–Mead iterations between barriers.
+    pub stage_iters: u64,
+    /// Iteration budget of one start.
+    pub max_iters: u64,
+    /// Convergence: standard deviation of the simplex costs below this.
+    pub sd_tolerance: f64,
+    /// Size of the initial simplex in optimizer coordinates θ.
+    pub initial_step: f64,
+    /// A start stops early after this many rounds if its cost exceeds
+    /// `kill_factor`·best + `kill_margin`.
+    pub kill_after_rounds: usize,
+    /// See `kill_after_rounds`.
+    pub kill_factor: f64,
+    /// See `kill_after_rounds`.
+    pub kill_margin: f64,
+    /// Keep every start's cost trace.
+    pub keep_traces: bool,
+    /// Start points given in optimizer coordinates θ (e.g. a previous fit's optimum); they
+    /// take the first start indices, the Latin hypercube fills the rest.
+    pub given_starts: Vec<Vec<f64>>,
+    /// Fresh simplices around the best point after convergence (restarted Nelder–Mead):
+    /// a collapsed simplex is the method's known failure, and a restart that finds nothing
+    /// better is the convergence test.
+    pub max_restarts: u32,
+}
+
+impl Default for MultiStartConfig {
+    fn default() -> Self {
+        Self {
+            starts: 32,
+            seed: 1,
+            stage_iters: 100,
+            max_iters: 3000,
+            sd_tolerance: 1e-6,
+            initial_step: 0.5,
+            kill_after_rounds: 5,
+            kill_factor: 3.0,
+            kill_margin: 10.0,
+            keep_traces: false,
+            max_restarts: 20,
+            given_starts: Vec::new(),
+        }
+    }
+}
+
+impl MultiStartConfig {
+    /// Checks every value (one error per kind of bad value).
+    pub fn check(&self) -> Result<MultiStartSettings, EstimateError> {
+        if self.starts == 0 {
+            return Err(EstimateError::NoStarts);
+        }
+        if self.stage_iters == 0 {
+            return Err(EstimateError::NoStageIterations);
+        }
+        if !(self.sd_tolerance.is_finite() && self.sd_tolerance >= 0.0) {
+            return Err(EstimateError::SdTolerance(self.sd_tolerance));
+        }
+        if !(self.initial_step.is_finite() && self.initial_step > 0.0) {
+            return Err(EstimateError::InitialStep(self.initial_step));
+        }
+        if self.kill_factor.is_nan() || self.kill_factor < 0.0 {
+            return Err(EstimateError::KillFactor(self.kill_factor));
+        }
+        if self.kill_margin.is_nan() {
+            return Err(EstimateError::KillMargin(self.kill_margin));
+        }
+        Ok(MultiStartSettings(self.clone()))
+    }
+}
+
+/// Checked settings of a multi-start run (see [`MultiStartConfig`] for the meaning).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultiStartSettings(MultiStartConfig);
+
+impl MultiStartSettings {
+    /// Number of starts (≥ 1).
+    pub fn starts(&self) -> usize {
+        self.0.starts
+    }
+    /// Seed of the start design.
+    pub fn seed(&self) -> u64 {
+        self.0.seed
+    }
+    /// Iterations between barriers (≥ 1).
+    pub fn stage_iters(&self) -> u64 {
+        self.0.stage_iters
+    }
+    /// Iteration budget of one start.
+    pub fn max_iters(&self) -> u64 {
+        self.0.max_iters
+    }
+    /// Rounds before the early-stop rule applies.
+    pub fn kill_after_rounds(&self) -> usize {
+        self.0.kill_after_rounds
+    }
+    /// Whether a start with `cost` stops early when the best cost so far is `best`.
+    pub fn stops_early(&self, cost: f64, best: f64) -> bool {
+        cost > self.0.kill_factor * best + self.0.kill_margin
+    }
+    /// Keep every start's cost trace.
+    pub fn keep_traces(&self) -> bool {
+        self.0.keep_traces
+    }
+    /// Start points given in θ.
+    pub fn given_starts(&self) -> &[Vec<f64>] {
+        &self.0.given_starts
+    }
+    /// The Nelder–Mead of each start: an inward axis simplex of edge `initial_step`,
+    /// Gao–Han coefficients, curvature-shaped restarts.
+    pub fn nelder_mead(&self) -> NelderMeadSettings {
+        NelderMeadSettings {
+            sd_tolerance: self.0.sd_tolerance,
+            step: self.0.initial_step,
+            layout: Layout::Inward,
+            adaptive: true,
+            restart: Restart::Curvature {
+                max_restarts: self.0.max_restarts,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_bad_value_has_its_own_error() {
+        let ok = MultiStartConfig::default();
+        assert!(ok.check().is_ok());
+        let bad = |c: MultiStartConfig| c.check().unwrap_err().to_string();
+        assert_eq!(
+            bad(MultiStartConfig {
+                starts: 0,
+                ..ok.clone()
+            }),
+            "--starts must be at least 1"
+        );
+        assert!(bad(MultiStartConfig {
+            stage_iters: 0,
+            ..ok.clone()
+        })
+        .contains("stage"));
+        assert!(bad(MultiStartConfig {
+            sd_tolerance: -1.0,
+            ..ok.clone()
+        })
+        .contains("sd"));
+        assert!(bad(MultiStartConfig {
+            initial_step: 0.0,
+            ..ok.clone()
+        })
+        .contains("step"));
+        assert!(bad(MultiStartConfig {
+            kill_factor: f64::NAN,
+            ..ok.clone()
+        })
+        .contains("kill"));
+        assert!(bad(MultiStartConfig {
+            kill_margin: f64::NAN,
+            ..ok
+        })
+        .contains("margin"));
+    }
+}
