@@ -34,8 +34,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let engine = Engine::with_threads(None)?;
     let out = fit(&engine, &cost, &setup, &Silent)?;
-    println!("{}: cost {:.4} after {} evaluations", ds.name, out.cost, out.evaluations);
-    println!("{:<10} {:>12} {:>25}  unit", "parameter", "value", "95% interval");
+    println!(
+        "{}: cost {:.4} after {} evaluations",
+        ds.name, out.cost, out.evaluations
+    );
+    println!(
+        "{:<10} {:>12} {:>25}  unit",
+        "parameter", "value", "95% interval"
+    );
     for iv in &out.intervals {
         let ci = iv.ci95().map_or("not identifiable".into(), |[lo, hi]| {
             format!("[{lo:.4e}, {hi:.4e}]")

@@ -2,8 +2,8 @@
 
 use crate::cli::Failure;
 use crate::data::dataset::Dataset;
-use crate::estimate::Engine;
 use crate::diagnose::{diagnose_observed, summary, DiagnoseObserver, DiagnoseOptions, Progress};
+use crate::estimate::Engine;
 use std::path::PathBuf;
 
 /// `vanefit diagnose` options (SPEC §6).

@@ -163,107 +163,23 @@ impl FitFile {
 
     /// Parses fit-file text (`path` is used in messages only).
     pub fn parse(path: &Path, text: &str) -> Result<Self, FitFileError> {
-        let fail = |line: Option<usize>, message: String| FitFileError {
-            file: path.to_path_buf(),
-            line,
-            message,
-        };
-        let line_of = |needle: &str| text.lines().position(|l| l.contains(needle)).map(|i| i + 1);
+        let r = Reader { path, text };
         let doc: Value = serde_json::from_str(text)
-            .map_err(|e| fail(Some(e.line()), format!("not valid JSON: {e}")))?;
+            .map_err(|e| r.fail(Some(e.line()), format!("not valid JSON: {e}")))?;
         let obj = doc
             .as_object()
-            .ok_or_else(|| fail(None, "expected a JSON object".into()))?;
+            .ok_or_else(|| r.fail(None, "expected a JSON object".into()))?;
         if let Some(f) = obj.get("format") {
             if f.as_str() != Some(FORMAT) {
-                return Err(fail(
-                    line_of("\"format\""),
+                return Err(r.fail(
+                    r.line_of("\"format\""),
                     format!("format {f} is not \"{FORMAT}\""),
                 ));
             }
         }
-        let effects = match obj.get("model").and_then(|m| m.get("effects")) {
-            None | Some(Value::Null) => EffectSet::empty(),
-            Some(Value::Array(ids)) => ids
-                .iter()
-                .map(|v| {
-                    v.as_str()
-                        .ok_or_else(|| "effect ids must be strings".to_string())
-                        .and_then(|s| s.parse::<Effect>())
-                })
-                .collect::<Result<EffectSet, _>>()
-                .map_err(|m| fail(line_of("\"effects\""), m))?,
-            Some(_) => {
-                return Err(fail(
-                    line_of("\"effects\""),
-                    "model.effects must be a list of ids".into(),
-                ))
-            }
-        };
-        let extra = match obj.get("model").and_then(|m| m.get("discovered")) {
-            None | Some(Value::Null) => Vec::new(),
-            Some(Value::Array(items)) => items
-                .iter()
-                .map(term_from_json)
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| fail(line_of("\"discovered\""), e.to_string()))?,
-            Some(_) => {
-                return Err(fail(
-                    line_of("\"discovered\""),
-                    "model.discovered must be a list".into(),
-                ))
-            }
-        };
-        let mut set = ParamSet::default();
-        let mut estimated = Vec::new();
-        let mut ci95 = Vec::new();
-        let params = match obj.get("parameters") {
-            None => Map::new(),
-            Some(Value::Object(m)) => m.clone(),
-            Some(_) => {
-                return Err(fail(
-                    line_of("\"parameters\""),
-                    "parameters must be an object".into(),
-                ))
-            }
-        };
-        for (name, entry) in &params {
-            let here = line_of(&format!("\"{name}\""));
-            let s = spec(name).ok_or_else(|| fail(here, format!("unknown parameter '{name}'")))?;
-            let (value, unit, est, ci) = match entry {
-                Value::Number(n) => (n.as_f64(), None, false, None),
-                Value::Object(o) => (
-                    o.get("value").and_then(Value::as_f64),
-                    o.get("unit").and_then(Value::as_str),
-                    o.get("estimated").and_then(Value::as_bool).unwrap_or(false),
-                    o.get("ci95")
-                        .and_then(|c| serde_json::from_value::<[f64; 2]>(c.clone()).ok()),
-                ),
-                _ => (None, None, false, None),
-            };
-            let value = value.ok_or_else(|| {
-                fail(
-                    here,
-                    format!("parameter '{name}' needs a numeric \"value\""),
-                )
-            })?;
-            if let Some(u) = unit {
-                if u != s.unit {
-                    return Err(fail(here, format!("parameter '{name}' has unit '{u}', expected '{}' (no conversion is done)", s.unit)));
-                }
-            }
-            set.set(name, value)
-                .map_err(|e| fail(here, e.to_string()))?;
-            if est {
-                estimated.push(name.clone());
-            }
-            if let Some(c) = ci {
-                ci95.push((name.clone(), c));
-            }
-        }
-        let params = set
-            .check()
-            .map_err(|e| fail(line_of(&format!("\"{}\"", e.name)), e.to_string()))?;
+        let effects = r.effects(obj)?;
+        let extra = r.discovered(obj)?;
+        let (params, estimated, ci95) = r.parameters(obj)?;
         Ok(FitFile {
             dataset: obj
                 .get("dataset")
@@ -284,6 +200,144 @@ impl FitFile {
                 .and_then(|v| serde_json::from_value(v.clone()).ok()),
             extra,
         })
+    }
+}
+
+/// Reads the parts of one fit file's text, with errors located at their line.
+struct Reader<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+/// What a fit file says of its parameters: the checked values, the estimated names and the
+/// 95% intervals.
+type ParsedParameters = (MotorParams, Vec<String>, Vec<(String, [f64; 2])>);
+
+impl Reader<'_> {
+    fn fail(&self, line: Option<usize>, message: String) -> FitFileError {
+        FitFileError {
+            file: self.path.to_path_buf(),
+            line,
+            message,
+        }
+    }
+
+    /// The first line that contains `needle` (where a key's error is reported).
+    fn line_of(&self, needle: &str) -> Option<usize> {
+        self.text
+            .lines()
+            .position(|l| l.contains(needle))
+            .map(|i| i + 1)
+    }
+
+    /// `model.effects`: a list of catalog ids.
+    fn effects(&self, obj: &Map<String, Value>) -> Result<EffectSet, FitFileError> {
+        match obj.get("model").and_then(|m| m.get("effects")) {
+            None | Some(Value::Null) => Ok(EffectSet::empty()),
+            Some(Value::Array(ids)) => ids
+                .iter()
+                .map(|v| {
+                    v.as_str()
+                        .ok_or_else(|| "effect ids must be strings".to_string())
+                        .and_then(|s| s.parse::<Effect>())
+                })
+                .collect::<Result<EffectSet, _>>()
+                .map_err(|m| self.fail(self.line_of("\"effects\""), m)),
+            Some(_) => Err(self.fail(
+                self.line_of("\"effects\""),
+                "model.effects must be a list of ids".into(),
+            )),
+        }
+    }
+
+    /// `model.discovered`: the terms outside the catalog.
+    fn discovered(&self, obj: &Map<String, Value>) -> Result<Vec<ExtraTerm>, FitFileError> {
+        match obj.get("model").and_then(|m| m.get("discovered")) {
+            None | Some(Value::Null) => Ok(Vec::new()),
+            Some(Value::Array(items)) => items
+                .iter()
+                .map(term_from_json)
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| self.fail(self.line_of("\"discovered\""), e.to_string())),
+            Some(_) => Err(self.fail(
+                self.line_of("\"discovered\""),
+                "model.discovered must be a list".into(),
+            )),
+        }
+    }
+
+    /// `parameters`: defaults overridden by each entry (a number or an object with value,
+    /// unit, estimated and ci95), checked as a whole.
+    fn parameters(&self, obj: &Map<String, Value>) -> Result<ParsedParameters, FitFileError> {
+        let mut set = ParamSet::default();
+        let mut estimated = Vec::new();
+        let mut ci95 = Vec::new();
+        let params = match obj.get("parameters") {
+            None => Map::new(),
+            Some(Value::Object(m)) => m.clone(),
+            Some(_) => {
+                return Err(self.fail(
+                    self.line_of("\"parameters\""),
+                    "parameters must be an object".into(),
+                ))
+            }
+        };
+        for (name, entry) in &params {
+            let (value, est, ci) = self.entry(name, entry)?;
+            let here = self.line_of(&format!("\"{name}\""));
+            set.set(name, value)
+                .map_err(|e| self.fail(here, e.to_string()))?;
+            if est {
+                estimated.push(name.clone());
+            }
+            if let Some(c) = ci {
+                ci95.push((name.clone(), c));
+            }
+        }
+        let params = set
+            .check()
+            .map_err(|e| self.fail(self.line_of(&format!("\"{}\"", e.name)), e.to_string()))?;
+        Ok((params, estimated, ci95))
+    }
+
+    /// One parameter entry: its value, whether it was estimated, its interval; the name must
+    /// be known and a unit, if given, must be the parameter's SI unit.
+    fn entry(
+        &self,
+        name: &str,
+        entry: &Value,
+    ) -> Result<(f64, bool, Option<[f64; 2]>), FitFileError> {
+        let here = self.line_of(&format!("\"{name}\""));
+        let s = spec(name).ok_or_else(|| self.fail(here, format!("unknown parameter '{name}'")))?;
+        let (value, unit, est, ci) = match entry {
+            Value::Number(n) => (n.as_f64(), None, false, None),
+            Value::Object(o) => (
+                o.get("value").and_then(Value::as_f64),
+                o.get("unit").and_then(Value::as_str),
+                o.get("estimated").and_then(Value::as_bool).unwrap_or(false),
+                o.get("ci95")
+                    .and_then(|c| serde_json::from_value::<[f64; 2]>(c.clone()).ok()),
+            ),
+            _ => (None, None, false, None),
+        };
+        let value = value.ok_or_else(|| {
+            self.fail(
+                here,
+                format!("parameter '{name}' needs a numeric \"value\""),
+            )
+        })?;
+        if let Some(u) = unit {
+            if u != s.unit {
+                return Err(self.fail(
+                    here,
+                    format!(
+                        "parameter '{name}' has unit '{u}', expected '{}' (no conversion is done)",
+                        s.unit
+                    ),
+                ));
+            }
+        }
+        Ok((value, est, ci))
     }
 }
 

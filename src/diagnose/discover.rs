@@ -199,8 +199,7 @@ pub fn regress(
 ) -> Result<Regression, RegressError> {
     let solver = DiffsolBdf::default();
     let motor = model.motor();
-    let sim = outputs(cost, target, &motor, &solver)
-        .ok_or(RegressError::NoSimulation)?;
+    let sim = outputs(cost, target, &motor, &solver).ok_or(RegressError::NoSimulation)?;
     let data: Vec<f64> = target
         .channels
         .iter()

@@ -273,7 +273,9 @@ mod tests {
         assert_eq!(tried.len(), 7);
         assert_eq!(skipped.len(), 1);
         assert_eq!(skipped[0].effect, Effect::ValveDynamics);
-        let steady = subset(&ds, |i| ds.experiments[i].kind == crate::data::dataset::Kind::Datasheet);
+        let steady = subset(&ds, |i| {
+            ds.experiments[i].kind == crate::data::dataset::Kind::Datasheet
+        });
         let (tried, skipped) = applicable_effects(&steady);
         assert!(!tried.contains(&Effect::SensorLag));
         assert_eq!(skipped.len(), 2);

@@ -378,7 +378,10 @@ mod tests {
         assert_eq!(names.join(" "), expected);
         let p = MotorParams::default().with("g_seal", 2.5).unwrap();
         assert_eq!(p.g_seal(), 2.5);
-        assert_eq!(p.effect_values(Effect::SpeedDependentLeakage), &[2.5, 300.0]);
+        assert_eq!(
+            p.effect_values(Effect::SpeedDependentLeakage),
+            &[2.5, 300.0]
+        );
     }
 
     #[test]
