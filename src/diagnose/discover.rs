@@ -198,8 +198,7 @@ pub fn regress(
     engine: &Engine,
 ) -> Result<Regression, RegressError> {
     let solver = DiffsolBdf::default();
-    let motor = model.motor();
-    let sim = outputs(cost, target, &motor, &solver).ok_or(RegressError::NoSimulation)?;
+    let sim = outputs(cost, target, &model.motor(), &solver).ok_or(RegressError::NoSimulation)?;
     let data: Vec<f64> = target
         .channels
         .iter()
@@ -207,20 +206,85 @@ pub fn regress(
         .collect();
     let r: Vec<f64> = data.iter().zip(&sim).map(|(d, s)| d - s).collect();
     let n = r.len();
+    let lib = library();
+    let (n_nuisance, columns) = sensitivities(cost, target, model, names, &lib, engine)?;
+    let nuisance: Vec<&Vec<f64>> = columns[..n_nuisance].iter().flatten().collect();
+    let basis = nuisance_basis(&nuisance, n);
+    let lib_cols: Vec<(ExtraTerm, DVector<f64>)> = lib
+        .iter()
+        .zip(&columns[n_nuisance..])
+        .filter_map(|(t, c)| c.as_ref().map(|c| (*t, DVector::from_column_slice(c))))
+        .collect();
+    let ln_n = (n.max(1) as f64).ln();
+    let r0 = DVector::from_vec(r);
+    let r_perp = project(&r0, &basis);
+    let mut ranking: Vec<TermScore> = score(&lib_cols, &basis, &r_perp)
+        .into_iter()
+        .map(|(i, d, beta)| TermScore {
+            term: ExtraTerm {
+                coefficient: beta,
+                ..lib_cols[i].0
+            },
+            delta_chi2: d,
+            delta_bic: -d + ln_n,
+        })
+        .collect();
+    ranking.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+    let (chosen, gains) = forward_select(&lib_cols, basis, r_perp, ln_n);
+    let selected = if chosen.is_empty() {
+        Vec::new()
+    } else {
+        let beta = joint_coefficients(&nuisance, &lib_cols, &chosen, &r0)?;
+        chosen
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| TermScore {
+                term: ExtraTerm {
+                    coefficient: beta[nuisance.len() + k],
+                    ..lib_cols[i].0
+                },
+                delta_chi2: gains[k],
+                delta_bic: -gains[k] + ln_n,
+            })
+            .collect()
+    };
+    Ok(Regression {
+        ranking,
+        selected,
+        n_points: n,
+    })
+}
+
+/// A column of the sensitivity matrix.
+enum Col {
+    /// An estimated parameter, in search coordinates θ (nuisance).
+    Theta(usize),
+    /// A discovered term already in the model, by relative change (nuisance).
+    Extra(usize),
+    /// A library term at ±δ.
+    Library(ExtraTerm, f64),
+}
+
+/// Normalised output sensitivities by central differences of whole simulations: first the
+/// nuisance columns (their count is returned), then one per library term; `None` where a
+/// perturbed model does not simulate.
+fn sensitivities(
+    cost: &CostModel,
+    target: &Target,
+    model: &Fitted,
+    names: &[String],
+    lib: &[ExtraTerm],
+    engine: &Engine,
+) -> Result<(usize, Vec<Option<Vec<f64>>>), RegressError> {
+    let solver = DiffsolBdf::default();
+    let motor = model.motor();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     let space = ParamSpace::new(&name_refs, model.params.clone(), model.effects.clone())?;
     let theta = space.theta(&model.params);
     let h = 1e-2;
-    // Nuisance: estimated parameters (θ) and any discovered terms already in the model.
-    enum Col {
-        Theta(usize),
-        Extra(usize),
-        Library(ExtraTerm, f64),
-    }
     let mut cols: Vec<Col> = (0..theta.len()).map(Col::Theta).collect();
     cols.extend((0..model.extra.len()).map(Col::Extra));
     let n_nuisance = cols.len();
-    let lib = library();
     cols.extend(lib.iter().map(|t| Col::Library(*t, step(t))));
     let column = |c: &Col| -> Option<Vec<f64>> {
         let at = |sign: f64| -> Option<Vec<f64>> {
@@ -251,11 +315,12 @@ pub fn regress(
         };
         Some(central_column(&plus, &minus, denom))
     };
-    let columns: Vec<Option<Vec<f64>>> = engine.map(&cols, column);
+    Ok((n_nuisance, engine.map(&cols, column)))
+}
 
-    // Orthonormal basis of the nuisance columns (SVD, dropping directions with singular
-    // value below 1e-8 of the largest: parameters these data cannot see).
-    let nuisance: Vec<&Vec<f64>> = columns[..n_nuisance].iter().flatten().collect();
+/// Orthonormal basis of the nuisance columns (SVD, dropping directions with singular value
+/// below 1e-8 of the largest: parameters these data cannot see).
+fn nuisance_basis(nuisance: &[&Vec<f64>], n: usize) -> Vec<DVector<f64>> {
     let mut basis: Vec<DVector<f64>> = Vec::new();
     if !nuisance.is_empty() {
         let a = DMatrix::from_fn(n, nuisance.len(), |i, j| nuisance[j][i]);
@@ -268,53 +333,53 @@ pub fn regress(
             }
         }
     }
-    let project = |v: &DVector<f64>, basis: &[DVector<f64>]| -> DVector<f64> {
-        let mut out = v.clone();
-        for q in basis {
-            let c = q.dot(&out);
-            out.axpy(-c, q, 1.0);
-        }
-        out
-    };
-    let ln_n = (n.max(1) as f64).ln();
-    let r0 = DVector::from_vec(r);
-    let lib_cols: Vec<(ExtraTerm, DVector<f64>)> = lib
-        .iter()
-        .zip(&columns[n_nuisance..])
-        .filter_map(|(t, c)| c.as_ref().map(|c| (*t, DVector::from_column_slice(c))))
-        .collect();
-    let score = |basis: &[DVector<f64>], r: &DVector<f64>| -> Vec<(usize, f64, f64)> {
-        lib_cols
-            .iter()
-            .enumerate()
-            .filter_map(|(i, (_, s))| {
-                let sp = project(s, basis);
-                let ss = sp.dot(&sp);
-                (ss > 1e-12 * s.dot(s).max(1e-300)).then(|| {
-                    let sr = sp.dot(r);
-                    (i, sr * sr / ss, sr / ss)
-                })
-            })
-            .collect()
-    };
-    let mut r_perp = project(&r0, &basis);
-    let mut ranking: Vec<TermScore> = score(&basis, &r_perp)
-        .into_iter()
-        .map(|(i, d, beta)| TermScore {
-            term: ExtraTerm {
-                coefficient: beta,
-                ..lib_cols[i].0
-            },
-            delta_chi2: d,
-            delta_bic: -d + ln_n,
-        })
-        .collect();
-    ranking.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+    basis
+}
 
+/// `v` with its components along the orthonormal `basis` removed.
+fn project(v: &DVector<f64>, basis: &[DVector<f64>]) -> DVector<f64> {
+    let mut out = v.clone();
+    for q in basis {
+        let c = q.dot(&out);
+        out.axpy(-c, q, 1.0);
+    }
+    out
+}
+
+/// Each library column's (index, χ² reduction (sᵀr)²/(sᵀs), coefficient sᵀr/(sᵀs)) after
+/// projecting out `basis`; columns that vanish in the projection are left out.
+fn score(
+    lib_cols: &[(ExtraTerm, DVector<f64>)],
+    basis: &[DVector<f64>],
+    r: &DVector<f64>,
+) -> Vec<(usize, f64, f64)> {
+    lib_cols
+        .iter()
+        .enumerate()
+        .filter_map(|(i, (_, s))| {
+            let sp = project(s, basis);
+            let ss = sp.dot(&sp);
+            (ss > 1e-12 * s.dot(s).max(1e-300)).then(|| {
+                let sr = sp.dot(r);
+                (i, sr * sr / ss, sr / ss)
+            })
+        })
+        .collect()
+}
+
+/// Forward selection: the best remaining column while its ΔBIC = −Δχ² + ln n is below
+/// [`DISCOVERY_DELTA_BIC`], at most [`MAX_TERMS`]; returns the chosen columns and their
+/// χ² reductions.
+fn forward_select(
+    lib_cols: &[(ExtraTerm, DVector<f64>)],
+    mut basis: Vec<DVector<f64>>,
+    mut r_perp: DVector<f64>,
+    ln_n: f64,
+) -> (Vec<usize>, Vec<f64>) {
     let mut chosen: Vec<usize> = Vec::new();
     let mut gains: Vec<f64> = Vec::new();
     while chosen.len() < MAX_TERMS {
-        let Some((i, d, _)) = score(&basis, &r_perp)
+        let Some((i, d, _)) = score(lib_cols, &basis, &r_perp)
             .into_iter()
             .filter(|(i, _, _)| !chosen.contains(i))
             .max_by(|a, b| a.1.total_cmp(&b.1))
@@ -331,38 +396,28 @@ pub fn regress(
         chosen.push(i);
         gains.push(d);
     }
-    // Joint coefficients of the chosen terms with the nuisance (least squares).
-    let mut selected = Vec::new();
-    if !chosen.is_empty() {
-        let mut all: Vec<&DVector<f64>> = Vec::new();
-        let nuis: Vec<DVector<f64>> = nuisance
-            .iter()
-            .map(|c| DVector::from_column_slice(c))
-            .collect();
-        all.extend(nuis.iter());
-        all.extend(chosen.iter().map(|&i| &lib_cols[i].1));
-        let a = DMatrix::from_fn(n, all.len(), |i, j| all[j][i]);
-        let beta = a
-            .svd(true, true)
-            .solve(&r0, 1e-10)
-            .map_err(|e| RegressError::Solve(e.to_string()))?;
-        for (k, &i) in chosen.iter().enumerate() {
-            let b = beta[nuis.len() + k];
-            selected.push(TermScore {
-                term: ExtraTerm {
-                    coefficient: b,
-                    ..lib_cols[i].0
-                },
-                delta_chi2: gains[k],
-                delta_bic: -gains[k] + ln_n,
-            });
-        }
-    }
-    Ok(Regression {
-        ranking,
-        selected,
-        n_points: n,
-    })
+    (chosen, gains)
+}
+
+/// Joint least-squares coefficients of the nuisance columns and the chosen terms (in that
+/// order) for the residual `r0`.
+fn joint_coefficients(
+    nuisance: &[&Vec<f64>],
+    lib_cols: &[(ExtraTerm, DVector<f64>)],
+    chosen: &[usize],
+    r0: &DVector<f64>,
+) -> Result<DVector<f64>, RegressError> {
+    let nuis: Vec<DVector<f64>> = nuisance
+        .iter()
+        .map(|c| DVector::from_column_slice(c))
+        .collect();
+    let mut all: Vec<&DVector<f64>> = nuis.iter().collect();
+    all.extend(chosen.iter().map(|&i| &lib_cols[i].1));
+    let n = r0.len();
+    let a = DMatrix::from_fn(n, all.len(), |i, j| all[j][i]);
+    a.svd(true, true)
+        .solve(r0, 1e-10)
+        .map_err(|e| RegressError::Solve(e.to_string()))
 }
 
 #[cfg(test)]
