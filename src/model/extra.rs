@@ -25,22 +25,32 @@ pub enum BalanceId {
 /// The pressure factor of a discovered term's feature (Pa, or 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum PressureFactor {
+    /// 1 (no pressure factor).
     One,
+    /// p_1, Pa.
     P1,
+    /// p_2, Pa.
     P2,
+    /// p_e, Pa.
     Pe,
-    /// Gauge pressures p − p_atm.
+    /// Gauge pressure p_1 − p_atm, Pa.
     P1Gauge,
+    /// Gauge pressure p_2 − p_atm, Pa.
     P2Gauge,
+    /// Gauge pressure p_e − p_atm, Pa.
     PeGauge,
+    /// p_1 − p_e, Pa.
     P1MinusPe,
+    /// p_2 − p_e, Pa.
     P2MinusPe,
+    /// p_1 − p_2, Pa.
     P1MinusP2,
 }
 
 /// The speed factor of a discovered term's feature.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum SpeedFactor {
+    /// 1 (no speed factor).
     One,
     /// ω, rad/s.
     Omega,
@@ -56,9 +66,13 @@ pub enum SpeedFactor {
 /// The coefficient is SI: (N·m or kg/s) per unit of the feature.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ExtraTerm {
+    /// The balance the term enters.
     pub balance: BalanceId,
+    /// Its pressure factor.
     pub pressure: PressureFactor,
+    /// Its speed factor.
     pub speed: SpeedFactor,
+    /// The coefficient, SI per unit of the feature ([`coefficient_unit`]).
     pub coefficient: f64,
 }
 

@@ -33,8 +33,11 @@ pub struct PortTiming {
 /// Volumes derived from geometry and port timing (eqs. 5–7).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DerivedVolumes {
+    /// Dead volume per compartment V_0, m³ (eq. 5).
     pub v_dead_m3: f64,
+    /// Compartment volume at inlet cut-off V_fill, m³ (eq. 5).
     pub v_fill_m3: f64,
+    /// Compartment volume at exhaust opening V_exp, m³ (eq. 5).
     pub v_exp_m3: f64,
     /// ε = V_exp / V_fill (eq. 6).
     pub eps: f64,

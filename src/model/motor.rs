@@ -23,9 +23,13 @@ pub use crate::numerics::ode::{State, N_STATES};
 
 /// Index of each state in [`State`].
 pub mod idx {
+    /// p_1, Pa.
     pub const P1: usize = 0;
+    /// p_2, Pa.
     pub const P2: usize = 1;
+    /// p_e, Pa.
     pub const PE: usize = 2;
+    /// ω, rad/s.
     pub const OMEGA: usize = 3;
 }
 
@@ -36,9 +40,15 @@ pub enum Load {
     #[default]
     None,
     /// Eddy-current brake: T_load = c·ω (c in N·m·s/rad).
-    ViscousBrake { c_nm_s_rad: f64 },
+    ViscousBrake {
+        /// Brake coefficient c, N·m·s/rad.
+        c_nm_s_rad: f64,
+    },
     /// Constant torque opposing forward rotation, N·m (an active load).
-    Torque { t_nm: f64 },
+    Torque {
+        /// The torque, N·m.
+        t_nm: f64,
+    },
 }
 
 impl Load {
@@ -65,6 +75,7 @@ pub struct Boundary {
     pub c_port1_m3_s_pa: Option<f64>,
     /// Extra nozzle in series behind port 2 (outlet throttling), m³/(s·Pa).
     pub c_port2_m3_s_pa: Option<f64>,
+    /// Mechanical load on the shaft.
     pub load: Load,
 }
 
@@ -91,14 +102,19 @@ pub struct Balance {
     pub flow_port2_kg_s: f64,
     /// Mass flow out of the exhaust port, kg/s.
     pub flow_exhaust_kg_s: f64,
-    /// Leakage V_1 → V_e, V_2 → V_e, V_1 → V_2, kg/s.
+    /// Leakage V_1 → V_e, kg/s.
     pub leak_1e_kg_s: f64,
+    /// Leakage V_2 → V_e, kg/s.
     pub leak_2e_kg_s: f64,
+    /// Leakage V_1 → V_2, kg/s.
     pub leak_12_kg_s: f64,
+    /// Displacement flows of the ideal motor (paper eqs. 16–18).
     pub displacement: DisplacementFlows,
-    /// Net mass flow into V_1, V_2, V_e, kg/s.
+    /// Net mass flow into V_1, kg/s.
     pub dm1_kg_s: f64,
+    /// Net mass flow into V_2, kg/s.
     pub dm2_kg_s: f64,
+    /// Net mass flow into V_e, kg/s.
     pub dme_kg_s: f64,
     /// Torque of the ideal motor, N·m.
     pub torque_ideal_nm: f64,
@@ -118,7 +134,9 @@ impl Balance {
 /// A motor model: checked parameters plus the effects switched on.
 #[derive(Debug, Clone)]
 pub struct Motor {
+    /// Checked parameters, SI.
     pub params: MotorParams,
+    /// The catalog effects switched on.
     pub effects: EffectSet,
     /// Terms found by `vanefit diagnose` outside the catalog (empty: the model as specified).
     pub extra: Vec<ExtraTerm>,
@@ -126,6 +144,7 @@ pub struct Motor {
 }
 
 impl Motor {
+    /// A motor of these parameters with these effects switched on.
     pub fn new(params: MotorParams, effects: EffectSet) -> Self {
         let cycle = Cycle::new(
             params.z().round(),
@@ -153,6 +172,7 @@ impl Motor {
         Self::new(MotorParams::default(), EffectSet::empty())
     }
 
+    /// The ideal motor's polytropic cycle (SPEC §1.2).
     pub fn cycle(&self) -> &Cycle {
         &self.cycle
     }

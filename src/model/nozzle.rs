@@ -17,7 +17,9 @@ pub const R_LAMINAR: f64 = 0.999;
 /// An ISO 6358 restriction: sonic conductance C (m³/(s·Pa)) and critical ratio b.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Nozzle {
+    /// Sonic conductance C, m³/(s·Pa).
     pub c_m3_s_pa: f64,
+    /// Critical pressure ratio b, 1.
     pub b_crit: f64,
 }
 
@@ -39,6 +41,7 @@ fn subsonic(r: f64, b_crit: f64) -> f64 {
 }
 
 impl Nozzle {
+    /// A nozzle of conductance C (m³/(s·Pa)) and critical ratio b.
     pub fn new(c_m3_s_pa: f64, b_crit: f64) -> Self {
         Self { c_m3_s_pa, b_crit }
     }

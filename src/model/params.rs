@@ -258,19 +258,14 @@ impl MotorParams {
 }
 
 /// An error in a parameter value or name.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("parameter '{name}': {message}")]
 pub struct ParamError {
+    /// The parameter's name as given.
     pub name: String,
+    /// What is wrong with it.
     pub message: String,
 }
-
-impl fmt::Display for ParamError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "parameter '{}': {}", self.name, self.message)
-    }
-}
-
-impl std::error::Error for ParamError {}
 
 /// Unchecked parameters: defaults overridden by whatever a file or the user gave.
 #[derive(Debug, Clone, Default)]

@@ -105,8 +105,11 @@ pub fn forward_weight(omega: f64) -> f64 {
 /// They sum to zero exactly (eq. 18): the ideal motor stores no air.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct DisplacementFlows {
+    /// Into V_1, kg/s.
     pub into_1_kg_s: f64,
+    /// Into V_2, kg/s.
     pub into_2_kg_s: f64,
+    /// Into V_e, kg/s.
     pub into_e_kg_s: f64,
 }
 

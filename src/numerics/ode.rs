@@ -4,8 +4,6 @@
 //! while the rotor and the ramps move over seconds. The default backend is diffsol's
 //! variable-order BDF with a dense LU on the 4×4 Jacobian.
 
-use std::fmt;
-
 /// Number of components of a state (the motor's p_1, p_2, p_e and ω).
 pub const N_STATES: usize = 4;
 /// A state vector. Fixed-size so that a step allocates nothing.
@@ -17,7 +15,9 @@ pub type Rhs<'a> = dyn Fn(f64, &State) -> State + 'a;
 /// Integration tolerances: |error_i| ≤ atol_i + rtol·|x_i|.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tolerances {
+    /// Relative tolerance, 1.
     pub rtol: f64,
+    /// Absolute tolerance per state, in the state's unit.
     pub atol: State,
 }
 
@@ -45,17 +45,10 @@ impl Tolerances {
     }
 }
 
-/// Why an integration failed.
-#[derive(Debug, Clone, PartialEq)]
+/// Why an integration failed (the integrator's own message).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("integration failed: {0}")]
 pub struct SolveError(pub String);
-
-impl fmt::Display for SolveError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "integration failed: {}", self.0)
-    }
-}
-
-impl std::error::Error for SolveError {}
 
 /// A stiff initial-value solver.
 pub trait StiffSolver: Send + Sync {
@@ -104,6 +97,7 @@ fn jacobian_times(rhs: &Rhs<'_>, t: f64, x: &State, f0: &State, v: &State) -> St
 /// diffsol's BDF (variable order 1–5, like MATLAB's ode15s) with nalgebra's dense LU.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct DiffsolBdf {
+    /// Integration tolerances.
     pub tol: Tolerances,
 }
 

@@ -37,7 +37,9 @@ fn missing_message(q: Quantity) -> String {
 pub struct Column {
     /// Name as written in the file's header.
     pub name: String,
+    /// The quantity the name stands for.
     pub quantity: Quantity,
+    /// The unit the values are written in.
     pub unit: Unit,
     /// Values in SI, one per data row.
     pub si: Vec<f64>,
@@ -48,16 +50,20 @@ pub struct Column {
 /// A CSV recording: columns in file order, all of equal length.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recording {
+    /// The CSV file.
     pub file: PathBuf,
+    /// Every column, in file order.
     pub columns: Vec<Column>,
     /// Line number of each data row (header is line 1).
     pub lines: Vec<u64>,
 }
 
 impl Recording {
+    /// Number of data rows.
     pub fn rows(&self) -> usize {
         self.lines.len()
     }
+    /// The column of a quantity, if recorded.
     pub fn column(&self, q: Quantity) -> Option<&Column> {
         self.columns.iter().find(|c| c.quantity == q)
     }
@@ -78,14 +84,18 @@ pub use crate::sim::experiment::Kind;
 /// One experiment as the rig file describes it, with its recording.
 #[derive(Debug, Clone)]
 pub struct ExperimentData {
+    /// The kind of experiment.
     pub kind: Kind,
     /// File name as given in rig.toml.
     pub file: String,
+    /// Supply pressure from rig.toml (`p_supply_mpa`), absolute Pa.
     pub p_supply_pa: Option<f64>,
+    /// Load on the shaft.
     pub load: Load,
     /// Weight of the whole experiment in the cost (default 1).
     pub weight: f64,
     /// Weight per channel prefix (e.g. "flow1"), default 1.
     pub channel_weights: std::collections::BTreeMap<String, f64>,
+    /// The recording, converted to SI.
     pub recording: Recording,
 }

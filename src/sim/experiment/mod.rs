@@ -30,10 +30,12 @@ pub struct SimError {
 /// Simulated channels of one experiment, SI, one value per recorded row.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Simulated {
+    /// Each channel with its values, SI, in the kind's channel order.
     pub outputs: Vec<(Quantity, Vec<f64>)>,
 }
 
 impl Simulated {
+    /// The values of one channel (`None` if the kind does not simulate it).
     pub fn channel(&self, q: Quantity) -> Option<&[f64]> {
         self.outputs
             .iter()
