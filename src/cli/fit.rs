@@ -44,7 +44,7 @@ pub enum FitCommandError {
     StartSpread(f64),
     /// `--effects` names an unknown effect.
     #[error("--effects: {0}")]
-    Effects(String),
+    Effects(crate::model::effects::UnknownEffect),
     /// A dimension of the search space is bad.
     #[error("--estimate/--bounds/--start-range: {0}")]
     Dimension(SpaceError),

@@ -76,7 +76,7 @@ pub enum SettingsError {
     BackCalculationWithoutGains,
     /// An unknown effect in `--effects` (the model's message).
     #[error("--effects: {0}")]
-    Effects(String),
+    Effects(#[from] crate::model::effects::UnknownEffect),
     /// `--t-step-s` at or after the end of the scenario, s.
     #[error("--t-step-s {0}: must be before --duration-s")]
     StepAfterEnd(f64),

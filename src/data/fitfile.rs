@@ -239,7 +239,7 @@ impl Reader<'_> {
                 .map(|v| {
                     v.as_str()
                         .ok_or_else(|| "effect ids must be strings".to_string())
-                        .and_then(|s| s.parse::<Effect>())
+                        .and_then(|s| s.parse::<Effect>().map_err(|e| e.to_string()))
                 })
                 .collect::<Result<EffectSet, _>>()
                 .map_err(|m| self.fail(self.line_of("\"effects\""), m)),

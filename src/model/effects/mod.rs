@@ -287,16 +287,22 @@ impl fmt::Display for Effect {
     }
 }
 
+/// An effect id that is not in the catalog.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown effect '{id}' (known: {known})", id = .0, known = known_ids())]
+pub struct UnknownEffect(pub String);
+
+fn known_ids() -> String {
+    Effect::ALL.map(|e| e.id()).join(", ")
+}
+
 impl FromStr for Effect {
-    type Err = String;
+    type Err = UnknownEffect;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Effect::ALL
             .into_iter()
             .find(|e| e.id() == s)
-            .ok_or_else(|| {
-                let known: Vec<_> = Effect::ALL.iter().map(|e| e.id()).collect();
-                format!("unknown effect '{s}' (known: {})", known.join(", "))
-            })
+            .ok_or_else(|| UnknownEffect(s.to_string()))
     }
 }
 
@@ -331,7 +337,7 @@ impl EffectSet {
         self.iter().map(|e| e.id().to_string()).collect()
     }
     /// Parses a comma-separated list of ids ("" gives the empty set).
-    pub fn parse_list(list: &str) -> Result<Self, String> {
+    pub fn parse_list(list: &str) -> Result<Self, UnknownEffect> {
         list.split(',')
             .map(str::trim)
             .filter(|s| !s.is_empty())
@@ -409,6 +415,7 @@ mod tests {
         assert!("magic_friction"
             .parse::<Effect>()
             .unwrap_err()
+            .to_string()
             .contains("unknown effect"));
         let set = EffectSet::parse_list("sensor_lag, breakaway_friction").unwrap();
         assert_eq!(set.ids(), vec!["breakaway_friction", "sensor_lag"]);
