@@ -1,3 +1,5 @@
+#![warn(missing_docs)]
+#![deny(rustdoc::broken_intra_doc_links)]
 //! vanefit: estimate the physical parameters of pneumatic vane motors from datasheets and
 //! test-rig recordings, and find the physics that a model leaves out.
 //!

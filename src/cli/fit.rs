@@ -110,7 +110,7 @@ pub struct FitArgs {
     /// How to compute 95% intervals.
     #[arg(long, value_enum, default_value_t = Uncertainty::Profile)]
     pub uncertainty: Uncertainty,
-    /// Continue an interrupted run from its results file (<out>.starts.jsonl).
+    /// Continue an interrupted run from its results file (`<out>.starts.jsonl`).
     #[arg(long)]
     pub resume: bool,
     /// Keep every start's cost trace in the results file.

@@ -168,6 +168,7 @@ pub struct Regression {
     pub ranking: Vec<TermScore>,
     /// Terms chosen by forward selection, with their joint least-squares coefficients.
     pub selected: Vec<TermScore>,
+    /// Compared points n (of ln n in the BIC).
     pub n_points: usize,
 }
 
@@ -255,6 +256,10 @@ pub fn regress(
     })
 }
 
+/// The sensitivity columns: how many lead as nuisance, then every column (`None` where a
+/// perturbed model does not simulate).
+type Sensitivities = (usize, Vec<Option<Vec<f64>>>);
+
 /// A column of the sensitivity matrix.
 enum Col {
     /// An estimated parameter, in search coordinates θ (nuisance).
@@ -275,7 +280,7 @@ fn sensitivities(
     names: &[String],
     lib: &[ExtraTerm],
     engine: &Engine,
-) -> Result<(usize, Vec<Option<Vec<f64>>>), RegressError> {
+) -> Result<Sensitivities, RegressError> {
     let solver = DiffsolBdf::default();
     let motor = model.motor();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();

@@ -5,7 +5,7 @@
 //! category and one line of physics, its parameters ([`ParamSpec`], with the value that
 //! switches each off), the experiments it can show in ([`ShowsIn`]), and where it acts in
 //! the motor (the hooks of [`Term`]). Adding an effect is its file plus one line in the
-//! [`registry!`] below; its parameters join [`crate::model::params::PARAMS`] after those
+//! `registry!` below; its parameters join [`crate::model::params::PARAMS`] after those
 //! of the effects before it (the order of fit files).
 //!
 //! Discovered terms ([`crate::model::extra::ExtraTerm`]) act through the same [`Term`]

@@ -5,7 +5,7 @@
 //! (as rig.toml writes it), the inputs it reads from a recording and how they are checked,
 //! the channels it measures, its abscissa, whether it is transient, and how it builds the
 //! [`Drive`] that simulates it. Adding a kind is its file plus one line in the
-//! [`registry!`] below (which also adds the [`Kind`] variant that rig.toml names).
+//! `registry!` below (which also adds the [`Kind`] variant that rig.toml names).
 
 use crate::model::motor::{Load, Motor};
 use crate::numerics::ode::StiffSolver;
