@@ -324,9 +324,18 @@ impl EffectSet {
     pub fn contains(&self, e: Effect) -> bool {
         self.0 & (1 << e.0) != 0
     }
-    /// The effects switched on, in registry order.
+    /// The effects switched on, in registry order. Walks the set bits only, so that the
+    /// base model (the empty set) costs nothing on the motor's hot path.
     pub fn iter(&self) -> impl Iterator<Item = Effect> + '_ {
-        Effect::ALL.into_iter().filter(|e| self.contains(*e))
+        let mut bits = self.0;
+        std::iter::from_fn(move || {
+            if bits == 0 {
+                return None;
+            }
+            let i = bits.trailing_zeros() as u8;
+            bits &= bits - 1;
+            Some(Effect(i))
+        })
     }
     /// Whether no effect is switched on.
     pub fn is_empty(&self) -> bool {
