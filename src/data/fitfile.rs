@@ -374,23 +374,12 @@ pub fn term_from_json(v: &serde_json::Value) -> Result<ExtraTerm, TermError> {
         other => return Err(TermError(format!("unknown balance '{other}'"))),
     };
     let p = field("pressure")?;
-    let pressure = [
-        P::One,
-        P::P1,
-        P::P2,
-        P::Pe,
-        P::P1Gauge,
-        P::P2Gauge,
-        P::PeGauge,
-        P::P1MinusPe,
-        P::P2MinusPe,
-        P::P1MinusP2,
-    ]
-    .into_iter()
-    .find(|x| pressure_id(*x) == p)
-    .ok_or_else(|| TermError(format!("unknown pressure factor '{p}'")))?;
+    let pressure = P::ALL
+        .into_iter()
+        .find(|x| pressure_id(*x) == p)
+        .ok_or_else(|| TermError(format!("unknown pressure factor '{p}'")))?;
     let w = field("speed")?;
-    let speed = [W::One, W::Omega, W::AbsOmega, W::OmegaAbsOmega, W::Sign]
+    let speed = W::ALL
         .into_iter()
         .find(|x| speed_id(*x) == w)
         .ok_or_else(|| TermError(format!("unknown speed factor '{w}'")))?;

@@ -62,6 +62,27 @@ pub enum SpeedFactor {
     Sign,
 }
 
+impl PressureFactor {
+    /// Every pressure factor.
+    pub const ALL: [PressureFactor; 10] = [
+        P::One,
+        P::P1,
+        P::P2,
+        P::Pe,
+        P::P1Gauge,
+        P::P2Gauge,
+        P::PeGauge,
+        P::P1MinusPe,
+        P::P2MinusPe,
+        P::P1MinusP2,
+    ];
+}
+
+impl SpeedFactor {
+    /// Every speed factor.
+    pub const ALL: [SpeedFactor; 5] = [W::One, W::Omega, W::AbsOmega, W::OmegaAbsOmega, W::Sign];
+}
+
 /// A term outside the catalog: `coefficient · pressure(x) · speed(ω)` added to one balance.
 /// The coefficient is SI: (N·m or kg/s) per unit of the feature.
 #[derive(Debug, Clone, Copy, PartialEq)]
