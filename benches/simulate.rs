@@ -1,12 +1,15 @@
-//! Speed of the simulation core (issue 2): one datasheet characteristic (25 speeds), one 60 s
-//! pressure ramp, one 65 s outlet-throttle ramp, and one full evaluation of all three.
-//! Run: `cargo bench --bench simulate`.
+//! Speed of the simulation core (issues 2 and 10): one datasheet characteristic (25 speeds),
+//! one 60 s pressure ramp, one 65 s outlet-throttle ramp, and all three, each with the
+//! default solver (Rodas4, `numerics::DefaultSolver`) and with diffsol's BDF at its own
+//! default tolerance (the solver before issue 10), in one run so that the two compare on
+//! the same machine state. Run: `cargo bench --bench simulate`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use vanefit::data::synth::{free_speed, plan_experiments, SynthPlan};
 use vanefit::model::motor::Motor;
-use vanefit::numerics::ode::{DiffsolBdf, Tolerances};
+use vanefit::numerics::ode::{DiffsolBdf, StiffSolver};
+use vanefit::numerics::DefaultSolver;
 use vanefit::sim::experiment::Experiment;
 
 fn experiments() -> (Motor, Vec<Experiment>) {
@@ -22,36 +25,30 @@ fn experiments() -> (Motor, Vec<Experiment>) {
 
 fn bench(c: &mut Criterion) {
     let (motor, ex) = experiments();
-    let solver = DiffsolBdf::default();
+    let solvers: [(&str, Box<dyn StiffSolver>); 2] = [
+        ("rodas4", Box::new(DefaultSolver::default())),
+        ("bdf", Box::new(DiffsolBdf::default())),
+    ];
     let names = [
         "datasheet_25_speeds",
         "pressure_ramp_60s",
         "outlet_throttle_65s",
     ];
-    for (name, e) in names.iter().zip(&ex) {
-        c.bench_function(name, |b| {
-            b.iter(|| black_box(e.simulate(black_box(&motor), &solver).unwrap()))
+    for (solver_name, solver) in &solvers {
+        let solver = solver.as_ref();
+        for (name, e) in names.iter().zip(&ex) {
+            c.bench_function(&format!("{name}/{solver_name}"), |b| {
+                b.iter(|| black_box(e.simulate(black_box(&motor), solver).unwrap()))
+            });
+        }
+        c.bench_function(&format!("all_three/{solver_name}"), |b| {
+            b.iter(|| {
+                for e in &ex {
+                    black_box(e.simulate(black_box(&motor), solver).unwrap());
+                }
+            })
         });
     }
-    c.bench_function("all_three", |b| {
-        b.iter(|| {
-            for e in &ex {
-                black_box(e.simulate(black_box(&motor), &solver).unwrap());
-            }
-        })
-    });
-    // The same at rtol 1e-6, the tolerance a plain simulation would use; the default
-    // (3e-8) is chosen for a smooth fitting cost (see `ode::Tolerances`).
-    let loose = DiffsolBdf {
-        tol: Tolerances::with_rtol(1e-6),
-    };
-    c.bench_function("all_three_rtol_1e-6", |b| {
-        b.iter(|| {
-            for e in &ex {
-                black_box(e.simulate(black_box(&motor), &loose).unwrap());
-            }
-        })
-    });
 }
 
 criterion_group!(benches, bench);

@@ -15,7 +15,7 @@ use vanefit::data::dataset::Dataset;
 use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
 use vanefit::model::params::MotorParams;
-use vanefit::numerics::ode::DiffsolBdf;
+use vanefit::numerics::DefaultSolver;
 use vanefit::objective::cost::{CostModel, CostOptions};
 use vanefit::sim::experiment::Experiment;
 use vanefit::units::{column_name, Quantity, Unit};
@@ -229,7 +229,7 @@ const COST_REL: f64 = 1e-9;
 fn same_simulation_and_same_cost_in_other_units() {
     let a = Dataset::load(&measurements(SOURCE)).unwrap();
     let b = Dataset::load(&measurements(TARGET)).unwrap();
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let truth = Motor::default_motor();
     for (ea, eb) in a.experiments.iter().zip(&b.experiments) {
         let sa = Experiment::new(ea, a.p_atm_pa)

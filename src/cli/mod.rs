@@ -11,7 +11,7 @@ use crate::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::sim::experiment::Experiment;
 use crate::units::Quantity;
 use clap::{Parser, Subcommand};
@@ -241,7 +241,7 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
     let (p, effects) = params_for(&ds, fit.as_ref())?;
     let extra = fit.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
     let motor = Motor::new(p, effects).with_extra(&extra);
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     std::fs::create_dir_all(out)
         .map_err(|e| Failure(format!("{}: cannot create: {e}", out.display())))?;
     for data in &ds.experiments {
@@ -305,7 +305,7 @@ fn synth(
     let plan = SynthPlan::default();
     let experiments = synthesize(
         &motor,
-        &DiffsolBdf::default(),
+        &DefaultSolver::default(),
         &plan,
         &SensorNoise::typical().scaled(noise),
         seed,

@@ -597,7 +597,7 @@ pub fn disturbance_metrics(tr: &Trace, t_step: f64, band_rad_s: f64) -> Disturba
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::numerics::ode::DiffsolBdf;
+    use crate::numerics::DefaultSolver;
 
     const P_ATM: f64 = 101_325.0;
 
@@ -690,7 +690,7 @@ mod tests {
             load_torque_nm: Steps::constant(0.0),
         };
         let tr = lp
-            .simulate(&m, &DiffsolBdf::default(), &sc, &start)
+            .simulate(&m, &DefaultSolver::default(), &sc, &start)
             .unwrap();
         // Started settled: no movement before the step.
         let k_step = 190;
@@ -720,7 +720,7 @@ mod tests {
             load_torque_nm: Steps::step(0.0, 0.2, 0.03),
         };
         let tr = lp
-            .simulate(&m, &DiffsolBdf::default(), &sc, &start)
+            .simulate(&m, &DefaultSolver::default(), &sc, &start)
             .unwrap();
         let d = disturbance_metrics(&tr, 0.2, rpm(20.0));
         assert!(d.max_drop_rad_s > rpm(50.0), "the step must be felt: {d:?}");
@@ -729,7 +729,7 @@ mod tests {
         // Without control the same torque step costs a lasting speed loss.
         let open = lp.without_control();
         let tr_open = open
-            .simulate(&m, &DiffsolBdf::default(), &sc, &start)
+            .simulate(&m, &DefaultSolver::default(), &sc, &start)
             .unwrap();
         let open_error = tail_mean_error(&tr_open, 0.1);
         assert!(open_error > rpm(50.0), "open loop loses {open_error} rad/s");
@@ -761,7 +761,7 @@ mod tests {
             };
             let start = lp.settled_at(&m, from).unwrap();
             let tr = lp
-                .simulate(&m, &DiffsolBdf::default(), &sc, &start)
+                .simulate(&m, &DefaultSolver::default(), &sc, &start)
                 .unwrap();
             let saturated = tr.command_v.iter().filter(|u| **u <= 0.0).count();
             let min_i = tr.integral_v.iter().cloned().fold(f64::MAX, f64::min);

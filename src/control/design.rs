@@ -208,7 +208,7 @@ mod tests {
     use crate::control::linear::operating_point;
     use crate::control::RAD_S_PER_RPM;
     use crate::model::motor::{idx, Boundary, Load, Motor};
-    use crate::numerics::ode::DiffsolBdf;
+    use crate::numerics::DefaultSolver;
 
     const P_ATM: f64 = 101_325.0;
 
@@ -285,7 +285,7 @@ mod tests {
                 load_torque_nm: Steps::constant(0.0),
             };
             let tr = lp
-                .simulate(&m, &DiffsolBdf::default(), &sc, &start)
+                .simulate(&m, &DefaultSolver::default(), &sc, &start)
                 .unwrap();
             step_metrics(&tr, 0.1, w0, to)
         };

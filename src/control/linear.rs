@@ -350,7 +350,8 @@ pub fn rad_s(f_hz: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::model::motor::Load;
-    use crate::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
+    use crate::numerics::ode::{StiffSolver, Tolerances};
+    use crate::numerics::DefaultSolver;
 
     fn default_point(p_supply_pa: f64) -> (Motor, OperatingPoint) {
         let m = Motor::default_motor();
@@ -373,7 +374,7 @@ mod tests {
         let mut bc = op.bc;
         bc.p_port1_pa += du;
         let t: Vec<f64> = [0.002, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0].to_vec();
-        let solver = DiffsolBdf {
+        let solver = DefaultSolver {
             tol: Tolerances {
                 rtol: 1e-10,
                 atol: [1e-4, 1e-4, 1e-4, 1e-7],

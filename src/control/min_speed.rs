@@ -28,7 +28,7 @@
 use super::closed_loop::{Loop, Scenario, Steps, Trace};
 use super::{ControlError, RAD_S_PER_RPM};
 use crate::model::motor::{idx, Boundary, Load, Motor, State};
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::sim::steady;
 
 /// A jump of the speed on the ramp.
@@ -316,7 +316,7 @@ pub fn closed_loop_min_speed(
     stage_s: f64,
 ) -> Result<ControlledMin, ControlError> {
     let mut state = lp.settled_at(motor, w_start_rad_s)?;
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let mut attempts = Vec::new();
     let mut trace = Trace::default();
     let mut w_min = f64::NAN;
@@ -381,7 +381,7 @@ pub fn ramp_simulation(
     let n = n.max(2);
     let t_out: Vec<f64> = (1..n).map(|k| ramp_s * k as f64 / (n - 1) as f64).collect();
     let x0 = [p_atm_pa, p_atm_pa, p_atm_pa, 0.0];
-    let xs = DiffsolBdf::default().solve(&rhs, 0.0, x0, &t_out)?;
+    let xs = DefaultSolver::default().solve(&rhs, 0.0, x0, &t_out)?;
     let mut out = vec![(p_atm_pa, 0.0)];
     out.extend(
         t_out

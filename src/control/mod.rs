@@ -15,8 +15,8 @@
 //!   and SVG figures are `report::control`'s).
 //! * [`error`]: why a study could not be done.
 //!
-//! The motor is integrated with `ode::DiffsolBdf`, which steps and interpolates itself and so
-//! serves the many short sample-to-sample intervals of the closed loop.
+//! The motor is integrated with `numerics::DefaultSolver`, which steps and interpolates
+//! itself and so serves the many short sample-to-sample intervals of the closed loop.
 //!
 //! SI units inside (Pa absolute, rad/s, N·m, s). The controller's signals are the exception
 //! that the paper imposes: the command is in volts (0–10 V to the valve) and the speed error in

@@ -13,7 +13,7 @@ use crate::estimate::Engine;
 use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
 use crate::model::params::MotorParams;
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::objective::cost::{CostModel, CostOptions};
 use crate::sim::experiment::SimError;
 use std::cell::{Cell, RefCell};
@@ -30,7 +30,7 @@ pub(crate) struct Context<'a> {
     /// The recorded data and noise at the compared rows (what every fit maximises).
     pub target: Target,
     /// The ODE solver of the analyses (each fit has its own).
-    pub solver: DiffsolBdf,
+    pub solver: DefaultSolver,
     /// The rig's nominal motor (the first baseline start).
     pub nominal: MotorParams,
     /// Names estimated in the base model.
@@ -53,7 +53,7 @@ impl<'a> Context<'a> {
         t0: Instant,
     ) -> Result<Self, DiagnoseError> {
         let phase_start = Cell::new(Instant::now());
-        let solver = DiffsolBdf::default();
+        let solver = DefaultSolver::default();
         let cost = CostModel::new(ds, CostOptions::default())?;
         let target = Target::new(&cost, ds)?;
         let nominal = ds.nominal_params()?;

@@ -45,7 +45,7 @@ pub use crate::model::extra::{
     speed_id,
 };
 use crate::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, SpeedFactor as W};
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
 use nalgebra::{DMatrix, DVector};
 
@@ -178,7 +178,7 @@ fn outputs(
     cost: &CostModel,
     target: &Target,
     motor: &Motor,
-    solver: &DiffsolBdf,
+    solver: &DefaultSolver,
 ) -> Option<Vec<f64>> {
     let res = cost.residuals(motor, solver).ok()?;
     let v: Vec<f64> = res
@@ -198,7 +198,7 @@ pub fn regress(
     names: &[String],
     engine: &Engine,
 ) -> Result<Regression, RegressError> {
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let sim = outputs(cost, target, &model.motor(), &solver).ok_or(RegressError::NoSimulation)?;
     let data: Vec<f64> = target
         .channels
@@ -281,7 +281,7 @@ fn sensitivities(
     lib: &[ExtraTerm],
     engine: &Engine,
 ) -> Result<Sensitivities, RegressError> {
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let motor = model.motor();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     let space = ParamSpace::new(&name_refs, model.params.clone(), model.effects.clone())?;

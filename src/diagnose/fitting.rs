@@ -19,7 +19,7 @@ use crate::estimate::space::{ParamSpace, SpaceError};
 use crate::model::effects::EffectSet;
 use crate::model::motor::{ExtraTerm, Motor};
 use crate::model::params::MotorParams;
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
 use std::time::Instant;
 
@@ -161,11 +161,11 @@ pub fn run_job(
     engine: &Engine,
 ) -> Result<Fitted, FitError> {
     let t0 = Instant::now();
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let objective = Likelihood {
         cost,
         target,
-        solver: DiffsolBdf::default(),
+        solver: DefaultSolver::default(),
     };
     let names: Vec<&str> = job.names.iter().map(String::as_str).collect();
     let first = job

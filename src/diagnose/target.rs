@@ -33,7 +33,7 @@ use super::error::DiagnoseError;
 use crate::data::dataset::{Dataset, Kind};
 use crate::estimate::objective::{Evaluation, Objective};
 use crate::model::motor::Motor;
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel, FAILURE_PENALTY};
 use crate::objective::reference::{FitOptions, Reference};
 use crate::units::Quantity;
@@ -229,7 +229,7 @@ impl Target {
     }
 
     /// χ² of eq. \[1\] for a motor, or `None` if the simulation fails or is not finite.
-    pub fn chi2(&self, cost: &CostModel, motor: &Motor, solver: &DiffsolBdf) -> Option<f64> {
+    pub fn chi2(&self, cost: &CostModel, motor: &Motor, solver: &DefaultSolver) -> Option<f64> {
         let res = cost.residuals(motor, solver).ok()?;
         let c: f64 = self.channel_chi2(&res).iter().sum();
         c.is_finite().then_some(c)
@@ -244,7 +244,7 @@ pub struct Likelihood<'a> {
     /// The recorded data and noise at those rows.
     pub target: &'a Target,
     /// The ODE solver.
-    pub solver: DiffsolBdf,
+    pub solver: DefaultSolver,
 }
 
 impl Objective for Likelihood<'_> {

@@ -14,7 +14,7 @@ use crate::data::dataset::Kind;
 use crate::data::fitfile::{FitFile, RunInfo, Starts};
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -111,7 +111,7 @@ pub fn fit(
     let t0 = Instant::now();
     let objective = DataObjective {
         cost,
-        solver: Box::new(DiffsolBdf::default()),
+        solver: Box::new(DefaultSolver::default()),
     };
     let file = setup.results_file.as_deref().map(ResultsFile::new);
     let run = multistart::run(
@@ -186,7 +186,7 @@ pub fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kind> {
         motor.effects.clone(),
     );
     let w_free = free_speed(motor, plan.p_supply_pa, plan.p_atm_pa).ok()?;
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     plan_experiments(&plan, w_free)
         .iter()
         .filter_map(|d| {

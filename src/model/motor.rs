@@ -329,6 +329,16 @@ impl Motor {
         }
     }
 
+    /// The two measured flows alone, kg/s: into port 1 and out of port 2, as in
+    /// [`Balance`]. Recorded rows need only these, and a ramp has a thousand rows.
+    pub fn port_flows(&self, x: &State, bc: &Boundary) -> (f64, f64) {
+        let p = &self.params;
+        (
+            self.port_flow(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, x[idx::P1]),
+            self.port_flow(p.c_out2(), bc.c_port2_m3_s_pa, x[idx::P2], bc.p_port2_pa),
+        )
+    }
+
     /// Flow through a duct with an optional throttle in series, from `p_a` to `p_b`, kg/s.
     fn port_flow(&self, c_duct: f64, c_throttle: Option<f64>, p_a: f64, p_b: f64) -> f64 {
         let duct = self.nozzle(c_duct);
@@ -372,6 +382,10 @@ mod tests {
             let b = m.balance(&x, &bc);
             let stored = b.dm1_kg_s + b.dm2_kg_s + b.dme_kg_s;
             let exchanged = b.flow_port1_kg_s - b.flow_port2_kg_s - b.flow_exhaust_kg_s;
+            assert_eq!(
+                m.port_flows(&x, &bc),
+                (b.flow_port1_kg_s, b.flow_port2_kg_s)
+            );
             assert!(
                 (stored - exchanged).abs() < 1e-15,
                 "{stored} vs {exchanged}"

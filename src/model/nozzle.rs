@@ -84,9 +84,11 @@ pub fn series_flow(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64,
 /// (p_u > p_d) when neither nozzle is in its laminar range. In the choked and subsonic
 /// ranges the squared flow is a quadratic polynomial in the pressures,
 /// ṁ² = (C·ρ0)²·(p_u² − ((p_d − b·p_u)/(1 − b))²) or (C·ρ0·p_u)², so ṁ_up² = ṁ_down² is a
-/// quadratic in p_m for each of the four regime pairs; the root that lies inside its own
-/// regimes is the solution (it is unique, as the flow balance has one root). `None` when
-/// the root lies in a laminar range.
+/// quadratic in p_m for each of the four regime pairs. The balance
+/// g(p_m) = ṁ_up² − ṁ_down² falls strictly with p_m, so the sign of g at the two regime
+/// boundaries (p_m = b_up·p_u, where the first nozzle stops choking, and p_m = p_d/b_down,
+/// where the second starts) tells which pair holds the root; one quadratic is then solved.
+/// `None` when the root lies in a laminar range.
 fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<f64> {
     let (k1, k2) = (
         (up.c_m3_s_pa * RHO0_KG_M3).powi(2),
@@ -94,9 +96,9 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
     );
     let (b1, b2) = (up.b_crit, down.b_crit);
     let (s1, s2) = (1.0 / (1.0 - b1).powi(2), 1.0 / (1.0 - b2).powi(2));
-    for up_choked in [false, true] {
-        // ṁ_up² = a1·p² + b1·p + c1 as a polynomial in p = p_m.
-        let (a1, l1, c1) = if up_choked {
+    // ṁ² = a·p² + l·p + c as a polynomial in p = p_m, for each nozzle and regime.
+    let up_poly = |choked: bool| {
+        if choked {
             (0.0, 0.0, k1 * p_u * p_u)
         } else {
             (
@@ -104,40 +106,43 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
                 2.0 * k1 * s1 * b1 * p_u,
                 k1 * p_u * p_u * (1.0 - b1 * b1 * s1),
             )
-        };
-        for down_choked in [false, true] {
-            let (a2, l2, c2) = if down_choked {
-                (k2, 0.0, 0.0)
-            } else {
-                (
-                    k2 * (1.0 - b2 * b2 * s2),
-                    2.0 * k2 * s2 * b2 * p_d,
-                    -k2 * s2 * p_d * p_d,
-                )
-            };
-            let in_regimes = |p: f64| {
-                let up_ok = if up_choked {
-                    p <= b1 * p_u
-                } else {
-                    p > b1 * p_u && p <= R_LAMINAR * p_u
-                };
-                let down_ok = if down_choked {
-                    p_d <= b2 * p
-                } else {
-                    p_d > b2 * p && p_d <= R_LAMINAR * p
-                };
-                p > p_d && p < p_u && up_ok && down_ok
-            };
-            if let Some(p) = quadratic_roots(a1 - a2, l1 - l2, c1 - c2)
-                .into_iter()
-                .flatten()
-                .find(|p| in_regimes(*p))
-            {
-                return Some(p);
-            }
         }
-    }
-    None
+    };
+    let down_poly = |choked: bool| {
+        if choked {
+            (k2, 0.0, 0.0)
+        } else {
+            (
+                k2 * (1.0 - b2 * b2 * s2),
+                2.0 * k2 * s2 * b2 * p_d,
+                -k2 * s2 * p_d * p_d,
+            )
+        }
+    };
+    let eval = |(a, l, c): (f64, f64, f64), p: f64| (a * p + l) * p + c;
+    let (edge_up, edge_down) = (b1 * p_u, p_d / b2);
+    let balance_at = |p: f64| eval(up_poly(p <= edge_up), p) - eval(down_poly(p >= edge_down), p);
+    let up_choked = edge_up > p_d && balance_at(edge_up) <= 0.0;
+    let down_choked = edge_down < p_u && balance_at(edge_down) >= 0.0;
+    let (a1, l1, c1) = up_poly(up_choked);
+    let (a2, l2, c2) = down_poly(down_choked);
+    let in_regimes = |p: f64| {
+        let up_ok = if up_choked {
+            p <= edge_up
+        } else {
+            p > edge_up && p <= R_LAMINAR * p_u
+        };
+        let down_ok = if down_choked {
+            p_d <= b2 * p
+        } else {
+            p_d > b2 * p && p_d <= R_LAMINAR * p
+        };
+        p > p_d && p < p_u && up_ok && down_ok
+    };
+    quadratic_roots(a1 - a2, l1 - l2, c1 - c2)
+        .into_iter()
+        .flatten()
+        .find(|p| in_regimes(*p))
 }
 
 /// Real roots of a·x² + b·x + c = 0, computed without cancellation.
@@ -299,6 +304,37 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn closed_form_picks_each_regime_pair_correctly() {
+        // The regime pair is chosen from the sign of the balance at the regime edges; check
+        // that every pair occurs and that each closed-form root equals Newton's.
+        let mut seen = [[0usize; 2]; 2];
+        for (c1, b1) in [(6.758e-9, 0.5), (2e-9, 0.3), (1e-8, 0.45), (1e-9, 0.5)] {
+            for (c2, b2) in [
+                (5e-8, 0.4),
+                (6e-9, 0.5),
+                (3e-9, 0.5),
+                (1e-9, 0.2),
+                (2e-10, 0.4),
+            ] {
+                for p_u in [1.05e5, 1.5e5, 2.5e5, 4e5, 8e5, 1.2e6] {
+                    let (up, down) = (Nozzle::new(c1, b1), Nozzle::new(c2, b2));
+                    let p_d = 1.01325e5;
+                    let Some(p) = series_closed_form(&up, &down, p_u, p_d) else {
+                        continue;
+                    };
+                    let (_, p_newton) = series_newton(&up, &down, p_u, p_d);
+                    assert!((p - p_newton).abs() < 1e-6 * p, "{p} vs {p_newton}");
+                    seen[usize::from(p <= b1 * p_u)][usize::from(p_d <= b2 * p)] += 1;
+                }
+            }
+        }
+        assert!(
+            seen.iter().flatten().all(|&n| n > 0),
+            "regime pairs hit: {seen:?}"
+        );
     }
 
     #[test]

@@ -1,3 +1,8 @@
 //! Numerical methods that know nothing of motors: stiff integration.
 
 pub mod ode;
+pub mod rodas;
+
+/// The stiff solver every simulation uses unless it asks for another: Rodas4 (see
+/// [`rodas`] for why, and `examples/solver_accuracy.rs` for the measurements behind it).
+pub type DefaultSolver = rodas::Rodas4;

@@ -12,6 +12,10 @@ pub type State = [f64; N_STATES];
 /// Right-hand side dx/dt = f(t, x).
 pub type Rhs<'a> = dyn Fn(f64, &State) -> State + 'a;
 
+/// Jacobian ∂f/∂x at (t, x), row-major (`j[i][k]` = ∂f_i/∂x_k), when the model has it in
+/// closed form; `None` makes the solver use finite differences.
+pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<[State; N_STATES]> + 'a;
+
 /// Integration tolerances: |error_i| ≤ atol_i + rtol·|x_i|.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tolerances {
@@ -61,6 +65,20 @@ pub trait StiffSolver: Send + Sync {
         x0: State,
         t_out: &[f64],
     ) -> Result<Vec<State>, SolveError>;
+
+    /// As [`StiffSolver::solve`], with the model's own Jacobian where it has one. Solvers
+    /// that do not use Jacobians (or build their own) ignore it.
+    fn solve_with_jacobian(
+        &self,
+        rhs: &Rhs<'_>,
+        jacobian: &Jacobian<'_>,
+        t0: f64,
+        x0: State,
+        t_out: &[f64],
+    ) -> Result<Vec<State>, SolveError> {
+        let _ = jacobian;
+        self.solve(rhs, t0, x0, t_out)
+    }
 }
 
 /// Typical magnitude of each state (pressures in Pa, then a speed in rad/s), used to size

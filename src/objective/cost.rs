@@ -365,7 +365,7 @@ mod tests {
     use crate::data::synth::{synthesize, SensorNoise, SynthPlan};
     use crate::model::effects::EffectSet;
     use crate::model::params::MotorParams;
-    use crate::numerics::ode::DiffsolBdf;
+    use crate::numerics::DefaultSolver;
     use std::path::PathBuf;
 
     fn dataset(experiments: Vec<crate::data::dataset::ExperimentData>) -> Dataset {
@@ -405,7 +405,7 @@ mod tests {
     #[test]
     fn generating_model_costs_almost_nothing_and_others_cost_more() {
         let motor = Motor::default_motor();
-        let solver = DiffsolBdf::default();
+        let solver = DefaultSolver::default();
         let plan = short_plan();
         let clean = synthesize(&motor, &solver, &plan, &SensorNoise::none(), 1).unwrap();
         let noisy = synthesize(&motor, &solver, &plan, &SensorNoise::typical(), 1).unwrap();
@@ -459,7 +459,7 @@ mod tests {
 
     #[test]
     fn absurd_parameters_give_a_finite_cost() {
-        let solver = DiffsolBdf::default();
+        let solver = DefaultSolver::default();
         let plan = short_plan();
         let data = synthesize(
             &Motor::default_motor(),
@@ -534,7 +534,7 @@ mod tests {
 
     #[test]
     fn failures_give_the_finite_penalty_and_are_counted() {
-        let solver = DiffsolBdf::default();
+        let solver = DefaultSolver::default();
         let data = synthesize(
             &Motor::default_motor(),
             &solver,
@@ -569,7 +569,7 @@ mod tests {
 
     #[test]
     fn weights_scale_channel_terms() {
-        let solver = DiffsolBdf::default();
+        let solver = DefaultSolver::default();
         let plan = short_plan();
         let mut data = synthesize(
             &Motor::default_motor(),
@@ -607,7 +607,7 @@ mod tests {
 
     #[test]
     fn residuals_agree_with_the_cost() {
-        let solver = DiffsolBdf::default();
+        let solver = DefaultSolver::default();
         let data = synthesize(
             &Motor::default_motor(),
             &solver,

@@ -3,7 +3,7 @@
 
 use crate::data::dataset::Dataset;
 use crate::model::motor::Motor;
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
 use crate::report::plot::{Chart, Figure, PlotError, Series};
@@ -39,7 +39,7 @@ pub fn overlays(
     models: &[(&str, &Motor)],
     prefix: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let runs: Vec<(&str, Vec<ChannelResiduals>)> = models
         .iter()
         .map(|(name, m)| {

@@ -21,6 +21,10 @@ pub struct Schedule {
     t: Vec<f64>,
     v: Vec<f64>,
     slope: Vec<f64>,
+    /// Per segment k, the cubic in τ = time − t_k: v_k + τ·(s_k + τ·(c2_k + τ·c3_k)), stored
+    /// as [c2, c3]. Computed once: the integrator asks for the input at every evaluation of
+    /// the right-hand side, and Horner's form there is a handful of multiply-adds.
+    cubic: Vec<[f64; 2]>,
 }
 
 impl Schedule {
@@ -42,7 +46,19 @@ impl Schedule {
     /// The monotone cubic through the given knots (times increasing).
     pub fn through(t: Vec<f64>, v: Vec<f64>) -> Self {
         let slope = pchip_slopes(&t, &v);
-        Self { t, v, slope }
+        let cubic = (1..t.len())
+            .map(|k| {
+                // Hermite cubic through (t, v, slope) at both ends, in powers of τ.
+                let h = t[k] - t[k - 1];
+                let secant = (v[k] - v[k - 1]) / h;
+                let (s0, s1) = (slope[k - 1], slope[k]);
+                [
+                    (3.0 * secant - 2.0 * s0 - s1) / h,
+                    (s0 + s1 - 2.0 * secant) / (h * h),
+                ]
+            })
+            .collect();
+        Self { t, v, slope, cubic }
     }
 
     /// A constant schedule.
@@ -63,18 +79,9 @@ impl Schedule {
             return self.v[n - 1] + self.slope[n - 1] * (time - self.t[n - 1]);
         }
         let k = self.t.partition_point(|tk| *tk <= time) - 1;
-        let h = self.t[k + 1] - self.t[k];
-        let s = (time - self.t[k]) / h;
-        let (h00, h10, h01, h11) = (
-            (1.0 + 2.0 * s) * (1.0 - s).powi(2),
-            s * (1.0 - s).powi(2),
-            s * s * (3.0 - 2.0 * s),
-            s * s * (s - 1.0),
-        );
-        h00 * self.v[k]
-            + h10 * h * self.slope[k]
-            + h01 * self.v[k + 1]
-            + h11 * h * self.slope[k + 1]
+        let tau = time - self.t[k];
+        let [c2, c3] = self.cubic[k];
+        self.v[k] + tau * (self.slope[k] + tau * (c2 + tau * c3))
     }
 }
 
@@ -112,6 +119,28 @@ mod tests {
         let s = Schedule::smoothed(&times, &values);
         for t in [0.0, 0.05, 13.37, 59.99, 60.0] {
             assert!((s.at(t) - (1e5 + 1e4 * t)).abs() < 1e-6, "t = {t}");
+        }
+    }
+
+    #[test]
+    fn cubic_pieces_are_the_hermite_interpolant() {
+        // Independent re-computation with the Hermite basis: values and slopes at knots.
+        let t = vec![0.0, 1.0, 2.5, 4.0];
+        let v = vec![1.0, 3.0, 3.5, 7.0];
+        let s = Schedule::through(t.clone(), v.clone());
+        for k in 0..3 {
+            let h = t[k + 1] - t[k];
+            for x in [0.1, 0.5, 0.9] {
+                let (h00, h10, h01, h11) = (
+                    (1.0 + 2.0 * x) * (1.0 - x) * (1.0 - x),
+                    x * (1.0 - x) * (1.0 - x),
+                    x * x * (3.0 - 2.0 * x),
+                    x * x * (x - 1.0),
+                );
+                let hermite =
+                    h00 * v[k] + h10 * h * s.slope[k] + h01 * v[k + 1] + h11 * h * s.slope[k + 1];
+                assert!((s.at(t[k] + x * h) - hermite).abs() < 1e-12);
+            }
         }
     }
 

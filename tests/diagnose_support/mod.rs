@@ -7,7 +7,7 @@ use vanefit::data::dataset::{Dataset, ExperimentData, MotorSection};
 use vanefit::data::synth::{SensorNoise, SynthPlan};
 use vanefit::model::motor::Motor;
 use vanefit::model::params::MotorParams;
-use vanefit::numerics::ode::DiffsolBdf;
+use vanefit::numerics::DefaultSolver;
 
 /// The base parameters of the test motor: the AR034-11 defaults with every estimated
 /// parameter moved by 20–40% (so that the diagnosis cannot lean on the defaults).
@@ -34,7 +34,7 @@ pub fn perturbed_base() -> MotorParams {
 pub fn synthesize(truth: &Motor, seed: u64) -> Vec<ExperimentData> {
     vanefit::data::synth::synthesize(
         truth,
-        &DiffsolBdf::default(),
+        &DefaultSolver::default(),
         &SynthPlan::default(),
         &SensorNoise::typical(),
         seed,

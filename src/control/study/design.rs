@@ -11,7 +11,7 @@ use crate::control::design::{design_pi, margins, open_loop, Margins, Target};
 use crate::control::error::{ControlError, SettingsError};
 use crate::control::linear::{log_grid, rad_s, unwrapped_phase_deg};
 use crate::control::{rpm, RAD_S_PER_RPM};
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use nalgebra::Complex;
 
 /// Time of the set-point step of the check simulation, s.
@@ -157,7 +157,7 @@ pub fn study(plant: &Plant, lp: &Loop, s: &DesignSettings) -> Result<DesignStudy
     };
     let w0 = lin.op.speed_rad_s();
     let step = s.step_rad_s();
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let f = log_grid(1e-3, 1e2, 300);
     let run = |pi: PiController| -> Result<DesignRun, ControlError> {
         let l = Loop { pi, ..*lp };

@@ -7,7 +7,7 @@ use crate::control::closed_loop::{
 };
 use crate::control::error::{ControlError, SettingsError};
 use crate::control::RAD_S_PER_RPM;
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 
 /// The options of `disturbance` as given (unchecked).
 #[derive(Debug, Clone, PartialEq)]
@@ -115,7 +115,7 @@ pub fn study(
         setpoint_rad_s: Steps::constant(w),
         load_torque_nm: Steps::step(0.0, s.t_step_s, s.load_step_nm),
     };
-    let solver = DiffsolBdf::default();
+    let solver = DefaultSolver::default();
     let trace = lp.simulate(m, &solver, &sc, &start)?;
     // Without control: the command stays where it was (the controller's gains set to zero).
     let open_trace = lp.without_control().simulate(m, &solver, &sc, &start)?;

@@ -6,7 +6,7 @@ use crate::control::closed_loop::{step_metrics, Loop, Scenario, StepMetrics, Ste
 use crate::control::error::{ControlError, SettingsError};
 use crate::control::RAD_S_PER_RPM;
 use crate::model::motor::{idx, Boundary};
-use crate::numerics::ode::DiffsolBdf;
+use crate::numerics::DefaultSolver;
 use crate::sim::steady;
 use crate::units::constants::P_ATM_PA;
 
@@ -108,7 +108,7 @@ pub fn study(plant: &Plant, lp: &Loop, s: &StepSettings) -> Result<StepStudy, Co
         setpoint_rad_s: Steps::step(from, s.t_step_s, to),
         load_torque_nm: Steps::constant(0.0),
     };
-    let trace = lp.simulate(m, &DiffsolBdf::default(), &sc, &start)?;
+    let trace = lp.simulate(m, &DefaultSolver::default(), &sc, &start)?;
     let metrics = step_metrics(&trace, s.t_step_s, from, to);
     let bc_full = Boundary::supplied(
         lp.valve.set_pressure_pa(lp.valve.u_max_v),

@@ -61,11 +61,11 @@ impl Drive for Transient {
         let mut out: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
         for (t, x) in times.iter().zip(&states) {
             let bc = self.boundary_at(setting, *t);
-            let b = motor.balance(x, &bc);
-            out[0].push(b.flow_port1_kg_s);
-            out[1].push(b.flow_port2_kg_s);
+            let (flow1, flow2) = motor.port_flows(x, &bc);
+            out[0].push(flow1);
+            out[1].push(flow2);
             out[2].push(x[idx::OMEGA]);
-            out[3].push(b.torque_load_nm);
+            out[3].push(bc.load.torque(x[idx::OMEGA]));
         }
         // What the flow and speed sensors record (a lag where `sensor_lag` is on).
         for ch in out.iter_mut().take(3) {

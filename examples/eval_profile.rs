@@ -1,0 +1,80 @@
+//! Times one full cost evaluation of the shipped dataset and counts the right-hand-side
+//! evaluations behind it: `cargo run --release --example eval_profile [n [rtol [atol_p atol_w]]]`
+//! (`SOLVER=rodas4` or `bdf` runs one solver only).
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+use vanefit::data::dataset::Dataset;
+use vanefit::model::motor::Motor;
+use vanefit::numerics::ode::{DiffsolBdf, Rhs, SolveError, State, StiffSolver, Tolerances};
+use vanefit::numerics::rodas::Rodas4;
+use vanefit::objective::cost::{CostModel, CostOptions};
+
+static CALLS: AtomicU64 = AtomicU64::new(0);
+
+struct Counting<'a>(&'a dyn StiffSolver);
+impl StiffSolver for Counting<'_> {
+    fn solve(
+        &self,
+        rhs: &Rhs<'_>,
+        t0: f64,
+        x0: State,
+        t_out: &[f64],
+    ) -> Result<Vec<State>, SolveError> {
+        let f = |t: f64, x: &State| {
+            CALLS.fetch_add(1, Ordering::Relaxed);
+            rhs(t, x)
+        };
+        self.0.solve(&f, t0, x0, t_out)
+    }
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let n: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(200);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("measurements/ar034-synthetic");
+    let ds = Dataset::load(&dir)?;
+    let cost = CostModel::new(&ds, CostOptions::default())?;
+    let motor = Motor::default_motor();
+    let rtol: f64 = std::env::args()
+        .nth(2)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(3e-8);
+    let arg = |k: usize| {
+        std::env::args()
+            .nth(k)
+            .map(|s| s.parse::<f64>())
+            .transpose()
+    };
+    let mut tol = Tolerances::with_rtol(rtol);
+    if let (Some(ap), Some(aw)) = (arg(3)?, arg(4)?) {
+        tol.atol = [ap, ap, ap, aw];
+    }
+    let solvers: [(&str, Box<dyn StiffSolver>); 2] = [
+        ("bdf", Box::new(DiffsolBdf { tol })),
+        ("rodas4", Box::new(Rodas4 { tol })),
+    ];
+    let only = std::env::var("SOLVER").ok();
+    for (name, solver) in &solvers {
+        if only.as_deref().is_some_and(|o| o != *name) {
+            continue;
+        }
+        CALLS.store(0, Ordering::Relaxed);
+        let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
+        let calls = CALLS.load(Ordering::Relaxed);
+        let t = Instant::now();
+        for _ in 0..n {
+            std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));
+        }
+        let us = t.elapsed().as_secs_f64() * 1e6 / n as f64;
+        println!(
+            "{name}: cost {:.10} failed {:?}; rhs calls {calls}; {us:.1} µs per evaluation",
+            c.total, c.failed
+        );
+    }
+    Ok(())
+}

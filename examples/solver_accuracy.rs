@@ -1,0 +1,148 @@
+//! Accuracy, smoothness and speed of the stiff solvers on the shipped dataset (issue 10):
+//! `cargo run --release --example solver_accuracy [n_timing]`.
+//!
+//! For each solver and tolerance it prints the time of one full cost evaluation, the
+//! right-hand-side evaluations behind it, the largest deviation of any simulated output from
+//! a tight-tolerance reference run in units of that channel's noise σ, and the cost jitter:
+//! the largest residual of a quadratic fitted to the cost at 21 values of c_12 spread over
+//! ±1e-5 relative (a smooth cost leaves only rounding there).
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+use vanefit::data::dataset::Dataset;
+use vanefit::model::effects::EffectSet;
+use vanefit::model::motor::Motor;
+use vanefit::model::params::MotorParams;
+use vanefit::numerics::ode::{DiffsolBdf, Rhs, SolveError, State, StiffSolver, Tolerances};
+use vanefit::numerics::rodas::Rodas4;
+use vanefit::objective::cost::{CostModel, CostOptions};
+
+static CALLS: AtomicU64 = AtomicU64::new(0);
+
+struct Counting<'a>(&'a dyn StiffSolver);
+impl StiffSolver for Counting<'_> {
+    fn solve(
+        &self,
+        rhs: &Rhs<'_>,
+        t0: f64,
+        x0: State,
+        t_out: &[f64],
+    ) -> Result<Vec<State>, SolveError> {
+        let f = |t: f64, x: &State| {
+            CALLS.fetch_add(1, Ordering::Relaxed);
+            rhs(t, x)
+        };
+        self.0.solve(&f, t0, x0, t_out)
+    }
+}
+
+fn outputs(cost: &CostModel, motor: &Motor, solver: &dyn StiffSolver) -> Vec<(f64, Vec<f64>)> {
+    let res = cost.residuals(motor, solver).expect("simulation");
+    res.into_iter().map(|c| (c.sigma, c.simulated)).collect()
+}
+
+fn max_dev_sigma(a: &[(f64, Vec<f64>)], b: &[(f64, Vec<f64>)]) -> f64 {
+    let mut worst = (0.0, 0, 0);
+    for (c, ((s, x), (_, y))) in a.iter().zip(b).enumerate() {
+        for (i, (u, v)) in x.iter().zip(y).enumerate() {
+            let d = (u - v).abs() / s;
+            if d > worst.0 {
+                worst = (d, c, i);
+            }
+        }
+    }
+    if std::env::var("WHERE").is_ok() {
+        eprintln!("worst: channel {} row {}", worst.1, worst.2);
+    }
+    worst.0
+}
+
+/// Largest residual of a least-squares quadratic through (u_k, J_k).
+fn jitter(cost: &CostModel, params: &MotorParams, solver: &dyn StiffSolver) -> f64 {
+    let c12 = params.c_12();
+    let us: Vec<f64> = (-10..=10).map(|k| f64::from(k) * 1e-6).collect();
+    let js: Vec<f64> = us
+        .iter()
+        .map(|u| {
+            let p = params.with("c_12", c12 * (1.0 + u)).unwrap();
+            cost.evaluate(&Motor::new(p, EffectSet::empty()), solver)
+                .total
+        })
+        .collect();
+    let a = nalgebra::DMatrix::from_fn(us.len(), 3, |i, j| (us[i] * 1e5).powi(j as i32));
+    let b = nalgebra::DVector::from_vec(js.clone());
+    let coef = a.clone().svd(true, true).solve(&b, 1e-14).unwrap();
+    (a * coef - b).amax()
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let n: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(100);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("measurements/ar034-synthetic");
+    let ds = Dataset::load(&dir)?;
+    let cost = CostModel::new(&ds, CostOptions::default())?;
+    let nominal = ds.nominal_params()?;
+    let which = std::env::var("MOTOR").unwrap_or_default();
+    let params = match which.as_str() {
+        "default" => MotorParams::default(),
+        "leaky" => nominal
+            .with("c_12", 3.0 * nominal.c_12())?
+            .with("t_coulomb", 2.0 * nominal.t_coulomb())?,
+        _ => nominal,
+    };
+    println!(
+        "motor: {}",
+        if which.is_empty() { "nominal" } else { &which }
+    );
+    let motor = Motor::new(params.clone(), EffectSet::empty());
+    let reference = outputs(
+        &cost,
+        &motor,
+        &Rodas4 {
+            tol: Tolerances::with_rtol(1e-12),
+        },
+    );
+    let check = outputs(
+        &cost,
+        &motor,
+        &DiffsolBdf {
+            tol: Tolerances::with_rtol(1e-12),
+        },
+    );
+    println!(
+        "reference: Rodas4 rtol 1e-12; BDF rtol 1e-12 differs from it by {:.2e} σ",
+        max_dev_sigma(&reference, &check)
+    );
+    println!("solver  rtol,atol_p,atol_w  µs/eval  rhs/eval  max dev (σ)  jitter (cost)  cost");
+    let mut cases: Vec<(&str, String, Box<dyn StiffSolver>)> = Vec::new();
+    cases.push(("bdf", "3e-8".into(), Box::new(DiffsolBdf::default())));
+    let grid = std::env::var("GRID").unwrap_or("3e-8,0.03,3e-5".into());
+    for item in grid.split(';') {
+        let v: Vec<f64> = item.split(',').map(|x| x.parse().unwrap()).collect();
+        let tol = Tolerances {
+            rtol: v[0],
+            atol: [v[1], v[1], v[1], v[2]],
+        };
+        cases.push(("rodas4", item.to_string(), Box::new(Rodas4 { tol })));
+    }
+    for (name, rtol, solver) in &cases {
+        CALLS.store(0, Ordering::Relaxed);
+        let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
+        let calls = CALLS.load(Ordering::Relaxed);
+        let t = Instant::now();
+        for _ in 0..n {
+            std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));
+        }
+        let us = t.elapsed().as_secs_f64() * 1e6 / n as f64;
+        let dev = max_dev_sigma(&reference, &outputs(&cost, &motor, solver.as_ref()));
+        let jit = jitter(&cost, &params, solver.as_ref());
+        println!(
+            "{name:7} {rtol:18}  {us:7.1}  {calls:8}  {dev:11.2e}  {jit:13.2e}  {:.8}",
+            c.total
+        );
+    }
+    Ok(())
+}
