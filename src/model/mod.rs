@@ -1,10 +1,12 @@
 //! The motor model (SPEC §1, paper §2): geometry, polytropic cycle, nozzles, friction,
-//! the missing-physics catalog, parameters, and the motor as parameters → state derivatives.
+//! the missing-physics catalog, parameters, the motor as parameters → state derivatives, and
+//! the analytic Jacobian of the base model.
 
 pub mod effects;
 pub mod extra;
 pub mod friction;
 pub mod geometry;
+pub mod jacobian;
 pub mod motor;
 pub mod nozzle;
 pub mod params;

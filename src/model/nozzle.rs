@@ -182,7 +182,10 @@ fn series_newton(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64, f
         }
         let slope = d1_dm - d2_dm;
         let newton = p_m - g / slope;
-        let next = if slope < 0.0 && newton > lo && newton < hi {
+        // The bracket is closed: once Newton has hit the root, g rounds to either sign and
+        // the new bracket end is p_m itself, which the step then returns to; an open test
+        // would reject that step and bisect away from the root by up to 1e-12·p_m.
+        let next = if slope < 0.0 && newton >= lo && newton <= hi {
             newton
         } else {
             0.5 * (lo + hi)
@@ -335,6 +338,24 @@ mod tests {
             seen.iter().flatten().all(|&n| n > 0),
             "regime pairs hit: {seen:?}"
         );
+    }
+
+    #[test]
+    fn newton_series_balances_to_rounding() {
+        // A wide throttle behind the duct sits in its laminar range (the Newton path); the
+        // flows of the two nozzles must agree to rounding, not to the solver's tolerance,
+        // or finite differences of the flow turn noisy.
+        let duct = Nozzle::new(6.758282e-9, 0.5);
+        let thr = Nozzle::new(1e-7, 0.5);
+        for i in 0..200 {
+            let p_a = 0.9e5 + f64::from(i) * 0.01;
+            let (flow, p_m) = series_flow(&duct, &thr, p_a, 101_325.0);
+            let residual = duct.flow(p_a, p_m) - thr.flow(p_m, 101_325.0);
+            assert!(
+                residual.abs() <= 1e-12 * flow.abs(),
+                "{p_a}: residual {residual:e} of {flow:e}"
+            );
+        }
     }
 
     #[test]
