@@ -39,24 +39,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ds = Dataset::load(&dir)?;
     let cost = CostModel::new(&ds, CostOptions::default())?;
     let motor = Motor::default_motor();
-    let rtol: f64 = std::env::args()
-        .nth(2)
-        .map(|s| s.parse())
-        .transpose()?
-        .unwrap_or(3e-8);
+    // Without tolerances on the command line each solver runs at its own default.
     let arg = |k: usize| {
         std::env::args()
             .nth(k)
             .map(|s| s.parse::<f64>())
             .transpose()
     };
-    let mut tol = Tolerances::with_rtol(rtol);
-    if let (Some(ap), Some(aw)) = (arg(3)?, arg(4)?) {
-        tol.atol = [ap, ap, ap, aw];
-    }
+    let given = arg(2)?.map(|rtol| {
+        let mut tol = Tolerances::with_rtol(rtol);
+        if let (Ok(Some(ap)), Ok(Some(aw))) = (arg(3), arg(4)) {
+            tol.atol = [ap, ap, ap, aw];
+        }
+        tol
+    });
     let solvers: [(&str, Box<dyn StiffSolver>); 2] = [
-        ("bdf", Box::new(DiffsolBdf { tol })),
-        ("rodas4", Box::new(Rodas4 { tol })),
+        (
+            "bdf",
+            Box::new(given.map_or_else(DiffsolBdf::default, |tol| DiffsolBdf { tol })),
+        ),
+        (
+            "rodas4",
+            Box::new(given.map_or_else(Rodas4::default, |tol| Rodas4 { tol })),
+        ),
     ];
     let only = std::env::var("SOLVER").ok();
     for (name, solver) in &solvers {

@@ -4,8 +4,10 @@
 //! For each solver and tolerance it prints the time of one full cost evaluation, the
 //! right-hand-side evaluations behind it, the largest deviation of any simulated output from
 //! a tight-tolerance reference run in units of that channel's noise σ, and the cost jitter:
-//! the largest residual of a quadratic fitted to the cost at 21 values of c_12 spread over
-//! ±1e-5 relative (a smooth cost leaves only rounding there).
+//! the largest residual of a quadratic fitted to the cost at 21 values of c_12, t_coulomb
+//! and c_in1 each spread over ±1e-5 relative (a smooth cost leaves only rounding there).
+//! `GRID="rtol,atol_p,atol_w;…"` sets the Rodas4 tolerances to try, `MOTOR=leaky` a motor
+//! far from the data.
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -57,22 +59,27 @@ fn max_dev_sigma(a: &[(f64, Vec<f64>)], b: &[(f64, Vec<f64>)]) -> f64 {
     worst.0
 }
 
-/// Largest residual of a least-squares quadratic through (u_k, J_k).
+/// Largest residual of a least-squares quadratic through the cost at 21 values of each of
+/// c_12, t_coulomb and c_in1 spread over ±1e-5 relative (the largest over the three).
 fn jitter(cost: &CostModel, params: &MotorParams, solver: &dyn StiffSolver) -> f64 {
-    let c12 = params.c_12();
     let us: Vec<f64> = (-10..=10).map(|k| f64::from(k) * 1e-6).collect();
-    let js: Vec<f64> = us
-        .iter()
-        .map(|u| {
-            let p = params.with("c_12", c12 * (1.0 + u)).unwrap();
-            cost.evaluate(&Motor::new(p, EffectSet::empty()), solver)
-                .total
-        })
-        .collect();
     let a = nalgebra::DMatrix::from_fn(us.len(), 3, |i, j| (us[i] * 1e5).powi(j as i32));
-    let b = nalgebra::DVector::from_vec(js.clone());
-    let coef = a.clone().svd(true, true).solve(&b, 1e-14).unwrap();
-    (a * coef - b).amax()
+    let mut worst: f64 = 0.0;
+    for name in ["c_12", "t_coulomb", "c_in1"] {
+        let v = params.get(name).unwrap();
+        let js: Vec<f64> = us
+            .iter()
+            .map(|u| {
+                let p = params.with(name, v * (1.0 + u)).unwrap();
+                cost.evaluate(&Motor::new(p, EffectSet::empty()), solver)
+                    .total
+            })
+            .collect();
+        let b = nalgebra::DVector::from_vec(js);
+        let coef = a.clone().svd(true, true).solve(&b, 1e-14).unwrap();
+        worst = worst.max((&a * coef - b).amax());
+    }
+    worst
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -12,9 +12,10 @@ pub type State = [f64; N_STATES];
 /// Right-hand side dx/dt = f(t, x).
 pub type Rhs<'a> = dyn Fn(f64, &State) -> State + 'a;
 
-/// Jacobian ∂f/∂x at (t, x), row-major (`j[i][k]` = ∂f_i/∂x_k), when the model has it in
-/// closed form; `None` makes the solver use finite differences.
-pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<[State; N_STATES]> + 'a;
+/// f(t, x) together with its Jacobian ∂f/∂x, row-major (`j[i][k]` = ∂f_i/∂x_k), when the
+/// model has it in closed form (sharing the work of both); `None` makes the solver call
+/// the right-hand side and use finite differences.
+pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<(State, [State; N_STATES])> + 'a;
 
 /// Integration tolerances: |error_i| ≤ atol_i + rtol·|x_i|.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -166,14 +166,18 @@ impl Linearisation {
     /// f, J and ∂f/∂t at (t, y); each state is moved by √ε times its magnitude (at least
     /// its typical scale), time by √ε·max(|t|, 1 s).
     pub fn at(rhs: &Rhs<'_>, jacobian: &Jacobian<'_>, t: f64, y: &State) -> Self {
-        let f = rhs(t, y);
         let sqrt_eps = f64::EPSILON.sqrt();
         let dt = sqrt_eps * t.abs().max(1.0);
-        let fh = rhs(t + dt, y);
-        let f_t = std::array::from_fn(|i| (fh[i] - f[i]) / dt);
-        if let Some(jac) = jacobian(t, y) {
+        let time_slope = |f: &State| -> State {
+            let fh = rhs(t + dt, y);
+            std::array::from_fn(|i| (fh[i] - f[i]) / dt)
+        };
+        if let Some((f, jac)) = jacobian(t, y) {
+            let f_t = time_slope(&f);
             return Self { f, jac, f_t };
         }
+        let f = rhs(t, y);
+        let f_t = time_slope(&f);
         let mut jac = [[0.0; N_STATES]; N_STATES];
         for j in 0..N_STATES {
             let mut yh = *y;
@@ -247,11 +251,12 @@ impl Lu {
             }
             a.swap(col, pivot);
             perm.swap(col, pivot);
-            for r in col + 1..N_STATES {
-                let m = a[r][col] / a[col][col];
-                a[r][col] = m;
-                for c in col + 1..N_STATES {
-                    a[r][c] -= m * a[col][c];
+            let pivot_row = a[col];
+            for row in a.iter_mut().skip(col + 1) {
+                let m = row[col] / pivot_row[col];
+                row[col] = m;
+                for (v, p) in row.iter_mut().zip(&pivot_row).skip(col + 1) {
+                    *v -= m * p;
                 }
             }
         }
@@ -520,6 +525,32 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn lu_solves_like_nalgebra_and_rejects_singular_matrices() {
+        // Needs pivoting (zero leading entry); checked against nalgebra's LU.
+        let a = [
+            [0.0, 2.0, -1.0, 4.0],
+            [3.0, -1.0, 2.0, 0.5],
+            [1.0, 1.0, 1.0, 1.0],
+            [-2.0, 0.3, 5.0, 1.0],
+        ];
+        let b = [1.0, -2.0, 0.5, 3.0];
+        let x = Lu::new(a).unwrap().solve(b);
+        let m = nalgebra::Matrix4::from_fn(|i, j| a[i][j]);
+        let want = m.lu().solve(&nalgebra::Vector4::from(b)).unwrap();
+        for i in 0..4 {
+            assert!((x[i] - want[i]).abs() < 1e-12, "{x:?} vs {want:?}");
+        }
+        let mut singular = a;
+        singular[3] = [3.0, 1.0, 1.0, 4.5]; // row 0 + row 1
+        assert!(
+            Lu::new(singular).is_none() || {
+                let y = Lu::new(singular).unwrap().solve(b);
+                !y.iter().all(|v| v.is_finite() && v.abs() < 1e12)
+            }
+        );
     }
 
     #[test]

@@ -24,12 +24,27 @@ pub fn at_speed(
 ) -> Result<State, SteadyError> {
     let mut x0 = *guess;
     x0[idx::OMEGA] = omega;
-    solve(motor, bc, x0, true)
+    solve(motor, bc, x0, true, 1e-3)
+}
+
+/// As [`at_speed`], from the solution at a nearby speed (a sweep): the guess is close, so
+/// the iteration starts as plain Newton (pseudo-time step 1e6 s) instead of following the
+/// physical transient from 1 ms; if the residual grows, the continuation takes over as
+/// usual. Measured on the 25-speed datasheet: about half the iterations.
+pub fn at_speed_from_neighbour(
+    motor: &Motor,
+    bc: &Boundary,
+    omega: f64,
+    neighbour: &State,
+) -> Result<State, SteadyError> {
+    let mut x0 = *neighbour;
+    x0[idx::OMEGA] = omega;
+    solve(motor, bc, x0, true, 1e6)
 }
 
 /// Steady state with the speed free (torque balanced by friction and load).
 pub fn free(motor: &Motor, bc: &Boundary, guess: &State) -> Result<State, SteadyError> {
-    solve(motor, bc, *guess, false)
+    solve(motor, bc, *guess, false, 1e-3)
 }
 
 /// A first guess: inlet at supply, the rest at atmosphere, standing still.
@@ -37,18 +52,28 @@ pub fn initial_guess(bc: &Boundary) -> State {
     [bc.p_port1_pa, bc.p_port2_pa, bc.p_atm_pa, 0.0]
 }
 
-fn solve(motor: &Motor, bc: &Boundary, x0: State, speed_fixed: bool) -> Result<State, SteadyError> {
+fn solve(
+    motor: &Motor,
+    bc: &Boundary,
+    x0: State,
+    speed_fixed: bool,
+    dt0: f64,
+) -> Result<State, SteadyError> {
     let n_free = if speed_fixed { 3 } else { 4 };
     let f = |x: &State| motor.derivatives(x, bc);
     let mut x = x0;
     let mut fx = f(&x);
     let mut res = residual_norm(&fx, n_free);
-    let mut dt = 1e-3;
+    let mut dt = dt0;
     for _ in 0..200 {
         if res == 0.0 {
             return Ok(x);
         }
-        let jac = jacobian(&f, &x, &fx, n_free);
+        // The model's own Jacobian where it has one (the base model), else differences.
+        let jac = motor.jacobian(&x, bc).map_or_else(
+            || jacobian(&f, &x, &fx, n_free),
+            |j| SMatrix::from_fn(|r, c| j[r][c]),
+        );
         let mut a = SMatrix::<f64, 4, 4>::identity() / dt - jac;
         let mut rhs = SVector::<f64, 4>::from(fx);
         if speed_fixed {

@@ -81,9 +81,12 @@ impl Drive for SteadySweep {
         let mut guess: Option<State> = None;
         for &i in &order {
             let bc = Boundary::supplied(p_supply[i], setting.p_atm_pa, Load::None);
-            let g = guess.unwrap_or_else(|| steady::initial_guess(&bc));
-            let x = steady::at_speed(motor, &bc, speeds[i], &g)
-                .or_else(|_| steady::at_speed(motor, &bc, speeds[i], &steady::initial_guess(&bc)))
+            let near = guess.map(|g| steady::at_speed_from_neighbour(motor, &bc, speeds[i], &g));
+            let x = near
+                .filter(Result::is_ok)
+                .unwrap_or_else(|| {
+                    steady::at_speed(motor, &bc, speeds[i], &steady::initial_guess(&bc))
+                })
                 .map_err(|e| setting.fail(format!("row {}: {e}", i + 1)))?;
             let b = motor.balance(&x, &bc);
             // At standstill the brake holds the rotor against the full dry friction.

@@ -54,8 +54,10 @@ impl Drive for Transient {
         let x0 = steady::free(motor, &bc0, &steady::initial_guess(&bc0))
             .map_err(|e| setting.fail(format!("initial state: {e}")))?;
         let rhs = |t: f64, x: &State| motor.derivatives(x, &self.boundary_at(setting, t));
+        let jacobian =
+            |t: f64, x: &State| motor.derivatives_and_jacobian(x, &self.boundary_at(setting, t));
         let states = solver
-            .solve(&rhs, t0, x0, times)
+            .solve_with_jacobian(&rhs, &jacobian, t0, x0, times)
             .map_err(|e| setting.fail(e.to_string()))?;
         let n = times.len();
         let mut out: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
