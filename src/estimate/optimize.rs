@@ -29,11 +29,14 @@ pub enum Restart {
     Never,
     /// When the simplex collapses or a stage gains nothing (relative 1e-9), a simplex shaped
     /// by the curvature at the best point ([`curvature_simplex`]; an axis simplex of edge
-    /// step·2⁻ʳ, at least 1e-3, if the curvature is unusable), until a restart gains less
-    /// than 1e-6 relative or after `max_restarts`. Ties of the best cost move the point.
+    /// step·2⁻ʳ, at least 1e-3, if the curvature is unusable), until a restart gains at
+    /// most `min_gain`·(1 + |f|) or after `max_restarts`. Ties of the best cost move the
+    /// point.
     Curvature {
         /// Most restarts.
         max_restarts: u32,
+        /// Relative gain below which a restart counts as finding nothing better.
+        min_gain: f64,
     },
     /// After every stage, an axis simplex of half the edge (at least `min_edge`) until a
     /// stage gains at most `gain`·(1 + |f|), after at most `rounds` stages. Only a strict
@@ -237,9 +240,10 @@ impl RestartedNelderMead {
         self.solver = Some(res.solver);
         match self.settings.restart {
             Restart::Never => self.status = Status::Converged,
-            Restart::Curvature { max_restarts } => {
-                self.curvature_restart(problem, cost_before, collapsed, max_restarts)
-            }
+            Restart::Curvature {
+                max_restarts,
+                min_gain,
+            } => self.curvature_restart(problem, cost_before, collapsed, (max_restarts, min_gain)),
             Restart::Halving {
                 rounds,
                 min_edge,
@@ -249,7 +253,7 @@ impl RestartedNelderMead {
     }
 
     /// [`Restart::Curvature`] after a stage.
-    fn curvature_restart<P>(&mut self, problem: &P, before: f64, collapsed: bool, max: u32)
+    fn curvature_restart<P>(&mut self, problem: &P, before: f64, collapsed: bool, rule: (u32, f64))
     where
         P: CostFunction<Param = Vec<f64>, Output = f64>,
     {
@@ -259,7 +263,8 @@ impl RestartedNelderMead {
         if !(collapsed || stalled) {
             return;
         }
-        let gained = self.cost_at_restart - self.fx > 1e-6 * (1.0 + self.fx.abs());
+        let (max, min_gain) = rule;
+        let gained = self.cost_at_restart - self.fx > min_gain * (1.0 + self.fx.abs());
         if !(gained && self.restarts < max) {
             self.status = Status::Converged;
             return;
@@ -333,7 +338,13 @@ mod tests {
             min_edge: 0.02,
             gain: 1e-7,
         };
-        for restart in [halving, Restart::Curvature { max_restarts: 20 }] {
+        for restart in [
+            halving,
+            Restart::Curvature {
+                max_restarts: 20,
+                min_gain: 1e-6,
+            },
+        ] {
             let settings = NelderMeadSettings {
                 sd_tolerance: 1e-10,
                 step: 0.5,

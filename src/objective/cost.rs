@@ -28,8 +28,9 @@ use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
 use crate::objective::reference::{experiment_references, ChannelReference, FitOptions};
-use crate::sim::experiment::{Experiment, SimError};
+use crate::sim::experiment::{Experiment, SimError, Simulated};
 use crate::units::Quantity;
+use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Cost given to a failed simulation or a non-finite cost (dimensionless, like J).
@@ -207,8 +208,12 @@ impl CostModel {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let mut channels = Vec::new();
         let mut total = 0.0;
-        for ex in &self.experiments {
-            let sim = match ex.experiment.simulate(motor, solver) {
+        for (ex, sim) in self
+            .experiments
+            .iter()
+            .zip(self.simulate_all(motor, solver))
+        {
+            let sim = match sim {
                 Ok(s) => s,
                 Err(e) => return self.failed(e.to_string(), channels),
             };
@@ -261,6 +266,26 @@ impl CostModel {
             total,
             failed: None,
             channels,
+        }
+    }
+
+    /// Every experiment simulated, in rig.toml order. Inside a rayon pool (the estimator's
+    /// engine) the experiments are offered to idle threads: when fewer starts are left than
+    /// threads, the ramps of one evaluation run side by side instead of leaving a core idle;
+    /// when every thread is busy the pool runs them in turn at the cost of a few queue
+    /// operations. Outside a pool they run in turn on the caller's thread, so a single-core
+    /// caller never gets a second core by accident. Either way the results, and the sum
+    /// taken from them in order, are the same.
+    fn simulate_all(
+        &self,
+        motor: &Motor,
+        solver: &dyn StiffSolver,
+    ) -> Vec<Result<Simulated, SimError>> {
+        let one = |ex: &ExperimentCost| ex.experiment.simulate(motor, solver);
+        if rayon::current_thread_index().is_some() {
+            self.experiments.par_iter().map(one).collect()
+        } else {
+            self.experiments.iter().map(one).collect()
         }
     }
 
