@@ -136,16 +136,21 @@ fn resumed_run_ends_where_an_uninterrupted_one_would() {
         kill_after_rounds: 1,
         kill_factor: 1.0,
         kill_margin: 0.1,
+        join_tolerance: 1e-2,
         ..Default::default()
     };
     let file = ResultsFile::new(&path);
     let full = run(2, &obj, &s, &cfg, Some(&file), false);
-    assert!(
-        full.results
-            .iter()
-            .any(|r| r.ending == Ending::StoppedEarly),
-        "the test needs early stops"
-    );
+    for (ending, what) in [
+        (Ending::StoppedEarly, "early stops"),
+        (Ending::Joined, "starts that join a converged one"),
+    ] {
+        assert!(
+            full.results.iter().any(|r| r.ending == ending),
+            "the test needs {what}: {:?}",
+            full.results.iter().map(|r| r.ending).collect::<Vec<_>>()
+        );
+    }
     // Interrupt: keep the header and the first few finished starts, and a torn last line.
     let text = std::fs::read_to_string(&path).unwrap();
     let mut kept: Vec<&str> = text.lines().take(4).collect();

@@ -16,6 +16,9 @@ pub enum EstimateError {
     /// argmin needs a finite tolerance ≥ 0.
     #[error("sd tolerance {0}: must be a finite number >= 0")]
     SdTolerance(f64),
+    /// The join rule needs a number (negative: never join).
+    #[error("join tolerance {0}: must be a number")]
+    JoinTolerance(f64),
     /// The restart rule needs a finite gain ≥ 0.
     #[error("restart gain {0}: must be a finite number >= 0")]
     RestartGain(f64),

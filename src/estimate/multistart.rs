@@ -30,6 +30,9 @@ pub enum Ending {
     Budget,
     /// Stopped far above the best cost (see `kill_after_rounds`).
     StoppedEarly,
+    /// Reached the cost of a start that had already converged (within `join_tolerance`)
+    /// and stopped there instead of polishing the same minimum again.
+    Joined,
 }
 
 /// The outcome of one start.
@@ -122,12 +125,20 @@ impl Runner {
         }
     }
 
-    /// How the start ends after a round, if it does (`best`: best cost over every start).
-    fn ending(&self, cfg: &MultiStartSettings, round: usize, best: f64) -> Option<Ending> {
+    /// How the start ends after a round, if it does (`best`: best cost over every start;
+    /// `known`: best cost of the starts that converged in earlier rounds).
+    fn ending(
+        &self,
+        cfg: &MultiStartSettings,
+        round: usize,
+        best: f64,
+        known: f64,
+    ) -> Option<Ending> {
         match self.search.status() {
             Status::Converged => Some(Ending::Converged),
             Status::Failed => Some(Ending::Budget),
             Status::Running if self.search.iterations() >= cfg.max_iters() => Some(Ending::Budget),
+            Status::Running if cfg.joins(self.search.cost(), known) => Some(Ending::Joined),
             Status::Running
                 if round >= cfg.kill_after_rounds()
                     && cfg.stops_early(self.search.cost(), best) =>
@@ -172,11 +183,11 @@ impl MultiStartOutcome {
             .min_by(|a, b| a.cost.total_cmp(&b.cost).then(a.index.cmp(&b.index)))
             .expect("at least one start")
     }
-    /// Number of starts that converged.
+    /// Number of starts that converged (or joined a converged start's minimum).
     pub fn converged(&self) -> usize {
         self.results
             .iter()
-            .filter(|r| r.ending == Ending::Converged)
+            .filter(|r| matches!(r.ending, Ending::Converged | Ending::Joined))
             .count()
     }
 }
@@ -293,10 +304,17 @@ impl Rounds<'_> {
                         .map(|f| f.cost),
                 )
                 .fold(f64::INFINITY, f64::min);
+            // Converged before this round, whether in this run or read back on resume (a
+            // start's history has one entry per round it ran).
+            let known = finished
+                .iter()
+                .filter(|f| f.ending == Ending::Converged && f.history.len() < round)
+                .map(|f| f.cost)
+                .fold(f64::INFINITY, f64::min);
             let mut still = Vec::with_capacity(live.len());
             let mut newly = Vec::new();
             for r in live {
-                match r.ending(cfg, round, best) {
+                match r.ending(cfg, round, best, known) {
                     Some(e) => newly.push(r.finish(e, cfg.keep_traces())),
                     None => still.push(r),
                 }
