@@ -1,33 +1,17 @@
 //! Times one full cost evaluation of the shipped dataset and counts the right-hand-side
 //! evaluations behind it: `cargo run --release --example eval_profile [n [rtol [atol_p atol_w]]]`
 //! (`SOLVER=rodas4` or `bdf` runs one solver only).
+#[path = "common/counting.rs"]
+mod counting;
+
+use counting::Counting;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use vanefit::data::dataset::Dataset;
 use vanefit::model::motor::Motor;
-use vanefit::numerics::ode::{DiffsolBdf, Rhs, SolveError, State, StiffSolver, Tolerances};
+use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
 use vanefit::numerics::rodas::Rodas4;
 use vanefit::objective::cost::{CostModel, CostOptions};
-
-static CALLS: AtomicU64 = AtomicU64::new(0);
-
-struct Counting<'a>(&'a dyn StiffSolver);
-impl StiffSolver for Counting<'_> {
-    fn solve(
-        &self,
-        rhs: &Rhs<'_>,
-        t0: f64,
-        x0: State,
-        t_out: &[f64],
-    ) -> Result<Vec<State>, SolveError> {
-        let f = |t: f64, x: &State| {
-            CALLS.fetch_add(1, Ordering::Relaxed);
-            rhs(t, x)
-        };
-        self.0.solve(&f, t0, x0, t_out)
-    }
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = std::env::args()
@@ -68,9 +52,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if only.as_deref().is_some_and(|o| o != *name) {
             continue;
         }
-        CALLS.store(0, Ordering::Relaxed);
+        counting::reset();
         let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
-        let calls = CALLS.load(Ordering::Relaxed);
+        let calls = counting::calls();
         let t = Instant::now();
         for _ in 0..n {
             std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));

@@ -8,35 +8,19 @@
 //! and c_in1 each spread over ±1e-5 relative (a smooth cost leaves only rounding there).
 //! `GRID="rtol,atol_p,atol_w;…"` sets the Rodas4 tolerances to try, `MOTOR=leaky` a motor
 //! far from the data.
+#[path = "common/counting.rs"]
+mod counting;
+
+use counting::Counting;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use vanefit::data::dataset::Dataset;
 use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
 use vanefit::model::params::MotorParams;
-use vanefit::numerics::ode::{DiffsolBdf, Rhs, SolveError, State, StiffSolver, Tolerances};
+use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
 use vanefit::numerics::rodas::Rodas4;
 use vanefit::objective::cost::{CostModel, CostOptions};
-
-static CALLS: AtomicU64 = AtomicU64::new(0);
-
-struct Counting<'a>(&'a dyn StiffSolver);
-impl StiffSolver for Counting<'_> {
-    fn solve(
-        &self,
-        rhs: &Rhs<'_>,
-        t0: f64,
-        x0: State,
-        t_out: &[f64],
-    ) -> Result<Vec<State>, SolveError> {
-        let f = |t: f64, x: &State| {
-            CALLS.fetch_add(1, Ordering::Relaxed);
-            rhs(t, x)
-        };
-        self.0.solve(&f, t0, x0, t_out)
-    }
-}
 
 fn outputs(cost: &CostModel, motor: &Motor, solver: &dyn StiffSolver) -> Vec<(f64, Vec<f64>)> {
     let res = cost.residuals(motor, solver).expect("simulation");
@@ -126,8 +110,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("solver  rtol,atol_p,atol_w  µs/eval  rhs/eval  max dev (σ)  jitter (cost)  cost");
     let mut cases: Vec<(&str, String, Box<dyn StiffSolver>)> = Vec::new();
     cases.push(("bdf", "3e-8".into(), Box::new(DiffsolBdf::default())));
-    let grid = std::env::var("GRID").unwrap_or("3e-8,0.03,3e-5".into());
-    for item in grid.split(';') {
+    if std::env::var("GRID").is_err() {
+        let tol = Rodas4::default().tol;
+        let name = format!("{:.0e},{},{}", tol.rtol, tol.atol[0], tol.atol[3]);
+        cases.push(("rodas4", name, Box::new(Rodas4::default())));
+    }
+    let grid = std::env::var("GRID").unwrap_or_default();
+    for item in grid.split(';').filter(|i| !i.is_empty()) {
         let v: Vec<f64> = item.split(',').map(|x| x.parse().unwrap()).collect();
         let tol = Tolerances {
             rtol: v[0],
@@ -136,9 +125,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         cases.push(("rodas4", item.to_string(), Box::new(Rodas4 { tol })));
     }
     for (name, rtol, solver) in &cases {
-        CALLS.store(0, Ordering::Relaxed);
+        counting::reset();
         let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
-        let calls = CALLS.load(Ordering::Relaxed);
+        let calls = counting::calls();
         let t = Instant::now();
         for _ in 0..n {
             std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));
