@@ -157,7 +157,7 @@ impl Step {
 pub struct Linearisation {
     /// f(t, y).
     pub f: State,
-    /// ∂f/∂y, row-major: jac[i][j] = ∂f_i/∂y_j.
+    /// ∂f/∂y, row-major: `jac[i][j]` = ∂f_i/∂y_j.
     pub jac: [State; N_STATES],
     /// ∂f/∂t.
     pub f_t: State,
