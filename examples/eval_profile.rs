@@ -1,27 +1,17 @@
 //! Times one full cost evaluation of the shipped dataset and counts the right-hand-side
 //! evaluations behind it: `cargo run --release --example eval_profile [n [rtol [atol_p atol_w]]]`
 //! (`SOLVER=rodas4` or `bdf` runs one solver only).
-#[path = "common/counting.rs"]
-mod counting;
+#[path = "common/support.rs"]
+mod support;
 
-use counting::Counting;
-use std::path::Path;
 use std::time::Instant;
-use vanefit::data::dataset::Dataset;
+use support::Counting;
 use vanefit::model::motor::Motor;
 use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
 use vanefit::numerics::rodas::Rodas4;
-use vanefit::objective::cost::{CostModel, CostOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let n: usize = std::env::args()
-        .nth(1)
-        .map(|s| s.parse())
-        .transpose()?
-        .unwrap_or(200);
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("measurements/ar034-synthetic");
-    let ds = Dataset::load(&dir)?;
-    let cost = CostModel::new(&ds, CostOptions::default())?;
+    let (n, _, cost) = support::shipped(200)?;
     let motor = Motor::default_motor();
     // Without tolerances on the command line each solver runs at its own default.
     let arg = |k: usize| {
@@ -52,9 +42,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if only.as_deref().is_some_and(|o| o != *name) {
             continue;
         }
-        counting::reset();
+        support::reset();
         let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
-        let calls = counting::calls();
+        let calls = support::calls();
         let t = Instant::now();
         for _ in 0..n {
             std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));

@@ -8,19 +8,17 @@
 //! and c_in1 each spread over ±1e-5 relative (a smooth cost leaves only rounding there).
 //! `GRID="rtol,atol_p,atol_w;…"` sets the Rodas4 tolerances to try, `MOTOR=leaky` a motor
 //! far from the data.
-#[path = "common/counting.rs"]
-mod counting;
+#[path = "common/support.rs"]
+mod support;
 
-use counting::Counting;
-use std::path::Path;
 use std::time::Instant;
-use vanefit::data::dataset::Dataset;
+use support::Counting;
 use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
 use vanefit::model::params::MotorParams;
 use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
 use vanefit::numerics::rodas::Rodas4;
-use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::objective::cost::CostModel;
 
 fn outputs(cost: &CostModel, motor: &Motor, solver: &dyn StiffSolver) -> Vec<(f64, Vec<f64>)> {
     let res = cost.residuals(motor, solver).expect("simulation");
@@ -67,14 +65,7 @@ fn jitter(cost: &CostModel, params: &MotorParams, solver: &dyn StiffSolver) -> f
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let n: usize = std::env::args()
-        .nth(1)
-        .map(|s| s.parse())
-        .transpose()?
-        .unwrap_or(100);
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("measurements/ar034-synthetic");
-    let ds = Dataset::load(&dir)?;
-    let cost = CostModel::new(&ds, CostOptions::default())?;
+    let (n, ds, cost) = support::shipped(100)?;
     let nominal = ds.nominal_params()?;
     let which = std::env::var("MOTOR").unwrap_or_default();
     let params = match which.as_str() {
@@ -125,9 +116,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         cases.push(("rodas4", item.to_string(), Box::new(Rodas4 { tol })));
     }
     for (name, rtol, solver) in &cases {
-        counting::reset();
+        support::reset();
         let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
-        let calls = counting::calls();
+        let calls = support::calls();
         let t = Instant::now();
         for _ in 0..n {
             std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));
