@@ -1,8 +1,11 @@
 //! Stiff time integration behind a small trait, so that the integrator can be swapped.
 //!
 //! The motor is stiff: the lumped volumes fill in milliseconds (τ ≈ V/(C·ρ0·R·T0) ≈ 3 ms)
-//! while the rotor and the ramps move over seconds. The default backend is diffsol's
-//! variable-order BDF with a dense LU on the 4×4 Jacobian.
+//! while the rotor and the ramps move over seconds. Two backends implement the trait:
+//! [`super::rodas::Rodas4`], the default ([`super::DefaultSolver`]), which takes the model's
+//! own Jacobian through [`StiffSolver::solve_with_jacobian`]; and diffsol's variable-order
+//! BDF ([`DiffsolBdf`]), kept as an independent cross-check (tests compare the two, and the
+//! recovery test makes its data with the BDF).
 
 /// Number of components of a state (the motor's p_1, p_2, p_e and ω).
 pub const N_STATES: usize = 4;
@@ -27,7 +30,8 @@ pub struct Tolerances {
 }
 
 impl Default for Tolerances {
-    /// rtol 3e-8; 0.03 Pa on pressures, 3e-5 rad/s on speed. Chosen by measurement so that
+    /// rtol 3e-8; 0.03 Pa on pressures, 3e-5 rad/s on speed: the BDF's default (Rodas4 has
+    /// its own, see [`super::rodas::Rodas4`]). Chosen by measurement so that
     /// the fitting cost is smooth in the parameters: an adaptive integrator changes its step
     /// sequence when a parameter changes, and the cost jitters with its tolerance. Over a
     /// 1e-5 change of c_12 (examples in the issue-4 note) the jitter was 2e-2 cost units at
