@@ -4,8 +4,6 @@
 #[path = "common/support.rs"]
 mod support;
 
-use std::time::Instant;
-use support::Counting;
 use vanefit::model::motor::Motor;
 use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
 use vanefit::numerics::rodas::Rodas4;
@@ -42,14 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if only.as_deref().is_some_and(|o| o != *name) {
             continue;
         }
-        support::reset();
-        let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
-        let calls = support::calls();
-        let t = Instant::now();
-        for _ in 0..n {
-            std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));
-        }
-        let us = t.elapsed().as_secs_f64() * 1e6 / n as f64;
+        let (c, calls, us) = support::count_and_time(&cost, &motor, solver.as_ref(), n);
         println!(
             "{name}: cost {:.10} failed {:?}; rhs calls {calls}; {us:.1} µs per evaluation",
             c.total, c.failed

@@ -11,8 +11,6 @@
 #[path = "common/support.rs"]
 mod support;
 
-use std::time::Instant;
-use support::Counting;
 use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
 use vanefit::model::params::MotorParams;
@@ -116,14 +114,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         cases.push(("rodas4", item.to_string(), Box::new(Rodas4 { tol })));
     }
     for (name, rtol, solver) in &cases {
-        support::reset();
-        let c = cost.evaluate(&motor, &Counting(solver.as_ref()));
-        let calls = support::calls();
-        let t = Instant::now();
-        for _ in 0..n {
-            std::hint::black_box(cost.evaluate(&motor, solver.as_ref()));
-        }
-        let us = t.elapsed().as_secs_f64() * 1e6 / n as f64;
+        let (c, calls, us) = support::count_and_time(&cost, &motor, solver.as_ref(), n);
         let dev = max_dev_sigma(&reference, &outputs(&cost, &motor, solver.as_ref()));
         let jit = jitter(&cost, &params, solver.as_ref());
         println!(

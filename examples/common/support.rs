@@ -3,9 +3,11 @@
 
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
 use vanefit::data::dataset::Dataset;
+use vanefit::model::motor::Motor;
 use vanefit::numerics::ode::{Jacobian, Rhs, SolveError, State, StiffSolver};
-use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::objective::cost::{CostModel, CostOptions, CostValue};
 
 /// Right-hand-side evaluations since the last [`reset`].
 pub static CALLS: AtomicU64 = AtomicU64::new(0);
@@ -70,4 +72,23 @@ pub fn shipped(default: usize) -> Result<(usize, Dataset, CostModel), Box<dyn st
     let ds = Dataset::load(&dir)?;
     let cost = CostModel::new(&ds, CostOptions::default())?;
     Ok((n, ds, cost))
+}
+
+/// One evaluation through [`Counting`] (its cost and right-hand-side calls), then the mean
+/// time of `n` plain evaluations, µs.
+pub fn count_and_time(
+    cost: &CostModel,
+    motor: &Motor,
+    solver: &dyn StiffSolver,
+    n: usize,
+) -> (CostValue, u64, f64) {
+    reset();
+    let value = cost.evaluate(motor, &Counting(solver));
+    let rhs_calls = calls();
+    let t = Instant::now();
+    for _ in 0..n {
+        std::hint::black_box(cost.evaluate(motor, solver));
+    }
+    let us = t.elapsed().as_secs_f64() * 1e6 / n.max(1) as f64;
+    (value, rhs_calls, us)
 }

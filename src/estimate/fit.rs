@@ -126,7 +126,7 @@ pub fn fit(
     )?;
     let best = run.best().clone();
     let problem = Problem::new(&objective, &setup.space, false);
-    let best_theta = finish(&problem, &best.theta, &settings);
+    let best_theta = finish(&problem, &best.theta, best.cost, &settings);
     // With intervals, the estimate is the maximum-likelihood point (χ² polished from the best
     // start), so that value and interval belong together; without, the best start's point.
     let (theta, intervals) = match intervals(engine, &problem, &best_theta, setup.uncertainty) {
@@ -156,13 +156,19 @@ pub fn fit(
 /// that intervals are measured from is finished as every start used to be (issue 10:
 /// this keeps the estimate where a run with the tight tolerance for every start ends,
 /// for a few hundred evaluations instead of a third of all of them).
-fn finish(problem: &Problem<'_>, theta: &[f64], settings: &MultiStartSettings) -> Vec<f64> {
+///
+/// `f0` is the cost at `theta`, as the multi-start recorded it.
+fn finish(
+    problem: &Problem<'_>,
+    theta: &[f64],
+    f0: f64,
+    settings: &MultiStartSettings,
+) -> Vec<f64> {
     let mut nm = settings.nelder_mead();
     nm.sd_tolerance = nm.sd_tolerance.min(1e-6);
     if let Restart::Curvature { min_gain, .. } = &mut nm.restart {
         *min_gain = min_gain.min(1e-6);
     }
-    let f0 = problem.evaluate(theta).cost;
     let search = minimize(
         problem,
         theta.to_vec(),

@@ -243,7 +243,7 @@ impl RestartedNelderMead {
             Restart::Curvature {
                 max_restarts,
                 min_gain,
-            } => self.curvature_restart(problem, cost_before, collapsed, (max_restarts, min_gain)),
+            } => self.curvature_restart(problem, cost_before, collapsed, max_restarts, min_gain),
             Restart::Halving {
                 rounds,
                 min_edge,
@@ -253,8 +253,14 @@ impl RestartedNelderMead {
     }
 
     /// [`Restart::Curvature`] after a stage.
-    fn curvature_restart<P>(&mut self, problem: &P, before: f64, collapsed: bool, rule: (u32, f64))
-    where
+    fn curvature_restart<P>(
+        &mut self,
+        problem: &P,
+        before: f64,
+        collapsed: bool,
+        max: u32,
+        min_gain: f64,
+    ) where
         P: CostFunction<Param = Vec<f64>, Output = f64>,
     {
         // A stage that gained nothing has stagnated (a simplex stuck in a curved valley):
@@ -263,7 +269,6 @@ impl RestartedNelderMead {
         if !(collapsed || stalled) {
             return;
         }
-        let (max, min_gain) = rule;
         let gained = self.cost_at_restart - self.fx > min_gain * (1.0 + self.fx.abs());
         if !(gained && self.restarts < max) {
             self.status = Status::Converged;

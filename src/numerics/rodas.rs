@@ -337,11 +337,14 @@ impl StepControl {
 impl Rodas4 {
     /// RMS of the error estimate scaled by atol_i + rtol·max(|y0_i|, |y1_i|).
     fn error_norm(&self, y0: &State, s: &Step) -> f64 {
+        let size: State = std::array::from_fn(|i| y0[i].abs().max(s.y1[i].abs()));
+        self.weighted_rms(&s.err, &size)
+    }
+
+    /// RMS of v_i / (atol_i + rtol·size_i): the norm every step decision is made in.
+    fn weighted_rms(&self, v: &State, size: &State) -> f64 {
         let sum: f64 = (0..N_STATES)
-            .map(|i| {
-                let scale = self.tol.atol[i] + self.tol.rtol * y0[i].abs().max(s.y1[i].abs());
-                (s.err[i] / scale).powi(2)
-            })
+            .map(|i| (v[i] / (self.tol.atol[i] + self.tol.rtol * size[i])).powi(2))
             .sum();
         (sum / N_STATES as f64).sqrt()
     }
@@ -349,13 +352,9 @@ impl Rodas4 {
     /// A first step from the size of f and of its change along an Euler step (Hairer &
     /// Wanner's `hinit`, order 4), at most the whole interval.
     fn initial_step(&self, rhs: &Rhs<'_>, t0: f64, y0: &State, f0: &State, span: f64) -> f64 {
-        let norm = |v: &State, y: &State| -> f64 {
-            let s: f64 = (0..N_STATES)
-                .map(|i| (v[i] / (self.tol.atol[i] + self.tol.rtol * y[i].abs())).powi(2))
-                .sum();
-            (s / N_STATES as f64).sqrt()
-        };
-        let (d0, d1) = (norm(y0, y0), norm(f0, y0));
+        let size = y0.map(f64::abs);
+        let norm = |v: &State| self.weighted_rms(v, &size);
+        let (d0, d1) = (norm(y0), norm(f0));
         let h0 = if d0 < 1e-5 || d1 < 1e-5 {
             1e-6
         } else {
@@ -365,7 +364,7 @@ impl Rodas4 {
         let y1: State = std::array::from_fn(|i| y0[i] + h0 * f0[i]);
         let f1 = rhs(t0 + h0, &y1);
         let df: State = std::array::from_fn(|i| f1[i] - f0[i]);
-        let d2 = norm(&df, y0) / h0;
+        let d2 = norm(&df) / h0;
         let h1 = if d1.max(d2) <= 1e-15 {
             (h0 * 1e-3).max(1e-6)
         } else {

@@ -1,7 +1,7 @@
 //! The outlet throttle (SPEC §2): a transient at constant supply driven by the recorded
 //! port-2 conductance; measured flows, speed and torque against log10 of that conductance.
 
-use super::transient::{Transient, CHANNELS};
+use super::transient::{supply_schedule, SupplyFrom, Transient, CHANNELS};
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, SimError};
 use crate::sim::recording::ExperimentData;
 use crate::sim::schedule::Schedule;
@@ -41,16 +41,7 @@ impl ExperimentKind for OutletThrottle {
     fn build(&self, data: &ExperimentData) -> Result<Arc<dyn Drive>, SimError> {
         let rec = &data.recording;
         let times = rec.values(Quantity::Time).map_err(missing(data))?.to_vec();
-        let p_supply = match (data.p_supply_pa, rec.column(Quantity::PPort1)) {
-            (Some(p), _) => Schedule::constant(p),
-            (None, Some(p)) => Schedule::smoothed(&times, &p.si),
-            (None, None) => {
-                return Err(SimError {
-                    experiment: data.file.clone(),
-                    message: "no supply pressure".into(),
-                })
-            }
-        };
+        let p_supply = supply_schedule(data, &times, SupplyFrom::Rig)?;
         let c = rec.values(Quantity::CPort2).map_err(missing(data))?;
         let logc: Vec<f64> = c.iter().map(|v| v.log10()).collect();
         let log10_c_port2 = Some(Schedule::smoothed(&times, &logc));

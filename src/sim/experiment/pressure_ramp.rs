@@ -1,10 +1,9 @@
 //! The pressure ramp (SPEC §2): a transient driven by the recorded supply pressure at
 //! port 1; measured flows, speed and torque against that pressure.
 
-use super::transient::{Transient, CHANNELS};
+use super::transient::{supply_schedule, SupplyFrom, Transient, CHANNELS};
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, SimError};
 use crate::sim::recording::ExperimentData;
-use crate::sim::schedule::Schedule;
 use crate::units::Quantity;
 use std::sync::Arc;
 
@@ -39,16 +38,7 @@ impl ExperimentKind for PressureRamp {
     fn build(&self, data: &ExperimentData) -> Result<Arc<dyn Drive>, SimError> {
         let rec = &data.recording;
         let times = rec.values(Quantity::Time).map_err(missing(data))?.to_vec();
-        let p_supply = match (data.p_supply_pa, rec.column(Quantity::PPort1)) {
-            (_, Some(p)) => Schedule::smoothed(&times, &p.si),
-            (Some(p), None) => Schedule::constant(p),
-            (None, None) => {
-                return Err(SimError {
-                    experiment: data.file.clone(),
-                    message: "no supply pressure".into(),
-                })
-            }
-        };
+        let p_supply = supply_schedule(data, &times, SupplyFrom::Recording)?;
         Ok(Arc::new(Transient {
             times,
             p_supply,

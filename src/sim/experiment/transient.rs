@@ -4,6 +4,7 @@
 use super::{Drive, Setting, SimError, Simulated};
 use crate::model::motor::{idx, Boundary, Motor, State};
 use crate::numerics::ode::StiffSolver;
+use crate::sim::recording::{Column, ExperimentData};
 use crate::sim::schedule::Schedule;
 use crate::sim::steady;
 use crate::units::Quantity;
@@ -82,6 +83,37 @@ impl Drive for Transient {
                 (Quantity::Torque, torque),
             ],
         })
+    }
+}
+
+/// Which supply a transient kind takes when rig.toml and the recording both give one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum SupplyFrom {
+    /// The recorded port-1 pressure (the pressure ramp: the supply is what is varied).
+    Recording,
+    /// `p_supply_mpa` of rig.toml (the outlet throttle: the supply is held).
+    Rig,
+}
+
+/// The supply-pressure schedule of a transient: the recorded port-1 pressure smoothed, or
+/// the constant `p_supply_mpa`, whichever `prefer` names when both are given; the other
+/// when only one is; an error naming the file when neither is.
+pub(super) fn supply_schedule(
+    data: &ExperimentData,
+    times: &[f64],
+    prefer: SupplyFrom,
+) -> Result<Schedule, SimError> {
+    let recorded = data.recording.column(Quantity::PPort1);
+    let smoothed = |p: &Column| Schedule::smoothed(times, &p.si);
+    match (data.p_supply_pa, recorded, prefer) {
+        (Some(p), _, SupplyFrom::Rig) | (Some(p), None, SupplyFrom::Recording) => {
+            Ok(Schedule::constant(p))
+        }
+        (_, Some(col), _) => Ok(smoothed(col)),
+        (None, None, _) => Err(SimError {
+            experiment: data.file.clone(),
+            message: "no supply pressure".into(),
+        }),
     }
 }
 
