@@ -6,7 +6,7 @@
 //! For every compared row i of channel c (the rows the cost compares, [`ChannelResiduals`]),
 //! r_ci = (y_sim − y_data)/σ_c with y_data the RECORDED value at that row and σ_c the
 //! channel's noise estimate from the data alone (second differences,
-//! [`super::target::noise_sigma`]). Then
+//! [`crate::objective::likelihood::noise_sigma`]). Then
 //!
 //! ```text
 //!     noise_ratio = √( (1/C) Σ_c mean_i r_ci² )
@@ -17,7 +17,7 @@
 //! the true curve scores ≈ 1 (the data scatter by σ about it); the residual against the
 //! reference polynomial would not do (the polynomial already averages noise out and a
 //! perfect model scores ≈ √(p/n) ≪ 1 against it), nor would the polynomial's residual σ as
-//! noise estimate (it holds the polynomial's lack of fit; see [`super::target`]). Values
+//! noise estimate (it holds the polynomial's lack of fit; see [`crate::objective::likelihood`]). Values
 //! clearly above 1 are misfit; see [`super::noise_ratio_limit`] for how far above.
 //!
 //! # Locations
@@ -35,11 +35,11 @@
 //! σ (1 means the model is off by one noise standard deviation throughout the region).
 
 use super::stats;
-use super::target::Target;
 use crate::data::dataset::Kind;
 use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel};
+use crate::objective::likelihood::Target;
 use crate::objective::reference::Abscissa;
 use crate::sim::experiment::SimError;
 use crate::units::{Quantity, Unit};

@@ -8,10 +8,10 @@ use super::fitting::{self, FitJob, Fitted};
 use super::locate::{noise_ratio_limit, Baseline};
 use super::models::{subset, Models};
 use super::observe::{ChowTest, Progress};
-use super::target::Target;
 use super::{analysis, stats, Candidate, Concealment, ExperimentCheck};
 use crate::data::dataset::Dataset;
 use crate::objective::cost::{CostModel, CostOptions};
+use crate::objective::likelihood::Target;
 
 /// A fit of the concealment test: (model index into the held-out models, or None for the
 /// base model fitted to the experiment alone; experiment index; the fit).
@@ -42,7 +42,7 @@ impl Split {
                 costs
                     .iter()
                     .zip(sets)
-                    .map(|(c, d)| Target::new(c, d))
+                    .map(|(c, d)| Ok(Target::new(c, d)?))
                     .collect()
             };
         Ok(Self {

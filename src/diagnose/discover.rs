@@ -16,7 +16,7 @@
 //! them).
 //!
 //! With r = (recorded − simulated)/σ over every compared point (σ the channel's noise,
-//! [`super::target`]) and S the normalised
+//! [`crate::objective::likelihood`]) and S the normalised
 //! sensitivities, forward selection with BIC: the nuisance columns are projected out, each
 //! library column's χ² reduction (sᵀr)²/(sᵀs) of the projected quantities is computed, and
 //! the best is kept while its ΔBIC = −Δχ² + ln n is below [`DISCOVERY_DELTA_BIC`]; at most
@@ -35,7 +35,6 @@
 //! differences times ω (speed-driven flows: pumping, carry-over). 50 terms in all.
 
 use super::fitting::Fitted;
-use super::target::Target;
 pub use crate::data::fitfile::{term_from_json, term_to_json};
 use crate::estimate::derivatives::central_column;
 use crate::estimate::engine::Engine;
@@ -47,6 +46,7 @@ pub use crate::model::extra::{
 use crate::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, SpeedFactor as W};
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
+use crate::objective::likelihood::Target;
 use nalgebra::{DMatrix, DVector};
 
 /// Linearised ΔBIC a library term must reach to be refitted.

@@ -24,9 +24,6 @@ pub enum DiagnoseError {
     /// A channel the cost compares has no column in its recording.
     #[error(transparent)]
     MissingColumn(#[from] MissingColumn),
-    /// An experiment of the cost model is not in the dataset it was built from.
-    #[error("{0}: not in the dataset")]
-    NotInDataset(String),
     /// A fit failed.
     #[error(transparent)]
     Fit(#[from] FitError),

@@ -1,16 +1,16 @@
 //! The fits a diagnosis runs: the base model and every candidate extension, warm-started
 //! from a previous optimum, several at once.
 //!
-//! Every fit minimises the likelihood of the recorded data ([`super::target`]). Catalog
+//! Every fit minimises the likelihood of the recorded data ([`crate::objective::likelihood`]). Catalog
 //! models go through the project's multi-start estimator ([`crate::estimate::multistart`])
 //! with the warm points as `given_starts`. Models with discovered terms ([`ExtraTerm`]) are
 //! not expressible as a [`ParamSpace`] (their coefficients are not named parameters), so
 //! they are fitted here by restarted Nelder–Mead over the space's θ plus one coordinate per
 //! term, the coefficient in units of its starting value.
 
-use super::target::{Likelihood, Target};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
+use crate::estimate::likelihood::Likelihood;
 use crate::estimate::multistart::{self, Silent};
 use crate::estimate::objective::{Coordinates, Objective, Problem};
 use crate::estimate::optimize::{self, Layout, NelderMeadSettings, Restart};
@@ -21,6 +21,7 @@ use crate::model::motor::{ExtraTerm, Motor};
 use crate::model::params::MotorParams;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
+use crate::objective::likelihood::Target;
 use std::time::Instant;
 
 /// Why a fit could not run (every message starts with the fit's label).
@@ -60,7 +61,7 @@ pub struct Fitted {
     pub params: MotorParams,
     /// The project's fitting cost J (`cost::CostModel::evaluate`) at these parameters.
     pub cost: f64,
-    /// χ² against the recorded data ([`super::target`], eq. 1), which the fit minimises.
+    /// χ² against the recorded data ([`crate::objective::likelihood`], eq. 1), which the fit minimises.
     pub chi2: f64,
     /// Data points behind χ².
     pub n_points: usize,

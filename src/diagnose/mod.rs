@@ -4,13 +4,13 @@
 //! # What is fitted
 //!
 //! Every fit of a diagnosis maximises the Gaussian likelihood of the RECORDED rows
-//! ([`target`]): χ² = Σ((simulated − recorded)/σ)² over the rows the cost compares, σ each
+//! ([`crate::objective::likelihood`]): χ² = Σ((simulated − recorded)/σ)² over the rows the cost compares, σ each
 //! channel's noise estimated from the data alone (second differences). Not the project's
 //! cost J against the reference polynomials: their σ also holds the polynomials' lack of
 //! fit (threefold for a ramp's speed), and their systematic error is a signal that a fit to
 //! one experiment can chase; both would make a correct model look wrong and separate fits
 //! "disagree" on clean data. The recorded inputs of transients are replaced by their smooth
-//! in time (errors in variables, [`target::smooth_inputs`]). `cost` in the output is J at the
+//! in time (errors in variables, [`crate::objective::likelihood::smooth_inputs`]). `cost` in the output is J at the
 //! fitted parameters, as `vanefit fit` reports it.
 //!
 //! # Procedure
@@ -85,7 +85,6 @@ pub mod analysis;
 pub mod discover;
 pub mod fitting;
 pub mod stats;
-pub mod target;
 
 pub use error::DiagnoseError;
 pub use json::{extended_fit_file, to_json};
@@ -129,7 +128,7 @@ pub fn diagnose_observed(
     observer: &dyn DiagnoseObserver,
 ) -> Result<Diagnosis, DiagnoseError> {
     let t0 = Instant::now();
-    let (smoothed, inputs) = target::smooth_inputs(recorded);
+    let (smoothed, inputs) = crate::objective::likelihood::smooth_inputs(recorded);
     let cx = Context::new(&smoothed, opts, engine, observer, t0)?;
     let fitted = baseline::fit(&cx)?;
     cx.end_phase("baseline fit");

@@ -2,11 +2,12 @@
 
 use super::analysis::{ChannelData, Location};
 use super::fitting::Fitted;
-use super::{discover, target, CONCEALMENT_ALPHA};
+use super::{discover, CONCEALMENT_ALPHA};
 use crate::data::dataset::Kind;
 use crate::model::effects::{Category, Effect};
 use crate::model::motor::ExtraTerm;
 use crate::model::params::MotorParams;
+use crate::objective::likelihood;
 
 /// How thorough a diagnosis is.
 #[derive(Debug, Clone, PartialEq)]
@@ -203,7 +204,7 @@ pub struct Diagnosis {
     /// Names estimated in the baseline.
     pub estimated: Vec<String>,
     /// How the recorded inputs of transient experiments were smoothed.
-    pub inputs: Vec<target::InputSmoothing>,
+    pub inputs: Vec<likelihood::InputSmoothing>,
     /// (phase, seconds).
     pub phases: Vec<(String, f64)>,
     /// Wall time of the whole diagnosis, s.

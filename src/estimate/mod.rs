@@ -10,6 +10,7 @@ pub mod engine;
 pub mod error;
 pub mod fit;
 pub mod history;
+pub mod likelihood;
 pub mod multistart;
 pub mod objective;
 pub mod optimize;

@@ -65,6 +65,12 @@ pub enum CostError {
     /// An experiment's inputs cannot drive a simulation.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// A channel the cost compares has no column in its recording.
+    #[error(transparent)]
+    MissingColumn(#[from] crate::sim::recording::MissingColumn),
+    /// An experiment of the cost model is not in the dataset it was built from.
+    #[error("{0}: not in the dataset")]
+    NotInDataset(String),
 }
 
 /// One channel's part of the cost.

@@ -1,4 +1,6 @@
-//! The fitting objective: polynomial reference responses and the cost built on them.
+//! The fitting objective: polynomial reference responses and the cost built on them, and
+//! the likelihood of the recorded rows with a noise estimate from the data.
 
 pub mod cost;
+pub mod likelihood;
 pub mod reference;

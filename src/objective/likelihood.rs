@@ -1,4 +1,5 @@
-//! What the diagnosis fits: the recorded data themselves, with a noise estimate per channel
+//! The likelihood of the recorded data themselves (what the diagnosis fits and what a
+//! fit's intervals are measured on), with a noise estimate per channel
 //! that does not depend on any model or polynomial.
 //!
 //! # Why not the cost's references
@@ -29,13 +30,11 @@
 //! σ² = mean(d_i²)/6 over the rest. As in the references, σ is at least max|y|/4096 (a
 //! 12-bit converter's resolution), so noise-free data do not get an infinite weight.
 
-use super::error::DiagnoseError;
+use super::cost::{ChannelResiduals, CostError, CostModel};
+use super::reference::{FitOptions, Reference};
 use crate::data::dataset::{Dataset, Kind};
-use crate::estimate::objective::{Evaluation, Objective};
 use crate::model::motor::Motor;
 use crate::numerics::DefaultSolver;
-use crate::objective::cost::{ChannelResiduals, CostModel, FAILURE_PENALTY};
-use crate::objective::reference::{FitOptions, Reference};
 use crate::units::Quantity;
 
 /// One compared channel: rows, recorded values there, noise.
@@ -174,14 +173,14 @@ pub fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
 impl Target {
     /// The compared rows of every channel of `cost` (built from `ds`), the recorded values
     /// there and each channel's noise.
-    pub fn new(cost: &CostModel, ds: &Dataset) -> Result<Self, DiagnoseError> {
+    pub fn new(cost: &CostModel, ds: &Dataset) -> Result<Self, CostError> {
         let mut channels = Vec::new();
         for ex in cost.experiments() {
             let data = ds
                 .experiments
                 .iter()
                 .find(|e| e.file == ex.file)
-                .ok_or_else(|| DiagnoseError::NotInDataset(ex.file.clone()))?;
+                .ok_or_else(|| CostError::NotInDataset(ex.file.clone()))?;
             let abscissa = ex.abscissa();
             for r in cost.references().filter(|r| r.file == ex.file) {
                 let values = data.recording.values(r.quantity)?;
@@ -233,37 +232,6 @@ impl Target {
         let res = cost.residuals(motor, solver).ok()?;
         let c: f64 = self.channel_chi2(&res).iter().sum();
         c.is_finite().then_some(c)
-    }
-}
-
-/// The likelihood of eq. \[1\] as an estimation objective: cost = χ²/n (≈ 1 for a correct
-/// model), failures give the cost module's penalty.
-pub struct Likelihood<'a> {
-    /// The cost model, which simulates the compared rows.
-    pub cost: &'a CostModel,
-    /// The recorded data and noise at those rows.
-    pub target: &'a Target,
-    /// The ODE solver.
-    pub solver: DefaultSolver,
-}
-
-impl Objective for Likelihood<'_> {
-    fn evaluate(&self, motor: &Motor) -> Evaluation {
-        let n = self.target.n_points();
-        match self.target.chi2(self.cost, motor, &self.solver) {
-            Some(chi2) => Evaluation {
-                cost: chi2 / n.max(1) as f64,
-                chi2,
-                n_points: n,
-                failed: false,
-            },
-            None => Evaluation {
-                cost: FAILURE_PENALTY,
-                chi2: FAILURE_PENALTY,
-                n_points: n,
-                failed: true,
-            },
-        }
     }
 }
 
