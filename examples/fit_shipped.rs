@@ -5,12 +5,12 @@
 
 use std::path::Path;
 use vanefit::data::dataset::Dataset;
-use vanefit::estimate::fit::{fit, FitSetup, UncertaintyMethod};
+use vanefit::estimate::fit::{fit, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::multistart::Silent;
 use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, DEFAULT_ESTIMATED};
 use vanefit::model::effects::EffectSet;
 use vanefit::model::params::spec;
-use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::objective::cost::CostOptions;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let starts = match std::env::args().nth(1) {
@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("measurements/ar034-synthetic");
     let ds = Dataset::load(&dir)?;
-    let cost = CostModel::new(&ds, CostOptions::default())?;
+    let data = FitData::new(&ds, CostOptions::default())?;
     let space = ParamSpace::new(&DEFAULT_ESTIMATED, ds.nominal_params()?, EffectSet::empty())?;
     let setup = FitSetup {
         space,
@@ -33,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         resume: false,
     };
     let engine = Engine::with_threads(None)?;
-    let out = fit(&engine, &cost, &setup, &Silent)?;
+    let out = fit(&engine, &data, &setup, &Silent)?;
     println!(
         "{}: cost {:.4} after {} evaluations",
         ds.name, out.cost, out.evaluations

@@ -4,7 +4,7 @@
 
 use vanefit::data::dataset::Dataset;
 use vanefit::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
-use vanefit::estimate::fit::{fit, FitSetup, UncertaintyMethod};
+use vanefit::estimate::fit::{fit, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::multistart::Silent;
 use vanefit::estimate::{Engine, MultiStartConfig};
 use vanefit::estimate::{ParamSpace, DEFAULT_ESTIMATED};
@@ -12,7 +12,7 @@ use vanefit::model::effects::EffectSet;
 use vanefit::model::motor::Motor;
 use vanefit::model::params::MotorParams;
 use vanefit::numerics::ode::DiffsolBdf;
-use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::objective::cost::CostOptions;
 
 /// A motor that is not the default one: conductances and friction moved by up to 40%.
 fn truth() -> MotorParams {
@@ -54,7 +54,7 @@ fn dataset(noise: SensorNoise, seed: u64) -> (tempfile::TempDir, Dataset) {
 
 /// Fits from the default motor (every parameter 15–40% off) plus a few Latin-hypercube starts.
 fn fit_back(ds: &Dataset, uncertainty: UncertaintyMethod) -> vanefit::estimate::fit::FitOutcome {
-    let cost = CostModel::new(ds, CostOptions::default()).unwrap();
+    let data = FitData::new(ds, CostOptions::default()).unwrap();
     let space = ParamSpace::new(
         &DEFAULT_ESTIMATED,
         MotorParams::default(),
@@ -75,7 +75,7 @@ fn fit_back(ds: &Dataset, uncertainty: UncertaintyMethod) -> vanefit::estimate::
         results_file: None,
         resume: false,
     };
-    fit(&Engine::with_threads(None).unwrap(), &cost, &setup, &Silent).unwrap()
+    fit(&Engine::with_threads(None).unwrap(), &data, &setup, &Silent).unwrap()
 }
 
 #[test]

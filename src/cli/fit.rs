@@ -4,7 +4,7 @@ use crate::data::dataset::{DataError, Dataset};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::fit::{
-    fit, fit_file, most_sensitive_experiment, FitOutcome, FitSetup, UncertaintyMethod,
+    fit, fit_file, most_sensitive_experiment, FitData, FitOutcome, FitSetup, UncertaintyMethod,
 };
 use crate::estimate::multistart::{RunObserver, StartResult};
 use crate::estimate::settings::MultiStartConfig;
@@ -12,7 +12,7 @@ use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATE
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::spec;
-use crate::objective::cost::{CostError, CostModel, CostOptions};
+use crate::objective::cost::{CostError, CostOptions};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
 use clap::{Args, ValueEnum};
@@ -261,7 +261,7 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
     }
     let ds = Dataset::load(&args.dataset)?;
     let space = space_from_args(&ds, args)?;
-    let cost = CostModel::new(&ds, CostOptions::default())?;
+    let data = FitData::new(&ds, CostOptions::default())?;
     let setup = FitSetup {
         space,
         multistart: MultiStartConfig {
@@ -281,7 +281,7 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
     };
     // The one thread pool of the run.
     let engine = Engine::with_threads(args.threads)?;
-    let outcome = fit(&engine, &cost, &setup, &progress())?;
+    let outcome = fit(&engine, &data, &setup, &progress())?;
     let file = fit_file(&ds.name, &setup, &outcome, args.seed);
     file.write(&args.out)
         .map_err(|source| FitCommandError::Write {
@@ -293,8 +293,12 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
         let best = Motor::new(outcome.params.clone(), setup.space.effects.clone());
         let waterfall = side_path(&args.out, "waterfall.svg");
         report::waterfall(&outcome.run.results, &waterfall)?;
-        let written =
-            report::overlays(&ds, &cost, &[("fit", &best)], &args.out.with_extension(""))?;
+        let written = report::overlays(
+            &ds,
+            &data.cost,
+            &[("fit", &best)],
+            &args.out.with_extension(""),
+        )?;
         println!(
             "plots: {} and {}",
             waterfall.display(),
@@ -311,11 +315,8 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
 fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) {
     let run = &out.run;
     println!(
-        "fit of {}: cost {:.4}, chi2/n {:.3} over {} points; {} starts ({} converged), {} evaluations, {:.1} s on {} thread(s)",
+        "fit of {}: {} starts ({} converged), {} evaluations, {:.1} s on {} thread(s)",
         ds.name,
-        out.cost,
-        out.chi2 / out.n_points.max(1) as f64,
-        out.n_points,
         run.results.len(),
         run.converged(),
         out.evaluations,
@@ -325,6 +326,58 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
     if !setup.space.effects.is_empty() {
         println!("effects: {}", setup.space.effects.ids().join(", "));
     }
+    print_goodness(out);
+    print_parameters(ds, setup, out);
+    let fixed: Vec<String> = crate::model::params::PARAMS
+        .iter()
+        .filter(|s| s.effect.is_none_or(|e| setup.space.effects.contains(e)))
+        .filter(|s| !setup.space.dims.iter().any(|d| d.name == s.name))
+        .map(|s| format!("{}={}", s.name, out.params.get(s.name).unwrap_or(s.default)))
+        .collect();
+    println!("fixed: {}", fixed.join(", "));
+    let minima: Vec<String> = out
+        .clusters
+        .iter()
+        .take(5)
+        .map(|c| format!("{:.4} (x{})", c.cost, c.members.len()))
+        .collect();
+    println!("local minima (cost x starts): {}", minima.join(", "));
+    println!("wrote {}", path.display());
+}
+
+/// What the estimate is, how well it fits, and cost against χ².
+fn print_goodness(out: &FitOutcome) {
+    println!(
+        "estimate: the maximum-likelihood point of the recorded rows (chi2 {:.1} over {} points, noise from the data, sensor offsets allowed)",
+        out.chi2, out.n_points
+    );
+    if let Some(g) = &out.goodness {
+        let verdict = if g.noise_reached {
+            "the model reaches the noise".to_string()
+        } else {
+            let worst = g
+                .worst_channel
+                .as_ref()
+                .map(|(c, r)| format!("; worst {c} at {r:.2}x its noise"))
+                .unwrap_or_default();
+            format!(
+                "the model does NOT reach the noise{worst}: intervals widened {:.2}x; do not trust them without a look at the plots",
+                g.interval_scale
+            )
+        };
+        println!(
+            "goodness of fit: chi2/dof {:.3} (dof {}), noise ratio {:.3} (limit {:.3}): {verdict}",
+            g.chi2_per_dof, g.dof, g.noise_ratio, g.noise_ratio_limit
+        );
+    }
+    println!(
+        "cost J {:.4} at the estimate; the best start reached {:.4} (J weighs each channel by its reference polynomial's scatter, chi2 by the data's noise, so their optima differ a little)",
+        out.cost, out.best_start_cost
+    );
+}
+
+/// The table of estimated parameters with their intervals and identifiability.
+fn print_parameters(ds: &Dataset, setup: &FitSetup, out: &FitOutcome) {
     let motor = Motor::new(out.params.clone(), setup.space.effects.clone());
     println!(
         "{:<12} {:>13} {:>27}  unit",
@@ -342,31 +395,18 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
                 i.hi.map_or("open".into(), |x| format!("{x:.4e}"))
             ),
         };
-        let mut note = String::new();
-        if iv.is_some_and(|i| !i.identifiable()) {
-            note = match most_sensitive_experiment(&motor, &d.name) {
-                Some(k) if !ds.experiments.iter().any(|e| e.kind == k) => format!(
-                    "  not identifiable here; a {} experiment would pin it down",
-                    k.id()
-                ),
-                _ => "  not identifiable from these experiments".into(),
-            };
-        }
+        let note = match iv.and_then(|i| i.why_not()) {
+            None => String::new(),
+            Some(why) => {
+                let hint = match most_sensitive_experiment(&motor, &d.name) {
+                    Some(k) if !ds.experiments.iter().any(|e| e.kind == k) => {
+                        format!("; adding the {} experiment would pin it down", k.id())
+                    }
+                    _ => String::new(),
+                };
+                format!("  NOT IDENTIFIABLE: {why}{hint}")
+            }
+        };
         println!("{:<12} {:>13.5e} {:>27}  {unit}{note}", d.name, v, interval);
     }
-    let fixed: Vec<String> = crate::model::params::PARAMS
-        .iter()
-        .filter(|s| s.effect.is_none_or(|e| setup.space.effects.contains(e)))
-        .filter(|s| !setup.space.dims.iter().any(|d| d.name == s.name))
-        .map(|s| format!("{}={}", s.name, out.params.get(s.name).unwrap_or(s.default)))
-        .collect();
-    println!("fixed: {}", fixed.join(", "));
-    let minima: Vec<String> = out
-        .clusters
-        .iter()
-        .take(5)
-        .map(|c| format!("{:.4} (x{})", c.cost, c.members.len()))
-        .collect();
-    println!("local minima (cost x starts): {}", minima.join(", "));
-    println!("wrote {}", path.display());
 }

@@ -40,6 +40,50 @@ pub struct ParamEntry {
     pub ci95: Option<[f64; 2]>,
 }
 
+/// What a fit could say of one estimated parameter's 95% interval (issue 11). Exported in
+/// the parameter's entry beside `ci95` (which is `[lo, hi]` only when identifiable), so
+/// that "not identifiable" is distinct from "not computed": `"identifiable": false` with a
+/// `"why"`, and `"bounds95"` holding the ends that closed (`null` for an open side).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParamVerdict {
+    /// Parameter name.
+    pub name: String,
+    /// Lower and upper end of the 95% interval, SI; `None` where the profile stays open.
+    pub bounds95: [Option<f64>; 2],
+    /// Both ends closed and no other optimum competes.
+    pub identifiable: bool,
+    /// Why not, in words.
+    pub why: Option<String>,
+}
+
+/// How the fit's estimate and intervals were obtained and how well it reproduces the data
+/// (`statistics` in the file; see `estimate::goodness`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitStatistics {
+    /// What the exported values are: "maximum_likelihood" (of the recorded rows).
+    pub estimate: String,
+    /// How intervals were computed: "profile", "curvature" or "none".
+    pub uncertainty: String,
+    /// χ² of the likelihood at the estimate.
+    pub chi2: f64,
+    /// Compared points.
+    pub n_points: usize,
+    /// n − k.
+    pub dof: usize,
+    /// χ²/dof.
+    pub chi2_per_dof: f64,
+    /// RMS residual over noise, channels averaged alike.
+    pub noise_ratio: f64,
+    /// The largest noise ratio of a model that reaches the noise.
+    pub noise_ratio_limit: f64,
+    /// Whether the model reaches the noise.
+    pub noise_reached: bool,
+    /// Factor by which the intervals were widened (1 when the noise is reached).
+    pub interval_scale: f64,
+    /// Cost J of the multi-start's best start (`cost` is J at the estimate).
+    pub best_start_cost: f64,
+}
+
 /// Number of starts and how many converged.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct Starts {
@@ -83,6 +127,10 @@ pub struct FitFile {
     pub run: Option<RunInfo>,
     /// Terms outside the catalog (`model.discovered`, written by `vanefit diagnose`).
     pub extra: Vec<ExtraTerm>,
+    /// Identifiability of the estimated parameters (empty: not computed).
+    pub verdicts: Vec<ParamVerdict>,
+    /// The fit's statistics, where a fit made the file.
+    pub statistics: Option<FitStatistics>,
 }
 
 impl FitFile {
@@ -99,6 +147,8 @@ impl FitFile {
             seed: None,
             run: None,
             extra: Vec::new(),
+            verdicts: Vec::new(),
+            statistics: None,
         }
     }
 
@@ -117,10 +167,18 @@ impl FitFile {
                 estimated: self.estimated.iter().any(|n| n == s.name),
                 ci95: ci,
             };
-            parameters.insert(
-                s.name.to_string(),
-                serde_json::to_value(entry).expect("plain data"),
-            );
+            let mut value = serde_json::to_value(entry).expect("plain data");
+            if let Some(v) = self.verdicts.iter().find(|v| v.name == s.name) {
+                value["identifiable"] = v.identifiable.into();
+                value["bounds95"] = serde_json::to_value(v.bounds95).expect("plain data");
+                if let Some(why) = &v.why {
+                    value["why"] = why.clone().into();
+                }
+            } else if self.statistics.is_some() && self.estimated.iter().any(|n| n == s.name) {
+                // Estimated, but no interval asked for: not computed, said as null.
+                value["identifiable"] = Value::Null;
+            }
+            parameters.insert(s.name.to_string(), value);
         }
         let mut doc = Map::new();
         doc.insert("format".into(), FORMAT.into());
@@ -141,6 +199,12 @@ impl FitFile {
             "run".into(),
             serde_json::to_value(self.run).expect("plain data"),
         );
+        if let Some(st) = &self.statistics {
+            doc.insert(
+                "statistics".into(),
+                serde_json::to_value(st).expect("plain data"),
+            );
+        }
         doc.insert("version".into(), env!("CARGO_PKG_VERSION").into());
         Value::Object(doc)
     }
@@ -199,8 +263,31 @@ impl FitFile {
                 .get("run")
                 .and_then(|v| serde_json::from_value(v.clone()).ok()),
             extra,
+            verdicts: verdicts(obj),
+            statistics: obj
+                .get("statistics")
+                .and_then(|v| serde_json::from_value(v.clone()).ok()),
         })
     }
+}
+
+/// The identifiability verdicts written in the parameter entries (informative: a malformed
+/// one is left out, not refused, since nothing computes with it).
+fn verdicts(obj: &Map<String, Value>) -> Vec<ParamVerdict> {
+    let Some(Value::Object(params)) = obj.get("parameters") else {
+        return Vec::new();
+    };
+    params
+        .iter()
+        .filter_map(|(name, e)| {
+            Some(ParamVerdict {
+                name: name.clone(),
+                identifiable: e.get("identifiable")?.as_bool()?,
+                bounds95: serde_json::from_value(e.get("bounds95")?.clone()).ok()?,
+                why: e.get("why").and_then(Value::as_str).map(str::to_string),
+            })
+        })
+        .collect()
 }
 
 /// Reads the parts of one fit file's text, with errors located at their line.

@@ -1,22 +1,38 @@
 //! Fitting a dataset: the runner that owns the multi-start, the uncertainty analysis and the
 //! export. It joins the data's cost (`cost::CostModel`) to the estimator through the
 //! [`Objective`] trait.
+//!
+//! # One estimate, two scores
+//!
+//! The multi-start minimises the cost J of SPEC §2 (simulation against the reference
+//! polynomials, each channel normalised by its polynomial's scatter): smooth, cheap to rank
+//! starts by, and the project's contract. Its best start is then carried to the maximum of
+//! the likelihood of the RECORDED rows ([`crate::objective::likelihood`]: σ from the data
+//! alone, the inputs' smooth driving the simulation, sensor offsets as nuisances), which is
+//! the estimate, whatever `--uncertainty` asks: a point and its interval belong to one
+//! likelihood, and the exported parameters do not depend on whether intervals were computed.
+//! J at that point is a little above the best start's J (the two scores weigh the channels
+//! differently); both are reported. The goodness of fit ([`super::goodness`]) is measured
+//! against the data's noise, and intervals are widened where the model misses it.
 
 use super::engine::Engine;
 use super::error::EstimateError;
+use super::goodness::{competitors, mark_competitors, ChannelChi2, GoodnessOfFit};
 use super::history::ResultsFile;
+use super::likelihood::Likelihood;
 use super::multistart::{self, cluster, Cluster, MultiStartOutcome, RunObserver};
 use super::objective::{Evaluation, Objective, Problem};
 use super::optimize::{minimize, Restart};
 use super::settings::{MultiStartConfig, MultiStartSettings};
 use super::space::ParamSpace;
 use super::uncertainty::{self, Interval};
-use crate::data::dataset::Kind;
-use crate::data::fitfile::{FitFile, RunInfo, Starts};
+use crate::data::dataset::{Dataset, Kind};
+use crate::data::fitfile::{FitFile, FitStatistics, ParamVerdict, RunInfo, Starts};
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
 use crate::numerics::DefaultSolver;
-use crate::objective::cost::CostModel;
+use crate::objective::cost::{CostError, CostModel, CostOptions};
+use crate::objective::likelihood::{smooth_inputs, InputSmoothing, Target};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -44,6 +60,54 @@ impl Objective for DataObjective<'_> {
     }
 }
 
+/// What a fit is scored on: the cost J that the multi-start minimises, and the likelihood of
+/// the recorded rows that gives the estimate, its intervals and its goodness of fit.
+pub struct FitData {
+    /// J of SPEC §2 on the dataset as recorded.
+    pub cost: CostModel,
+    /// The same experiments driven by the smooth of each recorded input column.
+    pub smoothed: CostModel,
+    /// The recorded rows, their noise, and the sensors' calibration offsets as nuisances.
+    pub target: Target,
+    /// What the smoothing did to each input column.
+    pub inputs: Vec<InputSmoothing>,
+}
+
+impl FitData {
+    /// The cost and the likelihood of a dataset.
+    pub fn new(ds: &Dataset, options: CostOptions) -> Result<Self, CostError> {
+        let cost = CostModel::new(ds, options)?;
+        let (smooth_ds, inputs) = smooth_inputs(ds);
+        let smoothed = CostModel::new(&smooth_ds, options)?;
+        let target = Target::new(&smoothed, &smooth_ds)?.with_offsets();
+        Ok(Self {
+            cost,
+            smoothed,
+            target,
+            inputs,
+        })
+    }
+
+    /// Each channel's χ² under the likelihood (`None` if the simulation fails).
+    pub fn channel_chi2(&self, motor: &Motor) -> Option<Vec<ChannelChi2>> {
+        let res = self
+            .smoothed
+            .residuals(motor, &DefaultSolver::default())
+            .ok()?;
+        let chi2 = self.target.channel_chi2(&res);
+        Some(
+            res.iter()
+                .zip(chi2)
+                .map(|(r, c)| ChannelChi2 {
+                    label: format!("{} {}", r.file, r.column),
+                    chi2: c,
+                    n: r.simulated.len(),
+                })
+                .collect(),
+        )
+    }
+}
+
 /// How intervals are computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum UncertaintyMethod {
@@ -53,6 +117,17 @@ pub enum UncertaintyMethod {
     Curvature,
     /// No intervals.
     None,
+}
+
+impl UncertaintyMethod {
+    /// The method's name in files and on the command line.
+    pub fn id(self) -> &'static str {
+        match self {
+            UncertaintyMethod::Profile => "profile",
+            UncertaintyMethod::Curvature => "curvature",
+            UncertaintyMethod::None => "none",
+        }
+    }
 }
 
 /// Everything a fit needs besides the data.
@@ -76,12 +151,18 @@ pub struct FitOutcome {
     pub params: MotorParams,
     /// The estimate in optimizer coordinates.
     pub theta: Vec<f64>,
-    /// Cost at the estimate.
+    /// Cost J at the estimate.
     pub cost: f64,
-    /// χ² at the estimate.
+    /// J of the best start (the multi-start's optimum, before the likelihood's polish).
+    pub best_start_cost: f64,
+    /// The likelihood's χ² at the estimate.
     pub chi2: f64,
     /// Data points behind χ².
     pub n_points: usize,
+    /// Goodness of fit against the data's noise (`None` if the estimate cannot be simulated).
+    pub goodness: Option<GoodnessOfFit>,
+    /// How the intervals were computed.
+    pub method: UncertaintyMethod,
     /// 95% intervals (empty when not asked for).
     pub intervals: Vec<Interval>,
     /// Local minima found by the starts.
@@ -101,17 +182,17 @@ impl FitOutcome {
     }
 }
 
-/// Fits the space's parameters to the cost on the engine's threads.
+/// Fits the space's parameters to the data on the engine's threads (see the module docs).
 pub fn fit(
     engine: &Engine,
-    cost: &CostModel,
+    data: &FitData,
     setup: &FitSetup,
     observer: &dyn RunObserver,
 ) -> Result<FitOutcome, EstimateError> {
     let settings = setup.multistart.check()?;
     let t0 = Instant::now();
     let objective = DataObjective {
-        cost,
+        cost: &data.cost,
         solver: Box::new(DefaultSolver::default()),
     };
     let file = setup.results_file.as_deref().map(ResultsFile::new);
@@ -127,24 +208,36 @@ pub fn fit(
     let best = run.best().clone();
     let problem = Problem::new(&objective, &setup.space, false);
     let best_theta = finish(&problem, &best.theta, best.cost, &settings);
-    // With intervals, the estimate is the maximum-likelihood point (χ² polished from the best
-    // start), so that value and interval belong together; without, the best start's point.
-    let (theta, intervals) = match intervals(engine, &problem, &best_theta, setup.uncertainty) {
-        Some((theta_ml, iv)) => (theta_ml, iv),
-        None => (best_theta, Vec::new()),
+    let likelihood = Likelihood {
+        cost: &data.smoothed,
+        target: &data.target,
+        solver: DefaultSolver::default(),
+    };
+    let ml = Problem::new(&likelihood, &setup.space, false);
+    let (theta, chi2) = uncertainty::polish_chi2(&ml, &best_theta, 400);
+    let params = setup.space.params(&theta)?;
+    let motor = Motor::new(params.clone(), setup.space.effects.clone());
+    let goodness = data
+        .channel_chi2(&motor)
+        .map(|c| GoodnessOfFit::new(&c, theta.len()));
+    let clusters = cluster(&run.results, &setup.space, 0.02);
+    let intervals = match &goodness {
+        Some(g) => intervals(engine, &ml, &theta, chi2, g, &clusters, setup),
+        None => Vec::new(),
     };
     let at = problem.evaluate(&theta);
-    let clusters = cluster(&run.results, &setup.space, 0.02);
-    let params = setup.space.params(&theta)?;
     Ok(FitOutcome {
         params,
         cost: at.cost,
-        chi2: at.chi2,
-        n_points: at.n_points,
+        best_start_cost: best.cost,
+        chi2,
+        n_points: data.target.n_points(),
+        goodness,
+        method: setup.uncertainty,
         theta,
         intervals,
         clusters,
-        evaluations: run.evaluations + problem.evaluations(),
+        evaluations: run.evaluations + problem.evaluations() + ml.evaluations(),
         run,
         wall_s: t0.elapsed().as_secs_f64(),
     })
@@ -184,27 +277,39 @@ fn finish(
     }
 }
 
-/// The maximum-likelihood point and the intervals around it (`None` when not asked for).
+/// The 95% intervals around the maximum-likelihood point `theta` (χ² `chi2_min`), widened
+/// where the model misses the noise, each marked when another optimum of the multi-start
+/// fits as well with the parameter outside it; empty when not asked for.
 fn intervals(
     engine: &Engine,
-    problem: &Problem<'_>,
+    ml: &Problem<'_>,
     theta: &[f64],
-    method: UncertaintyMethod,
-) -> Option<(Vec<f64>, Vec<Interval>)> {
-    if method == UncertaintyMethod::None {
-        return None;
+    chi2_min: f64,
+    goodness: &GoodnessOfFit,
+    clusters: &[Cluster],
+    setup: &FitSetup,
+) -> Vec<Interval> {
+    if setup.uncertainty == UncertaintyMethod::None {
+        return Vec::new();
     }
-    let (theta_ml, chi2_min) = uncertainty::polish_chi2(problem, theta, 400);
-    let cov = uncertainty::curvature_covariance(problem, &theta_ml, 1e-3);
-    let intervals = match method {
-        UncertaintyMethod::Curvature => {
-            uncertainty::curvature_intervals(problem, &theta_ml, cov.as_ref())
-        }
-        _ => {
-            uncertainty::profile_intervals(engine, problem, &theta_ml, chi2_min, cov.as_ref(), 300)
-        }
+    let threshold = goodness.threshold();
+    let cov = uncertainty::curvature_covariance(ml, theta, 1e-3, goodness.interval_scale.powi(2));
+    let mut out = match setup.uncertainty {
+        UncertaintyMethod::Curvature => uncertainty::curvature_intervals(ml, theta, cov.as_ref()),
+        _ => uncertainty::profile_intervals(
+            engine,
+            ml,
+            theta,
+            chi2_min,
+            threshold,
+            cov.as_ref(),
+            300,
+        ),
     };
-    Some((theta_ml, intervals))
+    let others: Vec<Vec<f64>> = clusters.iter().skip(1).map(|c| c.theta.clone()).collect();
+    let rivals = competitors(ml, &others, chi2_min, threshold, 12);
+    mark_competitors(&mut out, &setup.space, &rivals);
+    out
 }
 
 /// The experiment kind whose outputs move most (relative to typical sensor noise) when a
@@ -254,7 +359,7 @@ pub fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kind> {
         .map(|(k, _)| k)
 }
 
-/// The fit file of an outcome (SPEC §4).
+/// The fit file of an outcome (SPEC §4, with identifiability and statistics).
 pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) -> FitFile {
     FitFile {
         dataset: dataset.to_string(),
@@ -264,6 +369,7 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
         ci95: out
             .intervals
             .iter()
+            .filter(|iv| iv.identifiable())
             .filter_map(|iv| iv.ci95().map(|c| (iv.name.clone(), c)))
             .collect(),
         cost: Some(out.cost),
@@ -278,5 +384,28 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             threads: out.run.threads,
         }),
         extra: Vec::new(),
+        verdicts: out
+            .intervals
+            .iter()
+            .map(|iv| ParamVerdict {
+                name: iv.name.clone(),
+                bounds95: [iv.lo, iv.hi],
+                identifiable: iv.identifiable(),
+                why: iv.why_not(),
+            })
+            .collect(),
+        statistics: out.goodness.as_ref().map(|g| FitStatistics {
+            estimate: "maximum_likelihood".into(),
+            uncertainty: out.method.id().into(),
+            chi2: g.chi2,
+            n_points: g.n_points,
+            dof: g.dof,
+            chi2_per_dof: g.chi2_per_dof,
+            noise_ratio: g.noise_ratio,
+            noise_ratio_limit: g.noise_ratio_limit,
+            noise_reached: g.noise_reached,
+            interval_scale: g.interval_scale,
+            best_start_cost: out.best_start_cost,
+        }),
     }
 }

@@ -9,6 +9,7 @@ pub mod derivatives;
 pub mod engine;
 pub mod error;
 pub mod fit;
+pub mod goodness;
 pub mod history;
 pub mod likelihood;
 pub mod multistart;

@@ -5,7 +5,14 @@
 //! to a constant when the reference is the least-squares polynomial of the data (the data's
 //! residuals about the polynomial are orthogonal to it, so differences of χ² against the
 //! polynomial equal differences against the data). The 95% profile interval of parameter j
-//! is where min over the others of χ² rises by χ²₁(0.95) = 3.841 above its minimum.
+//! is where min over the others of χ² rises by χ²₁(0.95) = 3.841 above its minimum; when the
+//! model misses the data by more than their noise (χ²/dof > 1) that threshold is scaled by
+//! χ²/dof (Birge's ratio, as curve fitting does with `absolute_sigma = False`), so that the
+//! interval of a model that misses is not narrower than its scatter warrants.
+//!
+//! A parameter is called identifiable only when its profile closes on both sides AND no
+//! other local optimum the multi-start found fits as well (within the threshold) with the
+//! parameter outside the interval: a profile explores one valley only.
 
 use super::derivatives::hessian;
 use super::engine::Engine;
@@ -43,12 +50,29 @@ pub struct Interval {
     pub hi: Option<f64>,
     /// How it was obtained.
     pub method: Method,
+    /// Another local optimum, as good within the threshold, puts the parameter here (SI),
+    /// outside the interval.
+    pub other_optimum: Option<f64>,
 }
 
 impl Interval {
-    /// Both sides are pinned down.
+    /// Both sides are pinned down and no other optimum competes.
     pub fn identifiable(&self) -> bool {
-        self.lo.is_some() && self.hi.is_some()
+        self.lo.is_some() && self.hi.is_some() && self.other_optimum.is_none()
+    }
+
+    /// Why the parameter is not identifiable, in words (`None` when it is).
+    pub fn why_not(&self) -> Option<String> {
+        match (self.lo, self.hi, self.other_optimum) {
+            (None, None, _) => Some("the data bound it on neither side".into()),
+            (None, Some(_), _) => Some("the data do not bound it from below".into()),
+            (Some(_), None, _) => Some("the data do not bound it from above".into()),
+            (_, _, Some(v)) => Some(format!(
+                "another optimum fits as well with {} = {v:.4e}",
+                self.name
+            )),
+            _ => None,
+        }
     }
     /// `[lo, hi]` when identifiable.
     pub fn ci95(&self) -> Option<[f64; 2]> {
@@ -96,13 +120,19 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
     }
 }
 
-/// Covariance of θ from the curvature of χ²: Σ = 2·H⁻¹, H by central differences.
-/// `None` when H is not positive definite (a flat or ill-posed direction).
-pub fn curvature_covariance(problem: &Problem<'_>, theta: &[f64], h: f64) -> Option<DMatrix<f64>> {
+/// Covariance of θ from the curvature of χ²: Σ = 2·s²·H⁻¹, H by central differences, s² the
+/// threshold's scale (1, or χ²/dof when the model misses). `None` when H is not positive
+/// definite (a flat or ill-posed direction).
+pub fn curvature_covariance(
+    problem: &Problem<'_>,
+    theta: &[f64],
+    h: f64,
+    scale2: f64,
+) -> Option<DMatrix<f64>> {
     let chi2 = |t: &[f64]| problem.evaluate(t).chi2;
     let hess = hessian(&chi2, theta, chi2(theta), h);
     let chol = hess.cholesky()?;
-    Some(chol.inverse() * 2.0)
+    Some(chol.inverse() * (2.0 * scale2))
 }
 
 /// Intervals from the curvature: θ̂ ± 1.96·σ_θ, mapped back through the transforms
@@ -129,6 +159,7 @@ pub fn curvature_intervals(
                 lo: sd.and_then(|s| within(theta[j] - 1.96 * s)),
                 hi: sd.and_then(|s| within(theta[j] + 1.96 * s)),
                 method: Method::Curvature,
+                other_optimum: None,
             }
         })
         .collect()
@@ -140,6 +171,8 @@ struct Profile<'a> {
     j: usize,
     others: Vec<usize>,
     max_iters: u64,
+    /// Rise of χ² that ends the interval.
+    threshold: f64,
 }
 
 impl Profile<'_> {
@@ -160,7 +193,7 @@ impl Profile<'_> {
         (template, c)
     }
 
-    /// Where the profile crosses χ²_min + 3.841 on one side (`dir` = ±1), in θ_j.
+    /// Where the profile crosses χ²_min + threshold on one side (`dir` = ±1), in θ_j.
     fn crossing(&self, theta_hat: &[f64], chi2_min: f64, dir: f64, step0: f64) -> Option<f64> {
         let t0 = theta_hat[self.j];
         let (mut t_in, mut d_in): (f64, f64) = (t0, 0.0);
@@ -173,19 +206,19 @@ impl Profile<'_> {
             }
             let (b, c) = self.at(&base, t);
             let delta = c - chi2_min;
-            if delta >= CHI2_95 {
+            if delta >= self.threshold {
                 // √Δ is close to linear in θ near the optimum: interpolate it, then refine once.
                 let mut t_out = t;
                 let mut d_out = delta;
                 for _ in 0..2 {
                     let (a, z) = (d_in.max(0.0).sqrt(), d_out.sqrt());
-                    let tc = t_in + (CHI2_95.sqrt() - a) / (z - a) * (t_out - t_in);
+                    let tc = t_in + (self.threshold.sqrt() - a) / (z - a) * (t_out - t_in);
                     let (_, cc) = self.at(&b, tc);
                     let dc = cc - chi2_min;
-                    if (dc - CHI2_95).abs() < 0.05 {
+                    if (dc - self.threshold).abs() < 0.05 {
                         return Some(tc);
                     }
-                    if dc < CHI2_95 {
+                    if dc < self.threshold {
                         t_in = tc;
                         d_in = dc;
                     } else {
@@ -194,7 +227,7 @@ impl Profile<'_> {
                     }
                 }
                 let (a, z) = (d_in.max(0.0).sqrt(), d_out.sqrt());
-                return Some(t_in + (CHI2_95.sqrt() - a) / (z - a) * (t_out - t_in));
+                return Some(t_in + (self.threshold.sqrt() - a) / (z - a) * (t_out - t_in));
             }
             t_in = t;
             d_in = delta;
@@ -205,12 +238,14 @@ impl Profile<'_> {
 }
 
 /// Profile-likelihood intervals for every estimated parameter (in parallel), starting from
-/// the χ² optimum `theta_hat` and using the curvature covariance (if any) to size steps.
+/// the χ² optimum `theta_hat`, ending where χ² rises by `threshold`, and using the curvature
+/// covariance (if any) to size steps.
 pub fn profile_intervals(
     engine: &Engine,
     problem: &Problem<'_>,
     theta_hat: &[f64],
     chi2_min: f64,
+    threshold: f64,
     cov: Option<&DMatrix<f64>>,
     max_iters: u64,
 ) -> Vec<Interval> {
@@ -228,6 +263,7 @@ pub fn profile_intervals(
             j,
             others: (0..k).filter(|i| *i != j).collect(),
             max_iters,
+            threshold,
         };
         let d = &problem.space.dims[j];
         profile
@@ -243,6 +279,7 @@ pub fn profile_intervals(
                 lo: ends[2 * j],
                 hi: ends[2 * j + 1],
                 method: Method::Profile,
+                other_optimum: None,
             }
         })
         .collect()

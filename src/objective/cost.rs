@@ -343,6 +343,31 @@ impl CostModel {
         Ok(out)
     }
 
+    /// The simulated values at every channel's compared rows, SI, in channel order (the lean
+    /// part of [`CostModel::residuals`], for likelihoods evaluated thousands of times).
+    pub fn simulated_rows(
+        &self,
+        motor: &Motor,
+        solver: &dyn StiffSolver,
+    ) -> Result<Vec<Vec<f64>>, SimError> {
+        let mut out = Vec::with_capacity(self.n_channels());
+        for (ex, sim) in self
+            .experiments
+            .iter()
+            .zip(self.simulate_all(motor, solver))
+        {
+            let sim = sim?;
+            for ch in &ex.channels {
+                let values = sim.channel(ch.reference.quantity).ok_or_else(|| SimError {
+                    experiment: ch.reference.file.clone(),
+                    message: format!("the simulation gives no {}", ch.reference.column),
+                })?;
+                out.push(ch.rows.iter().map(|&i| values[i]).collect());
+            }
+        }
+        Ok(out)
+    }
+
     /// Every channel's reference, in experiment and channel order.
     pub fn references(&self) -> impl Iterator<Item = &ChannelReference> {
         self.experiments

@@ -20,6 +20,21 @@
 //! over the rows the cost compares (abscissa inside the reference's valid range; the rows
 //! inside a breakaway jump are left out as there), with σ_c from the data alone.
 //!
+//! # Sensor offsets
+//!
+//! A calibrated sensor may still read a constant b off (its zero offset, within the
+//! calibration tolerance τ). With b a nuisance parameter of prior N(0, τ²), minimising
+//! Σ((y_sim + b − y_data)/σ)² + (b/τ)² over b gives, with u_i = (y_sim,i − y_data,i)/σ,
+//!
+//! ```text
+//!     χ²_c = Σ u_i² − (Σ u_i)² / (N + σ²/τ²)                        [2]
+//! ```
+//!
+//! (exactly the Gaussian marginal likelihood up to a constant). τ = 0 gives eq. \[1\]; a
+//! fit's intervals use the typical tolerances of [`calibration_tolerance`], so an offset
+//! that the data cannot tell from a parameter change widens the interval instead of
+//! biasing it. The diagnosis keeps τ = 0 (an offset there would be a finding).
+//!
 //! # Noise estimate
 //!
 //! Second differences d_i = y_{i+1} − 2y_i + y_{i−1} of the recorded channel, rows in
@@ -50,6 +65,52 @@ pub struct ChannelTarget {
     pub data: Vec<f64>,
     /// Noise standard deviation of the channel, SI (see the module documentation).
     pub sigma: f64,
+    /// Standard deviation of the sensor's constant calibration offset, SI (0: none); see
+    /// [`Target::with_offsets`].
+    pub offset_sd: f64,
+}
+
+impl ChannelTarget {
+    /// χ² of this channel's simulated values (rows as [`ChannelTarget::rows`]), with the
+    /// sensor offset b profiled out (eq. \[2\] of the module documentation).
+    pub fn chi2(&self, simulated: &[f64]) -> f64 {
+        let (mut s1, mut s2) = (0.0, 0.0);
+        for (s, d) in simulated.iter().zip(&self.data) {
+            let u = (s - d) / self.sigma;
+            s1 += u;
+            s2 += u * u;
+        }
+        if self.offset_sd > 0.0 {
+            let n = self.data.len() as f64;
+            s2 - s1 * s1 / (n + (self.sigma / self.offset_sd).powi(2))
+        } else {
+            s2
+        }
+    }
+
+    /// The offset b̂ that [`ChannelTarget::chi2`] profiles out, SI (recorded − simulated on
+    /// average, shrunk towards 0 by its prior); 0 without an offset.
+    pub fn offset(&self, simulated: &[f64]) -> f64 {
+        if self.offset_sd <= 0.0 {
+            return 0.0;
+        }
+        let s1: f64 = simulated.iter().zip(&self.data).map(|(s, d)| d - s).sum();
+        let n = self.data.len() as f64;
+        s1 / (n + (self.sigma / self.offset_sd).powi(2))
+    }
+}
+
+/// Typical calibration tolerance (1σ) of a rig's sensor, SI: the zero offset a calibrated
+/// sensor may still carry. Flow meters 0.02 g/s (0.2% of a 10 g/s range), speed 2 rpm,
+/// torque 2 mN·m (0.2% of a 1 N·m transducer); `None` for the recorded inputs, which drive
+/// the simulation instead of being compared.
+pub fn calibration_tolerance(q: Quantity) -> Option<f64> {
+    match q {
+        Quantity::Flow1 | Quantity::Flow2 => Some(2e-5),
+        Quantity::Speed => Some(2.0 * std::f64::consts::PI / 60.0),
+        Quantity::Torque => Some(2e-3),
+        _ => None,
+    }
 }
 
 /// Every compared channel of a dataset, in the cost's channel order.
@@ -201,10 +262,20 @@ impl Target {
                     data: rows.iter().map(|&i| values[i]).collect(),
                     rows,
                     sigma: noise_sigma(&ordered),
+                    offset_sd: 0.0,
                 });
             }
         }
         Ok(Self { channels })
+    }
+
+    /// The same target with a constant offset of each compared sensor as a nuisance
+    /// parameter, Gaussian with the sensor's [`calibration_tolerance`] as prior σ.
+    pub fn with_offsets(mut self) -> Self {
+        for c in &mut self.channels {
+            c.offset_sd = calibration_tolerance(c.quantity).unwrap_or(0.0);
+        }
+        self
     }
 
     /// Number of compared points.
@@ -212,25 +283,20 @@ impl Target {
         self.channels.iter().map(|c| c.rows.len()).sum()
     }
 
-    /// Per channel Σ((sim − data)/σ)² of simulated residuals (same channel order).
+    /// Per channel χ² of simulated residuals (same channel order): Σ((sim − data)/σ)², less
+    /// what a sensor offset explains where one is allowed.
     pub fn channel_chi2(&self, res: &[ChannelResiduals]) -> Vec<f64> {
         self.channels
             .iter()
             .zip(res)
-            .map(|(t, r)| {
-                r.simulated
-                    .iter()
-                    .zip(&t.data)
-                    .map(|(s, d)| ((s - d) / t.sigma).powi(2))
-                    .sum()
-            })
+            .map(|(t, r)| t.chi2(&r.simulated))
             .collect()
     }
 
     /// χ² of eq. \[1\] for a motor, or `None` if the simulation fails or is not finite.
     pub fn chi2(&self, cost: &CostModel, motor: &Motor, solver: &DefaultSolver) -> Option<f64> {
-        let res = cost.residuals(motor, solver).ok()?;
-        let c: f64 = self.channel_chi2(&res).iter().sum();
+        let sim = cost.simulated_rows(motor, solver).ok()?;
+        let c: f64 = self.channels.iter().zip(&sim).map(|(t, s)| t.chi2(s)).sum();
         c.is_finite().then_some(c)
     }
 }

@@ -1,0 +1,180 @@
+//! Goodness of fit against a noise estimate from the data, and the check that no other local
+//! optimum competes with the estimate (issue 11: intervals are trusted only where the model
+//! reaches the noise and the optimum is unique).
+//!
+//! # Noise ratio
+//!
+//! With χ²_c the likelihood's χ² of channel c over its n_c rows ([`crate::objective::likelihood`],
+//! σ_c estimated from the data), the noise ratio is
+//!
+//! ```text
+//!     r = √( (1/C) Σ_c χ²_c / n_c )                                    [1]
+//! ```
+//!
+//! (each channel counts alike, so a 25-point datasheet is not drowned by 600-row ramps; the
+//! diagnosis reports the same number). For a model that reaches the noise, χ²_c/n_c has
+//! relative variance 2/n_c from the noise itself and ≈ 3.9/n_c from the estimate of σ_c² by
+//! second differences (their mean square has variance 140σ⁴/m over m rows; divided by 6² that
+//! is 3.89σ⁴/m). The model "reaches the noise" when
+//!
+//! ```text
+//!     r² ≤ 1 + 3.09 · √(Σ_c 5.89/n_c) / C                              [2]
+//! ```
+//!
+//! (a one-sided 0.1% test). Intervals are widened by s² = max(1, r²): the profile threshold
+//! becomes 3.841·s² (Birge's ratio), so a model that misses gets intervals as wide as its
+//! scatter warrants, and the summary says that it misses.
+
+use super::objective::Problem;
+use super::uncertainty::{polish_chi2, Interval};
+use crate::estimate::space::ParamSpace;
+use serde::Serialize;
+
+/// How well the estimate reproduces the data, against the data's own noise.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GoodnessOfFit {
+    /// χ² of the likelihood at the estimate (offsets profiled out).
+    pub chi2: f64,
+    /// Compared points.
+    pub n_points: usize,
+    /// Degrees of freedom, n − k.
+    pub dof: usize,
+    /// χ²/dof.
+    pub chi2_per_dof: f64,
+    /// r of eq. \[1\].
+    pub noise_ratio: f64,
+    /// The largest r of a model that reaches the noise (eq. \[2\]).
+    pub noise_ratio_limit: f64,
+    /// r ≤ the limit.
+    pub noise_reached: bool,
+    /// s = max(1, r): the factor by which intervals are widened.
+    pub interval_scale: f64,
+    /// The channel with the largest χ²_c/n_c: "file column", and its √(χ²_c/n_c).
+    pub worst_channel: Option<(String, f64)>,
+}
+
+/// One channel's share of χ².
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelChi2 {
+    /// "file column".
+    pub label: String,
+    /// χ²_c.
+    pub chi2: f64,
+    /// n_c.
+    pub n: usize,
+}
+
+impl GoodnessOfFit {
+    /// The goodness of fit of channels' χ² with `k` estimated parameters.
+    pub fn new(channels: &[ChannelChi2], k: usize) -> Self {
+        let n_points: usize = channels.iter().map(|c| c.n).sum();
+        let chi2: f64 = channels.iter().map(|c| c.chi2).sum();
+        let dof = n_points.saturating_sub(k).max(1);
+        let used: Vec<&ChannelChi2> = channels.iter().filter(|c| c.n > 0).collect();
+        let c = used.len().max(1) as f64;
+        let r2 = used.iter().map(|ch| ch.chi2 / ch.n as f64).sum::<f64>() / c;
+        let spread: f64 = used.iter().map(|ch| 5.89 / ch.n as f64).sum();
+        let limit2 = 1.0 + 3.09 * spread.sqrt() / c;
+        let worst = used
+            .iter()
+            .map(|ch| (ch.label.clone(), (ch.chi2 / ch.n as f64).sqrt()))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        Self {
+            chi2,
+            n_points,
+            dof,
+            chi2_per_dof: chi2 / dof as f64,
+            noise_ratio: r2.sqrt(),
+            noise_ratio_limit: limit2.sqrt(),
+            noise_reached: r2 <= limit2,
+            interval_scale: r2.sqrt().max(1.0),
+            worst_channel: worst,
+        }
+    }
+
+    /// The rise of χ² that ends a 95% profile interval: 3.841·s².
+    pub fn threshold(&self) -> f64 {
+        super::uncertainty::CHI2_95 * self.interval_scale.powi(2)
+    }
+}
+
+/// A local optimum of the multi-start other than the estimate, re-polished on χ².
+#[derive(Debug, Clone, PartialEq)]
+pub struct Competitor {
+    /// θ of the optimum.
+    pub theta: Vec<f64>,
+    /// Its χ² minus the estimate's.
+    pub excess: f64,
+}
+
+/// The other local optima (`others`, θ of the multi-start's clusters after the best, best
+/// first) that fit within `threshold` of the estimate's χ²: each is polished on χ² first
+/// (they were found on the cost J, whose weights differ), at most `max` of them.
+pub fn competitors(
+    problem: &Problem<'_>,
+    others: &[Vec<f64>],
+    chi2_min: f64,
+    threshold: f64,
+    max: usize,
+) -> Vec<Competitor> {
+    others
+        .iter()
+        .take(max)
+        .filter(|t| problem.evaluate(t).chi2 - chi2_min < 10.0 * threshold)
+        .map(|t| {
+            let (theta, chi2) = polish_chi2(problem, t, 200);
+            Competitor {
+                theta,
+                excess: chi2 - chi2_min,
+            }
+        })
+        .filter(|c| c.excess < threshold)
+        .collect()
+}
+
+/// Marks each interval whose parameter a competing optimum puts outside it.
+pub fn mark_competitors(intervals: &mut [Interval], space: &ParamSpace, rivals: &[Competitor]) {
+    for (j, iv) in intervals.iter_mut().enumerate() {
+        let Some(d) = space.dims.get(j) else { continue };
+        for r in rivals {
+            let v = d.value(r.theta[j]);
+            let below = iv.lo.is_some_and(|lo| v < lo);
+            let above = iv.hi.is_some_and(|hi| v > hi);
+            if below || above {
+                iv.other_optimum = Some(v);
+                break;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ch(chi2: f64, n: usize) -> ChannelChi2 {
+        ChannelChi2 {
+            label: format!("c{n}"),
+            chi2,
+            n,
+        }
+    }
+
+    /// A model at the noise scores r ≈ 1 and passes; a channel twice as far off fails,
+    /// and the intervals widen by the ratio.
+    #[test]
+    fn noise_ratio_and_its_limit() {
+        let ok = GoodnessOfFit::new(&[ch(25.0, 25), ch(600.0, 600), ch(650.0, 650)], 8);
+        assert!((ok.noise_ratio - 1.0).abs() < 1e-12);
+        assert!(ok.noise_reached);
+        assert_eq!(ok.interval_scale, 1.0);
+        assert_eq!(ok.dof, 1267);
+        let limit2 = 1.0 + 3.09 * (5.89f64 / 25.0 + 5.89 / 600.0 + 5.89 / 650.0).sqrt() / 3.0;
+        assert!((ok.noise_ratio_limit - limit2.sqrt()).abs() < 1e-12);
+        let bad = GoodnessOfFit::new(&[ch(100.0, 25), ch(600.0, 600), ch(650.0, 650)], 8);
+        assert!(!bad.noise_reached);
+        assert!((bad.interval_scale - 2.0f64.sqrt()).abs() < 1e-12);
+        assert!((bad.threshold() - 2.0 * super::super::uncertainty::CHI2_95).abs() < 1e-9);
+        assert_eq!(bad.worst_channel.unwrap().0, "c25");
+    }
+}
