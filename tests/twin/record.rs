@@ -286,6 +286,10 @@ fn datasheet_csv(rows: &DatasheetRows, cfg: &RecordConfig, noise: &mut Noise) ->
     Csv { header, rows: out }
 }
 
+/// A recording's input column: its header, and the measured value in the column unit of a
+/// true input (Pa or m³/(s·Pa)), drawing noise from the source.
+type InputColumn<'a> = (String, &'a mut dyn FnMut(f64, &mut Noise) -> f64);
+
 /// A transient recording's CSV; `input_column` gives the input's header and, per row, its
 /// measured value in the column unit.
 fn transient_csv(
@@ -293,7 +297,7 @@ fn transient_csv(
     cfg: &RecordConfig,
     off: &Offsets,
     noise: &mut Noise,
-    input_column: (String, &mut dyn FnMut(f64, &mut Noise) -> f64),
+    input_column: InputColumn<'_>,
 ) -> Csv {
     let (u, sig) = (cfg.units, cfg.noise);
     let (input_name, input_value) = input_column;
