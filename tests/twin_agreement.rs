@@ -200,6 +200,26 @@ fn speed_dependent_leakage_agrees() {
     agreement("seal", &m, &RecordConfig::noise_free());
 }
 
+/// Other critical ratio, isothermal cycle, other volumes, inertia and dead volume, 5 Hz.
+/// (With b_crit ≠ 0.5 the twin follows SPEC §1.6, "critical pressure ratio of every
+/// nozzle", and gives the rig's outlet throttle the motor's b_crit, as vanefit does.)
+#[test]
+fn other_fixed_parameters_agree() {
+    let m = TwinMotor {
+        b_crit: 0.3,
+        n_poly: 1.0,
+        vol1: 5e-6,
+        vole: 1e-6,
+        inertia: 5e-4,
+        w_reg: 0.5,
+        v_dead: 0.2e-6,
+        ..twin::perturbed_motor(12)
+    };
+    let mut cfg = RecordConfig::noise_free();
+    cfg.conditions.rate_hz = 5.0;
+    agreement("fixed", &m, &cfg);
+}
+
 /// Other column units (l/min ANR, bar abs, rad/s), 20 Hz and the brake-torque channel.
 #[test]
 fn other_units_rate_and_brake_torque_agree() {
@@ -250,6 +270,7 @@ fn steady_state_conserves_mass() {
             port2: twin::rig::Port2::Open,
             p_atm_pa: c.p_atm_pa,
             brake_nm_s_rad: 0.0,
+            throttle_b_crit: None,
         };
         let f1 = twin::rig::flow1_kg_s(m, &bc, y[0]);
         let f2 = twin::rig::flow2_kg_s(m, &bc, y[1]);

@@ -14,8 +14,13 @@ fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
 /// The default motor with each conductance (c_in1, c_out2, c_ext, c_1e, c_2e, c_12) and
 /// t_coulomb and visc multiplied by its own factor, log-uniform in [0.75, 1.33].
 pub fn perturbed_motor(seed: u64) -> TwinMotor {
+    perturbed_motor_within(seed, 0.75, 1.33)
+}
+
+/// As [`perturbed_motor`], with the factors log-uniform in [lo, hi].
+pub fn perturbed_motor_within(seed: u64, lo: f64, hi: f64) -> TwinMotor {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut f = || log_uniform(&mut rng, 0.75, 1.33);
+    let mut f = || log_uniform(&mut rng, lo, hi);
     let d = TwinMotor::default();
     TwinMotor {
         c_in1: d.c_in1 * f(),

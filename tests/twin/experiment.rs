@@ -24,6 +24,9 @@ pub struct Conditions {
     pub rate_hz: f64,
     /// Number of datasheet points, evenly spaced from 0 to the free speed.
     pub datasheet_points: usize,
+    /// Critical pressure ratio of the outlet throttle, 1; `None`: the motor's b_crit
+    /// (SPEC §1.6: "critical pressure ratio of every nozzle").
+    pub throttle_b_crit: Option<f64>,
     /// Integrator tolerances of the transients.
     pub tol: Tolerances,
 }
@@ -41,6 +44,7 @@ impl Default for Conditions {
             c_throttle_m3_s_pa: (3e-8, 1.5e-9),
             rate_hz: 10.0,
             datasheet_points: 25,
+            throttle_b_crit: None,
             tol: Tolerances::default(),
         }
     }
@@ -86,6 +90,7 @@ fn open_boundary(c: &Conditions, p_port1_pa: f64, brake: f64) -> Boundary {
         port2: Port2::Open,
         p_atm_pa: c.p_atm_pa,
         brake_nm_s_rad: brake,
+        throttle_b_crit: c.throttle_b_crit,
     }
 }
 

@@ -158,6 +158,7 @@ pub fn truth_json(
             "seed": seed,
             "leak_1e_dp2_kg_s_pa2": m.leak_1e_dp2_kg_s_pa2,
             "rate_hz": cfg.conditions.rate_hz,
+            "throttle_b_crit": cfg.conditions.throttle_b_crit,
             "brake_torque_channel": cfg.brake_torque,
             "noise": {
                 "flow1_g_s": n.flow1_g_s, "flow2_g_s": n.flow2_g_s, "speed_rpm": n.speed_rpm,

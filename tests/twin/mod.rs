@@ -16,7 +16,7 @@ pub mod record;
 pub mod rig;
 pub mod steady;
 
-pub use cases::{perturbed_motor, varied_config, CALIBRATION_TOL};
+pub use cases::{perturbed_motor, perturbed_motor_within, varied_config, CALIBRATION_TOL};
 pub use experiment::Conditions;
 pub use motor::{Breakaway, SealLeakage, TwinMotor};
 pub use record::{

@@ -119,6 +119,19 @@ impl Default for TwinMotor {
     }
 }
 
+impl TwinMotor {
+    /// This motor's base parameters with `other`'s optional effects.
+    pub fn with_effects_of(self, other: &TwinMotor) -> TwinMotor {
+        TwinMotor {
+            breakaway_friction: other.breakaway_friction,
+            vane_friction_speed_squared: other.vane_friction_speed_squared,
+            speed_dependent_leakage: other.speed_dependent_leakage,
+            leak_1e_dp2_kg_s_pa2: other.leak_1e_dp2_kg_s_pa2,
+            ..self
+        }
+    }
+}
+
 /// ISO 6358 flow function ψ(r) with critical ratio b (SPEC §1.4): 1 for r ≤ b,
 /// √(1 − ((r − b)/(1 − b))²) up to r_lam = 0.999, then linear to 0 at r = 1 (laminar
 /// extension, continuous at r_lam, finite slope everywhere).

@@ -5,10 +5,6 @@
 
 use super::motor::{self, TwinMotor};
 
-/// Critical pressure ratio of the rig's variable outlet nozzle (a rig part, not the motor's;
-/// ISO 6358 default 0.5).
-pub const THROTTLE_B_CRIT: f64 = 0.5;
-
 /// What lies behind port 2.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Port2 {
@@ -29,6 +25,9 @@ pub struct Boundary {
     pub p_atm_pa: f64,
     /// Viscous brake coefficient c, N·m·s/rad (load torque c·ω).
     pub brake_nm_s_rad: f64,
+    /// Critical pressure ratio of the rig's outlet throttle, 1; `None`: the motor's b_crit,
+    /// which SPEC §1.6 defines as the ratio "of every nozzle" (vanefit reads it so too).
+    pub throttle_b_crit: Option<f64>,
 }
 
 /// Mass flow through two nozzles in series with no volume between them, kg/s, from p_u to
@@ -64,7 +63,7 @@ pub fn flow2_kg_s(m: &TwinMotor, bc: &Boundary, p2_pa: f64) -> f64 {
         Port2::Open => motor::nozzle_flow_kg_s(m.c_out2, m.b_crit, p2_pa, bc.p_atm_pa),
         Port2::Throttle(c) => series_flow_kg_s(
             (m.c_out2, m.b_crit),
-            (c, THROTTLE_B_CRIT),
+            (c, bc.throttle_b_crit.unwrap_or(m.b_crit)),
             p2_pa,
             bc.p_atm_pa,
         ),
