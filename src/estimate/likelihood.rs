@@ -19,6 +19,10 @@ pub struct Likelihood<'a> {
 }
 
 impl Objective for Likelihood<'_> {
+    fn residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
+        self.target.residuals(self.cost, motor, &self.solver)
+    }
+
     fn evaluate(&self, motor: &Motor) -> Evaluation {
         let n = self.target.n_points();
         match self.target.chi2(self.cost, motor, &self.solver) {

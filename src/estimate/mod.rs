@@ -11,6 +11,7 @@ pub mod error;
 pub mod fit;
 pub mod goodness;
 pub mod history;
+pub mod least_squares;
 pub mod likelihood;
 pub mod multistart;
 pub mod objective;

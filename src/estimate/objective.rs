@@ -36,6 +36,13 @@ pub struct Evaluation {
 pub trait Objective: Sync {
     /// The cost and χ² of one motor.
     fn evaluate(&self, motor: &Motor) -> Evaluation;
+
+    /// Residuals whose squares sum to χ², where the objective is a least-squares one
+    /// (`None`: it is not, or the simulation failed); enables Levenberg–Marquardt.
+    fn residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
+        let _ = motor;
+        None
+    }
 }
 
 /// What a point of the search coordinates is: a motor, or `None` where the point breaks a
@@ -96,6 +103,13 @@ impl<'a, C: Coordinates + ?Sized> Problem<'a, C> {
             t.lock().expect("trace lock").push(e.cost);
         }
         e
+    }
+
+    /// The objective's residual vector at θ (counted as an evaluation); `None` where θ
+    /// breaks a model constraint, the simulation fails, or the objective has none.
+    pub fn residuals(&self, theta: &[f64]) -> Option<Vec<f64>> {
+        self.evaluations.fetch_add(1, Ordering::Relaxed);
+        self.objective.residuals(&self.space.motor(theta)?)
     }
 
     /// Evaluations so far.

@@ -16,6 +16,7 @@
 
 use super::derivatives::hessian;
 use super::engine::Engine;
+use super::least_squares::{levenberg_marquardt, LmSettings};
 use super::objective::{Problem, Profiled};
 use super::optimize::{Layout, NelderMeadSettings, Restart, RestartedNelderMead};
 use nalgebra::DMatrix;
@@ -90,9 +91,14 @@ const POLISH: NelderMeadSettings = NelderMeadSettings {
     restart: Restart::Never,
 };
 
-/// Minimises the profiled χ² from `start` in at most `max_iters` iterations; (start, ∞) if
-/// the optimizer fails.
+/// Minimises the profiled χ² from `start`: by Levenberg–Marquardt where the objective has
+/// residuals (a likelihood), otherwise by Nelder–Mead in at most `max_iters` iterations;
+/// (start, ∞) if the optimizer fails.
 fn polish(problem: Profiled<'_>, start: Vec<f64>, max_iters: u64) -> (Vec<f64>, f64) {
+    let residuals = |free: &[f64]| problem.inner.residuals(&problem.full(free));
+    if problem.use_chi2 && residuals(&start).is_some() {
+        return levenberg_marquardt(&residuals, &start, LmSettings::default());
+    }
     if start.is_empty() {
         let c = argmin::core::CostFunction::cost(&problem, &start).unwrap_or(f64::INFINITY);
         return (start, c);
@@ -173,13 +179,21 @@ struct Profile<'a> {
     max_iters: u64,
     /// Rise of χ² that ends the interval.
     threshold: f64,
+    /// Σ_ij/Σ_jj for every coordinate i (from the curvature covariance): how the others'
+    /// optimum moves with θ_j near the optimum, so each profile point starts on the valley.
+    slope: Option<Vec<f64>>,
 }
 
 impl Profile<'_> {
     fn at(&self, base: &[f64], t: f64) -> (Vec<f64>, f64) {
         let mut template = base.to_vec();
         template[self.j] = t;
-        let start: Vec<f64> = self.others.iter().map(|i| base[*i]).collect();
+        let dt = t - base[self.j];
+        let start: Vec<f64> = self
+            .others
+            .iter()
+            .map(|i| base[*i] + self.slope.as_ref().map_or(0.0, |s| s[*i] * dt))
+            .collect();
         let p = Profiled {
             inner: self.problem,
             template: template.clone(),
@@ -258,12 +272,16 @@ pub fn profile_intervals(
             .map(|c| c[(j, j)])
             .filter(|v| v.is_finite() && *v > 0.0)
             .map_or(0.3, |v| v.sqrt().clamp(0.02, 2.0));
+        let slope = cov
+            .filter(|c| c[(j, j)].is_finite() && c[(j, j)] > 0.0)
+            .map(|c| (0..k).map(|i| c[(i, j)] / c[(j, j)]).collect());
         let profile = Profile {
             problem,
             j,
             others: (0..k).filter(|i| *i != j).collect(),
             max_iters,
             threshold,
+            slope,
         };
         let d = &problem.space.dims[j];
         profile

@@ -88,6 +88,28 @@ impl ChannelTarget {
         }
     }
 
+    /// The normalised residuals whose squares sum to [`ChannelTarget::chi2`], appended to
+    /// `out`: u_i + β̂ for each row and √λ·β̂ for the offset's prior, with β̂ = b̂/σ the
+    /// profiled offset and λ = σ²/τ² (Σ(u_i + β̂)² + λβ̂² is eq. \[2\] at β̂ = −Σu/(N + λ)).
+    pub fn residuals(&self, simulated: &[f64], out: &mut Vec<f64>) {
+        let start = out.len();
+        out.extend(
+            simulated
+                .iter()
+                .zip(&self.data)
+                .map(|(s, d)| (s - d) / self.sigma),
+        );
+        if self.offset_sd > 0.0 {
+            let lambda = (self.sigma / self.offset_sd).powi(2);
+            let n = (out.len() - start) as f64;
+            let beta = -out[start..].iter().sum::<f64>() / (n + lambda);
+            for u in &mut out[start..] {
+                *u += beta;
+            }
+            out.push(lambda.sqrt() * beta);
+        }
+    }
+
     /// The offset b̂ that [`ChannelTarget::chi2`] profiles out, SI (recorded − simulated on
     /// average, shrunk towards 0 by its prior); 0 without an offset.
     pub fn offset(&self, simulated: &[f64]) -> f64 {
@@ -293,6 +315,22 @@ impl Target {
             .collect()
     }
 
+    /// Every channel's [`ChannelTarget::residuals`] for a motor, in channel order, or `None`
+    /// if the simulation fails or a residual is not finite.
+    pub fn residuals(
+        &self,
+        cost: &CostModel,
+        motor: &Motor,
+        solver: &DefaultSolver,
+    ) -> Option<Vec<f64>> {
+        let sim = cost.simulated_rows(motor, solver).ok()?;
+        let mut out = Vec::with_capacity(self.n_points() + self.channels.len());
+        for (t, s) in self.channels.iter().zip(&sim) {
+            t.residuals(s, &mut out);
+        }
+        out.iter().all(|v| v.is_finite()).then_some(out)
+    }
+
     /// χ² of eq. \[1\] for a motor, or `None` if the simulation fails or is not finite.
     pub fn chi2(&self, cost: &CostModel, motor: &Motor, solver: &DefaultSolver) -> Option<f64> {
         let sim = cost.simulated_rows(motor, solver).ok()?;
@@ -307,6 +345,47 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
     use rand_xoshiro::Xoshiro256PlusPlus;
+
+    /// The residual vector's squares sum to eq. [2], and b̂ is the minimiser: χ² with the
+    /// offset b̂ subtracted from the data plus its prior term equals the profiled χ².
+    #[test]
+    fn offset_residuals_match_the_profiled_chi2() {
+        let t = ChannelTarget {
+            file: "f".into(),
+            quantity: Quantity::Flow1,
+            rows: (0..5).collect(),
+            data: vec![1.0, 2.0, 3.5, 4.0, 5.5],
+            sigma: 0.5,
+            offset_sd: 0.3,
+        };
+        let sim = [1.2, 2.3, 3.6, 4.4, 5.6];
+        let mut r = Vec::new();
+        t.residuals(&sim, &mut r);
+        let from_r: f64 = r.iter().map(|v| v * v).sum();
+        assert!(
+            (from_r - t.chi2(&sim)).abs() < 1e-12,
+            "{from_r} {}",
+            t.chi2(&sim)
+        );
+        let b = t.offset(&sim);
+        let direct: f64 = sim
+            .iter()
+            .zip(&t.data)
+            .map(|(s, d)| ((s + b - d) / 0.5).powi(2))
+            .sum::<f64>()
+            + (b / 0.3).powi(2);
+        assert!((direct - t.chi2(&sim)).abs() < 1e-12);
+        // Any other offset does worse.
+        for db in [-0.01, 0.01] {
+            let other: f64 = sim
+                .iter()
+                .zip(&t.data)
+                .map(|(s, d)| ((s + b + db - d) / 0.5).powi(2))
+                .sum::<f64>()
+                + ((b + db) / 0.3).powi(2);
+            assert!(other > direct);
+        }
+    }
 
     #[test]
     fn noise_of_a_smooth_curve_with_a_jump_is_the_noise() {
