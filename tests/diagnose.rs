@@ -34,9 +34,11 @@
 //! ```
 
 mod diagnose_support;
+mod twin;
 
 use diagnose_support::{dataset, issue_noise, perturbed_base, synthesize, synthesize_with};
 use std::time::Instant;
+use vanefit::data::dataset::Dataset;
 use vanefit::diagnose::{
     diagnose, discover, noise_ratio_limit, summary, to_json, DiagnoseOptions, Diagnosis,
 };
@@ -291,8 +293,10 @@ fn check(c: &Case, motor: &Motor, d: &Diagnosis) -> Result<(), String> {
                 return Err(format!("category {:?}", d.selected[0].category));
             }
         }
-        Expect::Effects(effects, tolerances) => check_effects(effects, tolerances, motor, d)?,
-        Expect::Leak(path, law, tol) => check_leak(*path, *law, *tol, c, d)?,
+        Expect::Effects(effects, tolerances) => {
+            check_effects(effects, tolerances, &|n| motor.params.get(n).unwrap(), d)?
+        }
+        Expect::Leak(path, law, tol) => check_leak(*path, *law, *tol, c.extra[0].coefficient, d)?,
     }
     if c.issue11 && after > ISSUE_RATIO {
         return Err(format!("noise ratio {before:.3} -> {after:.3}"));
@@ -319,7 +323,7 @@ const ISSUE_RATIO: f64 = 1.1;
 fn check_effects(
     effects: &[Effect],
     tolerances: &[(&str, f64)],
-    motor: &Motor,
+    truth: &dyn Fn(&str) -> f64,
     d: &Diagnosis,
 ) -> Result<(), String> {
     let mut ids: Vec<&str> = d.selected.iter().map(|s| s.effect.as_str()).collect();
@@ -337,7 +341,7 @@ fn check_effects(
     }
     for (name, tol) in tolerances {
         let got = d.extended.fitted.params.get(name).unwrap();
-        let want = motor.params.get(name).unwrap();
+        let want = truth(name);
         if ((got - want) / want).abs() > *tol {
             return Err(format!("{name} {got:.4e}, true {want:.4e} (tolerance {tol})"));
         }
@@ -351,7 +355,7 @@ fn check_leak(
     path: LeakPath,
     law: PressureFactor,
     tol: f64,
-    c: &Case,
+    want: f64,
     d: &Diagnosis,
 ) -> Result<(), String> {
     let terms: Vec<&ExtraTerm> = d.selected.iter().filter_map(|s| s.term.as_ref()).collect();
@@ -365,7 +369,6 @@ fn check_leak(
     if d.selected[0].category != path.category() {
         return Err(format!("category {:?}", d.selected[0].category));
     }
-    let want = c.extra[0].coefficient;
     if ((t.coefficient - want) / want).abs() > tol {
         return Err(format!("coefficient {:.4e}, true {want:.4e}", t.coefficient));
     }
@@ -667,4 +670,200 @@ fn quadratic_internal_leak_is_a_leak_path() {
 #[test]
 fn leakage_and_vane_friction_are_found_as_a_pair() {
     assert_issue_case("leakage+vane pair");
+}
+
+// ---- Issue 11 on data NOT made by vanefit: the independent twin generator (tests/twin). ----
+
+/// Issue 11's recording: 20 Hz, flows 0.03 g/s, speed 15 rpm, torques 4 mN·m, recorded
+/// supply pressure 2 kPa, no calibration offsets.
+fn twin_issue_config() -> twin::RecordConfig {
+    let mut cfg = twin::RecordConfig {
+        noise: twin::NoiseSigmas {
+            flow1_g_s: 0.03,
+            flow2_g_s: 0.03,
+            speed_rpm: 15.0,
+            torque_nm: 0.004,
+            brake_torque_nm: 0.004,
+            p_port1_pa: 2000.0,
+            c_port2_rel: 0.005,
+        },
+        ..twin::RecordConfig::default()
+    };
+    cfg.conditions.rate_hz = 20.0;
+    cfg
+}
+
+/// A twin dataset written to a temporary folder and loaded as vanefit reads any rig.
+fn twin_dataset(motor: &twin::TwinMotor, cfg: &twin::RecordConfig, seed: u64) -> Dataset {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(format!("twin-{seed}"));
+    twin::write_dataset(&path, motor, cfg, seed).unwrap();
+    vanefit::data::dataset::Dataset::load(&path).unwrap()
+}
+
+/// A twin case: its motor, what must be selected, and the truth of the checked values.
+struct TwinCase {
+    motor: twin::TwinMotor,
+    expect: Expect,
+    truth: Vec<(&'static str, f64)>,
+}
+
+fn twin_case(name: &str) -> TwinCase {
+    let base = twin::perturbed_motor(7);
+    let t_c = base.t_coulomb;
+    match name {
+        "stiction" => TwinCase {
+            motor: twin::TwinMotor {
+                breakaway_friction: Some(twin::Breakaway {
+                    t_static_nm: 3.0 * t_c,
+                    w_stribeck_rad_s: 8.0,
+                }),
+                ..base
+            },
+            expect: Expect::Effects(
+                vec![Effect::BreakawayFriction],
+                vec![("t_static", 0.15), ("w_stribeck", 0.5)],
+            ),
+            truth: vec![("t_static", 3.0 * t_c), ("w_stribeck", 8.0)],
+        },
+        "dp2 leak v1-ve" => TwinCase {
+            motor: twin::TwinMotor {
+                leak_1e_dp2_kg_s_pa2: Some(6e-16),
+                ..base
+            },
+            expect: Expect::Leak(
+                LeakPath::new(Chamber::V1, Chamber::Ve),
+                PressureFactor::Quadratic,
+                0.25,
+            ),
+            truth: vec![("coefficient", 6e-16)],
+        },
+        "leakage+vane pair" => TwinCase {
+            motor: twin::TwinMotor {
+                speed_dependent_leakage: Some(twin::SealLeakage {
+                    g_seal: 0.5,
+                    w_seal_rad_s: 300.0,
+                }),
+                vane_friction_speed_squared: Some(1e-8),
+                ..base
+            },
+            expect: Expect::Effects(
+                vec![Effect::SpeedDependentLeakage, Effect::VaneFrictionSpeedSquared],
+                vec![("g_seal", 0.3), ("c_w2", 0.25)],
+            ),
+            truth: vec![("g_seal", 0.5), ("w_seal", 300.0), ("c_w2", 1e-8)],
+        },
+        _ => panic!("no twin case {name}"),
+    }
+}
+
+/// Diagnoses a twin case and checks it (selected physics, category, parameters, noise ratio).
+fn twin_run(name: &str, opts: &DiagnoseOptions) -> (Diagnosis, f64, Result<(), String>) {
+    let c = twin_case(name);
+    let ds = twin_dataset(&c.motor, &twin_issue_config(), 11);
+    let t0 = Instant::now();
+    let d = diagnose(&ds, opts).unwrap();
+    let wall_s = t0.elapsed().as_secs_f64();
+    let truth = |n: &str| c.truth.iter().find(|(k, _)| *k == n).unwrap().1;
+    let (_, after) = d.noise_ratios();
+    let ok = match &c.expect {
+        Expect::Effects(effects, tol) => check_effects(effects, tol, &truth, &d),
+        Expect::Leak(path, law, tol) => check_leak(*path, *law, *tol, truth("coefficient"), &d),
+        _ => Ok(()),
+    }
+    .and_then(|()| {
+        (after <= ISSUE_RATIO)
+            .then_some(())
+            .ok_or(format!("noise ratio {after:.3}"))
+    });
+    eprintln!("twin {name}: {}\n  phases {:?}, {wall_s:.1} s", summary(&d), d.phases);
+    (d, wall_s, ok)
+}
+
+/// Issue 11 on twin data: stiction is breakaway friction alone, reproduced to the noise.
+#[test]
+fn twin_stiction_is_breakaway_friction() {
+    let (d, _, ok) = twin_run("stiction", &DiagnoseOptions::quick(1));
+    ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+}
+
+/// Issue 11 on twin data: the Δp² leak V1 -> Ve is that leak path.
+#[test]
+fn twin_quadratic_leak_is_a_leak_path() {
+    let (d, _, ok) = twin_run("dp2 leak v1-ve", &DiagnoseOptions::quick(1));
+    ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+}
+
+/// Issue 11 on twin data: the pair is found as the pair (full effort: `#[ignore]`d, it is
+/// in the normal run on vanefit's own data).
+#[test]
+#[ignore]
+fn twin_leakage_and_vane_friction_pair() {
+    let (d, _, ok) = twin_run("leakage+vane pair", &DiagnoseOptions::quick(1));
+    ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+}
+
+/// A clean twin dataset: a perturbed motor ([`twin::perturbed_motor`]) recorded with a
+/// varied configuration ([`twin::varied_config`]: rate, noise levels, brake channel) but
+/// without calibration offsets (a rig's zero errors are not in any model).
+fn clean_twin(seed: u64) -> Dataset {
+    let cfg = twin::RecordConfig {
+        offsets: twin::record::OffsetSpec::None,
+        ..twin::varied_config(seed)
+    };
+    twin_dataset(&twin::perturbed_motor(seed), &cfg, seed)
+}
+
+/// One row of the false-alarm table.
+fn false_alarm_row(seed: u64, opts: &DiagnoseOptions) -> (bool, String) {
+    let d = diagnose(&clean_twin(seed), opts).unwrap();
+    let best = d
+        .candidates
+        .iter()
+        .map(|c| c.delta_bic)
+        .fold(f64::INFINITY, f64::min);
+    let selected: Vec<&str> = d.selected.iter().map(|s| s.effect.as_str()).collect();
+    let row = format!(
+        "| twin seed {seed} | {} | {:.3} | {} | {:.1} | {:.1} |\n",
+        d.mismatch,
+        d.baseline.noise_ratio,
+        if selected.is_empty() { "-".to_string() } else { selected.join(" + ") },
+        best,
+        d.wall_s
+    );
+    eprint!("{row}");
+    (d.mismatch, row)
+}
+
+/// Clean data are not flagged (normal run: two clean twin datasets, quick options).
+#[test]
+fn clean_twin_datasets_are_not_flagged() {
+    for seed in [3, 4] {
+        let (mismatch, row) = false_alarm_row(seed, &DiagnoseOptions::quick(1));
+        assert!(!mismatch, "false alarm: {row}");
+    }
+}
+
+/// At most 1 false alarm in 20 clean twin datasets (different base motors, rates and noise
+/// levels); writes `target/false-alarms.md`:
+///
+/// ```sh
+/// cargo test --release --test diagnose -- --ignored --nocapture false_alarm_table
+/// ```
+#[test]
+#[ignore]
+fn false_alarm_table() {
+    let mut md = String::from(
+        "| dataset | mismatch | noise ratio | selected | best ΔBIC | wall s |\n|---|---|---|---|---|---|\n",
+    );
+    let mut alarms = 0;
+    for seed in 1..=20 {
+        let (mismatch, row) = false_alarm_row(seed, &DiagnoseOptions::quick(1));
+        alarms += usize::from(mismatch);
+        md += &row;
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/false-alarms.md");
+    std::fs::write(&path, &md).unwrap();
+    println!("{md}");
+    assert!(alarms <= 1, "{alarms} false alarms in 20\n{md}");
 }

@@ -118,6 +118,53 @@ pub(crate) fn pairs(cx: &Context, limit: f64, models: &mut Models) -> Result<(),
     Ok(())
 }
 
+/// A discovered term can imitate a catalog effect that was never tried together with the best
+/// single one. For every significant model with discovered terms, the best single effect
+/// is paired with the best-ranked catalog effect of each term's category (the catalog's
+/// nearest to the term); pairs already fitted are not refitted. The simplicity order then
+/// prefers the pair over "single + uncatalogued" whenever it explains the data as well.
+pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), DiagnoseError> {
+    let singles: Vec<&Candidate> = models
+        .all
+        .iter()
+        .filter(|c| c.kind == ModelKind::Single)
+        .collect();
+    let Some(best) = singles.first().filter(|b| b.delta_bic < -SELECT_DELTA_BIC) else {
+        return Ok(());
+    };
+    let categories: Vec<_> = models
+        .all
+        .iter()
+        .filter(|c| c.kind >= ModelKind::Uncatalogued && c.delta_bic < -SELECT_DELTA_BIC)
+        .flat_map(|c| c.fitted.extra.iter().map(super::discover::category))
+        .collect();
+    let mut jobs: Vec<(ModelKind, FitJob)> = Vec::new();
+    for cat in categories {
+        let Some(other) = singles.iter().skip(1).find(|c| {
+            c.fitted
+                .effects
+                .iter()
+                .next()
+                .is_some_and(|e| e.category() == cat)
+        }) else {
+            continue;
+        };
+        let job = pair_job(cx, best, other);
+        let done = models.all.iter().any(|c| c.label == job.label)
+            || jobs.iter().any(|(_, j)| j.label == job.label);
+        if !done {
+            jobs.push((ModelKind::Pair, job));
+        }
+    }
+    if jobs.is_empty() {
+        return Ok(());
+    }
+    cx.say(Progress::PairsStart(jobs.len()));
+    let found = models.refit(cx, &jobs, Some("pair"))?;
+    models.all.extend(found);
+    Ok(())
+}
+
 /// The refit of `best`'s effect with `other`'s: warm from `best`'s optimum with `other`'s
 /// fitted parameters, and with `other`'s effect off.
 fn pair_job(cx: &Context, best: &Candidate, other: &Candidate) -> FitJob {
