@@ -4,8 +4,8 @@
 
 use crate::model::effects::{Effect, EffectSet};
 use crate::model::extra::{
-    balance_name, coefficient_unit, describe, formula, pressure_id, speed_id, BalanceId,
-    Chamber, ExtraTerm, LeakPath, PressureFactor as P, SpeedFactor as W,
+    balance_name, coefficient_unit, describe, formula, pressure_id, speed_id, BalanceId, Chamber,
+    ExtraTerm, LeakPath, PressureFactor as P, SpeedFactor as W,
 };
 use crate::model::params::{spec, MotorParams, ParamSet, PARAMS};
 use serde::{Deserialize, Serialize};
@@ -371,9 +371,14 @@ pub fn term_to_json(t: &ExtraTerm) -> serde_json::Value {
 /// The leak path of a term read from JSON (`from`, `to`).
 fn path_from_json(v: &serde_json::Value) -> Result<LeakPath, TermError> {
     let end = |k: &str| {
-        let id = v.get(k).and_then(serde_json::Value::as_str).ok_or_else(|| {
-            TermError(format!("a leak path needs a string \"{k}\" (v1, v2, ve, atm)"))
-        })?;
+        let id = v
+            .get(k)
+            .and_then(serde_json::Value::as_str)
+            .ok_or_else(|| {
+                TermError(format!(
+                    "a leak path needs a string \"{k}\" (v1, v2, ve, atm)"
+                ))
+            })?;
         Chamber::ALL
             .into_iter()
             .find(|c| c.id().0 == id)
@@ -381,7 +386,10 @@ fn path_from_json(v: &serde_json::Value) -> Result<LeakPath, TermError> {
     };
     let (from, to) = (end("from")?, end("to")?);
     if from == to {
-        return Err(TermError(format!("a leak path from '{}' to itself", from.id().0)));
+        return Err(TermError(format!(
+            "a leak path from '{}' to itself",
+            from.id().0
+        )));
     }
     Ok(LeakPath::new(from, to))
 }

@@ -388,7 +388,9 @@ pub fn describe(t: &ExtraTerm) -> String {
             let law = match t.pressure {
                 P::Laminar => "that grows in proportion to the pressure difference (laminar)",
                 P::Quadratic => "that grows with the square of the pressure difference",
-                P::Orifice => "that grows with the square root of the pressure difference (orifice)",
+                P::Orifice => {
+                    "that grows with the square root of the pressure difference (orifice)"
+                }
                 P::Iso6358 => "through an ISO 6358 restriction (choked at large pressure ratios)",
                 _ => "driven by",
             };
@@ -532,9 +534,7 @@ fn factor_symbol(t: &ExtraTerm) -> (String, &'static str) {
 /// The balance's symbol in a formula (a path: `m_dot(v1->ve)`).
 pub fn balance_symbol(b: BalanceId) -> String {
     let s = match b {
-        BalanceId::Path(path) => {
-            return format!("m_dot({}->{})", path.from.id().0, path.to.id().0)
-        }
+        BalanceId::Path(path) => return format!("m_dot({}->{})", path.from.id().0, path.to.id().0),
         BalanceId::Torque => "T_loss",
         BalanceId::Mass1 => "dm1/dt",
         BalanceId::Mass2 => "dm2/dt",

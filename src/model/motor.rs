@@ -12,10 +12,10 @@
 //! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (SPEC §1.5).
 
 use crate::model::effects::{CatalogEffect, Effect, EffectSet, SupplyValve, Term};
+use crate::model::extra::slot;
 pub use crate::model::extra::{
     BalanceId, Chamber, ExtraTerm, LeakPath, PressureFactor, SpeedFactor,
 };
-use crate::model::extra::slot;
 use crate::model::nozzle::{series_flow, Nozzle};
 use crate::model::params::MotorParams;
 use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
@@ -326,8 +326,7 @@ impl Motor {
                 + displacement.into_e_kg_s
                 + extra[slot::MASSE],
             torque_ideal_nm: self.ideal_torque(p1, p2, pe, omega),
-            torque_friction_nm: self.friction_torque(omega, p_in, pe)
-                + extra[slot::TORQUE],
+            torque_friction_nm: self.friction_torque(omega, p_in, pe) + extra[slot::TORQUE],
             torque_load_nm: bc.load.torque(omega),
         }
     }
