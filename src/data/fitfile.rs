@@ -4,8 +4,8 @@
 
 use crate::model::effects::{Effect, EffectSet};
 use crate::model::extra::{
-    balance_name, coefficient_unit, formula, pressure_id, speed_id, BalanceId, ExtraTerm,
-    PressureFactor as P, SpeedFactor as W,
+    balance_name, coefficient_unit, describe, formula, pressure_id, speed_id, BalanceId, Chamber,
+    ExtraTerm, LeakPath, PressureFactor as P, SpeedFactor as W,
 };
 use crate::model::params::{spec, MotorParams, ParamSet, PARAMS};
 use serde::{Deserialize, Serialize};
@@ -434,16 +434,51 @@ impl Reader<'_> {
 pub struct TermError(pub String);
 
 /// A discovered term as JSON: `{"balance", "pressure", "speed", "coefficient", "unit",
-/// "formula"}` (ids of [`balance_name`], [`pressure_id`], [`speed_id`]; SI coefficient).
+/// "formula", "description"}` (ids of [`balance_name`], [`pressure_id`], [`speed_id`]; SI
+/// coefficient). A leak path has `"balance": "leak_path"`, its ends in `"from"` and `"to"`
+/// (`v1`, `v2`, `ve`, `atm`) and its flow law as `"pressure"` (`laminar`, `quadratic`,
+/// `orifice`, `iso6358`). Files written before paths existed read unchanged.
 pub fn term_to_json(t: &ExtraTerm) -> serde_json::Value {
-    serde_json::json!({
+    let mut v = serde_json::json!({
         "balance": balance_name(t.balance),
         "pressure": pressure_id(t.pressure),
         "speed": speed_id(t.speed),
         "coefficient": t.coefficient,
         "unit": coefficient_unit(t),
         "formula": formula(t),
-    })
+        "description": describe(t),
+    });
+    if let BalanceId::Path(path) = t.balance {
+        v["from"] = path.from.id().0.into();
+        v["to"] = path.to.id().0.into();
+    }
+    v
+}
+
+/// The leak path of a term read from JSON (`from`, `to`).
+fn path_from_json(v: &serde_json::Value) -> Result<LeakPath, TermError> {
+    let end = |k: &str| {
+        let id = v
+            .get(k)
+            .and_then(serde_json::Value::as_str)
+            .ok_or_else(|| {
+                TermError(format!(
+                    "a leak path needs a string \"{k}\" (v1, v2, ve, atm)"
+                ))
+            })?;
+        Chamber::ALL
+            .into_iter()
+            .find(|c| c.id().0 == id)
+            .ok_or_else(|| TermError(format!("unknown chamber '{id}' (v1, v2, ve, atm)")))
+    };
+    let (from, to) = (end("from")?, end("to")?);
+    if from == to {
+        return Err(TermError(format!(
+            "a leak path from '{}' to itself",
+            from.id().0
+        )));
+    }
+    Ok(LeakPath::new(from, to))
 }
 
 /// Reads a term written by [`term_to_json`] (`unit` and `formula` are informative only).
@@ -458,6 +493,7 @@ pub fn term_from_json(v: &serde_json::Value) -> Result<ExtraTerm, TermError> {
         "mass_v1" => BalanceId::Mass1,
         "mass_v2" => BalanceId::Mass2,
         "mass_ve" => BalanceId::MassE,
+        "leak_path" => BalanceId::Path(path_from_json(v)?),
         other => return Err(TermError(format!("unknown balance '{other}'"))),
     };
     let p = field("pressure")?;
@@ -465,6 +501,11 @@ pub fn term_from_json(v: &serde_json::Value) -> Result<ExtraTerm, TermError> {
         .into_iter()
         .find(|x| pressure_id(*x) == p)
         .ok_or_else(|| TermError(format!("unknown pressure factor '{p}'")))?;
+    if pressure.is_law() && !matches!(balance, BalanceId::Path(_)) {
+        return Err(TermError(format!(
+            "the flow law '{p}' needs a leak path (\"balance\": \"leak_path\")"
+        )));
+    }
     let w = field("speed")?;
     let speed = W::ALL
         .into_iter()

@@ -34,7 +34,11 @@ pub(crate) fn refit_singles(cx: &Context, baseline: Fitted) -> Result<Refits, Di
         ..cx.base_job()
     }];
     for e in &tried {
-        let starts = effect_starts(&[*e], &baseline.params, cx.opts.effect_starts);
+        let mut starts = effect_starts(&[*e], &baseline.params, cx.opts.effect_starts);
+        if *e == Effect::BreakawayFriction {
+            starts.truncate(1);
+            starts.extend(stribeck_starts(cx, &baseline.params));
+        }
         jobs.push(cx.refit_job(
             e.id().into(),
             EffectSet::empty().with(*e),
@@ -114,6 +118,53 @@ pub(crate) fn pairs(cx: &Context, limit: f64, models: &mut Models) -> Result<(),
     Ok(())
 }
 
+/// A discovered term can imitate a catalog effect that was never tried together with the best
+/// single one. For every significant model with discovered terms, the best single effect
+/// is paired with the best-ranked catalog effect of each term's category (the catalog's
+/// nearest to the term); pairs already fitted are not refitted. The simplicity order then
+/// prefers the pair over "single + uncatalogued" whenever it explains the data as well.
+pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), DiagnoseError> {
+    let singles: Vec<&Candidate> = models
+        .all
+        .iter()
+        .filter(|c| c.kind == ModelKind::Single)
+        .collect();
+    let Some(best) = singles.first().filter(|b| b.delta_bic < -SELECT_DELTA_BIC) else {
+        return Ok(());
+    };
+    let categories: Vec<_> = models
+        .all
+        .iter()
+        .filter(|c| c.kind >= ModelKind::Uncatalogued && c.delta_bic < -SELECT_DELTA_BIC)
+        .flat_map(|c| c.fitted.extra.iter().map(super::discover::category))
+        .collect();
+    let mut jobs: Vec<(ModelKind, FitJob)> = Vec::new();
+    for cat in categories {
+        let Some(other) = singles.iter().skip(1).find(|c| {
+            c.fitted
+                .effects
+                .iter()
+                .next()
+                .is_some_and(|e| e.category() == cat)
+        }) else {
+            continue;
+        };
+        let job = pair_job(cx, best, other);
+        let done = models.all.iter().any(|c| c.label == job.label)
+            || jobs.iter().any(|(_, j)| j.label == job.label);
+        if !done {
+            jobs.push((ModelKind::Pair, job));
+        }
+    }
+    if jobs.is_empty() {
+        return Ok(());
+    }
+    cx.say(Progress::PairsStart(jobs.len()));
+    let found = models.refit(cx, &jobs, Some("pair"))?;
+    models.all.extend(found);
+    Ok(())
+}
+
 /// The refit of `best`'s effect with `other`'s: warm from `best`'s optimum with `other`'s
 /// fitted parameters, and with `other`'s effect off.
 fn pair_job(cx: &Context, best: &Candidate, other: &Candidate) -> FitJob {
@@ -162,6 +213,48 @@ pub(crate) fn effect_starts(effects: &[Effect], base: &MotorParams, n: usize) ->
         out.push(set(Some(u)));
     }
     out
+}
+
+/// Static torques scanned for `breakaway_friction`, in units of the baseline's T_c.
+const STATIC_OVER_COULOMB: [f64; 5] = [1.3, 1.8, 2.5, 3.5, 5.0];
+/// Stribeck speeds scanned, rad/s: a log grid over the range where a start-up in a ramp can
+/// show them (below 1 rad/s the Stribeck curve is a step; above 200 rad/s it covers the
+/// whole low-speed range).
+const STRIBECK_GRID: [f64; 7] = [1.0, 2.4, 5.8, 14.0, 34.0, 83.0, 200.0];
+/// Best grid points kept as starts of the breakaway refit.
+const STRIBECK_STARTS: usize = 2;
+
+/// Starts of the `breakaway_friction` refit that cover the Stribeck range: the likelihood
+/// over a grid of static torque ([`STATIC_OVER_COULOMB`] × the baseline's T_c) and Stribeck
+/// speed ([`STRIBECK_GRID`], log-spaced), the base parameters held; the best
+/// [`STRIBECK_STARTS`] points. A warm start from one Stribeck speed stays in its valley:
+/// the static excess and the Stribeck speed trade against each other along the ramp's
+/// start-up, and a late start can be fitted by a high T_s that decays fast or a lower one
+/// that decays slowly.
+fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
+    let grid: Vec<MotorParams> = STATIC_OVER_COULOMB
+        .iter()
+        .flat_map(|k| STRIBECK_GRID.iter().map(move |w| (k, w)))
+        .filter_map(|(k, w)| {
+            base.with("t_static", k * base.t_coulomb())
+                .and_then(|p| p.with("w_stribeck", *w))
+                .ok()
+        })
+        .collect();
+    let effects = EffectSet::empty().with(Effect::BreakawayFriction);
+    let (cost, target, solver) = (&cx.cost, &cx.target, &cx.solver);
+    let chi2 = cx.engine.map(&grid, |p| {
+        let motor = crate::model::motor::Motor::new(p.clone(), effects.clone());
+        target.chi2(cost, &motor, solver).unwrap_or(f64::INFINITY)
+    });
+    let mut order: Vec<usize> = (0..grid.len()).collect();
+    order.sort_by(|a, b| chi2[*a].total_cmp(&chi2[*b]));
+    order
+        .into_iter()
+        .take(STRIBECK_STARTS)
+        .filter(|i| chi2[*i].is_finite())
+        .map(|i| grid[i].clone())
+        .collect()
 }
 
 /// A copy of `base` with every parameter of `effects` taken from `from`.

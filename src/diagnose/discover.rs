@@ -30,9 +30,14 @@
 //! p_1 − p_2, gauge pressures)·tanh(ω/ω_reg). Terms the model already has are left out:
 //! tanh and ω alone are the base model's `t_coulomb` and `visc`, ω·|ω| is
 //! `vane_friction_speed_squared`, (p_1 − p_e)·tanh is `pressure_dependent_friction`.
-//! Mass, for each of V_1, V_2, V_e (a flow into the volume): gauge pressures and pressure
-//! differences (pressure-driven leaks); ω, absolute pressures times ω and pressure
-//! differences times ω (speed-driven flows: pumping, carry-over). 50 terms in all.
+//! Leak paths ([`crate::model::extra::LeakPath`]: V_1→V_e, V_2→V_e, V_1→V_2 and each
+//! volume to atmosphere; the mass one balance loses the other gains) with each flow law
+//! (laminar Δp, Δp·|Δp|, orifice √Δp, ISO 6358), constant or times |ω|. Mass into one of
+//! V_1, V_2, V_e alone: gauge pressures and pressure differences (a volume's own gauge
+//! pressure is the laminar path to atmosphere and is left to the paths); ω, absolute
+//! pressures times ω and pressure differences times ω (speed-driven flows: pumping,
+//! carry-over). 95 terms in all. A one-balance mass term gives way to a path that explains
+//! the misfit within [`PATH_PREFERENCE`] as well (mass conservation is physics).
 
 use super::fitting::Fitted;
 pub use crate::data::fitfile::{term_from_json, term_to_json};
@@ -40,10 +45,12 @@ use crate::estimate::derivatives::central_column;
 use crate::estimate::engine::Engine;
 use crate::estimate::space::{ParamSpace, SpaceError};
 pub use crate::model::extra::{
-    balance_name, balance_symbol, category, coefficient_unit, feature_name, formula, pressure_id,
-    speed_id,
+    balance_name, balance_symbol, category, coefficient_unit, describe, feature_name, formula,
+    pressure_id, speed_id,
 };
-use crate::model::motor::{BalanceId, ExtraTerm, Motor, PressureFactor as P, SpeedFactor as W};
+use crate::model::motor::{
+    BalanceId, ExtraTerm, LeakPath, Motor, PressureFactor as P, SpeedFactor as W,
+};
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
 use crate::objective::likelihood::Target;
@@ -51,6 +58,9 @@ use nalgebra::{DMatrix, DVector};
 
 /// Linearised ΔBIC a library term must reach to be refitted.
 pub const DISCOVERY_DELTA_BIC: f64 = -10.0;
+/// χ² by which a leak path may explain less than a one-balance mass term and still be
+/// preferred to it (the selection's own margin, [`super::SELECT_DELTA_BIC`]).
+pub const PATH_PREFERENCE: f64 = 10.0;
 /// Most terms selected in one regression.
 pub const MAX_TERMS: usize = 2;
 
@@ -90,9 +100,24 @@ pub fn library() -> Vec<ExtraTerm> {
     ] {
         out.push(term(BalanceId::Torque, p, W::Sign));
     }
+    // Leak paths (mass leaves one balance and enters the other): every path, every flow
+    // law, constant or scaled by the speed's magnitude.
+    for path in LeakPath::ALL {
+        for law in P::LAWS {
+            for w in [W::One, W::AbsOmega] {
+                out.push(term(BalanceId::Path(path), law, w));
+            }
+        }
+    }
     for b in [BalanceId::Mass1, BalanceId::Mass2, BalanceId::MassE] {
-        // Pressure-driven flows (gauge pressures and differences; an absolute pressure
-        // alone would blow at vacuum):
+        // Pressure-driven flows into one balance (gauge pressures and differences; an
+        // absolute pressure alone would blow at vacuum). A volume's own gauge pressure is
+        // the laminar leak path to atmosphere, so it is left to the paths:
+        let own = match b {
+            BalanceId::Mass1 => P::P1Gauge,
+            BalanceId::Mass2 => P::P2Gauge,
+            _ => P::PeGauge,
+        };
         for p in [
             P::P1Gauge,
             P::P2Gauge,
@@ -101,7 +126,9 @@ pub fn library() -> Vec<ExtraTerm> {
             P::P2MinusPe,
             P::P1MinusP2,
         ] {
-            out.push(term(b, p, W::One));
+            if p != own {
+                out.push(term(b, p, W::One));
+            }
         }
         // Speed-driven flows (pumping, carry-over: density times swept volume):
         out.push(term(b, P::One, W::Omega));
@@ -384,11 +411,11 @@ fn forward_select(
     let mut chosen: Vec<usize> = Vec::new();
     let mut gains: Vec<f64> = Vec::new();
     while chosen.len() < MAX_TERMS {
-        let Some((i, d, _)) = score(lib_cols, &basis, &r_perp)
+        let scores: Vec<(usize, f64, f64)> = score(lib_cols, &basis, &r_perp)
             .into_iter()
             .filter(|(i, _, _)| !chosen.contains(i))
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-        else {
+            .collect();
+        let Some((i, d)) = prefer_paths(lib_cols, &scores) else {
             break;
         };
         if -d + ln_n >= DISCOVERY_DELTA_BIC {
@@ -402,6 +429,36 @@ fn forward_select(
         gains.push(d);
     }
     (chosen, gains)
+}
+
+/// The best column of `scores` (index, χ² reduction, _), except that a one-balance mass
+/// term gives way to the best leak path within [`PATH_PREFERENCE`] of it: a path conserves
+/// mass, which is physics, where a one-balance term makes or destroys it.
+fn prefer_paths(
+    lib_cols: &[(ExtraTerm, DVector<f64>)],
+    scores: &[(usize, f64, f64)],
+) -> Option<(usize, f64)> {
+    let best_of = |keep: &dyn Fn(&ExtraTerm) -> bool| {
+        scores
+            .iter()
+            .filter(|(i, _, _)| keep(&lib_cols[*i].0))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, d, _)| (*i, *d))
+    };
+    let (i, d) = best_of(&|_| true)?;
+    let one_balance_mass = |t: &ExtraTerm| {
+        matches!(
+            t.balance,
+            BalanceId::Mass1 | BalanceId::Mass2 | BalanceId::MassE
+        )
+    };
+    if !one_balance_mass(&lib_cols[i].0) {
+        return Some((i, d));
+    }
+    match best_of(&|t| matches!(t.balance, BalanceId::Path(_))) {
+        Some((j, dj)) if dj >= d - PATH_PREFERENCE => Some((j, dj)),
+        _ => Some((i, d)),
+    }
 }
 
 /// Joint least-squares coefficients of the nuisance columns and the chosen terms (in that

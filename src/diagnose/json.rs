@@ -8,7 +8,8 @@ use crate::data::fitfile::FitFile;
 use serde_json::{json, Value};
 
 /// `diagnosis.json` (SPEC §6). Uncatalogued entries of `selected` also carry `balance`,
-/// `feature` and `formula`.
+/// `feature`, `formula` and a `description` in words; a leak path also its ends `from`,
+/// `to` and its flow `law`.
 pub fn to_json(d: &Diagnosis) -> Value {
     let loc = |l: &Location| {
         json!({
@@ -49,6 +50,12 @@ pub fn to_json(d: &Diagnosis) -> Value {
                 o.insert("balance".into(), json!(discover::balance_name(t.balance)));
                 o.insert("feature".into(), json!(discover::feature_name(t)));
                 o.insert("formula".into(), json!(discover::formula(t)));
+                o.insert("description".into(), json!(discover::describe(t)));
+                if let crate::model::motor::BalanceId::Path(path) = t.balance {
+                    o.insert("from".into(), json!(path.from.id().0));
+                    o.insert("to".into(), json!(path.to.id().0));
+                    o.insert("law".into(), json!(discover::pressure_id(t.pressure)));
+                }
             }
             Value::Object(o)
         })

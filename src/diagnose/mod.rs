@@ -40,11 +40,15 @@
 //!    candidate only when a transient experiment is present. Candidates are ranked by
 //!    ΔBIC = BIC(candidate) − BIC(baseline), BIC = χ² + k·ln n (n compared points, k
 //!    estimated parameters), and by held-out prediction. When the best single effect is
-//!    significant, it is paired with the next three candidates.
+//!    significant, it is paired with the next three candidates. `breakaway_friction` starts
+//!    from the best points of a grid over static torque and (log-spaced) Stribeck speed.
 //! 5. **Uncatalogued** ([`discover`]): sparse regression of the misfit over a library of
 //!    terms in each balance, on the baseline and on the best catalog model; a term that the
 //!    linearised regression supports is put into the model ([`crate::model::motor::ExtraTerm`])
-//!    and refitted.
+//!    and refitted. Leak paths (mass leaves one volume and enters another, or atmosphere)
+//!    are preferred to one-balance mass terms. A discovered term may imitate a catalog
+//!    effect: the best single effect is then also paired with the best catalog effect of
+//!    the term's category, so that "pair" and "single + uncatalogued" compete.
 //! 6. **Selection.** Among the baseline and every refitted model, the simplest one within
 //!    [`SELECT_DELTA_BIC`] = 10 of the lowest BIC is chosen, simplicity ordered baseline <
 //!    one catalog effect < two catalog effects < an uncatalogued term < catalog effect(s)
@@ -140,6 +144,7 @@ pub fn diagnose_observed(
     candidates::pairs(&cx, base.limit, &mut models)?;
     cx.end_phase("pairs");
     let regression = uncatalogued::search(&cx, &base.fitted, &mut models)?;
+    candidates::similar_pairs(&cx, &mut models)?;
     cx.end_phase("uncatalogued search");
     let chosen = select::eliminate(&cx, &mut models)?;
     let mut baseline_c = base.candidate();

@@ -1,8 +1,21 @@
 //! Terms outside the catalog (SPEC §5, "uncatalogued"): `coefficient · pressure(x) · speed(ω)`
-//! added to one balance of the motor. `vanefit diagnose` finds them; fit files carry them in
-//! `model.discovered`, and every command that reads a fit file applies them.
+//! added to one balance of the motor, or carried along a leak path between two volumes (or
+//! a volume and atmosphere), so that the mass one balance loses the other gains.
+//! `vanefit diagnose` finds them; fit files carry them in `model.discovered`, and every
+//! command that reads a fit file applies them.
+//!
+//! # Leak paths
+//!
+//! A term whose balance is [`BalanceId::Path`] is a mass flow, kg/s, from the path's
+//! `from` chamber to its `to` chamber: it leaves `from`'s mass balance and enters `to`'s
+//! (atmosphere has none), so mass stays conserved. Its pressure factor is then a flow law of
+//! Δp = p_from − p_to ([`PressureFactor::Laminar`], [`PressureFactor::Quadratic`],
+//! [`PressureFactor::Orifice`], [`PressureFactor::Iso6358`]); any other pressure factor
+//! is taken as is (the flow from→to is coefficient·factor·speed). A flow law on a
+//! one-balance term has no Δp and contributes nothing; fit files refuse it.
 
 use crate::model::effects::{Category, Term};
+use crate::model::nozzle;
 use crate::model::params::MotorParams;
 use crate::numerics::ode::State;
 use PressureFactor as P;
@@ -20,7 +33,138 @@ pub enum BalanceId {
     Mass2,
     /// Mass balance of V_e, kg/s into V_e.
     MassE,
+    /// Not one balance but a leak path: the term is a mass flow, kg/s, out of the path's
+    /// `from` chamber and into its `to` chamber (see the module documentation).
+    Path(LeakPath),
 }
+
+/// Where the four balances sit in the accumulator of [`Term::add_to_balances`].
+pub mod slot {
+    /// The torque balance (a loss torque, N·m).
+    pub const TORQUE: usize = 0;
+    /// Mass into V_1, kg/s.
+    pub const MASS1: usize = 1;
+    /// Mass into V_2, kg/s.
+    pub const MASS2: usize = 2;
+    /// Mass into V_e, kg/s.
+    pub const MASSE: usize = 3;
+}
+
+impl BalanceId {
+    /// The balance's place in the accumulator of [`Term::add_to_balances`] (`None` for a
+    /// path, which acts on two).
+    pub fn slot(self) -> Option<usize> {
+        match self {
+            BalanceId::Torque => Some(slot::TORQUE),
+            BalanceId::Mass1 => Some(slot::MASS1),
+            BalanceId::Mass2 => Some(slot::MASS2),
+            BalanceId::MassE => Some(slot::MASSE),
+            BalanceId::Path(_) => None,
+        }
+    }
+}
+
+/// A chamber at one end of a leak path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Chamber {
+    /// V_1, the inlet compartment (port 1 side).
+    V1,
+    /// V_2, the outlet compartment (port 2 side).
+    V2,
+    /// V_e, the exhaust compartment.
+    Ve,
+    /// The atmosphere (no balance, pressure p_atm).
+    Atm,
+}
+
+impl Chamber {
+    /// Every chamber.
+    pub const ALL: [Chamber; 4] = [Chamber::V1, Chamber::V2, Chamber::Ve, Chamber::Atm];
+
+    /// Its pressure at state x, Pa.
+    pub fn pressure(self, x: &State, p_atm_pa: f64) -> f64 {
+        match self {
+            Chamber::V1 => x[0],
+            Chamber::V2 => x[1],
+            Chamber::Ve => x[2],
+            Chamber::Atm => p_atm_pa,
+        }
+    }
+
+    /// Its mass balance's slot (`None` for the atmosphere).
+    pub fn slot(self) -> Option<usize> {
+        match self {
+            Chamber::V1 => Some(slot::MASS1),
+            Chamber::V2 => Some(slot::MASS2),
+            Chamber::Ve => Some(slot::MASSE),
+            Chamber::Atm => None,
+        }
+    }
+
+    /// Id in files (`v1`, `v2`, `ve`, `atm`) and symbol in formulas (`p1`, `p2`, `pe`,
+    /// `p_atm`).
+    pub fn id(self) -> (&'static str, &'static str) {
+        match self {
+            Chamber::V1 => ("v1", "p1"),
+            Chamber::V2 => ("v2", "p2"),
+            Chamber::Ve => ("ve", "pe"),
+            Chamber::Atm => ("atm", "p_atm"),
+        }
+    }
+
+    /// The chamber in words.
+    pub fn words(self) -> &'static str {
+        match self {
+            Chamber::V1 => "the inlet compartment (V1)",
+            Chamber::V2 => "the outlet compartment (V2)",
+            Chamber::Ve => "the exhaust (Ve)",
+            Chamber::Atm => "the atmosphere",
+        }
+    }
+}
+
+/// A leak path: mass flows from `from` to `to` (a negative flow goes back).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct LeakPath {
+    /// The chamber the flow leaves.
+    pub from: Chamber,
+    /// The chamber the flow enters.
+    pub to: Chamber,
+}
+
+impl LeakPath {
+    /// The paths searched by the diagnosis: between the three volumes, and from each
+    /// volume to atmosphere.
+    pub const ALL: [LeakPath; 6] = [
+        LeakPath::new(Chamber::V1, Chamber::Ve),
+        LeakPath::new(Chamber::V2, Chamber::Ve),
+        LeakPath::new(Chamber::V1, Chamber::V2),
+        LeakPath::new(Chamber::V1, Chamber::Atm),
+        LeakPath::new(Chamber::V2, Chamber::Atm),
+        LeakPath::new(Chamber::Ve, Chamber::Atm),
+    ];
+
+    /// The path from `from` to `to`.
+    pub const fn new(from: Chamber, to: Chamber) -> Self {
+        Self { from, to }
+    }
+
+    /// The SPEC §5 category of a leak along this path: between two volumes
+    /// `internal_leakage`; from V_1 to atmosphere (the supply side) `inlet_flow`; from V_2
+    /// or V_e to atmosphere `outlet_flow`.
+    pub fn category(self) -> Category {
+        use Chamber::*;
+        match (self.from, self.to) {
+            (Atm, Atm) => Category::OutletFlow,
+            (V1, Atm) | (Atm, V1) => Category::InletFlow,
+            (_, Atm) | (Atm, _) => Category::OutletFlow,
+            _ => Category::InternalLeakage,
+        }
+    }
+}
+
+/// Pressure below which the orifice law √Δp turns laminar (finite slope at Δp = 0), Pa.
+pub const ORIFICE_LAMINAR_PA: f64 = 1e3;
 
 /// The pressure factor of a discovered term's feature (Pa, or 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -45,6 +189,16 @@ pub enum PressureFactor {
     P2MinusPe,
     /// p_1 − p_2, Pa.
     P1MinusP2,
+    /// Flow law of a leak path: Δp = p_from − p_to, Pa (laminar).
+    Laminar,
+    /// Flow law of a leak path: Δp·|Δp|, Pa² (grows with the square of the difference).
+    Quadratic,
+    /// Flow law of a leak path: Δp·(Δp² + p_r²)^(−1/4) ≈ sign(Δp)·√|Δp|, √Pa (a sharp
+    /// orifice; laminar below p_r = [`ORIFICE_LAMINAR_PA`]).
+    Orifice,
+    /// Flow law of a leak path: ISO 6358 (b = 0.5) with the coefficient as sonic
+    /// conductance: ρ0·p_u·ψ(p_d/p_u), kg/(s·m³/(s·Pa)), reverse flow by symmetry.
+    Iso6358,
 }
 
 /// The speed factor of a discovered term's feature.
@@ -63,8 +217,16 @@ pub enum SpeedFactor {
 }
 
 impl PressureFactor {
+    /// The flow laws of a leak path.
+    pub const LAWS: [PressureFactor; 4] = [P::Laminar, P::Quadratic, P::Orifice, P::Iso6358];
+
+    /// Whether this is a flow law of a leak path.
+    pub fn is_law(self) -> bool {
+        Self::LAWS.contains(&self)
+    }
+
     /// Every pressure factor.
-    pub const ALL: [PressureFactor; 10] = [
+    pub const ALL: [PressureFactor; 14] = [
         P::One,
         P::P1,
         P::P2,
@@ -75,6 +237,10 @@ impl PressureFactor {
         P::P1MinusPe,
         P::P2MinusPe,
         P::P1MinusP2,
+        P::Laminar,
+        P::Quadratic,
+        P::Orifice,
+        P::Iso6358,
     ];
 }
 
@@ -98,7 +264,8 @@ pub struct ExtraTerm {
 }
 
 impl ExtraTerm {
-    /// The feature pressure(x)·speed(ω) at state x (SI).
+    /// The feature pressure(x)·speed(ω) at state x (SI), times the coefficient: the loss
+    /// torque or the mass flow into the balance, or along the path from→to.
     pub fn feature(&self, x: &State, p_atm_pa: f64, w_reg: f64) -> f64 {
         let [p1, p2, pe, omega] = *x;
         let p = match self.pressure {
@@ -112,6 +279,14 @@ impl ExtraTerm {
             PressureFactor::P1MinusPe => p1 - pe,
             PressureFactor::P2MinusPe => p2 - pe,
             PressureFactor::P1MinusP2 => p1 - p2,
+            law => match self.balance {
+                BalanceId::Path(path) => flow_law(
+                    law,
+                    path.from.pressure(x, p_atm_pa),
+                    path.to.pressure(x, p_atm_pa),
+                ),
+                _ => 0.0,
+            },
         };
         let w = match self.speed {
             SpeedFactor::One => 1.0,
@@ -122,10 +297,43 @@ impl ExtraTerm {
         };
         self.coefficient * p * w
     }
+
+    /// A leak along `path` by flow `law`, scaled by `speed`.
+    pub fn leak(path: LeakPath, law: PressureFactor, speed: SpeedFactor, coefficient: f64) -> Self {
+        Self {
+            balance: BalanceId::Path(path),
+            pressure: law,
+            speed,
+            coefficient,
+        }
+    }
+}
+
+/// A flow law of Δp = `p_from` − `p_to` (see [`PressureFactor`]); 0 for any other factor.
+pub fn flow_law(law: PressureFactor, p_from: f64, p_to: f64) -> f64 {
+    let dp = p_from - p_to;
+    match law {
+        P::Laminar => dp,
+        P::Quadratic => dp * dp.abs(),
+        P::Orifice => dp * (dp * dp + ORIFICE_LAMINAR_PA * ORIFICE_LAMINAR_PA).powf(-0.25),
+        P::Iso6358 => {
+            let (pu, pd, sign) = if dp >= 0.0 {
+                (p_from, p_to, 1.0)
+            } else {
+                (p_to, p_from, -1.0)
+            };
+            if pu <= 0.0 {
+                return 0.0;
+            }
+            sign * crate::units::constants::RHO0_KG_M3 * pu * nozzle::psi((pd / pu).max(0.0), 0.5)
+        }
+        _ => 0.0,
+    }
 }
 
 impl Term for ExtraTerm {
-    /// coefficient·feature(x) added to its balance (the catalog effects' hook).
+    /// coefficient·feature(x) added to its balance (the catalog effects' hook); along a
+    /// path, taken from `from`'s balance and given to `to`'s.
     fn add_to_balances(
         &self,
         _own: &[f64],
@@ -134,21 +342,92 @@ impl Term for ExtraTerm {
         p_atm_pa: f64,
         acc: &mut [f64; 4],
     ) {
-        acc[self.balance as usize] += self.feature(x, p_atm_pa, params.w_reg());
+        let f = self.feature(x, p_atm_pa, params.w_reg());
+        match self.balance {
+            BalanceId::Path(path) => {
+                if let Some(i) = path.from.slot() {
+                    acc[i] -= f;
+                }
+                if let Some(i) = path.to.slot() {
+                    acc[i] += f;
+                }
+            }
+            b => acc[b.slot().expect("a balance")] += f,
+        }
     }
 }
 
-/// The SPEC §5 category of a discovered term: torque → torque_loss; a mass term driven by a
-/// pressure difference between two chambers → internal_leakage; other mass terms at V_1 →
-/// inlet_flow, at V_2 or V_e → outlet_flow.
+/// The SPEC §5 category of a discovered term: torque → torque_loss; a leak path by its path
+/// ([`LeakPath::category`]); a one-balance mass term driven by a pressure difference between
+/// two chambers → internal_leakage; other mass terms at V_1 → inlet_flow, at V_2 or V_e →
+/// outlet_flow.
 pub fn category(t: &ExtraTerm) -> Category {
     match t.balance {
         BalanceId::Torque => Category::TorqueLoss,
+        BalanceId::Path(path) => path.category(),
         _ if matches!(t.pressure, P::P1MinusPe | P::P2MinusPe | P::P1MinusP2) => {
             Category::InternalLeakage
         }
         BalanceId::Mass1 => Category::InletFlow,
         BalanceId::Mass2 | BalanceId::MassE => Category::OutletFlow,
+    }
+}
+
+/// A discovered term in words, e.g. "a leak from the inlet compartment (V1) to the exhaust
+/// (Ve) that grows with the square of the pressure difference".
+pub fn describe(t: &ExtraTerm) -> String {
+    let speed = match t.speed {
+        W::One => "",
+        W::Omega => ", proportional to the speed",
+        W::AbsOmega => ", proportional to the speed's magnitude",
+        W::OmegaAbsOmega => ", growing with the square of the speed",
+        W::Sign => ", of constant size while turning (Coulomb-like)",
+    };
+    match t.balance {
+        BalanceId::Path(path) => {
+            let law = match t.pressure {
+                P::Laminar => "that grows in proportion to the pressure difference (laminar)",
+                P::Quadratic => "that grows with the square of the pressure difference",
+                P::Orifice => {
+                    "that grows with the square root of the pressure difference (orifice)"
+                }
+                P::Iso6358 => "through an ISO 6358 restriction (choked at large pressure ratios)",
+                _ => "driven by",
+            };
+            let what = if t.pressure.is_law() {
+                law.to_string()
+            } else {
+                format!("{law} {}", feature_name(t))
+            };
+            format!(
+                "a leak from {} to {} {what}{speed}",
+                path.from.words(),
+                path.to.words()
+            )
+        }
+        BalanceId::Torque => format!("a loss torque proportional to {}", feature_name(t)),
+        b => format!(
+            "a mass flow into {} proportional to {}",
+            match b {
+                BalanceId::Mass1 => Chamber::V1.words(),
+                BalanceId::Mass2 => Chamber::V2.words(),
+                _ => Chamber::Ve.words(),
+            },
+            feature_name(t)
+        ),
+    }
+}
+
+/// The law's symbol on a path, e.g. `(p1 - pe)*|p1 - pe|`, and its unit.
+fn law_symbol(law: P, path: LeakPath) -> (String, &'static str) {
+    let (a, b) = (path.from.id().1, path.to.id().1);
+    let dp = format!("({a} - {b})");
+    match law {
+        P::Laminar => (dp, "Pa"),
+        P::Quadratic => (format!("{dp}*|{dp}|"), "Pa2"),
+        P::Orifice => (format!("sqrt{dp}"), "Pa^0.5"),
+        P::Iso6358 => (format!("iso6358({a}, {b})"), "kg/m3*Pa"),
+        _ => (String::new(), ""),
     }
 }
 
@@ -164,6 +443,10 @@ fn pressure_symbol(p: P) -> (&'static str, &'static str) {
         P::P1MinusPe => ("(p1 - pe)", "Pa"),
         P::P2MinusPe => ("(p2 - pe)", "Pa"),
         P::P1MinusP2 => ("(p1 - p2)", "Pa"),
+        P::Laminar => ("dp", "Pa"),
+        P::Quadratic => ("dp*|dp|", "Pa2"),
+        P::Orifice => ("sqrt(dp)", "Pa^0.5"),
+        P::Iso6358 => ("iso6358", "kg/m3*Pa"),
     }
 }
 
@@ -190,6 +473,10 @@ pub fn pressure_id(p: P) -> &'static str {
         P::P1MinusPe => "p1_minus_pe",
         P::P2MinusPe => "p2_minus_pe",
         P::P1MinusP2 => "p1_minus_p2",
+        P::Laminar => "laminar",
+        P::Quadratic => "quadratic",
+        P::Orifice => "orifice",
+        P::Iso6358 => "iso6358",
     }
 }
 
@@ -206,7 +493,8 @@ pub fn speed_id(w: W) -> &'static str {
 
 /// The feature as a product of symbols, e.g. `p2*omega`.
 pub fn feature_name(t: &ExtraTerm) -> String {
-    let (p, _) = pressure_symbol(t.pressure);
+    let (p, _) = factor_symbol(t);
+    let p = p.as_str();
     let (w, _) = speed_symbol(t.speed);
     match (p.is_empty(), w.is_empty()) {
         (true, true) => "1".into(),
@@ -222,7 +510,7 @@ pub fn coefficient_unit(t: &ExtraTerm) -> String {
         BalanceId::Torque => "N*m",
         _ => "kg/s",
     };
-    let (_, pu) = pressure_symbol(t.pressure);
+    let (_, pu) = factor_symbol(t);
     let (_, wu) = speed_symbol(t.speed);
     let den: Vec<&str> = [pu, wu].into_iter().filter(|s| !s.is_empty()).collect();
     if den.is_empty() {
@@ -232,19 +520,33 @@ pub fn coefficient_unit(t: &ExtraTerm) -> String {
     }
 }
 
-/// The balance's symbol in a formula.
-pub fn balance_symbol(b: BalanceId) -> &'static str {
-    match b {
+/// The pressure factor's symbol and unit, a path's flow law written out.
+fn factor_symbol(t: &ExtraTerm) -> (String, &'static str) {
+    match t.balance {
+        BalanceId::Path(path) if t.pressure.is_law() => law_symbol(t.pressure, path),
+        _ => {
+            let (s, u) = pressure_symbol(t.pressure);
+            (s.to_string(), u)
+        }
+    }
+}
+
+/// The balance's symbol in a formula (a path: `m_dot(v1->ve)`).
+pub fn balance_symbol(b: BalanceId) -> String {
+    let s = match b {
+        BalanceId::Path(path) => return format!("m_dot({}->{})", path.from.id().0, path.to.id().0),
         BalanceId::Torque => "T_loss",
         BalanceId::Mass1 => "dm1/dt",
         BalanceId::Mass2 => "dm2/dt",
         BalanceId::MassE => "dme/dt",
-    }
+    };
+    s.to_string()
 }
 
-/// The balance's name in reports and JSON.
+/// The balance's name in reports and JSON (`leak_path` for a path).
 pub fn balance_name(b: BalanceId) -> &'static str {
     match b {
+        BalanceId::Path(_) => "leak_path",
         BalanceId::Torque => "torque",
         BalanceId::Mass1 => "mass_v1",
         BalanceId::Mass2 => "mass_v2",
@@ -255,8 +557,13 @@ pub fn balance_name(b: BalanceId) -> &'static str {
 /// A term as a formula with its coefficient, e.g.
 /// `T_loss += 1.2e-10 N*m/(Pa*rad/s) * p2*omega`.
 pub fn formula(t: &ExtraTerm) -> String {
+    let op = if matches!(t.balance, BalanceId::Path(_)) {
+        "="
+    } else {
+        "+="
+    };
     format!(
-        "{} += {:.4e} {} * {}",
+        "{} {op} {:.4e} {} * {}",
         balance_symbol(t.balance),
         t.coefficient,
         coefficient_unit(t),

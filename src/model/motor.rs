@@ -12,7 +12,10 @@
 //! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (SPEC §1.5).
 
 use crate::model::effects::{CatalogEffect, Effect, EffectSet, SupplyValve, Term};
-pub use crate::model::extra::{BalanceId, ExtraTerm, PressureFactor, SpeedFactor};
+use crate::model::extra::slot;
+pub use crate::model::extra::{
+    BalanceId, Chamber, ExtraTerm, LeakPath, PressureFactor, SpeedFactor,
+};
 use crate::model::nozzle::{series_flow, Nozzle};
 use crate::model::params::MotorParams;
 use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
@@ -315,16 +318,15 @@ impl Motor {
             displacement,
             dm1_kg_s: flow_port1_kg_s - leak_1e_kg_s - leak_12_kg_s
                 + displacement.into_1_kg_s
-                + extra[BalanceId::Mass1 as usize],
+                + extra[slot::MASS1],
             dm2_kg_s: leak_12_kg_s - flow_port2_kg_s - leak_2e_kg_s
                 + displacement.into_2_kg_s
-                + extra[BalanceId::Mass2 as usize],
+                + extra[slot::MASS2],
             dme_kg_s: leak_1e_kg_s + leak_2e_kg_s - flow_exhaust_kg_s
                 + displacement.into_e_kg_s
-                + extra[BalanceId::MassE as usize],
+                + extra[slot::MASSE],
             torque_ideal_nm: self.ideal_torque(p1, p2, pe, omega),
-            torque_friction_nm: self.friction_torque(omega, p_in, pe)
-                + extra[BalanceId::Torque as usize],
+            torque_friction_nm: self.friction_torque(omega, p_in, pe) + extra[slot::TORQUE],
             torque_load_nm: bc.load.torque(omega),
         }
     }
