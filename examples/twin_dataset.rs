@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release --example twin_dataset -- OUT_DIR [--seed S] [--rate HZ]
 //!     [--noise-scale K] [--offsets] [--brake-torque] [--stiction TS,WS] [--leak-dp2 K]
-//!     [--seal G,WS] [--vane-w2 C] [--base-perturb SEED]
+//!     [--seal G,WS] [--vane-w2 C] [--base-perturb SEED] [--varied SEED]
 //! ```
 //!
 //! Noise is K × the shipped dataset's (flows 0.01 g/s, speed 5 rpm, torque 2 mN·m, pressure
@@ -13,7 +13,9 @@
 //! tolerance (flows 0.02 g/s, speed 2 rpm, torque 2 mN·m, pressure 2 kPa, 1σ);
 //! `--stiction` is t_static (N·m) and w_stribeck (rad/s); `--leak-dp2` is k in kg/(s·Pa²);
 //! `--seal` is g_seal and w_seal (rad/s); `--vane-w2` is c_w2 in N·m·s²/rad²;
-//! `--base-perturb` moves the conductances and friction by seeded factors in [0.7, 1.4].
+//! `--base-perturb` moves the conductances and friction by seeded factors in [0.7, 1.4];
+//! `--varied SEED` writes `tests/coverage.rs`'s case SEED (its base motor, rate, noise,
+//! offsets and brake-torque channel; it overrides the other recording options and the seed).
 
 #[path = "../tests/twin/mod.rs"]
 mod twin;
@@ -23,7 +25,7 @@ use twin::{Breakaway, NoiseSigmas, OffsetSpec, RecordConfig, SealLeakage, TwinMo
 
 const USAGE: &str = "usage: twin_dataset OUT_DIR [--seed S] [--rate HZ] [--noise-scale K] \
 [--offsets] [--brake-torque] [--stiction TS,WS] [--leak-dp2 K] [--seal G,WS] [--vane-w2 C] \
-[--base-perturb SEED]";
+[--base-perturb SEED] [--varied SEED]";
 
 struct Args {
     out: PathBuf,
@@ -54,6 +56,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     );
     let (mut seed, mut motor, mut cfg) = (1, TwinMotor::default(), RecordConfig::default());
     let (mut noise_scale, mut offsets, mut base) = (1.0, false, None);
+    let mut varied = None;
     while let Some(flag) = it.next() {
         match flag.as_str() {
             "--seed" => seed = number(&flag, it.next())?,
@@ -78,6 +81,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             }
             "--vane-w2" => motor.vane_friction_speed_squared = Some(number(&flag, it.next())?),
             "--base-perturb" => base = Some(number::<u64>(&flag, it.next())?),
+            "--varied" => varied = Some(number::<u64>(&flag, it.next())?),
             _ => return Err(format!("unknown argument '{flag}'")),
         }
     }
@@ -92,6 +96,12 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     }
     if let Some(s) = base {
         motor = twin::perturbed_motor_within(s, 0.7, 1.4).with_effects_of(&motor);
+    }
+    if let Some(s) = varied {
+        // The coverage test's case `s`: its base motor and recording configuration.
+        motor = twin::perturbed_motor(s).with_effects_of(&motor);
+        cfg = twin::varied_config(s);
+        seed = s;
     }
     Ok(Args {
         out,

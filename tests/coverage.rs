@@ -1,0 +1,223 @@
+//! Are the fit's 95% intervals calibrated on data vanefit did not make? (issue 11)
+//!
+//! Every dataset here comes from the twin generator (`tests/twin/`): an independent
+//! implementation of SPEC §1–§2 (its own code and integrator, TR-BDF2), with a recording
+//! configuration unlike vanefit's `synth` defaults, drawn per seed ([`twin::varied_config`]):
+//! 5, 10, 20 or 50 Hz; each channel's noise 0.5–3× (0.03 g/s, 15 rpm, 4 mN·m); 2 kPa noise
+//! on the recorded supply pressure and 0.5% on the throttle's conductance; constant sensor
+//! offsets within a calibrated rig's tolerance (flows 0.02 g/s, speed 2 rpm, torque 2 mN·m,
+//! pressure 2 kPa, 1σ); a brake-torque channel in half of them. The motor's base
+//! parameters are moved by factors in [0.75, 1.33] ([`twin::perturbed_motor`]).
+//!
+//! Each dataset is fitted as `vanefit fit` does (profile-likelihood intervals) and every
+//! estimated parameter's interval is checked against the twin's truth; an open side counts
+//! as unbounded. The normal run fits 6 datasets (48 intervals): under calibrated 95%
+//! intervals more than 7 misses has probability 0.2%. The full table (50 datasets, per
+//! parameter) is `#[ignore]`d and writes `target/coverage-table.md`:
+//!
+//! ```sh
+//! cargo test --release --test coverage -- --ignored --nocapture coverage_table
+//! ```
+
+#[allow(clippy::type_complexity)]
+mod twin;
+
+use std::fmt::Write as _;
+use vanefit::data::dataset::Dataset;
+use vanefit::estimate::fit::{fit, FitData, FitSetup, UncertaintyMethod};
+use vanefit::estimate::multistart::Silent;
+use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, DEFAULT_ESTIMATED};
+use vanefit::model::effects::EffectSet;
+use vanefit::objective::cost::CostOptions;
+
+/// One parameter of one fit against the truth.
+struct Check {
+    name: &'static str,
+    truth: f64,
+    estimate: f64,
+    lo: Option<f64>,
+    hi: Option<f64>,
+    identifiable: bool,
+}
+
+impl Check {
+    fn covers(&self) -> bool {
+        self.lo.is_none_or(|lo| lo <= self.truth) && self.hi.is_none_or(|hi| self.truth <= hi)
+    }
+}
+
+/// One dataset's fit.
+struct Case {
+    seed: u64,
+    rate_hz: f64,
+    brake_torque: bool,
+    noise_ratio: f64,
+    noise_reached: bool,
+    checks: Vec<Check>,
+}
+
+fn truth_of(m: &twin::TwinMotor, name: &str) -> f64 {
+    match name {
+        "c_in1" => m.c_in1,
+        "c_out2" => m.c_out2,
+        "c_ext" => m.c_ext,
+        "c_1e" => m.c_1e,
+        "c_2e" => m.c_2e,
+        "c_12" => m.c_12,
+        "t_coulomb" => m.t_coulomb,
+        "visc" => m.visc,
+        other => panic!("no truth for {other}"),
+    }
+}
+
+/// Writes the twin dataset of `seed`, fits it with `starts` starts and checks every interval.
+fn run_case(seed: u64, starts: usize, engine: &Engine) -> Case {
+    let dir = tempfile::tempdir().unwrap();
+    let motor = twin::perturbed_motor(seed);
+    let cfg = twin::varied_config(seed);
+    twin::write_dataset(dir.path(), &motor, &cfg, seed).unwrap();
+    let ds = Dataset::load(dir.path()).unwrap();
+    let data = FitData::new(&ds, CostOptions::default()).unwrap();
+    let space = ParamSpace::new(
+        &DEFAULT_ESTIMATED,
+        ds.nominal_params().unwrap(),
+        EffectSet::empty(),
+    )
+    .unwrap();
+    let setup = FitSetup {
+        multistart: MultiStartConfig {
+            starts,
+            seed,
+            ..MultiStartConfig::default()
+        },
+        space,
+        uncertainty: UncertaintyMethod::Profile,
+        results_file: None,
+        resume: false,
+    };
+    let out = fit(engine, &data, &setup, &Silent).unwrap();
+    let g = out.goodness.clone().expect("the estimate simulates");
+    let checks = DEFAULT_ESTIMATED
+        .iter()
+        .map(|name| {
+            let iv = out.intervals.iter().find(|i| i.name == *name).unwrap();
+            Check {
+                name,
+                truth: truth_of(&motor, name),
+                estimate: iv.value,
+                lo: iv.lo,
+                hi: iv.hi,
+                identifiable: iv.identifiable(),
+            }
+        })
+        .collect();
+    Case {
+        seed,
+        rate_hz: cfg.conditions.rate_hz,
+        brake_torque: cfg.brake_torque,
+        noise_ratio: g.noise_ratio,
+        noise_reached: g.noise_reached,
+        checks,
+    }
+}
+
+fn misses(cases: &[Case]) -> usize {
+    cases
+        .iter()
+        .flat_map(|c| &c.checks)
+        .filter(|k| !k.covers())
+        .count()
+}
+
+/// The markdown table: per parameter, then per dataset.
+fn table(cases: &[Case]) -> String {
+    let mut s = String::from(
+        "| parameter | intervals | cover the truth | coverage | identifiable | median half-width |\n|---|---|---|---|---|---|\n",
+    );
+    for name in DEFAULT_ESTIMATED {
+        let ks: Vec<&Check> = cases
+            .iter()
+            .flat_map(|c| &c.checks)
+            .filter(|k| k.name == name)
+            .collect();
+        let covered = ks.iter().filter(|k| k.covers()).count();
+        let ident = ks.iter().filter(|k| k.identifiable).count();
+        let mut widths: Vec<f64> = ks
+            .iter()
+            .filter_map(|k| Some(100.0 * (k.hi? - k.lo?) / (2.0 * k.estimate)))
+            .collect();
+        widths.sort_by(f64::total_cmp);
+        let median = widths.get(widths.len() / 2).copied().unwrap_or(f64::NAN);
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {covered} | {:.0}% | {ident} | {median:.2}% |",
+            ks.len(),
+            100.0 * covered as f64 / ks.len().max(1) as f64
+        );
+    }
+    let total: usize = cases.iter().map(|c| c.checks.len()).sum();
+    let _ = writeln!(
+        s,
+        "| all | {total} | {} | {:.1}% | | |\n",
+        total - misses(cases),
+        100.0 * (total - misses(cases)) as f64 / total.max(1) as f64
+    );
+    s.push_str("| seed | rate Hz | brake torque | noise ratio | reaches noise | misses |\n|---|---|---|---|---|---|\n");
+    for c in cases {
+        let missed: Vec<&str> = c
+            .checks
+            .iter()
+            .filter(|k| !k.covers())
+            .map(|k| k.name)
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.3} | {} | {} |",
+            c.seed,
+            c.rate_hz,
+            c.brake_torque,
+            c.noise_ratio,
+            c.noise_reached,
+            missed.join(", ")
+        );
+    }
+    s
+}
+
+#[test]
+fn intervals_cover_the_truth_on_twin_data() {
+    let engine = Engine::with_threads(None).unwrap();
+    let cases: Vec<Case> = (1..=6).map(|s| run_case(s, 6, &engine)).collect();
+    let t = table(&cases);
+    eprintln!("{t}");
+    let m = misses(&cases);
+    assert!(m <= 7, "{m} of 48 intervals miss the truth:\n{t}");
+    let reached = cases.iter().filter(|c| c.noise_reached).count();
+    assert!(reached >= 5, "only {reached} of 6 fits reach the noise:\n{t}");
+}
+
+#[test]
+#[ignore = "50 fits, several minutes: the issue-11 coverage table"]
+fn coverage_table() {
+    let engine = Engine::with_threads(None).unwrap();
+    let mut cases = Vec::new();
+    for s in 1..=50 {
+        let c = run_case(s, 8, &engine);
+        eprintln!(
+            "seed {s}: noise ratio {:.3}, misses {}",
+            c.noise_ratio,
+            c.checks.iter().filter(|k| !k.covers()).count()
+        );
+        cases.push(c);
+    }
+    let t = table(&cases);
+    std::fs::create_dir_all("target").unwrap();
+    std::fs::write("target/coverage-table.md", &t).unwrap();
+    eprintln!("{t}");
+    let total: usize = cases.iter().map(|c| c.checks.len()).sum();
+    let covered = total - misses(&cases);
+    assert!(
+        covered as f64 >= 0.9 * total as f64,
+        "coverage {covered}/{total}:\n{t}"
+    );
+}
