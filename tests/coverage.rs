@@ -187,13 +187,16 @@ fn table(cases: &[Case]) -> String {
 #[test]
 fn intervals_cover_the_truth_on_twin_data() {
     let engine = Engine::with_threads(None).unwrap();
-    let cases: Vec<Case> = (1..=6).map(|s| run_case(s, 6, &engine)).collect();
+    let cases: Vec<Case> = (1..=6).map(|s| run_case(s, 10, &engine)).collect();
     let t = table(&cases);
     eprintln!("{t}");
     let m = misses(&cases);
     assert!(m <= 7, "{m} of 48 intervals miss the truth:\n{t}");
     let reached = cases.iter().filter(|c| c.noise_reached).count();
-    assert!(reached >= 5, "only {reached} of 6 fits reach the noise:\n{t}");
+    assert!(
+        reached >= 5,
+        "only {reached} of 6 fits reach the noise:\n{t}"
+    );
 }
 
 #[test]
@@ -202,7 +205,7 @@ fn coverage_table() {
     let engine = Engine::with_threads(None).unwrap();
     let mut cases = Vec::new();
     for s in 1..=50 {
-        let c = run_case(s, 8, &engine);
+        let c = run_case(s, 12, &engine);
         eprintln!(
             "seed {s}: noise ratio {:.3}, misses {}",
             c.noise_ratio,

@@ -32,7 +32,9 @@ use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{CostError, CostModel, CostOptions};
-use crate::objective::likelihood::{smooth_inputs, InputSmoothing, Target};
+use crate::objective::likelihood::{calibration_tolerance, smooth_inputs, InputSmoothing, Target};
+use crate::objective::nuisance::Nuisance;
+use crate::units::Quantity;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -71,7 +73,14 @@ pub struct FitData {
     pub target: Target,
     /// What the smoothing did to each input column.
     pub inputs: Vec<InputSmoothing>,
+    /// `smoothed` with the recorded supply pressure raised by [`PRESSURE_STEP_PA`] (for the
+    /// pressure sensor's offset; `None` when no experiment records that pressure).
+    raised: Option<CostModel>,
 }
+
+/// The step by which the supply pressure's effect on the rows is differenced, Pa: 1 kPa,
+/// half the sensor's tolerance, where the response is linear and far above solver jitter.
+const PRESSURE_STEP_PA: f64 = 1e3;
 
 impl FitData {
     /// The cost and the likelihood of a dataset.
@@ -80,21 +89,59 @@ impl FitData {
         let (smooth_ds, inputs) = smooth_inputs(ds);
         let smoothed = CostModel::new(&smooth_ds, options)?;
         let target = Target::new(&smoothed, &smooth_ds)?.with_offsets();
+        let raised = match raise_supply(&smooth_ds) {
+            Some(ds) => Some(CostModel::new(&ds, options)?),
+            None => None,
+        };
         Ok(Self {
             cost,
             smoothed,
             target,
             inputs,
+            raised,
         })
     }
 
-    /// Each channel's χ² under the likelihood (`None` if the simulation fails).
-    pub fn channel_chi2(&self, motor: &Motor) -> Option<Vec<ChannelChi2>> {
+    /// The likelihood's target with the supply-pressure sensor's offset as one more nuisance:
+    /// its effect on every compared row is the simulation's response to a raised recorded
+    /// pressure, differenced at `motor` (the rows respond linearly to 2 kPa, and the
+    /// response hardly changes over a parameter's interval). The target as it is when no
+    /// experiment records the pressure or the rows do not match.
+    pub fn target_at(&self, motor: &Motor) -> Target {
+        let solver = DefaultSolver::default();
+        let Some(raised) = &self.raised else {
+            return self.target.clone();
+        };
+        let (Ok(base), Ok(up)) = (
+            self.smoothed.simulated_rows(motor, &solver),
+            raised.simulated_rows(motor, &solver),
+        ) else {
+            return self.target.clone();
+        };
+        if base.len() != up.len() || base.iter().zip(&up).any(|(a, b)| a.len() != b.len()) {
+            return self.target.clone();
+        }
+        let shape: Vec<f64> = base
+            .iter()
+            .flatten()
+            .zip(up.iter().flatten())
+            .map(|(a, b)| (b - a) / PRESSURE_STEP_PA)
+            .collect();
+        let tau = calibration_tolerance(Quantity::PPort1).unwrap_or(PRESSURE_STEP_PA);
+        self.target.clone().with_nuisances(vec![Nuisance {
+            label: "supply pressure sensor offset".into(),
+            prior_sd: tau,
+            shape,
+        }])
+    }
+
+    /// Each channel's χ² under the likelihood of `target` (`None` if the simulation fails).
+    pub fn channel_chi2(&self, target: &Target, motor: &Motor) -> Option<Vec<ChannelChi2>> {
         let res = self
             .smoothed
             .residuals(motor, &DefaultSolver::default())
             .ok()?;
-        let chi2 = self.target.channel_chi2(&res);
+        let chi2 = target.channel_chi2(&res);
         Some(
             res.iter()
                 .zip(chi2)
@@ -106,6 +153,23 @@ impl FitData {
                 .collect(),
         )
     }
+}
+
+/// The dataset with every recorded port-1 pressure raised by [`PRESSURE_STEP_PA`] (`None`
+/// when none is recorded).
+fn raise_supply(ds: &Dataset) -> Option<Dataset> {
+    let mut out = ds.clone();
+    let mut any = false;
+    for col in out
+        .experiments
+        .iter_mut()
+        .flat_map(|e| e.recording.columns.iter_mut())
+        .filter(|c| c.quantity == Quantity::PPort1)
+    {
+        col.si.iter_mut().for_each(|p| *p += PRESSURE_STEP_PA);
+        any = true;
+    }
+    any.then_some(out)
 }
 
 /// How intervals are computed.
@@ -208,9 +272,13 @@ pub fn fit(
     let best = run.best().clone();
     let problem = Problem::new(&objective, &setup.space, false);
     let best_theta = finish(&problem, &best.theta, best.cost, &settings);
+    let target = data.target_at(&Motor::new(
+        setup.space.params(&best_theta)?,
+        setup.space.effects.clone(),
+    ));
     let likelihood = Likelihood {
         cost: &data.smoothed,
-        target: &data.target,
+        target: &target,
         solver: DefaultSolver::default(),
     };
     let ml = Problem::new(&likelihood, &setup.space, false);
@@ -218,7 +286,7 @@ pub fn fit(
     let params = setup.space.params(&theta)?;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
     let goodness = data
-        .channel_chi2(&motor)
+        .channel_chi2(&target, &motor)
         .map(|c| GoodnessOfFit::new(&c, theta.len()));
     let clusters = cluster(&run.results, &setup.space, 0.02);
     let intervals = match &goodness {

@@ -20,20 +20,14 @@
 //! over the rows the cost compares (abscissa inside the reference's valid range; the rows
 //! inside a breakaway jump are left out as there), with σ_c from the data alone.
 //!
-//! # Sensor offsets
+//! # Systematic errors
 //!
-//! A calibrated sensor may still read a constant b off (its zero offset, within the
-//! calibration tolerance τ). With b a nuisance parameter of prior N(0, τ²), minimising
-//! Σ((y_sim + b − y_data)/σ)² + (b/τ)² over b gives, with u_i = (y_sim,i − y_data,i)/σ,
-//!
-//! ```text
-//!     χ²_c = Σ u_i² − (Σ u_i)² / (N + σ²/τ²)                        [2]
-//! ```
-//!
-//! (exactly the Gaussian marginal likelihood up to a constant). τ = 0 gives eq. \[1\]; a
-//! fit's intervals use the typical tolerances of [`calibration_tolerance`], so an offset
-//! that the data cannot tell from a parameter change widens the interval instead of
-//! biasing it. The diagnosis keeps τ = 0 (an offset there would be a finding).
+//! A calibrated sensor may still read a constant offset, and the recorded supply pressure
+//! that drives a ramp may be off by its sensor's offset. A fit's intervals treat these as
+//! nuisance parameters with the rig's calibration tolerances as Gaussian priors
+//! ([`calibration_tolerance`]), profiled out in closed form ([`super::nuisance`]): an offset
+//! the data cannot tell from a parameter change widens the interval instead of biasing it.
+//! The diagnosis keeps none (an offset there would be a finding).
 //!
 //! # Noise estimate
 //!
@@ -46,6 +40,7 @@
 //! 12-bit converter's resolution), so noise-free data do not get an infinite weight.
 
 use super::cost::{ChannelResiduals, CostError, CostModel};
+use super::nuisance::{Nuisance, Nuisances};
 use super::reference::{FitOptions, Reference};
 use crate::data::dataset::{Dataset, Kind};
 use crate::model::motor::Motor;
@@ -65,72 +60,30 @@ pub struct ChannelTarget {
     pub data: Vec<f64>,
     /// Noise standard deviation of the channel, SI (see the module documentation).
     pub sigma: f64,
-    /// Standard deviation of the sensor's constant calibration offset, SI (0: none); see
-    /// [`Target::with_offsets`].
-    pub offset_sd: f64,
 }
 
 impl ChannelTarget {
-    /// χ² of this channel's simulated values (rows as [`ChannelTarget::rows`]), with the
-    /// sensor offset b profiled out (eq. \[2\] of the module documentation).
-    pub fn chi2(&self, simulated: &[f64]) -> f64 {
-        let (mut s1, mut s2) = (0.0, 0.0);
-        for (s, d) in simulated.iter().zip(&self.data) {
-            let u = (s - d) / self.sigma;
-            s1 += u;
-            s2 += u * u;
-        }
-        if self.offset_sd > 0.0 {
-            let n = self.data.len() as f64;
-            s2 - s1 * s1 / (n + (self.sigma / self.offset_sd).powi(2))
-        } else {
-            s2
-        }
-    }
-
-    /// The normalised residuals whose squares sum to [`ChannelTarget::chi2`], appended to
-    /// `out`: u_i + β̂ for each row and √λ·β̂ for the offset's prior, with β̂ = b̂/σ the
-    /// profiled offset and λ = σ²/τ² (Σ(u_i + β̂)² + λβ̂² is eq. \[2\] at β̂ = −Σu/(N + λ)).
-    pub fn residuals(&self, simulated: &[f64], out: &mut Vec<f64>) {
-        let start = out.len();
+    /// (simulated − recorded)/σ at the compared rows, appended to `out`.
+    fn normalised(&self, simulated: &[f64], out: &mut Vec<f64>) {
         out.extend(
             simulated
                 .iter()
                 .zip(&self.data)
                 .map(|(s, d)| (s - d) / self.sigma),
         );
-        if self.offset_sd > 0.0 {
-            let lambda = (self.sigma / self.offset_sd).powi(2);
-            let n = (out.len() - start) as f64;
-            let beta = -out[start..].iter().sum::<f64>() / (n + lambda);
-            for u in &mut out[start..] {
-                *u += beta;
-            }
-            out.push(lambda.sqrt() * beta);
-        }
-    }
-
-    /// The offset b̂ that [`ChannelTarget::chi2`] profiles out, SI (recorded − simulated on
-    /// average, shrunk towards 0 by its prior); 0 without an offset.
-    pub fn offset(&self, simulated: &[f64]) -> f64 {
-        if self.offset_sd <= 0.0 {
-            return 0.0;
-        }
-        let s1: f64 = simulated.iter().zip(&self.data).map(|(s, d)| d - s).sum();
-        let n = self.data.len() as f64;
-        s1 / (n + (self.sigma / self.offset_sd).powi(2))
     }
 }
 
 /// Typical calibration tolerance (1σ) of a rig's sensor, SI: the zero offset a calibrated
 /// sensor may still carry. Flow meters 0.02 g/s (0.2% of a 10 g/s range), speed 2 rpm,
-/// torque 2 mN·m (0.2% of a 1 N·m transducer); `None` for the recorded inputs, which drive
-/// the simulation instead of being compared.
+/// torque 2 mN·m (0.2% of a 1 N·m transducer), the supply-pressure sensor 2 kPa (0.2% of
+/// 1 MPa); `None` for quantities without one (time, the throttle's conductance setting).
 pub fn calibration_tolerance(q: Quantity) -> Option<f64> {
     match q {
         Quantity::Flow1 | Quantity::Flow2 => Some(2e-5),
         Quantity::Speed => Some(2.0 * std::f64::consts::PI / 60.0),
         Quantity::Torque => Some(2e-3),
+        Quantity::PPort1 => Some(2e3),
         _ => None,
     }
 }
@@ -140,6 +93,8 @@ pub fn calibration_tolerance(q: Quantity) -> Option<f64> {
 pub struct Target {
     /// The channels, in the cost's channel order.
     pub channels: Vec<ChannelTarget>,
+    /// Systematic errors profiled out (none unless added).
+    nuisances: Option<Nuisances>,
 }
 
 /// Noise standard deviation of samples in order (see the module documentation).
@@ -284,20 +239,59 @@ impl Target {
                     data: rows.iter().map(|&i| values[i]).collect(),
                     rows,
                     sigma: noise_sigma(&ordered),
-                    offset_sd: 0.0,
                 });
             }
         }
-        Ok(Self { channels })
+        Ok(Self {
+            channels,
+            nuisances: None,
+        })
     }
 
-    /// The same target with a constant offset of each compared sensor as a nuisance
-    /// parameter, Gaussian with the sensor's [`calibration_tolerance`] as prior σ.
-    pub fn with_offsets(mut self) -> Self {
-        for c in &mut self.channels {
-            c.offset_sd = calibration_tolerance(c.quantity).unwrap_or(0.0);
+    /// The same target with a constant offset of each compared sensor as a nuisance, with
+    /// the sensor's [`calibration_tolerance`] as prior σ (one per channel and recording).
+    pub fn with_offsets(self) -> Self {
+        let n = self.n_points();
+        let mut items = Vec::new();
+        let mut start = 0;
+        for c in &self.channels {
+            if let Some(tau) = calibration_tolerance(c.quantity) {
+                let mut shape = vec![0.0; n];
+                shape[start..start + c.rows.len()].fill(1.0);
+                items.push(Nuisance {
+                    label: format!("{} {} offset", c.file, c.quantity.prefix()),
+                    prior_sd: tau,
+                    shape,
+                });
+            }
+            start += c.rows.len();
+        }
+        self.with_nuisances(items)
+    }
+
+    /// The same target with `more` nuisances added (shapes over every compared row, in
+    /// channel order); unchanged if they do not fit the rows.
+    pub fn with_nuisances(mut self, more: Vec<Nuisance>) -> Self {
+        let mut items: Vec<Nuisance> = self
+            .nuisances
+            .as_ref()
+            .map(|n| n.items().to_vec())
+            .unwrap_or_default();
+        items.extend(more);
+        let sigma: Vec<f64> = self
+            .channels
+            .iter()
+            .flat_map(|c| std::iter::repeat_n(c.sigma, c.rows.len()))
+            .collect();
+        if let Some(n) = Nuisances::new(items, &sigma) {
+            self.nuisances = Some(n);
         }
         self
+    }
+
+    /// The nuisances profiled out, if any.
+    pub fn nuisances(&self) -> Option<&Nuisances> {
+        self.nuisances.as_ref()
     }
 
     /// Number of compared points.
@@ -305,18 +299,38 @@ impl Target {
         self.channels.iter().map(|c| c.rows.len()).sum()
     }
 
-    /// Per channel χ² of simulated residuals (same channel order): Σ((sim − data)/σ)², less
-    /// what a sensor offset explains where one is allowed.
+    /// The residual vector of simulated values (one list per channel, the compared rows):
+    /// (simulated − recorded)/σ, corrected by the profiled nuisances, whose prior rows follow
+    /// (see [`super::nuisance`]); its squares sum to χ².
+    pub fn residual_vector(&self, simulated: &[Vec<f64>]) -> Vec<f64> {
+        let mut u = Vec::with_capacity(self.n_points() + 16);
+        for (t, s) in self.channels.iter().zip(simulated) {
+            t.normalised(s, &mut u);
+        }
+        if let Some(n) = &self.nuisances {
+            n.apply(&mut u);
+        }
+        u
+    }
+
+    /// Per channel χ² of simulated residuals (same channel order): Σ((sim − data)/σ)² after
+    /// the nuisances' correction (their prior terms are not in any channel).
     pub fn channel_chi2(&self, res: &[ChannelResiduals]) -> Vec<f64> {
+        let sim: Vec<Vec<f64>> = res.iter().map(|r| r.simulated.clone()).collect();
+        let r = self.residual_vector(&sim);
+        let mut start = 0;
         self.channels
             .iter()
-            .zip(res)
-            .map(|(t, r)| t.chi2(&r.simulated))
+            .map(|c| {
+                let part = &r[start..start + c.rows.len()];
+                start += c.rows.len();
+                part.iter().map(|v| v * v).sum()
+            })
             .collect()
     }
 
-    /// Every channel's [`ChannelTarget::residuals`] for a motor, in channel order, or `None`
-    /// if the simulation fails or a residual is not finite.
+    /// The residual vector for a motor, or `None` if the simulation fails or a residual is
+    /// not finite.
     pub fn residuals(
         &self,
         cost: &CostModel,
@@ -324,17 +338,18 @@ impl Target {
         solver: &DefaultSolver,
     ) -> Option<Vec<f64>> {
         let sim = cost.simulated_rows(motor, solver).ok()?;
-        let mut out = Vec::with_capacity(self.n_points() + self.channels.len());
-        for (t, s) in self.channels.iter().zip(&sim) {
-            t.residuals(s, &mut out);
-        }
-        out.iter().all(|v| v.is_finite()).then_some(out)
+        let r = self.residual_vector(&sim);
+        r.iter().all(|v| v.is_finite()).then_some(r)
     }
 
-    /// χ² of eq. \[1\] for a motor, or `None` if the simulation fails or is not finite.
+    /// χ² for a motor (the squares of [`Target::residuals`]), or `None` if the simulation
+    /// fails or is not finite.
     pub fn chi2(&self, cost: &CostModel, motor: &Motor, solver: &DefaultSolver) -> Option<f64> {
-        let sim = cost.simulated_rows(motor, solver).ok()?;
-        let c: f64 = self.channels.iter().zip(&sim).map(|(t, s)| t.chi2(s)).sum();
+        let c: f64 = self
+            .residuals(cost, motor, solver)?
+            .iter()
+            .map(|v| v * v)
+            .sum();
         c.is_finite().then_some(c)
     }
 }
@@ -345,47 +360,6 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
     use rand_xoshiro::Xoshiro256PlusPlus;
-
-    /// The residual vector's squares sum to eq. [2], and b̂ is the minimiser: χ² with the
-    /// offset b̂ subtracted from the data plus its prior term equals the profiled χ².
-    #[test]
-    fn offset_residuals_match_the_profiled_chi2() {
-        let t = ChannelTarget {
-            file: "f".into(),
-            quantity: Quantity::Flow1,
-            rows: (0..5).collect(),
-            data: vec![1.0, 2.0, 3.5, 4.0, 5.5],
-            sigma: 0.5,
-            offset_sd: 0.3,
-        };
-        let sim = [1.2, 2.3, 3.6, 4.4, 5.6];
-        let mut r = Vec::new();
-        t.residuals(&sim, &mut r);
-        let from_r: f64 = r.iter().map(|v| v * v).sum();
-        assert!(
-            (from_r - t.chi2(&sim)).abs() < 1e-12,
-            "{from_r} {}",
-            t.chi2(&sim)
-        );
-        let b = t.offset(&sim);
-        let direct: f64 = sim
-            .iter()
-            .zip(&t.data)
-            .map(|(s, d)| ((s + b - d) / 0.5).powi(2))
-            .sum::<f64>()
-            + (b / 0.3).powi(2);
-        assert!((direct - t.chi2(&sim)).abs() < 1e-12);
-        // Any other offset does worse.
-        for db in [-0.01, 0.01] {
-            let other: f64 = sim
-                .iter()
-                .zip(&t.data)
-                .map(|(s, d)| ((s + b + db - d) / 0.5).powi(2))
-                .sum::<f64>()
-                + ((b + db) / 0.3).powi(2);
-            assert!(other > direct);
-        }
-    }
 
     #[test]
     fn noise_of_a_smooth_curve_with_a_jump_is_the_noise() {

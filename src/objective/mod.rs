@@ -3,4 +3,5 @@
 
 pub mod cost;
 pub mod likelihood;
+pub mod nuisance;
 pub mod reference;
