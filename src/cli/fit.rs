@@ -348,9 +348,20 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
 /// What the estimate is, how well it fits, and cost against χ².
 fn print_goodness(out: &FitOutcome) {
     println!(
-        "estimate: the maximum-likelihood point of the recorded rows (chi2 {:.1} over {} points, noise from the data, sensor offsets allowed)",
+        "estimate: the maximum-likelihood point of the recorded rows (chi2 {:.1} over {} points, noise from the data, sensor offsets within calibration tolerance profiled out)",
         out.chi2, out.n_points
     );
+    if !out.nuisances.is_empty() {
+        let list: Vec<String> = out
+            .nuisances
+            .iter()
+            .map(|(k, v)| format!("{k} {v:+.3e}"))
+            .collect();
+        println!(
+            "systematic errors at the estimate (SI): {}",
+            list.join(", ")
+        );
+    }
     if let Some(g) = &out.goodness {
         let verdict = if g.noise_reached {
             "the model reaches the noise".to_string()

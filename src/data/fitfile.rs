@@ -82,6 +82,10 @@ pub struct FitStatistics {
     pub interval_scale: f64,
     /// Cost J of the multi-start's best start (`cost` is J at the estimate).
     pub best_start_cost: f64,
+    /// The systematic errors profiled out at the estimate, SI (sensor offsets in the
+    /// sensor's unit, the supply-pressure sensor's offset in Pa), by label.
+    #[serde(default)]
+    pub nuisances: serde_json::Map<String, Value>,
 }
 
 /// Number of starts and how many converged.

@@ -62,6 +62,10 @@ impl Objective for DataObjective<'_> {
     }
 }
 
+/// Local optima of the multi-start, besides the best, polished on the likelihood: candidates
+/// for the estimate and, when they fit as well, evidence that a parameter is not identifiable.
+const RIVALS: usize = 8;
+
 /// What a fit is scored on: the cost J that the multi-start minimises, and the likelihood of
 /// the recorded rows that gives the estimate, its intervals and its goodness of fit.
 pub struct FitData {
@@ -114,7 +118,7 @@ impl FitData {
         };
         let (Ok(base), Ok(up)) = (
             self.smoothed.simulated_rows(motor, &solver),
-            raised.simulated_rows(motor, &solver),
+            raised.simulated_at_rows(motor, &solver, &self.smoothed.rows()),
         ) else {
             return self.target.clone();
         };
@@ -227,6 +231,9 @@ pub struct FitOutcome {
     pub goodness: Option<GoodnessOfFit>,
     /// How the intervals were computed.
     pub method: UncertaintyMethod,
+    /// The systematic errors profiled out at the estimate (label, value SI: sensor offsets
+    /// in the sensor's unit, the supply-pressure offset in Pa).
+    pub nuisances: Vec<(String, f64)>,
     /// 95% intervals (empty when not asked for).
     pub intervals: Vec<Interval>,
     /// Local minima found by the starts.
@@ -282,15 +289,35 @@ pub fn fit(
         solver: DefaultSolver::default(),
     };
     let ml = Problem::new(&likelihood, &setup.space, false);
-    let (theta, chi2) = uncertainty::polish_chi2(&ml, &best_theta, 400);
+    // J knows neither the data's noise nor the sensors' offsets, so its best start need
+    // not lie in the likelihood's deepest valley: the best start and the next local optima
+    // of the multi-start are all polished on χ², and the lowest is the estimate.
+    let clusters = cluster(&run.results, &setup.space, 0.02);
+    let mut points = vec![best_theta];
+    points.extend(
+        clusters
+            .iter()
+            .skip(1)
+            .take(RIVALS)
+            .map(|c| c.theta.clone()),
+    );
+    let mut polished = engine.map(&points, |t| uncertainty::polish_chi2(&ml, t, 400));
+    let best_i = (0..polished.len())
+        .min_by(|a, b| polished[*a].1.total_cmp(&polished[*b].1))
+        .unwrap_or(0);
+    let (theta, chi2) = polished.swap_remove(best_i);
     let params = setup.space.params(&theta)?;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
     let goodness = data
         .channel_chi2(&target, &motor)
         .map(|c| GoodnessOfFit::new(&c, theta.len()));
-    let clusters = cluster(&run.results, &setup.space, 0.02);
+    let nuisances = data
+        .smoothed
+        .simulated_rows(&motor, &DefaultSolver::default())
+        .map(|sim| target.nuisance_estimates(&sim))
+        .unwrap_or_default();
     let intervals = match &goodness {
-        Some(g) => intervals(engine, &ml, &theta, chi2, g, &clusters, setup),
+        Some(g) => intervals(engine, &ml, &theta, chi2, g, &polished, setup),
         None => Vec::new(),
     };
     let at = problem.evaluate(&theta);
@@ -302,6 +329,7 @@ pub fn fit(
         n_points: data.target.n_points(),
         goodness,
         method: setup.uncertainty,
+        nuisances,
         theta,
         intervals,
         clusters,
@@ -346,15 +374,16 @@ fn finish(
 }
 
 /// The 95% intervals around the maximum-likelihood point `theta` (χ² `chi2_min`), widened
-/// where the model misses the noise, each marked when another optimum of the multi-start
-/// fits as well with the parameter outside it; empty when not asked for.
+/// where the model misses the noise, each marked when another polished optimum of the
+/// multi-start (`others`) fits as well with the parameter outside it; empty when not asked
+/// for.
 fn intervals(
     engine: &Engine,
     ml: &Problem<'_>,
     theta: &[f64],
     chi2_min: f64,
     goodness: &GoodnessOfFit,
-    clusters: &[Cluster],
+    others: &[(Vec<f64>, f64)],
     setup: &FitSetup,
 ) -> Vec<Interval> {
     if setup.uncertainty == UncertaintyMethod::None {
@@ -374,8 +403,7 @@ fn intervals(
             300,
         ),
     };
-    let others: Vec<Vec<f64>> = clusters.iter().skip(1).map(|c| c.theta.clone()).collect();
-    let rivals = competitors(ml, &others, chi2_min, threshold, 12);
+    let rivals = competitors(others, chi2_min, threshold);
     mark_competitors(&mut out, &setup.space, &rivals);
     out
 }
@@ -474,6 +502,11 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             noise_reached: g.noise_reached,
             interval_scale: g.interval_scale,
             best_start_cost: out.best_start_cost,
+            nuisances: out
+                .nuisances
+                .iter()
+                .map(|(k, v)| (k.clone(), (*v).into()))
+                .collect(),
         }),
     }
 }

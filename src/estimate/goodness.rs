@@ -24,9 +24,14 @@
 //! (a one-sided 0.1% test). Intervals are widened by s² = max(1, r²): the profile threshold
 //! becomes 3.841·s² (Birge's ratio), so a model that misses gets intervals as wide as its
 //! scatter warrants, and the summary says that it misses.
+//!
+//! # Competing optima
+//!
+//! A profile explores one valley. The multi-start's other local optima, polished on χ², that
+//! fit within the threshold with a parameter outside its interval make that parameter not
+//! identifiable ([`mark_competitors`]).
 
-use super::objective::Problem;
-use super::uncertainty::{polish_chi2, Interval};
+use super::uncertainty::Interval;
 use crate::estimate::space::ParamSpace;
 use serde::Serialize;
 
@@ -107,26 +112,14 @@ pub struct Competitor {
     pub excess: f64,
 }
 
-/// The other local optima (`others`, θ of the multi-start's clusters after the best, best
-/// first) that fit within `threshold` of the estimate's χ²: each is polished on χ² first
-/// (they were found on the cost J, whose weights differ), at most `max` of them.
-pub fn competitors(
-    problem: &Problem<'_>,
-    others: &[Vec<f64>],
-    chi2_min: f64,
-    threshold: f64,
-    max: usize,
-) -> Vec<Competitor> {
+/// The other local optima (θ and χ², each already polished on χ²: they were found on the
+/// cost J, whose weights differ) that fit within `threshold` of the estimate's χ².
+pub fn competitors(others: &[(Vec<f64>, f64)], chi2_min: f64, threshold: f64) -> Vec<Competitor> {
     others
         .iter()
-        .take(max)
-        .filter(|t| problem.evaluate(t).chi2 - chi2_min < 10.0 * threshold)
-        .map(|t| {
-            let (theta, chi2) = polish_chi2(problem, t, 200);
-            Competitor {
-                theta,
-                excess: chi2 - chi2_min,
-            }
+        .map(|(theta, chi2)| Competitor {
+            theta: theta.clone(),
+            excess: chi2 - chi2_min,
         })
         .filter(|c| c.excess < threshold)
         .collect()

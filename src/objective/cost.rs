@@ -350,6 +350,34 @@ impl CostModel {
         motor: &Motor,
         solver: &dyn StiffSolver,
     ) -> Result<Vec<Vec<f64>>, SimError> {
+        self.simulated_at(motor, solver, |_, ch| &ch.rows)
+    }
+
+    /// Every channel's compared rows (recording rows, 0-based), in channel order.
+    pub fn rows(&self) -> Vec<Vec<usize>> {
+        self.experiments
+            .iter()
+            .flat_map(|e| e.channels.iter().map(|c| c.rows.clone()))
+            .collect()
+    }
+
+    /// The simulated values at given rows of every channel (`rows[c]` for channel c, in
+    /// channel order; e.g. another cost model's rows of the same recordings), SI.
+    pub fn simulated_at_rows(
+        &self,
+        motor: &Motor,
+        solver: &dyn StiffSolver,
+        rows: &[Vec<usize>],
+    ) -> Result<Vec<Vec<f64>>, SimError> {
+        self.simulated_at(motor, solver, |i, _| rows.get(i).map_or(&[][..], |r| r))
+    }
+
+    fn simulated_at<'a>(
+        &'a self,
+        motor: &Motor,
+        solver: &dyn StiffSolver,
+        rows_of: impl Fn(usize, &'a Channel) -> &'a [usize],
+    ) -> Result<Vec<Vec<f64>>, SimError> {
         let mut out = Vec::with_capacity(self.n_channels());
         for (ex, sim) in self
             .experiments
@@ -362,7 +390,12 @@ impl CostModel {
                     experiment: ch.reference.file.clone(),
                     message: format!("the simulation gives no {}", ch.reference.column),
                 })?;
-                out.push(ch.rows.iter().map(|&i| values[i]).collect());
+                let rows = rows_of(out.len(), ch);
+                out.push(
+                    rows.iter()
+                        .filter_map(|&i| values.get(i).copied())
+                        .collect(),
+                );
             }
         }
         Ok(out)

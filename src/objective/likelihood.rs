@@ -313,6 +313,23 @@ impl Target {
         u
     }
 
+    /// The profiled nuisances β̂ for simulated values (label and value in the nuisance's unit,
+    /// SI); empty without nuisances.
+    pub fn nuisance_estimates(&self, simulated: &[Vec<f64>]) -> Vec<(String, f64)> {
+        let Some(n) = &self.nuisances else {
+            return Vec::new();
+        };
+        let mut u = Vec::with_capacity(self.n_points());
+        for (t, s) in self.channels.iter().zip(simulated) {
+            t.normalised(s, &mut u);
+        }
+        n.items()
+            .iter()
+            .map(|it| it.label.clone())
+            .zip(n.estimate(&u))
+            .collect()
+    }
+
     /// Per channel χ² of simulated residuals (same channel order): Σ((sim − data)/σ)² after
     /// the nuisances' correction (their prior terms are not in any channel).
     pub fn channel_chi2(&self, res: &[ChannelResiduals]) -> Vec<f64> {
