@@ -4,7 +4,7 @@
 //! narrower than a Nelder–Mead simplex starts.
 //!
 //! Each iteration solves (JᵀJ + μ·diag(JᵀJ))·δ = −Jᵀr (Marquardt's scaling, μ starting at
-//! 1e-3) with J by forward differences of step [`H`] in each coordinate (θ is logarithmic or
+//! 1e-3) with J by forward differences of step `H` = 1e-3 in each coordinate (θ is logarithmic or
 //! logistic, so that is a relative change), accepts δ when χ² falls, and adapts μ by the
 //! gain ratio ρ = (χ²_old − χ²_new)/(predicted fall): μ·max(1/3, 1 − (2ρ − 1)³) on success,
 //! μ·ν (ν doubling) on failure. It stops when a step lowers χ², or the linear model predicts

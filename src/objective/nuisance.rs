@@ -13,9 +13,9 @@
 //!     χ²(β̂) = ‖u‖² − uᵀ A (AᵀA + Λ²)⁻¹ Aᵀ u                            [2]
 //! ```
 //!
-//! Since β enters linearly, [2] is the Gaussian marginal likelihood up to a constant: an
+//! Since β enters linearly, \[2\] is the Gaussian marginal likelihood up to a constant: an
 //! offset the data cannot tell from a parameter change widens that parameter's interval
-//! instead of biasing it. The residual vector whose squares sum to [2] is u + A·β̂ followed
+//! instead of biasing it. The residual vector whose squares sum to \[2\] is u + A·β̂ followed
 //! by Λ·β̂ (one row per nuisance), which is what Levenberg–Marquardt sees.
 
 use nalgebra::{DMatrix, DVector};
