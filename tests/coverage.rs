@@ -224,3 +224,17 @@ fn coverage_table() {
         "coverage {covered}/{total}:\n{t}"
     );
 }
+
+/// SPEC §6: results never depend on the thread count, the intervals and the polish of the
+/// local optima included.
+#[test]
+fn a_fit_with_intervals_does_not_depend_on_the_thread_count() {
+    let one = run_case(3, 4, &Engine::with_threads(Some(1)).unwrap());
+    let two = run_case(3, 4, &Engine::with_threads(Some(2)).unwrap());
+    assert_eq!(one.noise_ratio.to_bits(), two.noise_ratio.to_bits());
+    for (a, b) in one.checks.iter().zip(&two.checks) {
+        assert_eq!(a.estimate.to_bits(), b.estimate.to_bits(), "{}", a.name);
+        assert_eq!(a.lo.map(f64::to_bits), b.lo.map(f64::to_bits), "{}", a.name);
+        assert_eq!(a.hi.map(f64::to_bits), b.hi.map(f64::to_bits), "{}", a.name);
+    }
+}
