@@ -161,16 +161,7 @@ fn a_datasheet_only_fit_says_what_it_cannot_pin_and_one_estimate_is_exported() {
     let ds = datasheet_only(dir.path());
     let with = fit_json(&ds, &dir.path().join("profile.json"), "profile");
     let without = fit_json(&ds, &dir.path().join("none.json"), "none");
-    let names = [
-        "c_in1",
-        "c_out2",
-        "c_ext",
-        "c_1e",
-        "c_2e",
-        "c_12",
-        "t_coulomb",
-        "visc",
-    ];
+    let names = vanefit::estimate::DEFAULT_ESTIMATED;
     let open: Vec<&str> = names
         .iter()
         .copied()
