@@ -279,19 +279,6 @@ pub fn fit(
     let best = run.best().clone();
     let problem = Problem::new(&objective, &setup.space, false);
     let best_theta = finish(&problem, &best.theta, best.cost, &settings);
-    let target = data.target_at(&Motor::new(
-        setup.space.params(&best_theta)?,
-        setup.space.effects.clone(),
-    ));
-    let likelihood = Likelihood {
-        cost: &data.smoothed,
-        target: &target,
-        solver: DefaultSolver::default(),
-    };
-    let ml = Problem::new(&likelihood, &setup.space, false);
-    // J knows neither the data's noise nor the sensors' offsets, so its best start need
-    // not lie in the likelihood's deepest valley: the best start and the next local optima
-    // of the multi-start are all polished on χ², and the lowest is the estimate.
     let clusters = cluster(&run.results, &setup.space, 0.02);
     let mut points = vec![best_theta];
     points.extend(
@@ -301,10 +288,14 @@ pub fn fit(
             .take(RIVALS)
             .map(|c| c.theta.clone()),
     );
-    let mut polished = engine.map(&points, |t| uncertainty::polish_chi2(&ml, t, 400));
-    let best_i = (0..polished.len())
-        .min_by(|a, b| polished[*a].1.total_cmp(&polished[*b].1))
-        .unwrap_or(0);
+    let (target, mut polished) = maximum_likelihood(engine, data, &setup.space, &points)?;
+    let likelihood = Likelihood {
+        cost: &data.smoothed,
+        target: &target,
+        solver: DefaultSolver::default(),
+    };
+    let ml = Problem::new(&likelihood, &setup.space, false);
+    let best_i = lowest(&polished);
     let (theta, chi2) = polished.swap_remove(best_i);
     let params = setup.space.params(&theta)?;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
@@ -337,6 +328,45 @@ pub fn fit(
         run,
         wall_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// Index of the lowest χ² of polished points.
+fn lowest(polished: &[(Vec<f64>, f64)]) -> usize {
+    (0..polished.len())
+        .min_by(|a, b| polished[*a].1.total_cmp(&polished[*b].1))
+        .unwrap_or(0)
+}
+
+/// The likelihood's target and `points` (the best start first, then the multi-start's other
+/// local optima) each polished on its χ². J knows neither the data's noise nor the sensors'
+/// offsets, so its best start need not lie in the likelihood's deepest valley: every point
+/// is polished and the lowest is the estimate. The supply-pressure offset's effect on the
+/// rows is linearised at a motor; where the motor breaks away in a ramp moves that effect
+/// row by row, so it is taken at the best polished point and everything polished again.
+fn maximum_likelihood(
+    engine: &Engine,
+    data: &FitData,
+    space: &ParamSpace,
+    points: &[Vec<f64>],
+) -> Result<(Target, Vec<(Vec<f64>, f64)>), EstimateError> {
+    let motor = |theta: &[f64]| -> Result<Motor, EstimateError> {
+        Ok(Motor::new(space.params(theta)?, space.effects.clone()))
+    };
+    let polish_all = |target: &Target, points: &[Vec<f64>]| {
+        let likelihood = Likelihood {
+            cost: &data.smoothed,
+            target,
+            solver: DefaultSolver::default(),
+        };
+        let ml = Problem::new(&likelihood, space, false);
+        engine.map(points, |t| uncertainty::polish_chi2(&ml, t, 400))
+    };
+    let first = data.target_at(&motor(&points[0])?);
+    let polished = polish_all(&first, points);
+    let target = data.target_at(&motor(&polished[lowest(&polished)].0)?);
+    let again: Vec<Vec<f64>> = polished.into_iter().map(|(t, _)| t).collect();
+    let polished = polish_all(&target, &again);
+    Ok((target, polished))
 }
 
 /// The best start carried on to a tight convergence (simplex costs within 1e-6, restarts

@@ -185,6 +185,8 @@ struct Profile<'a> {
 }
 
 impl Profile<'_> {
+    /// The profile at θ_j = t: the others re-optimised from the valley predicted from the
+    /// last profile point `base`.
     fn at(&self, base: &[f64], t: f64) -> (Vec<f64>, f64) {
         let mut template = base.to_vec();
         template[self.j] = t;
