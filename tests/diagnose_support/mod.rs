@@ -78,12 +78,6 @@ pub fn issue_plan() -> SynthPlan {
 
 /// [`synthesize`] with the issue's plan and `noise`.
 pub fn synthesize_with(truth: &Motor, seed: u64, noise: &SensorNoise) -> Vec<ExperimentData> {
-    vanefit::data::synth::synthesize(
-        truth,
-        &DefaultSolver::default(),
-        &issue_plan(),
-        noise,
-        seed,
-    )
-    .unwrap()
+    vanefit::data::synth::synthesize(truth, &DefaultSolver::default(), &issue_plan(), noise, seed)
+        .unwrap()
 }
