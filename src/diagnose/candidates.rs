@@ -239,6 +239,7 @@ const STRIBECK_GRID: [f64; 7] = [1.0, 2.4, 5.8, 14.0, 34.0, 83.0, 200.0];
 /// against each other along the ramp's start-up, and a late start can be fitted by a high
 /// T_s that decays fast or a lower one that decays slowly.
 fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
+    let base = &unpinned(base);
     let grid: Vec<(usize, MotorParams)> = (0..COULOMB_SCALE.len())
         .flat_map(|s| HANDOVER_SPEEDS.iter().map(move |h| (s, h)))
         .flat_map(|(s, h)| STATIC_OVER_COULOMB.iter().map(move |k| (s, h, k)))
@@ -270,6 +271,22 @@ fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
         })
         .map(|i| grid[i].1.clone())
         .collect()
+}
+
+/// `base` with every estimated base parameter that sits at the lower end of its search
+/// range given back its default: a base fit of a motor with stiction drives a conductance
+/// (c_12) to its bound, where its logarithmic coordinate has no gradient, and a refit from
+/// there never brings it back.
+fn unpinned(base: &MotorParams) -> MotorParams {
+    let mut p = base.clone();
+    for name in crate::estimate::space::DEFAULT_ESTIMATED {
+        if let (Some(s), Some(v)) = (crate::model::params::spec(name), base.get(name)) {
+            if v <= s.search.0 * 1.01 {
+                p = p.with(name, s.default).unwrap_or(p);
+            }
+        }
+    }
+    p
 }
 
 /// A copy of `base` with every parameter of `effects` taken from `from`.

@@ -216,7 +216,15 @@ fn catalog_fit(
     let run = multistart::run(engine, objective, space, &settings, &Silent, None, false)
         .map_err(run_error)?;
     let problem = Problem::new(objective, space, false);
-    let theta = lm_polish(&problem, run.best().theta.clone());
+    // Every start polished: the best Nelder–Mead end is not always the best after the
+    // polish (a start stalled on a curved valley's floor may lie below the others).
+    let theta = run
+        .results
+        .iter()
+        .map(|r| lm_polish(&problem, r.theta.clone()))
+        .map(|t| (problem.evaluate(&t).chi2, t))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or_else(|| run.best().theta.clone(), |(_, t)| t);
     let params = space
         .params(&theta)
         .map_err(|e| run_error(EstimateError::BestParameters(e)))?;
@@ -275,9 +283,6 @@ fn term_fit(
 /// point is kept only if its χ² is lower.
 fn lm_polish<C: Coordinates + ?Sized>(problem: &Problem<'_, C>, x: Vec<f64>) -> Vec<f64> {
     let before = problem.evaluate(&x).chi2;
-    if std::env::var_os("VANEFIT_NO_LM").is_some() {
-        return x;
-    }
     let residuals = |t: &[f64]| problem.residuals(t);
     let (polished, chi2) = levenberg_marquardt(&residuals, &x, LmSettings::default());
     if chi2 < before {
