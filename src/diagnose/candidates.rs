@@ -120,8 +120,9 @@ pub(crate) fn pairs(cx: &Context, limit: f64, models: &mut Models) -> Result<(),
 
 /// A discovered term can imitate a catalog effect that was never tried together with the best
 /// single one. For every significant model with discovered terms, the best single effect
-/// is paired with the best-ranked catalog effect of each term's category (the catalog's
-/// nearest to the term); pairs already fitted are not refitted. The simplicity order then
+/// is paired with every catalog effect of each term's category (the best-ranked one alone
+/// can miss it: ω² vane friction ranks below breakaway friction on its own, yet is the
+/// partner of speed-dependent leakage); pairs already fitted are not refitted. The simplicity order then
 /// prefers the pair over "single + uncatalogued" whenever it explains the data as well.
 pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), DiagnoseError> {
     let singles: Vec<&Candidate> = models
@@ -140,20 +141,20 @@ pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), Dia
         .collect();
     let mut jobs: Vec<(ModelKind, FitJob)> = Vec::new();
     for cat in categories {
-        let Some(other) = singles.iter().skip(1).find(|c| {
+        let others = singles.iter().skip(1).filter(|c| {
             c.fitted
                 .effects
                 .iter()
                 .next()
                 .is_some_and(|e| e.category() == cat)
-        }) else {
-            continue;
-        };
-        let job = pair_job(cx, best, other);
-        let done = models.all.iter().any(|c| c.label == job.label)
-            || jobs.iter().any(|(_, j)| j.label == job.label);
-        if !done {
-            jobs.push((ModelKind::Pair, job));
+        });
+        for other in others {
+            let job = pair_job(cx, best, other);
+            let done = models.all.iter().any(|c| c.label == job.label)
+                || jobs.iter().any(|(_, j)| j.label == job.label);
+            if !done {
+                jobs.push((ModelKind::Pair, job));
+            }
         }
     }
     if jobs.is_empty() {
@@ -166,7 +167,7 @@ pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), Dia
 }
 
 /// The refit of `best`'s effect with `other`'s: warm from `best`'s optimum with `other`'s
-/// fitted parameters, and with `other`'s effect off.
+/// fitted parameters, with `other`'s effect off, and at two points of its ranges.
 fn pair_job(cx: &Context, best: &Candidate, other: &Candidate) -> FitJob {
     let (a, b) = (
         best.fitted.effects.iter().next().expect("one effect"),
@@ -176,7 +177,10 @@ fn pair_job(cx: &Context, best: &Candidate, other: &Candidate) -> FitJob {
     let warm = &best.fitted.params;
     let other_set = EffectSet::empty().with(b);
     let mut starts = vec![with_effect_params(warm, &other.fitted.params, &other_set)];
-    starts.extend(effect_starts(&[b], warm, 1));
+    // Also at the middle and lower quarter of `other`'s ranges: when `other` alone gains
+    // nothing (ω² vane friction beside unmodelled leakage), its fitted value is at the
+    // bound, where the refit cannot leave it.
+    starts.extend(effect_starts(&[b], warm, 3));
     cx.refit_job(label_of(&effects, 0).0, effects, Vec::new(), starts)
 }
 
