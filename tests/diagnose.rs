@@ -940,7 +940,9 @@ fn false_alarm_table() {
     assert!(alarms <= 1, "{alarms} false alarms in 20\n{md}");
 }
 
-/// The one false alarm of the table before the Levenberg–Marquardt polish (seed 11), alone:
+/// The one false alarm of the table (seed 11), alone. KNOWN FAILING (ignored): with the
+/// Levenberg–Marquardt polish the baseline still ends at noise ratio 1.101 and an
+/// uncatalogued term gains ΔBIC −270.6: not a stalled baseline fit; cause not yet found.
 ///
 /// ```sh
 /// cargo test --release --test diagnose -- --ignored --nocapture false_alarm_seed_11
