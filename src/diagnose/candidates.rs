@@ -120,8 +120,9 @@ pub(crate) fn pairs(cx: &Context, limit: f64, models: &mut Models) -> Result<(),
 
 /// A discovered term can imitate a catalog effect that was never tried together with the best
 /// single one. For every significant model with discovered terms, the best single effect
-/// is paired with the best-ranked catalog effect of each term's category (the catalog's
-/// nearest to the term); pairs already fitted are not refitted. The simplicity order then
+/// is paired with every catalog effect of each term's category (the best-ranked one alone
+/// can miss it: ω² vane friction ranks below breakaway friction on its own, yet is the
+/// partner of speed-dependent leakage); pairs already fitted are not refitted. The simplicity order then
 /// prefers the pair over "single + uncatalogued" whenever it explains the data as well.
 pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), DiagnoseError> {
     let singles: Vec<&Candidate> = models
@@ -140,20 +141,20 @@ pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), Dia
         .collect();
     let mut jobs: Vec<(ModelKind, FitJob)> = Vec::new();
     for cat in categories {
-        let Some(other) = singles.iter().skip(1).find(|c| {
+        let others = singles.iter().skip(1).filter(|c| {
             c.fitted
                 .effects
                 .iter()
                 .next()
                 .is_some_and(|e| e.category() == cat)
-        }) else {
-            continue;
-        };
-        let job = pair_job(cx, best, other);
-        let done = models.all.iter().any(|c| c.label == job.label)
-            || jobs.iter().any(|(_, j)| j.label == job.label);
-        if !done {
-            jobs.push((ModelKind::Pair, job));
+        });
+        for other in others {
+            let job = pair_job(cx, best, other);
+            let done = models.all.iter().any(|c| c.label == job.label)
+                || jobs.iter().any(|(_, j)| j.label == job.label);
+            if !done {
+                jobs.push((ModelKind::Pair, job));
+            }
         }
     }
     if jobs.is_empty() {
@@ -166,7 +167,7 @@ pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), Dia
 }
 
 /// The refit of `best`'s effect with `other`'s: warm from `best`'s optimum with `other`'s
-/// fitted parameters, and with `other`'s effect off.
+/// fitted parameters, with `other`'s effect off, and at two points of its ranges.
 fn pair_job(cx: &Context, best: &Candidate, other: &Candidate) -> FitJob {
     let (a, b) = (
         best.fitted.effects.iter().next().expect("one effect"),
@@ -176,7 +177,10 @@ fn pair_job(cx: &Context, best: &Candidate, other: &Candidate) -> FitJob {
     let warm = &best.fitted.params;
     let other_set = EffectSet::empty().with(b);
     let mut starts = vec![with_effect_params(warm, &other.fitted.params, &other_set)];
-    starts.extend(effect_starts(&[b], warm, 1));
+    // Also at the middle and lower quarter of `other`'s ranges: when `other` alone gains
+    // nothing (ω² vane friction beside unmodelled leakage), its fitted value is at the
+    // bound, where the refit cannot leave it.
+    starts.extend(effect_starts(&[b], warm, 3));
     cx.refit_job(label_of(&effects, 0).0, effects, Vec::new(), starts)
 }
 
@@ -215,46 +219,78 @@ pub(crate) fn effect_starts(effects: &[Effect], base: &MotorParams, n: usize) ->
     out
 }
 
-/// Static torques scanned for `breakaway_friction`, in units of the baseline's T_c.
+/// Static torques scanned for `breakaway_friction`, in units of the start's T_c.
 const STATIC_OVER_COULOMB: [f64; 5] = [1.3, 1.8, 2.5, 3.5, 5.0];
+/// Coulomb torques scanned, in units of the baseline's T_c: a base fit of a motor with
+/// stiction raises T_c to spread the start-up torque over the whole run (to twice the true
+/// T_c at T_s = 3·T_c), and from that T_c the refit does not find the true one.
+const COULOMB_SCALE: [f64; 3] = [1.0, 0.7, 0.5];
+/// Speeds, rad/s, at which the Coulomb torque taken off ([`COULOMB_SCALE`]) is handed to
+/// the viscous term (d += ΔT_c/ω): the base fit lowers d as it raises T_c (to its lower
+/// bound under stiction), and a lower T_c alone makes the whole run too fast.
+const HANDOVER_SPEEDS: [f64; 3] = [250.0, 500.0, 1000.0];
 /// Stribeck speeds scanned, rad/s: a log grid over the range where a start-up in a ramp can
 /// show them (below 1 rad/s the Stribeck curve is a step; above 200 rad/s it covers the
 /// whole low-speed range).
 const STRIBECK_GRID: [f64; 7] = [1.0, 2.4, 5.8, 14.0, 34.0, 83.0, 200.0];
-/// Best grid points kept as starts of the breakaway refit.
-const STRIBECK_STARTS: usize = 2;
 
 /// Starts of the `breakaway_friction` refit that cover the Stribeck range: the likelihood
-/// over a grid of static torque ([`STATIC_OVER_COULOMB`] × the baseline's T_c) and Stribeck
-/// speed ([`STRIBECK_GRID`], log-spaced), the base parameters held; the best
-/// [`STRIBECK_STARTS`] points. A warm start from one Stribeck speed stays in its valley:
-/// the static excess and the Stribeck speed trade against each other along the ramp's
-/// start-up, and a late start can be fitted by a high T_s that decays fast or a lower one
-/// that decays slowly.
+/// over a grid of Coulomb torque ([`COULOMB_SCALE`] × the baseline's T_c, the difference
+/// handed to the viscous term at [`HANDOVER_SPEEDS`]), static torque
+/// ([`STATIC_OVER_COULOMB`] × that T_c) and Stribeck speed ([`STRIBECK_GRID`], log-spaced),
+/// the other base parameters held; the best point of each Coulomb scale. A warm start from
+/// one Stribeck speed stays in its valley: the static excess and the Stribeck speed trade
+/// against each other along the ramp's start-up, and a late start can be fitted by a high
+/// T_s that decays fast or a lower one that decays slowly.
 fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
-    let grid: Vec<MotorParams> = STATIC_OVER_COULOMB
-        .iter()
-        .flat_map(|k| STRIBECK_GRID.iter().map(move |w| (k, w)))
-        .filter_map(|(k, w)| {
-            base.with("t_static", k * base.t_coulomb())
+    let base = &unpinned(base);
+    let grid: Vec<(usize, MotorParams)> = (0..COULOMB_SCALE.len())
+        .flat_map(|s| HANDOVER_SPEEDS.iter().map(move |h| (s, h)))
+        .flat_map(|(s, h)| STATIC_OVER_COULOMB.iter().map(move |k| (s, h, k)))
+        .flat_map(|(s, h, k)| STRIBECK_GRID.iter().map(move |w| (s, h, k, w)))
+        .filter_map(|(s, h, k, w)| {
+            let t_c = COULOMB_SCALE[s] * base.t_coulomb();
+            let visc = base.visc() + (base.t_coulomb() - t_c) / h;
+            base.with("t_coulomb", t_c)
+                .and_then(|p| p.with("visc", visc))
+                .and_then(|p| p.with("t_static", k * t_c))
                 .and_then(|p| p.with("w_stribeck", *w))
                 .ok()
+                .map(|p| (s, p))
         })
         .collect();
     let effects = EffectSet::empty().with(Effect::BreakawayFriction);
     let (cost, target, solver) = (&cx.cost, &cx.target, &cx.solver);
-    let chi2 = cx.engine.map(&grid, |p| {
+    let chi2 = cx.engine.map(&grid, |(_, p)| {
         let motor = crate::model::motor::Motor::new(p.clone(), effects.clone());
         target.chi2(cost, &motor, solver).unwrap_or(f64::INFINITY)
     });
-    let mut order: Vec<usize> = (0..grid.len()).collect();
-    order.sort_by(|a, b| chi2[*a].total_cmp(&chi2[*b]));
-    order
-        .into_iter()
-        .take(STRIBECK_STARTS)
-        .filter(|i| chi2[*i].is_finite())
-        .map(|i| grid[i].clone())
+    // The best point of each Coulomb scale: a held lower T_c makes the run too fast, so
+    // the lower scales would never rank among the best of the whole grid.
+    (0..COULOMB_SCALE.len())
+        .filter_map(|s| {
+            (0..grid.len())
+                .filter(|i| grid[*i].0 == s && chi2[*i].is_finite())
+                .min_by(|a, b| chi2[*a].total_cmp(&chi2[*b]))
+        })
+        .map(|i| grid[i].1.clone())
         .collect()
+}
+
+/// `base` with every estimated base parameter that sits at the lower end of its search
+/// range given back its default: a base fit of a motor with stiction drives a conductance
+/// (c_12) to its bound, where its logarithmic coordinate has no gradient, and a refit from
+/// there never brings it back.
+fn unpinned(base: &MotorParams) -> MotorParams {
+    let mut p = base.clone();
+    for name in crate::estimate::space::DEFAULT_ESTIMATED {
+        if let (Some(s), Some(v)) = (crate::model::params::spec(name), base.get(name)) {
+            if v <= s.search.0 * 1.01 {
+                p = p.with(name, s.default).unwrap_or(p);
+            }
+        }
+    }
+    p
 }
 
 /// A copy of `base` with every parameter of `effects` taken from `from`.
