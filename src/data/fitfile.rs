@@ -86,6 +86,10 @@ pub struct FitStatistics {
     /// sensor's unit, the supply-pressure sensor's offset in Pa), by label.
     #[serde(default)]
     pub nuisances: serde_json::Map<String, Value>,
+    /// Channels whose noise estimate was widened to their residual scatter for the
+    /// intervals, by "file column": the factor (> 1).
+    #[serde(default)]
+    pub widened_noise: serde_json::Map<String, Value>,
 }
 
 /// Number of starts and how many converged.

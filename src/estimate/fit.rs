@@ -234,6 +234,9 @@ pub struct FitOutcome {
     /// The systematic errors profiled out at the estimate (label, value SI: sensor offsets
     /// in the sensor's unit, the supply-pressure offset in Pa).
     pub nuisances: Vec<(String, f64)>,
+    /// Channels whose noise estimate was widened to their residual scatter ("file column",
+    /// factor > 1), see [`maximum_likelihood`].
+    pub widening: Vec<(String, f64)>,
     /// 95% intervals (empty when not asked for).
     pub intervals: Vec<Interval>,
     /// Local minima found by the starts.
@@ -288,10 +291,11 @@ pub fn fit(
             .take(RIVALS)
             .map(|c| c.theta.clone()),
     );
-    let (target, mut polished) = maximum_likelihood(engine, data, &setup.space, &points)?;
+    let ml_fit = maximum_likelihood(engine, data, &setup.space, &points)?;
+    let (target, widened, mut polished) = (ml_fit.target, ml_fit.widened, ml_fit.polished);
     let likelihood = Likelihood {
         cost: &data.smoothed,
-        target: &target,
+        target: &widened,
         solver: DefaultSolver::default(),
     };
     let ml = Problem::new(&likelihood, &setup.space, false);
@@ -299,15 +303,19 @@ pub fn fit(
     let (theta, chi2) = polished.swap_remove(best_i);
     let params = setup.space.params(&theta)?;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
+    let k = theta.len();
     let goodness = data
         .channel_chi2(&target, &motor)
-        .map(|c| GoodnessOfFit::new(&c, theta.len()));
+        .map(|c| GoodnessOfFit::new(&c, k));
+    let scored = data
+        .channel_chi2(&widened, &motor)
+        .map(|c| GoodnessOfFit::new(&c, k));
     let nuisances = data
         .smoothed
         .simulated_rows(&motor, &DefaultSolver::default())
         .map(|sim| target.nuisance_estimates(&sim))
         .unwrap_or_default();
-    let intervals = match &goodness {
+    let intervals = match &scored {
         Some(g) => intervals(engine, &ml, &theta, chi2, g, &polished, setup),
         None => Vec::new(),
     };
@@ -321,6 +329,7 @@ pub fn fit(
         goodness,
         method: setup.uncertainty,
         nuisances,
+        widening: ml_fit.widening,
         theta,
         intervals,
         clusters,
@@ -330,11 +339,26 @@ pub fn fit(
     })
 }
 
+/// A point polished on the likelihood: θ and its χ².
+type Polished = (Vec<f64>, f64);
+
 /// Index of the lowest χ² of polished points.
-fn lowest(polished: &[(Vec<f64>, f64)]) -> usize {
+fn lowest(polished: &[Polished]) -> usize {
     (0..polished.len())
         .min_by(|a, b| polished[*a].1.total_cmp(&polished[*b].1))
         .unwrap_or(0)
+}
+
+/// What [`maximum_likelihood`] found.
+struct MlFit {
+    /// The likelihood's target (the data's noise estimates), linearised at the estimate.
+    target: Target,
+    /// The same with each channel's σ widened to its residual scatter where that is larger.
+    widened: Target,
+    /// The widened channels and their factors.
+    widening: Vec<(String, f64)>,
+    /// The points, each polished on the widened target's χ².
+    polished: Vec<Polished>,
 }
 
 /// The likelihood's target and `points` (the best start first, then the multi-start's other
@@ -343,12 +367,19 @@ fn lowest(polished: &[(Vec<f64>, f64)]) -> usize {
 /// is polished and the lowest is the estimate. The supply-pressure offset's effect on the
 /// rows is linearised at a motor; where the motor breaks away in a ramp moves that effect
 /// row by row, so it is taken at the best polished point and everything polished again.
+///
+/// A channel's σ from second differences of few rows is itself uncertain (±30% for a
+/// 25-point datasheet, whose torque pins T_c): an underestimate would give that channel too
+/// much weight and its parameters intervals too narrow. So where a channel's residuals at
+/// the estimate scatter more than its σ, σ is widened to √(χ²_c/n_c)·σ (Birge's ratio per
+/// channel; never narrowed) and the points are polished once more. The goodness of fit is
+/// still reported against the data's own σ.
 fn maximum_likelihood(
     engine: &Engine,
     data: &FitData,
     space: &ParamSpace,
     points: &[Vec<f64>],
-) -> Result<(Target, Vec<(Vec<f64>, f64)>), EstimateError> {
+) -> Result<MlFit, EstimateError> {
     let motor = |theta: &[f64]| -> Result<Motor, EstimateError> {
         Ok(Motor::new(space.params(theta)?, space.effects.clone()))
     };
@@ -361,12 +392,32 @@ fn maximum_likelihood(
         let ml = Problem::new(&likelihood, space, false);
         engine.map(points, |t| uncertainty::polish_chi2(&ml, t, 400))
     };
+    let thetas = |p: Vec<Polished>| -> Vec<Vec<f64>> { p.into_iter().map(|(t, _)| t).collect() };
     let first = data.target_at(&motor(&points[0])?);
     let polished = polish_all(&first, points);
-    let target = data.target_at(&motor(&polished[lowest(&polished)].0)?);
-    let again: Vec<Vec<f64>> = polished.into_iter().map(|(t, _)| t).collect();
-    let polished = polish_all(&target, &again);
-    Ok((target, polished))
+    let best = motor(&polished[lowest(&polished)].0)?;
+    let target = data.target_at(&best);
+    let polished = polish_all(&target, &thetas(polished));
+    let best = motor(&polished[lowest(&polished)].0)?;
+    let channels = data.channel_chi2(&target, &best).unwrap_or_default();
+    let factors: Vec<f64> = channels
+        .iter()
+        .map(|c| (c.chi2 / c.n.max(1) as f64).sqrt().max(1.0))
+        .collect();
+    let widening = channels
+        .iter()
+        .zip(&factors)
+        .filter(|(_, f)| **f > 1.0)
+        .map(|(c, f)| (c.label.clone(), *f))
+        .collect();
+    let widened = target.widened(&factors);
+    let polished = polish_all(&widened, &thetas(polished));
+    Ok(MlFit {
+        target,
+        widened,
+        widening,
+        polished,
+    })
 }
 
 /// The best start carried on to a tight convergence (simplex costs within 1e-6, restarts
@@ -413,7 +464,7 @@ fn intervals(
     theta: &[f64],
     chi2_min: f64,
     goodness: &GoodnessOfFit,
-    others: &[(Vec<f64>, f64)],
+    others: &[Polished],
     setup: &FitSetup,
 ) -> Vec<Interval> {
     if setup.uncertainty == UncertaintyMethod::None {
@@ -534,6 +585,11 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             best_start_cost: out.best_start_cost,
             nuisances: out
                 .nuisances
+                .iter()
+                .map(|(k, v)| (k.clone(), (*v).into()))
+                .collect(),
+            widened_noise: out
+                .widening
                 .iter()
                 .map(|(k, v)| (k.clone(), (*v).into()))
                 .collect(),

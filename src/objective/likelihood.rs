@@ -289,6 +289,21 @@ impl Target {
         self
     }
 
+    /// The same target with each channel's σ multiplied by its factor (same order; factors
+    /// below 1 are taken as 1), the nuisances re-normalised to the new σ.
+    pub fn widened(&self, factors: &[f64]) -> Self {
+        let mut out = self.clone();
+        for (c, k) in out.channels.iter_mut().zip(factors) {
+            c.sigma *= k.max(1.0);
+        }
+        let items: Vec<Nuisance> = out
+            .nuisances
+            .take()
+            .map(|n| n.items().to_vec())
+            .unwrap_or_default();
+        out.with_nuisances(items)
+    }
+
     /// The nuisances profiled out, if any.
     pub fn nuisances(&self) -> Option<&Nuisances> {
         self.nuisances.as_ref()

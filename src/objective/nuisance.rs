@@ -51,7 +51,7 @@ impl Nuisances {
         if m == 0
             || items
                 .iter()
-                .any(|it| it.shape.len() != n || !(it.prior_sd > 0.0))
+                .any(|it| it.shape.len() != n || it.prior_sd.is_nan() || it.prior_sd <= 0.0)
         {
             return None;
         }
