@@ -235,7 +235,7 @@ pub struct FitOutcome {
     /// in the sensor's unit, the supply-pressure offset in Pa).
     pub nuisances: Vec<(String, f64)>,
     /// Channels whose noise estimate was widened to their residual scatter ("file column",
-    /// factor > 1), see [`maximum_likelihood`].
+    /// factor > 1), widened where the residuals at the estimate scatter more than the data's σ.
     pub widening: Vec<(String, f64)>,
     /// 95% intervals (empty when not asked for).
     pub intervals: Vec<Interval>,
