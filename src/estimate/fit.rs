@@ -17,24 +17,23 @@
 
 use super::engine::Engine;
 use super::error::EstimateError;
-use super::goodness::{competitors, mark_competitors, ChannelChi2, GoodnessOfFit};
+pub use super::fit_data::FitData;
+use super::goodness::{competitors, mark_competitors, GoodnessOfFit};
 use super::history::ResultsFile;
 use super::likelihood::Likelihood;
+use super::max_likelihood::{lowest, maximum_likelihood, Polished};
 use super::multistart::{self, cluster, Cluster, MultiStartOutcome, RunObserver};
 use super::objective::{Evaluation, Objective, Problem};
 use super::optimize::{minimize, Restart};
 use super::settings::{MultiStartConfig, MultiStartSettings};
 use super::space::ParamSpace;
 use super::uncertainty::{self, Interval};
-use crate::data::dataset::{Dataset, Kind};
+use crate::data::dataset::Kind;
 use crate::data::fitfile::{FitFile, FitStatistics, ParamVerdict, RunInfo, Starts};
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
 use crate::numerics::DefaultSolver;
-use crate::objective::cost::{CostError, CostModel, CostOptions};
-use crate::objective::likelihood::{calibration_tolerance, smooth_inputs, InputSmoothing, Target};
-use crate::objective::nuisance::Nuisance;
-use crate::units::Quantity;
+use crate::objective::cost::CostModel;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -65,116 +64,6 @@ impl Objective for DataObjective<'_> {
 /// Local optima of the multi-start, besides the best, polished on the likelihood: candidates
 /// for the estimate and, when they fit as well, evidence that a parameter is not identifiable.
 const RIVALS: usize = 8;
-
-/// What a fit is scored on: the cost J that the multi-start minimises, and the likelihood of
-/// the recorded rows that gives the estimate, its intervals and its goodness of fit.
-pub struct FitData {
-    /// J of SPEC §2 on the dataset as recorded.
-    pub cost: CostModel,
-    /// The same experiments driven by the smooth of each recorded input column.
-    pub smoothed: CostModel,
-    /// The recorded rows, their noise, and the sensors' calibration offsets as nuisances.
-    pub target: Target,
-    /// What the smoothing did to each input column.
-    pub inputs: Vec<InputSmoothing>,
-    /// `smoothed` with the recorded supply pressure raised by [`PRESSURE_STEP_PA`] (for the
-    /// pressure sensor's offset; `None` when no experiment records that pressure).
-    raised: Option<CostModel>,
-}
-
-/// The step by which the supply pressure's effect on the rows is differenced, Pa: 1 kPa,
-/// half the sensor's tolerance, where the response is linear and far above solver jitter.
-const PRESSURE_STEP_PA: f64 = 1e3;
-
-impl FitData {
-    /// The cost and the likelihood of a dataset.
-    pub fn new(ds: &Dataset, options: CostOptions) -> Result<Self, CostError> {
-        let cost = CostModel::new(ds, options)?;
-        let (smooth_ds, inputs) = smooth_inputs(ds);
-        let smoothed = CostModel::new(&smooth_ds, options)?;
-        let target = Target::new(&smoothed, &smooth_ds)?.with_offsets();
-        let raised = match raise_supply(&smooth_ds) {
-            Some(ds) => Some(CostModel::new(&ds, options)?),
-            None => None,
-        };
-        Ok(Self {
-            cost,
-            smoothed,
-            target,
-            inputs,
-            raised,
-        })
-    }
-
-    /// The likelihood's target with the supply-pressure sensor's offset as one more nuisance:
-    /// its effect on every compared row is the simulation's response to a raised recorded
-    /// pressure, differenced at `motor` (the rows respond linearly to 2 kPa, and the
-    /// response hardly changes over a parameter's interval). The target as it is when no
-    /// experiment records the pressure or the rows do not match.
-    pub fn target_at(&self, motor: &Motor) -> Target {
-        let solver = DefaultSolver::default();
-        let Some(raised) = &self.raised else {
-            return self.target.clone();
-        };
-        let (Ok(base), Ok(up)) = (
-            self.smoothed.simulated_rows(motor, &solver),
-            raised.simulated_at_rows(motor, &solver, &self.smoothed.rows()),
-        ) else {
-            return self.target.clone();
-        };
-        if base.len() != up.len() || base.iter().zip(&up).any(|(a, b)| a.len() != b.len()) {
-            return self.target.clone();
-        }
-        let shape: Vec<f64> = base
-            .iter()
-            .flatten()
-            .zip(up.iter().flatten())
-            .map(|(a, b)| (b - a) / PRESSURE_STEP_PA)
-            .collect();
-        let tau = calibration_tolerance(Quantity::PPort1).unwrap_or(PRESSURE_STEP_PA);
-        self.target.clone().with_nuisances(vec![Nuisance {
-            label: "supply pressure sensor offset".into(),
-            prior_sd: tau,
-            shape,
-        }])
-    }
-
-    /// Each channel's χ² under the likelihood of `target` (`None` if the simulation fails).
-    pub fn channel_chi2(&self, target: &Target, motor: &Motor) -> Option<Vec<ChannelChi2>> {
-        let res = self
-            .smoothed
-            .residuals(motor, &DefaultSolver::default())
-            .ok()?;
-        let chi2 = target.channel_chi2(&res);
-        Some(
-            res.iter()
-                .zip(chi2)
-                .map(|(r, c)| ChannelChi2 {
-                    label: format!("{} {}", r.file, r.column),
-                    chi2: c,
-                    n: r.simulated.len(),
-                })
-                .collect(),
-        )
-    }
-}
-
-/// The dataset with every recorded port-1 pressure raised by [`PRESSURE_STEP_PA`] (`None`
-/// when none is recorded).
-fn raise_supply(ds: &Dataset) -> Option<Dataset> {
-    let mut out = ds.clone();
-    let mut any = false;
-    for col in out
-        .experiments
-        .iter_mut()
-        .flat_map(|e| e.recording.columns.iter_mut())
-        .filter(|c| c.quantity == Quantity::PPort1)
-    {
-        col.si.iter_mut().for_each(|p| *p += PRESSURE_STEP_PA);
-        any = true;
-    }
-    any.then_some(out)
-}
 
 /// How intervals are computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -336,87 +225,6 @@ pub fn fit(
         evaluations: run.evaluations + problem.evaluations() + ml.evaluations(),
         run,
         wall_s: t0.elapsed().as_secs_f64(),
-    })
-}
-
-/// A point polished on the likelihood: θ and its χ².
-type Polished = (Vec<f64>, f64);
-
-/// Index of the lowest χ² of polished points.
-fn lowest(polished: &[Polished]) -> usize {
-    (0..polished.len())
-        .min_by(|a, b| polished[*a].1.total_cmp(&polished[*b].1))
-        .unwrap_or(0)
-}
-
-/// What [`maximum_likelihood`] found.
-struct MlFit {
-    /// The likelihood's target (the data's noise estimates), linearised at the estimate.
-    target: Target,
-    /// The same with each channel's σ widened to its residual scatter where that is larger.
-    widened: Target,
-    /// The widened channels and their factors.
-    widening: Vec<(String, f64)>,
-    /// The points, each polished on the widened target's χ².
-    polished: Vec<Polished>,
-}
-
-/// The likelihood's target and `points` (the best start first, then the multi-start's other
-/// local optima) each polished on its χ². J knows neither the data's noise nor the sensors'
-/// offsets, so its best start need not lie in the likelihood's deepest valley: every point
-/// is polished and the lowest is the estimate. The supply-pressure offset's effect on the
-/// rows is linearised at a motor; where the motor breaks away in a ramp moves that effect
-/// row by row, so it is taken at the best polished point and everything polished again.
-///
-/// A channel's σ from second differences of few rows is itself uncertain (±30% for a
-/// 25-point datasheet, whose torque pins T_c): an underestimate would give that channel too
-/// much weight and its parameters intervals too narrow. So where a channel's residuals at
-/// the estimate scatter more than its σ, σ is widened to √(χ²_c/n_c)·σ (Birge's ratio per
-/// channel; never narrowed) and the points are polished once more. The goodness of fit is
-/// still reported against the data's own σ.
-fn maximum_likelihood(
-    engine: &Engine,
-    data: &FitData,
-    space: &ParamSpace,
-    points: &[Vec<f64>],
-) -> Result<MlFit, EstimateError> {
-    let motor = |theta: &[f64]| -> Result<Motor, EstimateError> {
-        Ok(Motor::new(space.params(theta)?, space.effects.clone()))
-    };
-    let polish_all = |target: &Target, points: &[Vec<f64>]| {
-        let likelihood = Likelihood {
-            cost: &data.smoothed,
-            target,
-            solver: DefaultSolver::default(),
-        };
-        let ml = Problem::new(&likelihood, space, false);
-        engine.map(points, |t| uncertainty::polish_chi2(&ml, t, 400))
-    };
-    let thetas = |p: Vec<Polished>| -> Vec<Vec<f64>> { p.into_iter().map(|(t, _)| t).collect() };
-    let first = data.target_at(&motor(&points[0])?);
-    let polished = polish_all(&first, points);
-    let best = motor(&polished[lowest(&polished)].0)?;
-    let target = data.target_at(&best);
-    let polished = polish_all(&target, &thetas(polished));
-    let best = motor(&polished[lowest(&polished)].0)?;
-    let channels = data.channel_chi2(&target, &best).unwrap_or_default();
-    let factors: Vec<f64> = channels
-        .iter()
-        .map(|c| (c.chi2 / c.n.max(1) as f64).sqrt().max(1.0))
-        .collect();
-    let widening = channels
-        .iter()
-        .zip(&factors)
-        .filter(|(_, f)| **f > 1.0)
-        .map(|(c, f)| (c.label.clone(), *f))
-        .collect();
-    let widened = target.widened(&factors);
-    let polished = polish_all(&widened, &thetas(polished));
-    Ok(MlFit {
-        target,
-        widened,
-        widening,
-        polished,
     })
 }
 
