@@ -10,7 +10,7 @@
 
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::least_squares::{levenberg_marquardt, LmSettings};
+use crate::estimate::least_squares::polish_residuals;
 use crate::estimate::likelihood::Likelihood;
 use crate::estimate::multistart::{self, Silent};
 use crate::estimate::objective::{Coordinates, Objective, Problem};
@@ -277,19 +277,12 @@ fn term_fit(
     })
 }
 
-/// The Levenberg–Marquardt polish of a search's best point `x` ([`levenberg_marquardt`] on
-/// the likelihood's residuals, default settings): Nelder–Mead stalls in narrow curved valleys
-/// (T_s against ω_s of breakaway friction), a Gauss–Newton step follows them. The polished
-/// point is kept only if its χ² is lower.
+/// The Levenberg–Marquardt polish of a search's best point `x` ([`polish_residuals`] on
+/// the likelihood's residuals): Nelder–Mead stalls in narrow curved valleys (T_s against ω_s
+/// of breakaway friction), a Gauss–Newton step follows them. The polished point is kept only
+/// if its χ² is lower.
 fn lm_polish<C: Coordinates + ?Sized>(problem: &Problem<'_, C>, x: Vec<f64>) -> Vec<f64> {
-    let before = problem.evaluate(&x).chi2;
-    let residuals = |t: &[f64]| problem.residuals(t);
-    let (polished, chi2) = levenberg_marquardt(&residuals, &x, LmSettings::default());
-    if chi2 < before {
-        polished
-    } else {
-        x
-    }
+    polish_residuals(problem, &x).map_or(x, |(polished, _)| polished)
 }
 
 /// Runs several fits at once on the engine, results in job order. Each fit's starts use the

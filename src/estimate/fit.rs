@@ -193,16 +193,16 @@ pub fn fit(
     let params = setup.space.params(&theta)?;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
     let k = theta.len();
-    let goodness = data
-        .channel_chi2(&target, &motor)
-        .map(|c| GoodnessOfFit::new(&c, k));
-    let scored = data
-        .channel_chi2(&widened, &motor)
-        .map(|c| GoodnessOfFit::new(&c, k));
-    let nuisances = data
-        .smoothed
-        .simulated_rows(&motor, &DefaultSolver::default())
-        .map(|sim| target.nuisance_estimates(&sim))
+    let simulated = data.simulate(&motor);
+    let goodness = simulated
+        .as_ref()
+        .map(|sim| GoodnessOfFit::new(&data.channel_chi2(&target, sim), k));
+    let scored = simulated
+        .as_ref()
+        .map(|sim| GoodnessOfFit::new(&data.channel_chi2(&widened, sim), k));
+    let nuisances = simulated
+        .as_ref()
+        .map(|sim| target.nuisance_estimates(sim))
         .unwrap_or_default();
     let intervals = match &scored {
         Some(g) => intervals(engine, &ml, &theta, chi2, g, &polished, setup),

@@ -84,23 +84,26 @@ impl FitData {
         }])
     }
 
-    /// Each channel's χ² under the likelihood of `target` (`None` if the simulation fails).
-    pub fn channel_chi2(&self, target: &Target, motor: &Motor) -> Option<Vec<ChannelChi2>> {
-        let res = self
-            .smoothed
-            .residuals(motor, &DefaultSolver::default())
-            .ok()?;
-        let chi2 = target.channel_chi2(&res);
-        Some(
-            res.iter()
-                .zip(chi2)
-                .map(|(r, c)| ChannelChi2 {
-                    label: format!("{} {}", r.file, r.column),
-                    chi2: c,
-                    n: r.simulated.len(),
-                })
-                .collect(),
-        )
+    /// The simulated values at every compared row of the likelihood (`None` if the
+    /// simulation fails).
+    pub fn simulate(&self, motor: &Motor) -> Option<Vec<Vec<f64>>> {
+        self.smoothed
+            .simulated_rows(motor, &DefaultSolver::default())
+            .ok()
+    }
+
+    /// Each channel's χ² under the likelihood of `target`, from [`FitData::simulate`]'s values.
+    pub fn channel_chi2(&self, target: &Target, simulated: &[Vec<f64>]) -> Vec<ChannelChi2> {
+        self.smoothed
+            .references()
+            .zip(simulated)
+            .zip(target.channel_chi2(simulated))
+            .map(|((r, s), c)| ChannelChi2 {
+                label: format!("{} {}", r.file, r.column),
+                chi2: c,
+                n: s.len(),
+            })
+            .collect()
     }
 }
 

@@ -12,6 +12,7 @@
 //! interval), or after `max_iters` iterations. A residual vector that cannot be computed
 //! (a failed simulation) counts as an infinite χ²: the step is refused.
 
+use super::objective::{Coordinates, Problem};
 use nalgebra::{DMatrix, DVector};
 
 /// Finite-difference step in θ: a relative change of 1e-3, a secant rather than a tangent
@@ -112,6 +113,23 @@ pub fn levenberg_marquardt(
         }
     }
     (x, c)
+}
+
+/// Levenberg–Marquardt on a problem's residuals from `x`, kept only where χ² falls: the
+/// better of the start and the polish, with its χ²; `None` when the problem has no residuals
+/// at `x` (not a least-squares objective, or a failed simulation).
+pub fn polish_residuals<C: Coordinates + ?Sized>(
+    problem: &Problem<'_, C>,
+    x: &[f64],
+) -> Option<(Vec<f64>, f64)> {
+    let start: f64 = problem.residuals(x)?.iter().map(|v| v * v).sum();
+    let residuals = |t: &[f64]| problem.residuals(t);
+    let (polished, chi2) = levenberg_marquardt(&residuals, x, LmSettings::default());
+    Some(if chi2 < start {
+        (polished, chi2)
+    } else {
+        (x.to_vec(), start)
+    })
 }
 
 #[cfg(test)]

@@ -72,7 +72,10 @@ pub(crate) fn maximum_likelihood(
     let target = data.target_at(&best);
     let polished = polish_all(&target, &thetas(polished));
     let best = motor(&polished[lowest(&polished)].0)?;
-    let channels = data.channel_chi2(&target, &best).unwrap_or_default();
+    let channels = data
+        .simulate(&best)
+        .map(|sim| data.channel_chi2(&target, &sim))
+        .unwrap_or_default();
     let factors: Vec<f64> = channels
         .iter()
         .map(|c| (c.chi2 / c.n.max(1) as f64).sqrt().max(1.0))

@@ -16,7 +16,7 @@
 
 use super::derivatives::hessian;
 use super::engine::Engine;
-use super::least_squares::{levenberg_marquardt, LmSettings};
+use super::least_squares::{levenberg_marquardt, polish_residuals, LmSettings};
 use super::objective::{Problem, Profiled};
 use super::optimize::{Layout, NelderMeadSettings, Restart, RestartedNelderMead};
 use nalgebra::DMatrix;
@@ -110,6 +110,9 @@ fn polish(problem: Profiled<'_>, start: Vec<f64>, max_iters: u64) -> (Vec<f64>, 
 
 /// Minimises χ² from θ (a short polish after a cost fit whose weights differ from χ²'s).
 pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec<f64>, f64) {
+    if let Some(polished) = polish_residuals(problem, theta) {
+        return polished;
+    }
     let all: Vec<usize> = (0..theta.len()).collect();
     let p = Profiled {
         inner: problem,

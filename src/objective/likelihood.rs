@@ -39,7 +39,7 @@
 //! σ² = mean(d_i²)/6 over the rest. As in the references, σ is at least max|y|/4096 (a
 //! 12-bit converter's resolution), so noise-free data do not get an infinite weight.
 
-use super::cost::{ChannelResiduals, CostError, CostModel};
+use super::cost::{CostError, CostModel};
 use super::nuisance::{Nuisance, Nuisances};
 use super::reference::{FitOptions, Reference};
 use crate::data::dataset::{Dataset, Kind};
@@ -345,11 +345,11 @@ impl Target {
             .collect()
     }
 
-    /// Per channel χ² of simulated residuals (same channel order): Σ((sim − data)/σ)² after
-    /// the nuisances' correction (their prior terms are not in any channel).
-    pub fn channel_chi2(&self, res: &[ChannelResiduals]) -> Vec<f64> {
-        let sim: Vec<Vec<f64>> = res.iter().map(|r| r.simulated.clone()).collect();
-        let r = self.residual_vector(&sim);
+    /// Per channel χ² of simulated values at the compared rows (same channel order):
+    /// Σ((sim − data)/σ)² after the nuisances' correction (their prior terms are not in any
+    /// channel).
+    pub fn channel_chi2(&self, simulated: &[Vec<f64>]) -> Vec<f64> {
+        let r = self.residual_vector(simulated);
         let mut start = 0;
         self.channels
             .iter()
