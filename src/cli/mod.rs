@@ -1,6 +1,7 @@
 //! Command line (SPEC §6). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
 //! (clap reports usage errors with status 2 itself).
 
+pub mod catalogue;
 pub mod control;
 pub mod diagnose;
 pub mod fit;
@@ -160,6 +161,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
                 c.unit.suffix()
             );
         }
+        catalogue::print(ex, ds.p_atm_pa);
         for r in refs {
             print_reference(r, ds.p_atm_pa);
         }
@@ -248,7 +250,9 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
         let sim = Experiment::new(data, ds.p_atm_pa)?.simulate(&motor, &solver)?;
         let rec = &data.recording;
         let inputs: &[Quantity] = match data.kind {
-            Kind::Datasheet => &[Quantity::Time, Quantity::Speed, Quantity::PPort1],
+            Kind::Datasheet | Kind::Catalogue => {
+                &[Quantity::Time, Quantity::Speed, Quantity::PPort1]
+            }
             _ => &[Quantity::Time, Quantity::PPort1, Quantity::CPort2],
         };
         let mut header = Vec::new();

@@ -6,7 +6,9 @@ pub use crate::data::motor::MotorSection;
 use crate::model::motor::Load;
 use crate::model::params::MotorParams;
 use crate::sim::experiment::InputCheck;
-pub use crate::sim::recording::{Column, ExperimentData, Kind, MissingColumn, Recording};
+pub use crate::sim::recording::{Column, ExperimentData, Figure, Kind, MissingColumn, Recording};
+
+pub mod catalogue;
 use crate::units::constants::P_ATM_PA;
 use crate::units::{parse_column, ColumnNameError, Quantity};
 use serde::Deserialize;
@@ -84,6 +86,21 @@ impl Recording {
 
     /// Parses CSV text (`path` is used in messages only).
     pub fn parse(path: &Path, text: &str, p_atm_pa: f64) -> Result<Self, DataError> {
+        Self::parse_cells(path, text, p_atm_pa, false)
+    }
+
+    /// Parses CSV text whose cells may be empty (a catalogue's sparse points): an empty cell
+    /// is NaN in SI and "" as written.
+    pub fn parse_sparse(path: &Path, text: &str, p_atm_pa: f64) -> Result<Self, DataError> {
+        Self::parse_cells(path, text, p_atm_pa, true)
+    }
+
+    fn parse_cells(
+        path: &Path,
+        text: &str,
+        p_atm_pa: f64,
+        sparse: bool,
+    ) -> Result<Self, DataError> {
         // A byte-order mark (as spreadsheet programs write) is not part of the first name.
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if text.trim().is_empty() {
@@ -163,6 +180,11 @@ impl Recording {
                 .at(line));
             }
             for (i, (field, col)) in record.iter().zip(columns.iter_mut()).enumerate() {
+                if sparse && field.is_empty() {
+                    col.si.push(f64::NAN);
+                    col.raw.push(String::new());
+                    continue;
+                }
                 let v: f64 = field.parse().map_err(|_| {
                     DataError::new(
                         path,
@@ -307,9 +329,20 @@ fn default_temperature() -> f64 {
 #[serde(deny_unknown_fields)]
 struct ExperimentSection {
     kind: Kind,
-    file: String,
+    /// The recording; a catalogue may give key figures only.
+    #[serde(default)]
+    file: Option<String>,
     #[serde(default)]
     p_supply_mpa: Option<f64>,
+    /// Supply pressure as printed, e.g. "6.3 bar_g" or "90 psi(g)".
+    #[serde(default)]
+    p_supply: Option<String>,
+    /// Relative reading tolerance of stated data (catalogues; default 0.02).
+    #[serde(default)]
+    tolerance: Option<f64>,
+    /// A catalogue's key figures as printed, e.g. free_speed = "9000 rpm".
+    #[serde(default)]
+    figures: Option<std::collections::BTreeMap<String, String>>,
     #[serde(default)]
     load: Option<LoadSection>,
     #[serde(default)]
@@ -369,36 +402,7 @@ impl Dataset {
         let p_atm_pa = rig.conditions.p_atm_pa;
         let mut experiments = Vec::with_capacity(rig.experiment.len());
         for (k, ex) in rig.experiment.iter().enumerate() {
-            let csv = dir.join(&ex.file);
-            if !csv.is_file() {
-                return Err(located(
-                    &rig_path,
-                    &text,
-                    Table::Experiment(k),
-                    "file",
-                    format!(
-                        "recording '{}' not found (looked for {})",
-                        ex.file,
-                        csv.display()
-                    ),
-                ));
-            }
-            let recording = Recording::read(&csv, p_atm_pa)?;
-            let data = ExperimentData {
-                kind: ex.kind,
-                file: ex.file.clone(),
-                p_supply_pa: ex.p_supply_mpa.map(|p| p * 1e6),
-                load: match ex.load {
-                    None | Some(LoadSection::None) => Load::None,
-                    Some(LoadSection::ViscousBrake { c_nm_s_rad }) => {
-                        Load::ViscousBrake { c_nm_s_rad }
-                    }
-                    Some(LoadSection::Torque { t_nm }) => Load::Torque { t_nm },
-                },
-                weight: ex.weight.unwrap_or(1.0),
-                channel_weights: ex.weights.clone().unwrap_or_default(),
-                recording,
-            };
+            let data = experiment_data(dir, (&rig_path, &text), k, ex, p_atm_pa)?;
             check_experiment(&data)?;
             experiments.push(data);
         }
@@ -416,6 +420,108 @@ impl Dataset {
             experiments,
         })
     }
+}
+
+impl ExperimentSection {
+    /// The experiment's name: its file, or for a catalogue of key figures only
+    /// `catalogue_<k>.csv` (the name `simulate` writes its points under).
+    fn name(&self, k: usize) -> String {
+        self.file
+            .clone()
+            .unwrap_or_else(|| format!("{}_{}.csv", self.kind.id(), k + 1))
+    }
+}
+
+/// One `[[experiment]]` (the k-th) with its recording, read and checked.
+fn experiment_data(
+    dir: &Path,
+    rig: (&Path, &str),
+    k: usize,
+    ex: &ExperimentSection,
+    p_atm_pa: f64,
+) -> Result<ExperimentData, DataError> {
+    let at = |key: &str, message: String| located(rig.0, rig.1, Table::Experiment(k), key, message);
+    let catalogue = ex.kind == Kind::Catalogue;
+    let p_supply_pa = match (&ex.p_supply, ex.p_supply_mpa) {
+        (Some(_), Some(_)) => {
+            return Err(at("p_supply", "give p_supply or p_supply_mpa, not both".into()))
+        }
+        (Some(text), None) => {
+            let (p, _, _) = catalogue::parse_value(text, Quantity::PPort1, p_atm_pa)
+                .map_err(|m| at("p_supply", format!("p_supply: {m}")))?;
+            if !(p > p_atm_pa && p < 5e6) {
+                return Err(at(
+                    "p_supply",
+                    format!("p_supply = '{text}' must be above atmosphere and below 5 MPa absolute"),
+                ));
+            }
+            Some(p)
+        }
+        (None, mpa) => mpa.map(|p| p * 1e6),
+    };
+    if !catalogue {
+        for key in ["figures", "tolerance"] {
+            let given = if key == "figures" { ex.figures.is_some() } else { ex.tolerance.is_some() };
+            if given {
+                return Err(at(key, format!("{key} is for kind = \"catalogue\" only")));
+            }
+        }
+    }
+    let tolerance = ex.tolerance.unwrap_or(catalogue::DEFAULT_TOLERANCE);
+    if !(tolerance.is_finite() && tolerance > 0.0 && tolerance < 0.5) {
+        return Err(at("tolerance", format!("tolerance = {tolerance} must be in (0, 0.5): the reading tolerance as a fraction of full scale")));
+    }
+    let recording = match &ex.file {
+        None if !catalogue => {
+            return Err(at("kind", format!("{} needs a recording: file = \"…\"", ex.kind.id())))
+        }
+        None => None,
+        Some(file) => {
+            let csv = dir.join(file);
+            if !csv.is_file() {
+                return Err(at(
+                    "file",
+                    format!("recording '{file}' not found (looked for {})", csv.display()),
+                ));
+            }
+            let text = read_text(&csv)?;
+            Some(if catalogue {
+                Recording::parse_sparse(&csv, &text, p_atm_pa)?
+            } else {
+                Recording::parse(&csv, &text, p_atm_pa)?
+            })
+        }
+    };
+    let (recording, figures) = if catalogue {
+        let src = catalogue::Source {
+            rig,
+            table: k,
+            p_atm_pa,
+            tolerance,
+        };
+        let figures = match &ex.figures {
+            Some(t) => catalogue::read_figures(&src, t)?,
+            None => Vec::new(),
+        };
+        (catalogue::recording(&src, recording, &figures)?, figures)
+    } else {
+        (recording.expect("checked above"), Vec::new())
+    };
+    Ok(ExperimentData {
+        kind: ex.kind,
+        file: ex.name(k),
+        p_supply_pa,
+        load: match ex.load {
+            None | Some(LoadSection::None) => Load::None,
+            Some(LoadSection::ViscousBrake { c_nm_s_rad }) => Load::ViscousBrake { c_nm_s_rad },
+            Some(LoadSection::Torque { t_nm }) => Load::Torque { t_nm },
+        },
+        weight: ex.weight.unwrap_or(1.0),
+        channel_weights: ex.weights.clone().unwrap_or_default(),
+        recording,
+        tolerance: catalogue.then_some(tolerance),
+        figures,
+    })
 }
 
 fn locate_toml_error(path: &Path, text: &str, e: &toml::de::Error) -> DataError {
@@ -486,6 +592,9 @@ fn key_location(text: &str, table: Table, key: &str) -> Option<(u64, usize)> {
         if t.starts_with("[[") && t[2..].trim_start().starts_with("experiment") {
             current = Some(Table::Experiment(experiments));
             experiments += 1;
+        } else if t.starts_with("[experiment.") {
+            // A sub-table of the current experiment (its figures).
+            current = Some(Table::Experiment(experiments.max(1) - 1));
         } else if t.starts_with("[conditions") {
             current = Some(Table::Conditions);
         } else if t.starts_with("[motor") {
@@ -564,18 +673,19 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
         ));
     }
     for (k, ex) in rig.experiment.iter().enumerate() {
+        let label = ex.name(k);
         let at =
             |key: &str, message: String| located(path, text, Table::Experiment(k), key, message);
         if let Some(p) = ex.p_supply_mpa {
             if !(p.is_finite() && p * 1e6 > c.p_atm_pa && p < 5.0) {
-                return Err(at("p_supply_mpa", format!("experiment '{}': p_supply_mpa = {p} must be an absolute pressure above atmosphere and below 5 MPa", ex.file)));
+                return Err(at("p_supply_mpa", format!("experiment '{}': p_supply_mpa = {p} must be an absolute pressure above atmosphere and below 5 MPa", label)));
             }
         }
         let bad_weight = |w: f64| !(w.is_finite() && w >= 0.0);
         if ex.weight.is_some_and(bad_weight) {
             return Err(at(
                 "weight",
-                format!("experiment '{}': weight must be finite and >= 0", ex.file),
+                format!("experiment '{}': weight must be finite and >= 0", label),
             ));
         }
         if let Some(weights) = &ex.weights {
@@ -587,7 +697,7 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
                         name,
                         format!(
                             "experiment '{}': weights names '{name}', which is not a channel of {} (channels: {})",
-                            ex.file,
+                            label,
                             ex.kind.id(),
                             known.join(", ")
                         ),
@@ -598,7 +708,7 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
                         name,
                         format!(
                             "experiment '{}': weight of {name} must be finite and >= 0",
-                            ex.file
+                            label
                         ),
                     ));
                 }
@@ -610,13 +720,13 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
             {
                 return Err(at(
                     "c_nm_s_rad",
-                    format!("experiment '{}': load c_nm_s_rad must be >= 0", ex.file),
+                    format!("experiment '{}': load c_nm_s_rad must be >= 0", label),
                 ));
             }
             Some(LoadSection::Torque { t_nm }) if !t_nm.is_finite() => {
                 return Err(at(
                     "t_nm",
-                    format!("experiment '{}': load t_nm must be finite", ex.file),
+                    format!("experiment '{}': load t_nm must be finite", label),
                 ));
             }
             _ => {}
@@ -636,7 +746,7 @@ fn check_input(ex: &ExperimentData, check: InputCheck) -> Result<(), DataError> 
                 return Err(DataError::new(
                     &rec.file,
                     format!(
-                        "{} needs p_supply_mpa in rig.toml or a p_port1 column",
+                        "{} needs its supply pressure: p_supply (e.g. \"6.3 bar_g\") or p_supply_mpa in rig.toml, or a p_port1 column",
                         ex.kind.id()
                     ),
                 ));
@@ -663,7 +773,8 @@ fn check_input(ex: &ExperimentData, check: InputCheck) -> Result<(), DataError> 
 /// Checks that an experiment has the columns its kind needs.
 fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
     let rec = &ex.recording;
-    if rec.rows() < MIN_ROWS {
+    // A catalogue's points are few by nature; its reader checks that it has some.
+    if rec.rows() < MIN_ROWS && ex.kind != Kind::Catalogue {
         return Err(DataError::new(
             &rec.file,
             format!(

@@ -128,6 +128,8 @@ fn experiment_data(
 ) -> ExperimentData {
     let rows = columns[0].si.len();
     ExperimentData {
+        tolerance: None,
+        figures: Vec::new(),
         kind,
         file: file.to_string(),
         p_supply_pa: p_supply,

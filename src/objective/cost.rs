@@ -27,7 +27,7 @@
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
-use crate::objective::reference::{experiment_references, ChannelReference, FitOptions};
+use crate::objective::reference::{experiment_references, ChannelReference, FitOptions, Reference};
 use crate::sim::experiment::{Experiment, SimError, Simulated};
 use crate::units::Quantity;
 use rayon::prelude::*;
@@ -149,6 +149,15 @@ struct ExperimentCost {
     channels: Vec<Channel>,
 }
 
+/// The rows of a channel that the cost and the likelihood compare: those with a value
+/// (a catalogue's empty cells are NaN) whose abscissa the reference covers.
+pub fn compared_rows(abscissa: &[f64], reference: &Reference, values: &[f64]) -> Vec<usize> {
+    (0..abscissa.len())
+        .filter(|&i| values.get(i).is_some_and(|v| v.is_finite()))
+        .filter(|&i| reference.eval(abscissa[i]).is_some())
+        .collect()
+}
+
 /// The cost of SPEC §2 for one dataset: experiments and references are built once.
 #[derive(Debug)]
 pub struct CostModel {
@@ -172,9 +181,8 @@ impl CostModel {
                     .get(reference.quantity.prefix())
                     .copied()
                     .unwrap_or(1.0);
-                let in_range: Vec<usize> = (0..abscissa.len())
-                    .filter(|&i| reference.reference.eval(abscissa[i]).is_some())
-                    .collect();
+                let values = data.recording.values(reference.quantity)?;
+                let in_range = compared_rows(&abscissa, &reference.reference, values);
                 let rows = evenly_spaced(&in_range, options.max_points_per_channel);
                 let x: Vec<f64> = rows.iter().map(|&i| abscissa[i]).collect();
                 let y_ref: Vec<f64> = x

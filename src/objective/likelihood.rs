@@ -39,7 +39,7 @@
 //! σ² = mean(d_i²)/6 over the rest. As in the references, σ is at least max|y|/4096 (a
 //! 12-bit converter's resolution), so noise-free data do not get an infinite weight.
 
-use super::cost::{CostError, CostModel};
+use super::cost::{compared_rows, CostError, CostModel};
 use super::nuisance::{Nuisance, Nuisances};
 use super::reference::{FitOptions, Reference};
 use crate::data::dataset::{Dataset, Kind};
@@ -148,7 +148,7 @@ pub fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
     let mut out = ds.clone();
     let mut notes = Vec::new();
     for ex in &mut out.experiments {
-        if ex.kind == Kind::Datasheet {
+        if !ex.kind.is_transient() {
             continue;
         }
         let Some(times) = ex.recording.column(Quantity::Time).map(|c| c.si.clone()) else {
@@ -222,9 +222,7 @@ impl Target {
             let abscissa = ex.abscissa();
             for r in cost.references().filter(|r| r.file == ex.file) {
                 let values = data.recording.values(r.quantity)?;
-                let rows: Vec<usize> = (0..abscissa.len())
-                    .filter(|&i| r.reference.eval(abscissa[i]).is_some())
-                    .collect();
+                let rows = compared_rows(&abscissa, &r.reference, values);
                 let ordered: Vec<f64> = match data.kind {
                     Kind::Datasheet => {
                         let mut idx: Vec<usize> = (0..values.len()).collect();
@@ -238,7 +236,11 @@ impl Target {
                     quantity: r.quantity,
                     data: rows.iter().map(|&i| values[i]).collect(),
                     rows,
-                    sigma: noise_sigma(&ordered),
+                    // Stated data (a catalogue) carry their reading tolerance, not noise.
+                    sigma: match data.tolerance {
+                        Some(_) => r.reference.sigma(),
+                        None => noise_sigma(&ordered),
+                    },
                 });
             }
         }

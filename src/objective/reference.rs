@@ -425,6 +425,54 @@ impl Reference {
         })
     }
 
+    /// The reference of stated points (a catalogue's curve read off a printed page): σ is
+    /// the reading tolerance, `tolerance`·max|y| (the curve's full scale), not a noise
+    /// estimate; with fewer than [`MIN_POINTS`] distinct abscissae the polynomial has degree
+    /// (distinct − 1) through them (a single point is a constant over a point-wide range),
+    /// otherwise it is fitted as any reference is.
+    pub fn stated(
+        x: &[f64],
+        y: &[f64],
+        options: &FitOptions,
+        tolerance: f64,
+    ) -> Result<Reference, FitError> {
+        let ymax = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut distinct: Vec<f64> = x.to_vec();
+        distinct.sort_by(f64::total_cmp);
+        distinct.dedup();
+        let mut reference = if distinct.len() >= MIN_POINTS {
+            Reference::fit(x, y, options)?
+        } else {
+            check_points(x, y, 1)?;
+            let degree = distinct.len() - 1;
+            let piece = if degree == 0 {
+                let mean = y.iter().sum::<f64>() / y.len() as f64;
+                Piece {
+                    x_min: distinct[0],
+                    x_max: distinct[0],
+                    degree: 0,
+                    coeffs: vec![mean],
+                    n: y.len(),
+                    rss: y.iter().map(|v| (v - mean).powi(2)).sum(),
+                    press: 0.0,
+                }
+            } else {
+                let qr = QrFit::new(x, y, degree + 1)?;
+                qr.piece(degree).ok_or(FitError::Undetermined(degree))?
+            };
+            Reference {
+                pieces: vec![piece],
+                sigma_residual: 0.0,
+                sigma_floor: 0.0,
+                r_squared: 1.0,
+                n: x.len(),
+            }
+        };
+        reference.sigma_residual = tolerance * ymax;
+        reference.sigma_floor = (ymax / 4096.0).max(f64::MIN_POSITIVE);
+        Ok(reference)
+    }
+
     /// The reference at x (SI), or `None` outside the measured range or in a gap between
     /// pieces.
     pub fn eval(&self, x: f64) -> Option<f64> {
@@ -740,7 +788,21 @@ pub fn experiment_references(
         else {
             continue;
         };
-        let reference = Reference::fit(&x, &col.si, options).map_err(|e| {
+        // A catalogue's empty cells (NaN) are not points of this channel.
+        let (xs, ys): (Vec<f64>, Vec<f64>) = x
+            .iter()
+            .zip(&col.si)
+            .filter(|(_, y)| y.is_finite())
+            .map(|(x, y)| (*x, *y))
+            .unzip();
+        if ys.is_empty() {
+            continue;
+        }
+        let fitted = match data.tolerance {
+            None => Reference::fit(&xs, &ys, options),
+            Some(tol) => Reference::stated(&xs, &ys, options, tol),
+        };
+        let reference = fitted.map_err(|e| {
             let mut err = DataError::new(
                 &rec.file,
                 format!("no reference response against {}: {e}", abscissa.column),

@@ -96,6 +96,28 @@ pub struct ExperimentData {
     pub weight: f64,
     /// Weight per channel prefix (e.g. "flow1"), default 1.
     pub channel_weights: std::collections::BTreeMap<String, f64>,
-    /// The recording, converted to SI.
+    /// The recording, converted to SI (a catalogue's rows may leave cells empty: NaN).
     pub recording: Recording,
+    /// Relative reading tolerance of stated (not recorded) data: each channel's σ is this
+    /// fraction of its full scale instead of a noise estimate (catalogues).
+    pub tolerance: Option<f64>,
+    /// Key figures of a catalogue as printed (they are also rows of the recording).
+    pub figures: Vec<Figure>,
+}
+
+/// A catalogue's key figure as printed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Figure {
+    /// Its key in rig.toml (`free_speed`, `max_power`, …).
+    pub key: String,
+    /// Its quantity.
+    pub quantity: Quantity,
+    /// The unit it was printed in.
+    pub unit: Unit,
+    /// Its value, SI.
+    pub si: f64,
+    /// The number as written.
+    pub written: f64,
+    /// Its line in rig.toml, where known.
+    pub line: Option<u64>,
 }

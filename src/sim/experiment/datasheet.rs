@@ -67,48 +67,48 @@ impl Drive for SteadySweep {
         motor: &Motor,
         _solver: &dyn StiffSolver,
     ) -> Result<Simulated, SimError> {
-        let (speeds, p_supply) = (&self.speeds, &self.p_supply);
-        let n = speeds.len();
-        let (mut torque, mut flow1, mut flow2) = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-        );
-        // Sweep in speed order so that each solve starts from its neighbour's solution.
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|a, b| speeds[*a].total_cmp(&speeds[*b]));
-        let mut results = vec![[0.0; 3]; n];
-        let mut guess: Option<State> = None;
-        for &i in &order {
-            let bc = Boundary::supplied(p_supply[i], setting.p_atm_pa, Load::None);
-            let near = guess.map(|g| steady::at_speed_from_neighbour(motor, &bc, speeds[i], &g));
-            let x = near
-                .filter(Result::is_ok)
-                .unwrap_or_else(|| {
-                    steady::at_speed(motor, &bc, speeds[i], &steady::initial_guess(&bc))
-                })
-                .map_err(|e| setting.fail(format!("row {}: {e}", i + 1)))?;
-            let b = motor.balance(&x, &bc);
-            // At standstill the brake holds the rotor against the full dry friction.
-            let torque = if speeds[i] == 0.0 {
-                b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
-            } else {
-                b.torque_shaft_nm()
-            };
-            results[i] = [torque, b.flow_port1_kg_s, b.flow_port2_kg_s];
-            guess = Some(x);
-        }
-        for r in results {
-            torque.push(r[0]);
-            flow1.push(r[1]);
-            flow2.push(r[2]);
-        }
+        let rows = steady_sweep(setting, motor, &self.speeds, &self.p_supply)?;
         Ok(Simulated {
             outputs: vec![
-                (Quantity::Torque, torque),
-                (Quantity::Flow1, flow1),
-                (Quantity::Flow2, flow2),
+                (Quantity::Torque, rows.iter().map(|r| r[0]).collect()),
+                (Quantity::Flow1, rows.iter().map(|r| r[1]).collect()),
+                (Quantity::Flow2, rows.iter().map(|r| r[2]).collect()),
             ],
         })
     }
+}
+
+/// Steady states at imposed speeds (rad/s) and supply pressures (Pa), one per row, in the
+/// rows' order: `[shaft torque N·m, port-1 flow kg/s, port-2 flow kg/s]`. Shared by every
+/// steady experiment (datasheet, catalogue) so that they follow one stall convention.
+pub(super) fn steady_sweep(
+    setting: &Setting<'_>,
+    motor: &Motor,
+    speeds: &[f64],
+    p_supply: &[f64],
+) -> Result<Vec<[f64; 3]>, SimError> {
+    let n = speeds.len();
+    // Sweep in speed order so that each solve starts from its neighbour's solution.
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|a, b| speeds[*a].total_cmp(&speeds[*b]));
+    let mut results = vec![[0.0; 3]; n];
+    let mut guess: Option<State> = None;
+    for &i in &order {
+        let bc = Boundary::supplied(p_supply[i], setting.p_atm_pa, Load::None);
+        let near = guess.map(|g| steady::at_speed_from_neighbour(motor, &bc, speeds[i], &g));
+        let x = near
+            .filter(Result::is_ok)
+            .unwrap_or_else(|| steady::at_speed(motor, &bc, speeds[i], &steady::initial_guess(&bc)))
+            .map_err(|e| setting.fail(format!("row {}: {e}", i + 1)))?;
+        let b = motor.balance(&x, &bc);
+        // At standstill the brake holds the rotor against the full dry friction.
+        let torque = if speeds[i] == 0.0 {
+            b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
+        } else {
+            b.torque_shaft_nm()
+        };
+        results[i] = [torque, b.flow_port1_kg_s, b.flow_port2_kg_s];
+        guess = Some(x);
+    }
+    Ok(results)
 }

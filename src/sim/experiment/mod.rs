@@ -154,6 +154,7 @@ registry! {
     datasheet::Datasheet;
     pressure_ramp::PressureRamp;
     outlet_throttle::OutletThrottle;
+    catalogue::Catalogue;
 }
 
 impl Kind {

@@ -1,0 +1,76 @@
+//! What `vanefit check` prints for a catalogue experiment: the supply pressure, the key
+//! figures and every point, as printed and in SI, with the reference conditions of the
+//! air-consumption unit (free air, ANR, normal or standard air).
+
+use crate::data::dataset::catalogue::FIGURES;
+use crate::data::dataset::{ExperimentData, Kind};
+use crate::units::{Quantity, Unit};
+
+/// A number for people: 5 significant digits.
+fn num(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        format!("{:.5}", v)
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    } else {
+        format!("{v:.4e}")
+    }
+}
+
+/// The catalogue part of `check` (nothing for other kinds).
+pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
+    if ex.kind != Kind::Catalogue {
+        return;
+    }
+    if let Some(p) = ex.p_supply_pa {
+        println!(
+            "    supply pressure {} bar(g) = {} Pa absolute; reading tolerance {} % of each curve's full scale",
+            num(Unit::BarG.from_si(p, p_atm_pa)),
+            num(p),
+            num(100.0 * ex.tolerance.unwrap_or(0.0))
+        );
+    }
+    for f in &ex.figures {
+        let what = FIGURES.iter().find(|x| x.0 == f.key).map_or("", |x| x.2);
+        let si = f.quantity.si_unit();
+        let note = if f.key == "min_start_torque" {
+            "  (shown, not compared: the model averages torque over the rotor angle)"
+        } else {
+            ""
+        };
+        println!(
+            "    {:<28} {:>10} {:<10} = {:>12} {}{note}",
+            what,
+            num(f.written),
+            f.unit.suffix(),
+            num(f.si),
+            si.suffix()
+        );
+    }
+    let rec = &ex.recording;
+    let cols: Vec<_> = [Quantity::Speed, Quantity::Torque, Quantity::Power, Quantity::Flow1]
+        .iter()
+        .filter_map(|q| rec.column(*q))
+        .collect();
+    let header: Vec<String> = cols
+        .iter()
+        .map(|c| format!("{} = {}", c.name, c.quantity.si_unit().suffix()))
+        .collect();
+    println!("    points (as written → SI): {}", header.join(" | "));
+    for r in 0..rec.rows() {
+        let cells: Vec<String> = cols
+            .iter()
+            .map(|c| match c.si[r].is_finite() {
+                true => format!("{:>9} → {:<11}", c.raw[r], num(c.si[r])),
+                false => format!("{:>9}   {:<11}", "-", ""),
+            })
+            .collect();
+        println!("      line {:>3}: {}", rec.lines[r], cells.join(" "));
+    }
+    for c in &cols {
+        if let Some(conditions) = c.unit.reference_conditions() {
+            println!("    {} counts air at {conditions}", c.name);
+        }
+    }
+}

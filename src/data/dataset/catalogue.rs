@@ -1,0 +1,419 @@
+//! Catalogue pages in (issue 12): one `[[experiment]] kind = "catalogue"` per supply
+//! pressure, with the curves read off the page (`file`, optional: speed and any of torque,
+//! power and air consumption, empty cells allowed) and the key figures (`[experiment.figures]`,
+//! optional: `free_speed = "9000 rpm"`, `max_power = "0.12 kW"`, …, each a number and the
+//! unit the catalogue prints). The figures become points of the same curves, so one
+//! experiment describes the page: the stall torque is the torque at ω = 0 (the datasheet's
+//! stall convention), the free speed is where the torque is 0, the max-power figures are the
+//! torque, power and air at the speed at max power. The minimum start torque is read and
+//! shown but not compared: the model averages the torque over the rotor angle (SPEC §1.2)
+//! and has no position-dependent starting torque.
+
+use super::{key_location, located, DataError, Table};
+use crate::sim::recording::{Column, Figure, Recording};
+use crate::units::{unit_of, Quantity, Unit};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The key figures a catalogue prints: rig.toml key, quantity, words.
+pub const FIGURES: [(&str, Quantity, &str); 8] = [
+    ("free_speed", Quantity::Speed, "free speed"),
+    ("max_power", Quantity::Power, "max power"),
+    ("speed_at_max_power", Quantity::Speed, "speed at max power"),
+    ("torque_at_max_power", Quantity::Torque, "torque at max power"),
+    ("stall_torque", Quantity::Torque, "stall torque"),
+    ("min_start_torque", Quantity::Torque, "minimum start torque"),
+    ("air_at_max_power", Quantity::Flow1, "air consumption at max power"),
+    ("air_at_free_speed", Quantity::Flow1, "air consumption at free speed"),
+];
+
+/// Default reading tolerance of a catalogue point: 1σ = 2 % of its curve's full scale
+/// (points read off a printed curve, figures rounded to two or three digits).
+pub const DEFAULT_TOLERANCE: f64 = 0.02;
+
+/// Where a catalogue experiment's text lives, for located errors.
+pub(super) struct Source<'a> {
+    /// rig.toml's path and text.
+    pub rig: (&'a Path, &'a str),
+    /// Index of the `[[experiment]]` table.
+    pub table: usize,
+    /// Atmosphere, Pa (gauge units).
+    pub p_atm_pa: f64,
+    /// Relative reading tolerance (1σ of the full scale).
+    pub tolerance: f64,
+}
+
+impl Source<'_> {
+    fn at(&self, key: &str, message: String) -> DataError {
+        located(self.rig.0, self.rig.1, Table::Experiment(self.table), key, message)
+    }
+}
+
+/// Reads "6.3 bar(g)", "0.12 kW", "12 lbf·ft", "7.4 cfm": a number and a unit of `q`,
+/// converted to SI. Returns (SI value, unit, the number as written).
+pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit, f64), String> {
+    let text = text.trim();
+    let split = text
+        .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E')))
+        .unwrap_or(text.len());
+    // An exponent's 'e' must not eat the unit's first letter ("5e" of "5 eV" is no number).
+    let (number, unit) = text.split_at(split);
+    let (number, unit) = match number.parse::<f64>() {
+        Ok(_) => (number, unit),
+        Err(_) => {
+            let k = number.rfind(['e', 'E']).unwrap_or(number.len());
+            (&text[..k], &text[k..])
+        }
+    };
+    let value: f64 = number
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number followed by a unit (e.g. '6.3 bar_g')"))?;
+    if unit.trim().is_empty() {
+        return Err(format!("'{text}' has no unit (e.g. '{value} {}')", q.si_unit().suffix()));
+    }
+    let name = normalise_unit(unit);
+    let unit = unit_of(q, &name).map_err(|_| {
+        let known: Vec<_> = q.units().iter().map(|u| u.suffix()).collect();
+        format!(
+            "'{}' is not a unit of {} (known: {})",
+            unit.trim(),
+            words(q),
+            known.join(", ")
+        )
+    })?;
+    let si = unit.to_si(value, p_atm_pa);
+    if !si.is_finite() {
+        return Err(format!("'{text}' is not a finite number"));
+    }
+    Ok((si, unit, value))
+}
+
+/// A printed unit as a column suffix: "N·m" → "n_m", "m³/min" → "m3_min", "bar(g)" →
+/// "bar_g", "l/min ANR" → "l_min_anr", "r/min" → "r_min".
+fn normalise_unit(unit: &str) -> String {
+    let mut s = String::new();
+    for c in unit.trim().to_lowercase().chars() {
+        match c {
+            '³' => s.push('3'),
+            '(' | ')' => {}
+            c if c.is_alphanumeric() => s.push(c),
+            _ => {
+                if !s.ends_with('_') && !s.is_empty() {
+                    s.push('_');
+                }
+            }
+        }
+        if c == '(' && !s.ends_with('_') {
+            s.push('_');
+        }
+    }
+    s.trim_end_matches('_').to_string()
+}
+
+/// A quantity in words, for messages.
+fn words(q: Quantity) -> &'static str {
+    match q {
+        Quantity::Speed => "speed",
+        Quantity::Torque => "torque",
+        Quantity::Power => "power",
+        Quantity::Flow1 | Quantity::Flow2 => "air consumption (a flow)",
+        Quantity::PPort1 | Quantity::PPort2 => "pressure",
+        Quantity::Time => "time",
+        Quantity::CPort2 => "conductance",
+    }
+}
+
+/// Reads the `[experiment.figures]` table: every key known, every value a number and a unit
+/// of its quantity, > 0, and consistent with one another.
+pub(super) fn read_figures(
+    src: &Source<'_>,
+    table: &BTreeMap<String, String>,
+) -> Result<Vec<Figure>, DataError> {
+    let mut out = Vec::new();
+    for (key, text) in table {
+        let Some((_, q, what)) = FIGURES.iter().find(|(k, _, _)| k == key) else {
+            let known: Vec<_> = FIGURES.iter().map(|f| f.0).collect();
+            return Err(src.at(
+                key,
+                format!("unknown key figure '{key}' (known: {})", known.join(", ")),
+            ));
+        };
+        let (si, unit, written) =
+            parse_value(text, *q, src.p_atm_pa).map_err(|m| src.at(key, format!("{key}: {m}")))?;
+        if si <= 0.0 {
+            return Err(src.at(key, format!("{key}: the {what} must be > 0 (got '{text}')")));
+        }
+        out.push(Figure {
+            key: key.clone(),
+            quantity: *q,
+            unit,
+            si,
+            written,
+            line: key_location(src.rig.1, Table::Experiment(src.table), key).map(|l| l.0),
+        });
+    }
+    check_figures(src, &out)?;
+    Ok(out)
+}
+
+fn figure(figures: &[Figure], key: &str) -> Option<f64> {
+    figures.iter().find(|f| f.key == key).map(|f| f.si)
+}
+
+/// The figures against one another: the free speed above the speed at max power, max power
+/// placed at a speed, max power = torque·speed there (within three reading tolerances).
+fn check_figures(src: &Source<'_>, figures: &[Figure]) -> Result<(), DataError> {
+    let get = |k: &str| figure(figures, k);
+    let rpm = |w: f64| Unit::Rpm.from_si(w, 0.0);
+    if let (Some(free), Some(at_max)) = (get("free_speed"), get("speed_at_max_power")) {
+        if free <= at_max {
+            return Err(src.at(
+                "free_speed",
+                format!(
+                    "free speed {:.0} rpm is not above the speed at max power {:.0} rpm (the torque is 0 at free speed, so the power is too)",
+                    rpm(free),
+                    rpm(at_max)
+                ),
+            ));
+        }
+    }
+    let at_max_keys = ["max_power", "torque_at_max_power", "air_at_max_power"];
+    if get("speed_at_max_power").is_none() {
+        if let Some(k) = at_max_keys.iter().find(|k| get(k).is_some()) {
+            return Err(src.at(
+                k,
+                format!("{k} needs speed_at_max_power: the model is compared at that speed"),
+            ));
+        }
+    }
+    if let (Some(p), Some(t), Some(w)) = (
+        get("max_power"),
+        get("torque_at_max_power"),
+        get("speed_at_max_power"),
+    ) {
+        let tw = t * w;
+        if (p - tw).abs() > 3.0 * src.tolerance * p.max(tw) {
+            let side = if p > tw { "above" } else { "below" };
+            return Err(src.at(
+                "max_power",
+                format!(
+                    "max power {p:.1} W is {side} torque·speed at max power = {t:.4} N·m × {:.0} rpm = {tw:.1} W (they must agree within 3 reading tolerances, {:.0} %)",
+                    rpm(w),
+                    300.0 * src.tolerance
+                ),
+            ));
+        }
+    }
+    if let (Some(stall), Some(t)) = (get("stall_torque"), get("torque_at_max_power")) {
+        if t >= stall {
+            return Err(src.at(
+                "torque_at_max_power",
+                format!("torque at max power {t:.4} N·m is not below the stall torque {stall:.4} N·m"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The figures as rows of the curves: (speed, torque, power, air), NaN where not given,
+/// with the rig.toml line of the row's first figure. Torque at max power is compared only
+/// when no max power is given (power = torque·speed there: the same information twice).
+fn figure_rows(figures: &[Figure]) -> Vec<([f64; 4], u64)> {
+    let get = |k: &str| figure(figures, k);
+    let line = |k: &str| figures.iter().find(|f| f.key == k).and_then(|f| f.line);
+    let mut rows = Vec::new();
+    if let Some(t) = get("stall_torque") {
+        rows.push(([0.0, t, f64::NAN, f64::NAN], line("stall_torque")));
+    }
+    if let Some(w) = get("speed_at_max_power") {
+        let p = get("max_power");
+        let t = if p.is_some() { None } else { get("torque_at_max_power") };
+        let a = get("air_at_max_power");
+        if p.is_some() || t.is_some() || a.is_some() {
+            let nan = f64::NAN;
+            rows.push((
+                [w, t.unwrap_or(nan), p.unwrap_or(nan), a.unwrap_or(nan)],
+                line("speed_at_max_power"),
+            ));
+        }
+    }
+    if let Some(w) = get("free_speed") {
+        let a = get("air_at_free_speed").unwrap_or(f64::NAN);
+        rows.push(([w, 0.0, f64::NAN, a], line("free_speed")));
+    }
+    rows.into_iter()
+        .map(|(r, l)| (r, l.unwrap_or(1)))
+        .collect()
+}
+
+/// The catalogue's recording: the curve rows (if a file is given) followed by the figure
+/// rows, columns speed, torque, power and air (those with any value), NaN where a row
+/// gives no value.
+pub(super) fn recording(
+    src: &Source<'_>,
+    curves: Option<Recording>,
+    figures: &[Figure],
+) -> Result<Recording, DataError> {
+    let quantities = [Quantity::Speed, Quantity::Torque, Quantity::Power, Quantity::Flow1];
+    let mut rec = curves.unwrap_or_else(|| Recording {
+        file: src.rig.0.to_path_buf(),
+        columns: Vec::new(),
+        lines: Vec::new(),
+    });
+    if let Some(c) = rec
+        .columns
+        .iter()
+        .position(|c| !quantities.contains(&c.quantity))
+    {
+        let name = rec.columns[c].name.clone();
+        return Err(DataError::new(
+            &rec.file,
+            "a catalogue curve file has speed, torque, power and air columns only (give the supply pressure as p_supply in rig.toml, one [[experiment]] per pressure)",
+        )
+        .at(1)
+        .col(c, &name));
+    }
+    let rows = figure_rows(figures);
+    for (k, &q) in quantities.iter().enumerate() {
+        let n_before = rec.rows();
+        if rec.column(q).is_none() && rows.iter().any(|(r, _)| r[k].is_finite()) {
+            // The column's unit: the first figure of that quantity, as printed.
+            let unit = figures
+                .iter()
+                .find(|f| f.quantity == q)
+                .map_or(q.si_unit(), |f| f.unit);
+            rec.columns.push(Column {
+                name: crate::units::column_name(q, unit),
+                quantity: q,
+                unit,
+                si: vec![f64::NAN; n_before],
+                raw: vec![String::new(); n_before],
+            });
+        }
+    }
+    for (row, line) in rows {
+        for col in &mut rec.columns {
+            let k = quantities.iter().position(|q| *q == col.quantity).unwrap_or(0);
+            let v = row[k];
+            col.si.push(v);
+            col.raw.push(if v.is_finite() {
+                format!("{}", col.unit.from_si(v, src.p_atm_pa))
+            } else {
+                String::new()
+            });
+        }
+        rec.lines.push(line);
+    }
+    check_curves(&rec, src.tolerance)?;
+    Ok(rec)
+}
+
+/// Every row has a speed ≥ 0; torque, power and air are ≥ 0; power is not above
+/// torque·speed (torque taken from the same row, or interpolated on the torque points
+/// around that speed) by more than three reading tolerances of the power's full scale.
+fn check_curves(rec: &Recording, tolerance: f64) -> Result<(), DataError> {
+    let locate = |q: Quantity, row: usize, message: String| {
+        let c = rec.columns.iter().position(|c| c.quantity == q).unwrap_or(0);
+        DataError::new(&rec.file, message)
+            .at(rec.lines[row])
+            .col(c, &rec.columns[c].name)
+    };
+    let speed = rec.values(Quantity::Speed)?;
+    for q in [Quantity::Speed, Quantity::Torque, Quantity::Power, Quantity::Flow1] {
+        let Some(col) = rec.column(q) else { continue };
+        for (i, v) in col.si.iter().enumerate() {
+            if q == Quantity::Speed && !v.is_finite() {
+                return Err(locate(q, i, "every catalogue point needs its speed".into()));
+            }
+            if *v < 0.0 {
+                return Err(locate(q, i, format!("'{}' must be >= 0", col.raw[i])));
+            }
+        }
+    }
+    if !rec
+        .columns
+        .iter()
+        .any(|c| c.quantity != Quantity::Speed && c.si.iter().any(|v| v.is_finite()))
+    {
+        return Err(DataError::new(
+            &rec.file,
+            "the catalogue gives no torque, power or air consumption (a curve file or key figures)",
+        ));
+    }
+    let (Some(power), Some(torque)) = (rec.column(Quantity::Power), rec.column(Quantity::Torque))
+    else {
+        return Ok(());
+    };
+    let p_max = power.si.iter().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let mut torque_points: Vec<(f64, f64)> = speed
+        .iter()
+        .zip(&torque.si)
+        .filter(|(_, t)| t.is_finite())
+        .map(|(w, t)| (*w, *t))
+        .collect();
+    torque_points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (i, (&w, &p)) in speed.iter().zip(&power.si).enumerate() {
+        let t = if torque.si[i].is_finite() {
+            Some(torque.si[i])
+        } else {
+            interpolate(&torque_points, w)
+        };
+        let Some(t) = t else { continue };
+        if p.is_finite() && p > t * w + 3.0 * tolerance * p_max {
+            let rpm = Unit::Rpm.from_si(w, 0.0);
+            let message = format!(
+                "power {p:.1} W at {rpm:.0} rpm is above torque·speed = {t:.4} N·m × {rpm:.0} rpm = {:.1} W (shaft power is torque times speed)",
+                t * w
+            );
+            return Err(locate(Quantity::Power, i, message));
+        }
+    }
+    Ok(())
+}
+
+/// Linear interpolation on points sorted by x; `None` outside their range.
+fn interpolate(points: &[(f64, f64)], x: f64) -> Option<f64> {
+    let k = points.iter().position(|p| p.0 >= x)?;
+    let (x1, y1) = points[k];
+    if x1 == x {
+        return Some(y1);
+    }
+    let (x0, y0) = *points.get(k.checked_sub(1)?)?;
+    Some(y0 + (y1 - y0) * (x - x0) / (x1 - x0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn printed_units_are_read() {
+        let p = 101_325.0;
+        let (si, u, v) = parse_value("6.3 bar(g)", Quantity::PPort1, p).unwrap();
+        assert_eq!((u, v), (Unit::BarG, 6.3));
+        assert!((si - 731_325.0).abs() < 1e-6);
+        assert_eq!(parse_value("0.12 kW", Quantity::Power, p).unwrap().1, Unit::Kw);
+        assert_eq!(parse_value("12 lbf·ft", Quantity::Torque, p).unwrap().1, Unit::LbfFt);
+        assert_eq!(parse_value("0.31 N·m", Quantity::Torque, p).unwrap().1, Unit::Nm);
+        assert_eq!(parse_value("7.4cfm", Quantity::Flow1, p).unwrap().1, Unit::Cfm);
+        assert_eq!(parse_value("3 m³/min", Quantity::Flow1, p).unwrap().1, Unit::M3Min);
+        assert_eq!(parse_value("180 l/min ANR", Quantity::Flow1, p).unwrap().1, Unit::LMinAnr);
+        assert_eq!(parse_value("180 Nl/min", Quantity::Flow1, p).unwrap().1, Unit::NlMin);
+        assert_eq!(parse_value("9000 r/min", Quantity::Speed, p).unwrap().1, Unit::Rpm);
+        assert_eq!(parse_value("90 psi(g)", Quantity::PPort1, p).unwrap().1, Unit::PsiG);
+        assert_eq!(parse_value("1e3 rpm", Quantity::Speed, p).unwrap().2, 1e3);
+        let e = parse_value("0.12 N·m", Quantity::Power, p).unwrap_err();
+        assert!(e.contains("not a unit of power") && e.contains("kw"), "{e}");
+        assert!(parse_value("kW", Quantity::Power, p).is_err());
+        assert!(parse_value("0.12", Quantity::Power, p).unwrap_err().contains("no unit"));
+    }
+
+    #[test]
+    fn interpolation_stays_inside_the_points() {
+        let pts = [(0.0, 1.0), (10.0, 0.0)];
+        assert_eq!(interpolate(&pts, 5.0), Some(0.5));
+        assert_eq!(interpolate(&pts, 0.0), Some(1.0));
+        assert_eq!(interpolate(&pts, 11.0), None);
+    }
+}

@@ -1,0 +1,84 @@
+//! The catalogue experiment: a manufacturer's curves and key figures at one supply
+//! pressure, read off a printed page. Like the datasheet (SPEC §2, experiment 1) it is a
+//! set of steady states at imposed speeds, but it measures shaft torque, shaft power
+//! P = T·ω and air consumption (the port-1 flow) and its points are sparse: a row may give
+//! any subset of them. Key figures arrive as rows too (the data layer turns free speed,
+//! stall torque and the max-power point into points on these curves), so the stall row at
+//! ω = 0 follows the datasheet's stall convention.
+
+use super::datasheet::steady_sweep;
+use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, Setting, SimError, Simulated};
+use crate::model::motor::Motor;
+use crate::numerics::ode::StiffSolver;
+use crate::sim::recording::ExperimentData;
+use crate::units::Quantity;
+use std::sync::Arc;
+
+/// The kind (see the module documentation).
+pub struct Catalogue;
+
+impl ExperimentKind for Catalogue {
+    fn id(&self) -> &'static str {
+        "catalogue"
+    }
+    fn inputs(&self) -> &'static [InputCheck] {
+        &[InputCheck::Column(Quantity::Speed), InputCheck::Supply]
+    }
+    fn channels(&self) -> &'static [Quantity] {
+        &[Quantity::Torque, Quantity::Power, Quantity::Flow1]
+    }
+    fn abscissa(&self) -> AbscissaSpec {
+        AbscissaSpec {
+            quantity: Quantity::Speed,
+            log10: false,
+        }
+    }
+    fn is_transient(&self) -> bool {
+        false
+    }
+    fn build(&self, data: &ExperimentData) -> Result<Arc<dyn Drive>, SimError> {
+        let rec = &data.recording;
+        let speeds = rec.values(Quantity::Speed).map_err(missing(data))?.to_vec();
+        let p_supply_pa = data.p_supply_pa.ok_or_else(|| SimError {
+            experiment: data.file.clone(),
+            message: "a catalogue needs its supply pressure".into(),
+        })?;
+        Ok(Arc::new(CatalogueSweep {
+            p_supply: vec![p_supply_pa; speeds.len()],
+            speeds,
+        }))
+    }
+}
+
+/// Steady states at the catalogue's speeds (rad/s) and its supply pressure (Pa).
+#[derive(Debug, Clone)]
+struct CatalogueSweep {
+    speeds: Vec<f64>,
+    p_supply: Vec<f64>,
+}
+
+impl Drive for CatalogueSweep {
+    fn abscissa(&self) -> Vec<f64> {
+        self.speeds.clone()
+    }
+
+    fn simulate(
+        &self,
+        setting: &Setting<'_>,
+        motor: &Motor,
+        _solver: &dyn StiffSolver,
+    ) -> Result<Simulated, SimError> {
+        let rows = steady_sweep(setting, motor, &self.speeds, &self.p_supply)?;
+        Ok(Simulated {
+            outputs: vec![
+                (Quantity::Torque, rows.iter().map(|r| r[0]).collect()),
+                // Shaft power P = T·ω, W (0 at stall).
+                (
+                    Quantity::Power,
+                    rows.iter().zip(&self.speeds).map(|(r, w)| r[0] * w).collect(),
+                ),
+                (Quantity::Flow1, rows.iter().map(|r| r[1]).collect()),
+            ],
+        })
+    }
+}
