@@ -25,7 +25,8 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
     }
     if let Some(p) = ex.p_supply_pa {
         println!(
-            "    supply pressure {} bar(g) = {} Pa absolute; reading tolerance {} % of each curve's full scale",
+            "    supply pressure {}{} bar(g) = {} Pa absolute; reading tolerance {} % of each curve's full scale",
+            ex.p_supply_written.as_deref().map_or(String::new(), |w| format!("{w} = ")),
             num(Unit::BarG.from_si(p, p_atm_pa)),
             num(p),
             num(100.0 * ex.tolerance.unwrap_or(0.0))
@@ -49,10 +50,15 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
         );
     }
     let rec = &ex.recording;
-    let cols: Vec<_> = [Quantity::Speed, Quantity::Torque, Quantity::Power, Quantity::Flow1]
-        .iter()
-        .filter_map(|q| rec.column(*q))
-        .collect();
+    let cols: Vec<_> = [
+        Quantity::Speed,
+        Quantity::Torque,
+        Quantity::Power,
+        Quantity::Flow1,
+    ]
+    .iter()
+    .filter_map(|q| rec.column(*q))
+    .collect();
     let header: Vec<String> = cols
         .iter()
         .map(|c| format!("{} = {}", c.name, c.quantity.si_unit().suffix()))
@@ -68,9 +74,19 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
             .collect();
         println!("      line {:>3}: {}", rec.lines[r], cells.join(" "));
     }
-    for c in &cols {
-        if let Some(conditions) = c.unit.reference_conditions() {
-            println!("    {} counts air at {conditions}", c.name);
+    let mut units: Vec<Unit> = cols.iter().map(|c| c.unit).collect();
+    units.extend(ex.figures.iter().map(|f| f.unit));
+    units.dedup();
+    let mut shown = Vec::new();
+    for u in units {
+        if let Some(conditions) = u.reference_conditions() {
+            if !shown.contains(&conditions) {
+                println!(
+                    "    air consumption in {} counts air at {conditions}",
+                    u.suffix()
+                );
+                shown.push(conditions);
+            }
         }
     }
 }

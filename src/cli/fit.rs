@@ -1,6 +1,6 @@
 //! `vanefit fit` (SPEC §6): options, progress, summary and export.
 
-use crate::data::dataset::{DataError, Dataset};
+use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::fit::{
@@ -39,6 +39,9 @@ pub enum FitCommandError {
     /// `--bounds` names a parameter that is not estimated.
     #[error("--bounds: '{0}' is not estimated")]
     NotEstimated(String),
+    /// A catalogue pins none of the parameters.
+    #[error("the catalogue pins none of {0} to within {1:.0} % (1σ): add curves, key figures or a rig experiment, or name parameters with --estimate")]
+    NothingPinned(String, f64),
     /// `--start-spread` must exceed 1.
     #[error("--start-spread {0}: must be a number > 1")]
     StartSpread(f64),
@@ -211,8 +214,6 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, FitCo
     if !(args.start_spread.is_finite() && args.start_spread > 1.0) {
         return Err(FitCommandError::StartSpread(args.start_spread));
     }
-    // Conductances grow with the motor: scale the AR034-11 defaults with the displacement.
-    let size = fixed.v_disp() / crate::model::params::MotorParams::default().v_disp();
     let dims = names
         .iter()
         .map(|n| {
@@ -223,10 +224,10 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, FitCo
             match starts.iter().find(|(m, _, _)| m == n) {
                 Some((_, lo, hi)) => d.with_start_range(*lo, *hi),
                 None => {
-                    let mut centre = spec(n).map_or(0.0, |s| s.default);
-                    if n.starts_with("c_") {
-                        centre *= size;
-                    }
+                    // The rig's nominal value: defaults scaled with the displacement.
+                    let centre = fixed
+                        .get(n)
+                        .unwrap_or_else(|| spec(n).map_or(0.0, |s| s.default));
                     if d.log_scale && centre > 0.0 {
                         d.clone()
                             .with_start_range(
@@ -251,6 +252,57 @@ pub fn side_path(out: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(format!("{}.{suffix}", stem.display()))
 }
 
+/// For a dataset of catalogue pages only and no `--estimate`: the parameters the catalogue
+/// pins down (`estimate::subset`), printed with what would pin the rest; otherwise `args`
+/// as they are.
+fn catalogue_estimates(
+    ds: &Dataset,
+    data: &FitData,
+    args: &FitArgs,
+) -> Result<FitArgs, FitCommandError> {
+    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
+    if args.estimate.is_some() || !catalogue_only {
+        return Ok(args.clone());
+    }
+    let motor = Motor::new(ds.nominal_params()?, EffectSet::empty());
+    let names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
+    let Some(pinning) = crate::estimate::subset::pinned_subset(data, &motor, &names) else {
+        return Err(FitCommandError::NothingPinned(names.join(", "), limit));
+    };
+    println!("catalogue only: what it pins down at the nominal motor (relative 1σ; pinned: ≤ {limit:.0} %)");
+    for p in &pinning {
+        let sd = if p.relative_sd.is_finite() {
+            format!("{:.1} %", 100.0 * p.relative_sd)
+        } else {
+            "unseen".to_string()
+        };
+        let verdict = if p.pinned {
+            "estimated".to_string()
+        } else {
+            let value = motor.params.get(&p.name).unwrap_or(f64::NAN);
+            let hint = match most_sensitive_experiment(&motor, &p.name) {
+                Some(k) => format!("; the {} experiment would pin it", k.id()),
+                None => String::new(),
+            };
+            format!("fixed at {value:.4e} (default scaled to the displacement){hint}")
+        };
+        println!("  {:<10} {:>9}  {verdict}", p.name, sd);
+    }
+    let chosen: Vec<&str> = pinning
+        .iter()
+        .filter(|p| p.pinned)
+        .map(|p| p.name.as_str())
+        .collect();
+    if chosen.is_empty() {
+        return Err(FitCommandError::NothingPinned(names.join(", "), limit));
+    }
+    Ok(FitArgs {
+        estimate: Some(chosen.join(",")),
+        ..args.clone()
+    })
+}
+
 /// Runs `vanefit fit`: fit, fit file, summary, plots.
 pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
     if args.starts == 0 {
@@ -260,8 +312,9 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
         return Err(FitCommandError::NoThreads);
     }
     let ds = Dataset::load(&args.dataset)?;
-    let space = space_from_args(&ds, args)?;
     let data = FitData::new(&ds, CostOptions::default())?;
+    let args = &catalogue_estimates(&ds, &data, args)?;
+    let space = space_from_args(&ds, args)?;
     let setup = FitSetup {
         space,
         multistart: MultiStartConfig {
@@ -325,6 +378,13 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
     );
     if !setup.space.effects.is_empty() {
         println!("effects: {}", setup.space.effects.ids().join(", "));
+    }
+    for ex in ds.experiments.iter().filter(|e| e.kind == Kind::Catalogue) {
+        println!(
+            "{}: catalogue points weigh with their reading tolerance ({:.0} % of each curve's full scale) as σ, not a noise estimate, and carry no sensor offsets",
+            ex.file,
+            100.0 * ex.tolerance.unwrap_or(0.0)
+        );
     }
     print_goodness(out);
     print_parameters(ds, setup, out);

@@ -444,7 +444,10 @@ fn experiment_data(
     let catalogue = ex.kind == Kind::Catalogue;
     let p_supply_pa = match (&ex.p_supply, ex.p_supply_mpa) {
         (Some(_), Some(_)) => {
-            return Err(at("p_supply", "give p_supply or p_supply_mpa, not both".into()))
+            return Err(at(
+                "p_supply",
+                "give p_supply or p_supply_mpa, not both".into(),
+            ))
         }
         (Some(text), None) => {
             let (p, _, _) = catalogue::parse_value(text, Quantity::PPort1, p_atm_pa)
@@ -452,7 +455,9 @@ fn experiment_data(
             if !(p > p_atm_pa && p < 5e6) {
                 return Err(at(
                     "p_supply",
-                    format!("p_supply = '{text}' must be above atmosphere and below 5 MPa absolute"),
+                    format!(
+                        "p_supply = '{text}' must be above atmosphere and below 5 MPa absolute"
+                    ),
                 ));
             }
             Some(p)
@@ -461,7 +466,11 @@ fn experiment_data(
     };
     if !catalogue {
         for key in ["figures", "tolerance"] {
-            let given = if key == "figures" { ex.figures.is_some() } else { ex.tolerance.is_some() };
+            let given = if key == "figures" {
+                ex.figures.is_some()
+            } else {
+                ex.tolerance.is_some()
+            };
             if given {
                 return Err(at(key, format!("{key} is for kind = \"catalogue\" only")));
             }
@@ -473,7 +482,10 @@ fn experiment_data(
     }
     let recording = match &ex.file {
         None if !catalogue => {
-            return Err(at("kind", format!("{} needs a recording: file = \"…\"", ex.kind.id())))
+            return Err(at(
+                "kind",
+                format!("{} needs a recording: file = \"…\"", ex.kind.id()),
+            ))
         }
         None => None,
         Some(file) => {
@@ -481,7 +493,10 @@ fn experiment_data(
             if !csv.is_file() {
                 return Err(at(
                     "file",
-                    format!("recording '{file}' not found (looked for {})", csv.display()),
+                    format!(
+                        "recording '{file}' not found (looked for {})",
+                        csv.display()
+                    ),
                 ));
             }
             let text = read_text(&csv)?;
@@ -511,6 +526,7 @@ fn experiment_data(
         kind: ex.kind,
         file: ex.name(k),
         p_supply_pa,
+        p_supply_written: ex.p_supply.clone(),
         load: match ex.load {
             None | Some(LoadSection::None) => Load::None,
             Some(LoadSection::ViscousBrake { c_nm_s_rad }) => Load::ViscousBrake { c_nm_s_rad },

@@ -181,8 +181,49 @@ impl MotorSection {
                 set.set(name, v)?;
             }
         }
+        if let Some(v_disp) = volumes[0] {
+            let size = v_disp / crate::model::params::MotorParams::default().v_disp();
+            for (name, value) in scaled_defaults(size) {
+                set.set(name, value)?;
+            }
+        }
         Ok(set.check()?)
     }
+}
+
+/// How the defaults of the parameters a rig file does not give grow with the motor:
+/// geometric similarity with s = V_disp/V_disp,AR034 (lengths ∝ s^⅓). Sonic conductances
+/// are areas (∝ s^⅔); lumped volumes ∝ s; Coulomb friction is a force from the pressure on
+/// vane and seal areas times a radius (∝ s); viscous friction is a sheared area times a
+/// radius squared over an unchanged clearance (∝ s^{4/3}); inertia is a mass times a radius
+/// squared (∝ s^{5/3}).
+pub const SIZE_EXPONENTS: [(&str, f64); 12] = [
+    ("c_in1", 2.0 / 3.0),
+    ("c_out2", 2.0 / 3.0),
+    ("c_ext", 2.0 / 3.0),
+    ("c_1e", 2.0 / 3.0),
+    ("c_2e", 2.0 / 3.0),
+    ("c_12", 2.0 / 3.0),
+    ("vol1", 1.0),
+    ("vol2", 1.0),
+    ("vole", 1.0),
+    ("t_coulomb", 1.0),
+    ("visc", 4.0 / 3.0),
+    ("inertia", 5.0 / 3.0),
+];
+
+/// The AR034-11 defaults of [`SIZE_EXPONENTS`] scaled to a motor `size` times its
+/// displacement (nothing when the size is 1, so the default motor keeps its exact values).
+pub fn scaled_defaults(size: f64) -> Vec<(&'static str, f64)> {
+    if size == 1.0 || !(size.is_finite() && size > 0.0) {
+        return Vec::new();
+    }
+    SIZE_EXPONENTS
+        .iter()
+        .filter_map(|(name, k)| {
+            crate::model::params::spec(name).map(|s| (*name, s.default * size.powf(*k)))
+        })
+        .collect()
 }
 
 /// Lengths positive, the rotor inside the stator, the ports in the order dead < fill < exp

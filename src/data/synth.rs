@@ -128,6 +128,7 @@ fn experiment_data(
 ) -> ExperimentData {
     let rows = columns[0].si.len();
     ExperimentData {
+        p_supply_written: None,
         tolerance: None,
         figures: Vec::new(),
         kind,

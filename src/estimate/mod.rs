@@ -20,6 +20,7 @@ pub mod objective;
 pub mod optimize;
 pub mod settings;
 pub mod space;
+pub mod subset;
 pub mod uncertainty;
 
 pub use engine::Engine;

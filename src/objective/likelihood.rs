@@ -60,6 +60,9 @@ pub struct ChannelTarget {
     pub data: Vec<f64>,
     /// Noise standard deviation of the channel, SI (see the module documentation).
     pub sigma: f64,
+    /// Stated data (a catalogue): σ is the reading tolerance and no sensor took the values,
+    /// so no sensor offset is profiled out.
+    pub stated: bool,
 }
 
 impl ChannelTarget {
@@ -232,6 +235,7 @@ impl Target {
                     _ => values.to_vec(),
                 };
                 channels.push(ChannelTarget {
+                    stated: data.tolerance.is_some(),
                     file: ex.file.clone(),
                     quantity: r.quantity,
                     data: rows.iter().map(|&i| values[i]).collect(),
@@ -257,7 +261,7 @@ impl Target {
         let mut items = Vec::new();
         let mut start = 0;
         for c in &self.channels {
-            if let Some(tau) = calibration_tolerance(c.quantity) {
+            if let Some(tau) = calibration_tolerance(c.quantity).filter(|_| !c.stated) {
                 let mut shape = vec![0.0; n];
                 shape[start..start + c.rows.len()].fill(1.0);
                 items.push(Nuisance {

@@ -88,8 +88,10 @@ pub struct ExperimentData {
     pub kind: Kind,
     /// File name as given in rig.toml.
     pub file: String,
-    /// Supply pressure from rig.toml (`p_supply_mpa`), absolute Pa.
+    /// Supply pressure from rig.toml (`p_supply_mpa` or `p_supply`), absolute Pa.
     pub p_supply_pa: Option<f64>,
+    /// The supply pressure as written (`p_supply = "90 psi(g)"`), for people.
+    pub p_supply_written: Option<String>,
     /// Load on the shaft.
     pub load: Load,
     /// Weight of the whole experiment in the cost (default 1).

@@ -20,11 +20,23 @@ pub const FIGURES: [(&str, Quantity, &str); 8] = [
     ("free_speed", Quantity::Speed, "free speed"),
     ("max_power", Quantity::Power, "max power"),
     ("speed_at_max_power", Quantity::Speed, "speed at max power"),
-    ("torque_at_max_power", Quantity::Torque, "torque at max power"),
+    (
+        "torque_at_max_power",
+        Quantity::Torque,
+        "torque at max power",
+    ),
     ("stall_torque", Quantity::Torque, "stall torque"),
     ("min_start_torque", Quantity::Torque, "minimum start torque"),
-    ("air_at_max_power", Quantity::Flow1, "air consumption at max power"),
-    ("air_at_free_speed", Quantity::Flow1, "air consumption at free speed"),
+    (
+        "air_at_max_power",
+        Quantity::Flow1,
+        "air consumption at max power",
+    ),
+    (
+        "air_at_free_speed",
+        Quantity::Flow1,
+        "air consumption at free speed",
+    ),
 ];
 
 /// Default reading tolerance of a catalogue point: 1σ = 2 % of its curve's full scale
@@ -45,7 +57,13 @@ pub(super) struct Source<'a> {
 
 impl Source<'_> {
     fn at(&self, key: &str, message: String) -> DataError {
-        located(self.rig.0, self.rig.1, Table::Experiment(self.table), key, message)
+        located(
+            self.rig.0,
+            self.rig.1,
+            Table::Experiment(self.table),
+            key,
+            message,
+        )
     }
 }
 
@@ -70,7 +88,10 @@ pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit,
         .parse()
         .map_err(|_| format!("'{text}' is not a number followed by a unit (e.g. '6.3 bar_g')"))?;
     if unit.trim().is_empty() {
-        return Err(format!("'{text}' has no unit (e.g. '{value} {}')", q.si_unit().suffix()));
+        return Err(format!(
+            "'{text}' has no unit (e.g. '{value} {}')",
+            q.si_unit().suffix()
+        ));
     }
     let name = normalise_unit(unit);
     let unit = unit_of(q, &name).map_err(|_| {
@@ -209,42 +230,48 @@ fn check_figures(src: &Source<'_>, figures: &[Figure]) -> Result<(), DataError> 
         if t >= stall {
             return Err(src.at(
                 "torque_at_max_power",
-                format!("torque at max power {t:.4} N·m is not below the stall torque {stall:.4} N·m"),
+                format!(
+                    "torque at max power {t:.4} N·m is not below the stall torque {stall:.4} N·m"
+                ),
             ));
         }
     }
     Ok(())
 }
 
-/// The figures as rows of the curves: (speed, torque, power, air), NaN where not given,
-/// with the rig.toml line of the row's first figure. Torque at max power is compared only
-/// when no max power is given (power = torque·speed there: the same information twice).
-fn figure_rows(figures: &[Figure]) -> Vec<([f64; 4], u64)> {
-    let get = |k: &str| figure(figures, k);
+/// One cell of a figure row: the SI value and, where a figure gave it, that figure.
+type Cell<'a> = Option<(f64, Option<&'a Figure>)>;
+
+/// The figures as rows of the curves: cells (speed, torque, power, air), `None` where not
+/// given, with the rig.toml line of the row's first figure. Torque at max power is compared
+/// only when no max power is given (power = torque·speed there: the same information twice).
+fn figure_rows(figures: &[Figure]) -> Vec<([Cell<'_>; 4], u64)> {
+    let get = |k: &str| figures.iter().find(|f| f.key == k).map(|f| (f.si, Some(f)));
     let line = |k: &str| figures.iter().find(|f| f.key == k).and_then(|f| f.line);
     let mut rows = Vec::new();
     if let Some(t) = get("stall_torque") {
-        rows.push(([0.0, t, f64::NAN, f64::NAN], line("stall_torque")));
+        rows.push((
+            [Some((0.0, None)), Some(t), None, None],
+            line("stall_torque"),
+        ));
     }
     if let Some(w) = get("speed_at_max_power") {
         let p = get("max_power");
-        let t = if p.is_some() { None } else { get("torque_at_max_power") };
+        let t = if p.is_some() {
+            None
+        } else {
+            get("torque_at_max_power")
+        };
         let a = get("air_at_max_power");
         if p.is_some() || t.is_some() || a.is_some() {
-            let nan = f64::NAN;
-            rows.push((
-                [w, t.unwrap_or(nan), p.unwrap_or(nan), a.unwrap_or(nan)],
-                line("speed_at_max_power"),
-            ));
+            rows.push(([Some(w), t, p, a], line("speed_at_max_power")));
         }
     }
     if let Some(w) = get("free_speed") {
-        let a = get("air_at_free_speed").unwrap_or(f64::NAN);
-        rows.push(([w, 0.0, f64::NAN, a], line("free_speed")));
+        let a = get("air_at_free_speed");
+        rows.push(([Some(w), Some((0.0, None)), None, a], line("free_speed")));
     }
-    rows.into_iter()
-        .map(|(r, l)| (r, l.unwrap_or(1)))
-        .collect()
+    rows.into_iter().map(|(r, l)| (r, l.unwrap_or(1))).collect()
 }
 
 /// The catalogue's recording: the curve rows (if a file is given) followed by the figure
@@ -255,7 +282,12 @@ pub(super) fn recording(
     curves: Option<Recording>,
     figures: &[Figure],
 ) -> Result<Recording, DataError> {
-    let quantities = [Quantity::Speed, Quantity::Torque, Quantity::Power, Quantity::Flow1];
+    let quantities = [
+        Quantity::Speed,
+        Quantity::Torque,
+        Quantity::Power,
+        Quantity::Flow1,
+    ];
     let mut rec = curves.unwrap_or_else(|| Recording {
         file: src.rig.0.to_path_buf(),
         columns: Vec::new(),
@@ -277,7 +309,7 @@ pub(super) fn recording(
     let rows = figure_rows(figures);
     for (k, &q) in quantities.iter().enumerate() {
         let n_before = rec.rows();
-        if rec.column(q).is_none() && rows.iter().any(|(r, _)| r[k].is_finite()) {
+        if rec.column(q).is_none() && rows.iter().any(|(r, _)| r[k].is_some()) {
             // The column's unit: the first figure of that quantity, as printed.
             let unit = figures
                 .iter()
@@ -294,14 +326,19 @@ pub(super) fn recording(
     }
     for (row, line) in rows {
         for col in &mut rec.columns {
-            let k = quantities.iter().position(|q| *q == col.quantity).unwrap_or(0);
-            let v = row[k];
-            col.si.push(v);
-            col.raw.push(if v.is_finite() {
-                format!("{}", col.unit.from_si(v, src.p_atm_pa))
-            } else {
-                String::new()
-            });
+            let k = quantities
+                .iter()
+                .position(|q| *q == col.quantity)
+                .unwrap_or(0);
+            let (si, raw) = match row[k] {
+                None => (f64::NAN, String::new()),
+                // As printed where the figure's unit is the column's, else with its unit.
+                Some((v, Some(f))) if f.unit == col.unit => (v, format!("{}", f.written)),
+                Some((v, Some(f))) if k > 0 => (v, format!("{} {}", f.written, f.unit.suffix())),
+                Some((v, _)) => (v, format!("{}", col.unit.from_si(v, src.p_atm_pa))),
+            };
+            col.si.push(si);
+            col.raw.push(raw);
         }
         rec.lines.push(line);
     }
@@ -314,13 +351,22 @@ pub(super) fn recording(
 /// around that speed) by more than three reading tolerances of the power's full scale.
 fn check_curves(rec: &Recording, tolerance: f64) -> Result<(), DataError> {
     let locate = |q: Quantity, row: usize, message: String| {
-        let c = rec.columns.iter().position(|c| c.quantity == q).unwrap_or(0);
+        let c = rec
+            .columns
+            .iter()
+            .position(|c| c.quantity == q)
+            .unwrap_or(0);
         DataError::new(&rec.file, message)
             .at(rec.lines[row])
             .col(c, &rec.columns[c].name)
     };
     let speed = rec.values(Quantity::Speed)?;
-    for q in [Quantity::Speed, Quantity::Torque, Quantity::Power, Quantity::Flow1] {
+    for q in [
+        Quantity::Speed,
+        Quantity::Torque,
+        Quantity::Power,
+        Quantity::Flow1,
+    ] {
         let Some(col) = rec.column(q) else { continue };
         for (i, v) in col.si.iter().enumerate() {
             if q == Quantity::Speed && !v.is_finite() {
@@ -345,7 +391,12 @@ fn check_curves(rec: &Recording, tolerance: f64) -> Result<(), DataError> {
     else {
         return Ok(());
     };
-    let p_max = power.si.iter().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let p_max = power
+        .si
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
     let mut torque_points: Vec<(f64, f64)> = speed
         .iter()
         .zip(&torque.si)
@@ -393,20 +444,49 @@ mod tests {
         let (si, u, v) = parse_value("6.3 bar(g)", Quantity::PPort1, p).unwrap();
         assert_eq!((u, v), (Unit::BarG, 6.3));
         assert!((si - 731_325.0).abs() < 1e-6);
-        assert_eq!(parse_value("0.12 kW", Quantity::Power, p).unwrap().1, Unit::Kw);
-        assert_eq!(parse_value("12 lbf·ft", Quantity::Torque, p).unwrap().1, Unit::LbfFt);
-        assert_eq!(parse_value("0.31 N·m", Quantity::Torque, p).unwrap().1, Unit::Nm);
-        assert_eq!(parse_value("7.4cfm", Quantity::Flow1, p).unwrap().1, Unit::Cfm);
-        assert_eq!(parse_value("3 m³/min", Quantity::Flow1, p).unwrap().1, Unit::M3Min);
-        assert_eq!(parse_value("180 l/min ANR", Quantity::Flow1, p).unwrap().1, Unit::LMinAnr);
-        assert_eq!(parse_value("180 Nl/min", Quantity::Flow1, p).unwrap().1, Unit::NlMin);
-        assert_eq!(parse_value("9000 r/min", Quantity::Speed, p).unwrap().1, Unit::Rpm);
-        assert_eq!(parse_value("90 psi(g)", Quantity::PPort1, p).unwrap().1, Unit::PsiG);
+        assert_eq!(
+            parse_value("0.12 kW", Quantity::Power, p).unwrap().1,
+            Unit::Kw
+        );
+        assert_eq!(
+            parse_value("12 lbf·ft", Quantity::Torque, p).unwrap().1,
+            Unit::LbfFt
+        );
+        assert_eq!(
+            parse_value("0.31 N·m", Quantity::Torque, p).unwrap().1,
+            Unit::Nm
+        );
+        assert_eq!(
+            parse_value("7.4cfm", Quantity::Flow1, p).unwrap().1,
+            Unit::Cfm
+        );
+        assert_eq!(
+            parse_value("3 m³/min", Quantity::Flow1, p).unwrap().1,
+            Unit::M3Min
+        );
+        assert_eq!(
+            parse_value("180 l/min ANR", Quantity::Flow1, p).unwrap().1,
+            Unit::LMinAnr
+        );
+        assert_eq!(
+            parse_value("180 Nl/min", Quantity::Flow1, p).unwrap().1,
+            Unit::NlMin
+        );
+        assert_eq!(
+            parse_value("9000 r/min", Quantity::Speed, p).unwrap().1,
+            Unit::Rpm
+        );
+        assert_eq!(
+            parse_value("90 psi(g)", Quantity::PPort1, p).unwrap().1,
+            Unit::PsiG
+        );
         assert_eq!(parse_value("1e3 rpm", Quantity::Speed, p).unwrap().2, 1e3);
         let e = parse_value("0.12 N·m", Quantity::Power, p).unwrap_err();
         assert!(e.contains("not a unit of power") && e.contains("kw"), "{e}");
         assert!(parse_value("kW", Quantity::Power, p).is_err());
-        assert!(parse_value("0.12", Quantity::Power, p).unwrap_err().contains("no unit"));
+        assert!(parse_value("0.12", Quantity::Power, p)
+            .unwrap_err()
+            .contains("no unit"));
     }
 
     #[test]
