@@ -859,8 +859,8 @@ mod tests {
         let e = parse("t_s,flow1_g_s\n0,1.0\n0,2\n").unwrap_err();
         assert_eq!(e.line, Some(3));
         assert!(e.message.contains("time does not increase"));
-        let e = parse("t_s,flow1_cfm\n0,1\n").unwrap_err();
-        assert!(e.message.contains("unknown unit 'cfm'"), "{e}");
+        let e = parse("t_s,flow1_furlongs\n0,1\n").unwrap_err();
+        assert!(e.message.contains("unknown unit 'furlongs'"), "{e}");
         assert!(parse("").unwrap_err().message.contains("empty"));
         assert!(parse("t_s,flow1_g_s\n")
             .unwrap_err()
