@@ -68,6 +68,13 @@ pub enum Command {
         /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Write catalogue pages (curves and key figures, printed to 3 digits) instead of
+        /// rig recordings.
+        #[arg(long)]
+        catalogue: bool,
+        /// Supply pressures of the catalogue pages, bar(g), comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "6.3")]
+        pressures: Vec<f64>,
     },
     /// Find the physics the model leaves out: locate, explain, model, refit (SPEC §5, §6).
     Diagnose(crate::cli::diagnose::DiagnoseArgs),
@@ -99,8 +106,17 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             out_dataset,
             params,
             effects,
+            catalogue: true,
+            pressures,
+            ..
+        } => synth_catalogue(&out_dataset, params.as_deref(), effects.as_deref(), &pressures),
+        Command::Synth {
+            out_dataset,
+            params,
+            effects,
             noise,
             seed,
+            ..
         } => synth(
             &out_dataset,
             params.as_deref(),
@@ -285,6 +301,61 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
     Ok(())
 }
 
+/// `vanefit synth --catalogue`: catalogue pages of the motor at `pressures` (bar(g)).
+fn synth_catalogue(
+    out: &Path,
+    params: Option<&Path>,
+    effects: Option<&str>,
+    pressures: &[f64],
+) -> Result<(), Failure> {
+    if let Some(p) = pressures.iter().find(|p| !(p.is_finite() && **p > 0.0 && **p < 40.0)) {
+        return Err(Failure(format!(
+            "--pressures: {p} is not a supply pressure in bar(g) (0 to 40)"
+        )));
+    }
+    let (motor, truth) = synth_motor(out, params, effects)?;
+    let plan = crate::data::synth_catalogue::CataloguePlan {
+        pressures_bar_g: pressures.to_vec(),
+        ..Default::default()
+    };
+    let rows = crate::data::synth_catalogue::write_catalogue(out, &motor, &plan, "no noise")?;
+    truth
+        .write(&out.join("truth.json"))
+        .map_err(|e| Failure(format!("{}: {e}", out.display())))?;
+    println!(
+        "wrote catalogue {} ({} page(s), truth in truth.json)",
+        out.display(),
+        rows.len()
+    );
+    Ok(())
+}
+
+/// The motor of `synth` (from a fit file or the default, effects overridden) and its truth
+/// file.
+fn synth_motor(
+    out: &Path,
+    params: Option<&Path>,
+    effects: Option<&str>,
+) -> Result<(Motor, FitFile), Failure> {
+    let fit = params.map(FitFile::read).transpose()?;
+    let (p, mut fx) = match &fit {
+        Some(f) => (f.params.clone(), f.effects.clone()),
+        None => (MotorParams::default(), EffectSet::empty()),
+    };
+    if let Some(list) = effects {
+        fx = EffectSet::parse_list(list).map_err(|m| Failure(format!("--effects: {m}")))?;
+    }
+    let extra = fit.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
+    let motor = Motor::new(p, fx.clone()).with_extra(&extra);
+    let mut truth = FitFile::from_params(
+        &out.file_name().unwrap_or_default().to_string_lossy(),
+        motor.params.clone(),
+        fx,
+    );
+    truth.extra = extra;
+    Ok((motor, truth))
+}
+
 fn synth(
     out: &Path,
     params: Option<&Path>,
@@ -295,17 +366,8 @@ fn synth(
     if !(noise.is_finite() && noise >= 0.0) {
         return Err(Failure(format!("--noise {noise}: must be a number >= 0")));
     }
-    let fit = params.map(FitFile::read).transpose()?;
-    let (p, mut fx) = match &fit {
-        Some(f) => (f.params.clone(), f.effects.clone()),
-        None => (MotorParams::default(), EffectSet::empty()),
-    };
-    if let Some(list) = effects {
-        fx = EffectSet::parse_list(list).map_err(|m| Failure(format!("--effects: {m}")))?;
-    }
     // Discovered terms of the fit file act in the synthetic motor as in `simulate`.
-    let extra = fit.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
-    let motor = Motor::new(p, fx.clone()).with_extra(&extra);
+    let (motor, truth) = synth_motor(out, params, effects)?;
     let plan = SynthPlan::default();
     let experiments = synthesize(
         &motor,
@@ -315,13 +377,7 @@ fn synth(
         seed,
     )?;
     let description = format!("seed {seed}, noise x{noise}.");
-    write_dataset(out, &experiments, &plan, &motor, &fx, &description)?;
-    let mut truth = FitFile::from_params(
-        &out.file_name().unwrap_or_default().to_string_lossy(),
-        motor.params.clone(),
-        fx,
-    );
-    truth.extra = extra;
+    write_dataset(out, &experiments, &plan, &motor, &motor.effects, &description)?;
     truth
         .write(&out.join("truth.json"))
         .map_err(|e| Failure(format!("{}: {e}", out.display())))?;

@@ -4,3 +4,4 @@ pub mod dataset;
 pub mod fitfile;
 pub mod motor;
 pub mod synth;
+pub mod synth_catalogue;

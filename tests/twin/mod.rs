@@ -8,6 +8,7 @@
 #![allow(dead_code, unused_imports)]
 
 pub mod cases;
+pub mod catalogue;
 pub mod experiment;
 pub mod files;
 pub mod motor;
