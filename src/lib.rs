@@ -5,8 +5,8 @@
 //!
 //! The folders are the layers, and each depends only on the ones before it:
 //! `units` → `io` → `numerics` → `model` → `sim` → `data` → `objective` → `estimate` →
-//! {`diagnose`, `control`} → `report` → `cli`. SI units everywhere inside; `units` converts
-//! at the file edge.
+//! {`diagnose`, `control`, `predict`} → `report` → `cli`. SI units everywhere inside; `units`
+//! converts at the file edge.
 
 pub mod cli;
 pub mod control;
@@ -17,6 +17,7 @@ pub mod io;
 pub mod model;
 pub mod numerics;
 pub mod objective;
+pub mod predict;
 pub mod report;
 pub mod sim;
 pub mod units;

@@ -18,7 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["data"],
     &["objective"],
     &["estimate"],
-    &["diagnose", "control"],
+    &["diagnose", "control", "predict"],
     &["report"],
     &["cli"],
 ];

@@ -5,6 +5,7 @@ pub mod catalogue;
 pub mod control;
 pub mod diagnose;
 pub mod fit;
+pub mod predict;
 
 use crate::data::dataset::{Dataset, Kind};
 use crate::data::fitfile::FitFile;
@@ -80,6 +81,10 @@ pub enum Command {
     Diagnose(crate::cli::diagnose::DiagnoseArgs),
     /// Speed-control studies (paper section 5): throttling, frequency response, closed loop.
     Control(crate::cli::control::ControlArgs),
+    /// Predict the fitted motor at other supply pressures or with an extra nozzle:
+    /// catalogue figures, correction factors and curves with 95% bands (SPEC section 7).
+    #[command(allow_negative_numbers = true)]
+    Predict(crate::cli::predict::PredictArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -126,6 +131,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         ),
         Command::Control(args) => crate::cli::control::run(args),
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
+        Command::Predict(args) => Ok(crate::cli::predict::run(&args)?),
     }
 }
 

@@ -8,6 +8,8 @@ use crate::model::extra::{
     ExtraTerm, LeakPath, PressureFactor as P, SpeedFactor as W,
 };
 use crate::model::params::{spec, MotorParams, ParamSet, PARAMS};
+use crate::sim::recording::ExperimentData;
+use crate::units::Quantity;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
@@ -112,6 +114,132 @@ pub struct RunInfo {
     pub threads: usize,
 }
 
+/// The joint uncertainty of the estimated parameters (`covariance` in the file): the
+/// covariance of ln θ from the curvature of the likelihood's χ² at the estimate,
+/// Σ_log = D·Σ_θ·D with Σ_θ = 2·s²·H⁻¹ in the optimizer's coordinates
+/// (`estimate::uncertainty::curvature_covariance`, s² the intervals' scale) and
+/// D = diag(d ln v/dθ). Written as
+/// `{"space": "log", "parameters": [names], "matrix": [[...]]}`; `null` when a fit computed
+/// no intervals or the curvature was not positive definite. The profile intervals (`ci95`)
+/// are the better marginal widths; this matrix adds the correlations between parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogCovariance {
+    /// The estimated parameters, in the matrix's order.
+    pub parameters: Vec<String>,
+    /// Cov(ln θ_i, ln θ_j), symmetric, positive diagonal.
+    pub matrix: Vec<Vec<f64>>,
+}
+
+impl LogCovariance {
+    /// The JSON object of the file.
+    fn to_json(&self) -> Value {
+        serde_json::json!({
+            "space": "log",
+            "parameters": self.parameters,
+            "matrix": self.matrix,
+        })
+    }
+
+    /// Reads and checks the file's object: log space, known and distinct names, a square
+    /// symmetric matrix of finite numbers with a positive diagonal.
+    fn from_json(v: &Value) -> Result<Self, String> {
+        if v.get("space").and_then(Value::as_str) != Some("log") {
+            return Err("covariance.space must be \"log\"".into());
+        }
+        let parameters: Vec<String> = v
+            .get("parameters")
+            .and_then(|p| serde_json::from_value(p.clone()).ok())
+            .ok_or("covariance.parameters must be a list of parameter names")?;
+        for (i, n) in parameters.iter().enumerate() {
+            if spec(n).is_none() {
+                return Err(format!("covariance: unknown parameter '{n}'"));
+            }
+            if parameters[..i].contains(n) {
+                return Err(format!("covariance: parameter '{n}' listed twice"));
+            }
+        }
+        let matrix: Vec<Vec<f64>> = v
+            .get("matrix")
+            .and_then(|m| serde_json::from_value(m.clone()).ok())
+            .ok_or("covariance.matrix must be a list of rows of numbers")?;
+        let k = parameters.len();
+        if matrix.len() != k || matrix.iter().any(|r| r.len() != k) {
+            return Err(format!(
+                "covariance.matrix must be {k}×{k}, one row per parameter"
+            ));
+        }
+        for i in 0..k {
+            if !(matrix[i][i].is_finite() && matrix[i][i] > 0.0) {
+                return Err(format!(
+                    "covariance.matrix: the variance of '{}' must be a positive number",
+                    parameters[i]
+                ));
+            }
+            for j in 0..i {
+                let (a, b) = (matrix[i][j], matrix[j][i]);
+                let scale = (matrix[i][i] * matrix[j][j]).sqrt();
+                if !(a.is_finite() && b.is_finite()) || (a - b).abs() > 1e-9 * scale {
+                    return Err("covariance.matrix must be symmetric and finite".into());
+                }
+            }
+        }
+        Ok(Self { parameters, matrix })
+    }
+}
+
+/// What the fitted data covered (`conditions` in the file): the rig's atmosphere and the
+/// span of supply pressures in the recordings, so that a prediction can say when it
+/// extrapolates.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FitConditions {
+    /// Atmospheric pressure of the rig, Pa absolute.
+    pub p_atm_pa: f64,
+    /// Lowest and highest supply pressure of the fitted experiments, Pa absolute (`None`:
+    /// no experiment states one).
+    pub p_supply_range_pa: Option<[f64; 2]>,
+}
+
+impl FitConditions {
+    /// The conditions of a dataset's experiments: each contributes its `p_supply_pa` where
+    /// rig.toml sets one, else the range of its recorded port-1 pressure (a datasheet's
+    /// pressure column, a pressure ramp's rising supply); experiments with neither add
+    /// nothing.
+    pub fn of(p_atm_pa: f64, experiments: &[ExperimentData]) -> Self {
+        let pressures = experiments.iter().flat_map(|ex| match ex.p_supply_pa {
+            Some(p) => vec![p],
+            None => ex
+                .recording
+                .column(Quantity::PPort1)
+                .map(|c| c.si.clone())
+                .unwrap_or_default(),
+        });
+        let (lo, hi) = pressures
+            .filter(|p| p.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p), b.max(p))
+            });
+        Self {
+            p_atm_pa,
+            p_supply_range_pa: (lo <= hi).then_some([lo, hi]),
+        }
+    }
+
+    /// Checks the file's values: a positive atmosphere, a range 0 < lo ≤ hi.
+    fn check(self) -> Result<Self, String> {
+        if !(self.p_atm_pa.is_finite() && self.p_atm_pa > 0.0) {
+            return Err("conditions.p_atm_pa must be a positive number of Pa".into());
+        }
+        if let Some([lo, hi]) = self.p_supply_range_pa {
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+                return Err(
+                    "conditions.p_supply_range_pa must be [lo, hi] Pa with 0 < lo ≤ hi".into(),
+                );
+            }
+        }
+        Ok(self)
+    }
+}
+
 /// A complete fit file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitFile {
@@ -139,6 +267,10 @@ pub struct FitFile {
     pub verdicts: Vec<ParamVerdict>,
     /// The fit's statistics, where a fit made the file.
     pub statistics: Option<FitStatistics>,
+    /// Covariance of the estimated parameters' logarithms, where the fit computed one.
+    pub covariance: Option<LogCovariance>,
+    /// What the fitted data covered (files written before it existed: `None`).
+    pub conditions: Option<FitConditions>,
 }
 
 impl FitFile {
@@ -157,6 +289,8 @@ impl FitFile {
             extra: Vec::new(),
             verdicts: Vec::new(),
             statistics: None,
+            covariance: None,
+            conditions: None,
         }
     }
 
@@ -213,6 +347,22 @@ impl FitFile {
                 serde_json::to_value(st).expect("plain data"),
             );
         }
+        // A fit says null when it computed no covariance; plain parameter files say nothing.
+        match &self.covariance {
+            Some(c) => {
+                doc.insert("covariance".into(), c.to_json());
+            }
+            None if self.statistics.is_some() => {
+                doc.insert("covariance".into(), Value::Null);
+            }
+            None => {}
+        }
+        if let Some(c) = &self.conditions {
+            doc.insert(
+                "conditions".into(),
+                serde_json::to_value(c).expect("plain data"),
+            );
+        }
         doc.insert("version".into(), env!("CARGO_PKG_VERSION").into());
         Value::Object(doc)
     }
@@ -252,6 +402,7 @@ impl FitFile {
         let effects = r.effects(obj)?;
         let extra = r.discovered(obj)?;
         let (params, estimated, ci95) = r.parameters(obj)?;
+        let covariance = r.covariance(obj, &estimated)?;
         Ok(FitFile {
             dataset: obj
                 .get("dataset")
@@ -275,6 +426,8 @@ impl FitFile {
             statistics: obj
                 .get("statistics")
                 .and_then(|v| serde_json::from_value(v.clone()).ok()),
+            covariance,
+            conditions: r.conditions(obj)?,
         })
     }
 }
@@ -358,6 +511,41 @@ impl Reader<'_> {
                 self.line_of("\"discovered\""),
                 "model.discovered must be a list".into(),
             )),
+        }
+    }
+
+    /// `covariance` (absent or null: none). Predictions compute with it, so a malformed one
+    /// is refused rather than left out.
+    /// Its parameters must be estimated ones (`estimated`).
+    fn covariance(
+        &self,
+        obj: &Map<String, Value>,
+        estimated: &[String],
+    ) -> Result<Option<LogCovariance>, FitFileError> {
+        let here = || self.line_of("\"covariance\"");
+        let c = match obj.get("covariance") {
+            None | Some(Value::Null) => return Ok(None),
+            Some(v) => LogCovariance::from_json(v).map_err(|m| self.fail(here(), m))?,
+        };
+        match c.parameters.iter().find(|n| !estimated.contains(n)) {
+            Some(n) => Err(self.fail(
+                here(),
+                format!("covariance: parameter '{n}' is not marked as estimated"),
+            )),
+            None => Ok(Some(c)),
+        }
+    }
+
+    /// `conditions` (absent or null: unknown).
+    fn conditions(&self, obj: &Map<String, Value>) -> Result<Option<FitConditions>, FitFileError> {
+        let here = || self.line_of("\"conditions\"");
+        match obj.get("conditions") {
+            None | Some(Value::Null) => Ok(None),
+            Some(v) => serde_json::from_value::<FitConditions>(v.clone())
+                .map_err(|e| format!("conditions: {e}"))
+                .and_then(FitConditions::check)
+                .map(Some)
+                .map_err(|m| self.fail(here(), m)),
         }
     }
 
@@ -554,6 +742,113 @@ mod tests {
         assert_eq!(back.estimated, f.estimated);
         assert_eq!(back.ci95, f.ci95);
         assert_eq!(back.cost, Some(3.5));
+    }
+
+    #[test]
+    fn covariance_and_conditions_round_trip_and_old_files_read_without_them() {
+        let mut f = FitFile::from_params("demo", MotorParams::default(), EffectSet::empty());
+        f.estimated = vec!["c_in1".into(), "visc".into()];
+        f.covariance = Some(LogCovariance {
+            parameters: f.estimated.clone(),
+            matrix: vec![vec![4e-6, -1e-6], vec![-1e-6, 9e-6]],
+        });
+        f.conditions = Some(FitConditions {
+            p_atm_pa: 101_325.0,
+            p_supply_range_pa: Some([1.2e5, 7.3e5]),
+        });
+        let text = serde_json::to_string_pretty(&f.to_json()).unwrap();
+        assert!(text.contains("\"space\": \"log\""), "{text}");
+        let back = FitFile::parse(Path::new("f.json"), &text).unwrap();
+        assert_eq!(back.covariance, f.covariance);
+        assert_eq!(back.conditions, f.conditions);
+        // A file written before these fields existed.
+        let old = FitFile::parse(Path::new("f.json"), r#"{"parameters": {}}"#).unwrap();
+        assert_eq!((old.covariance, old.conditions), (None, None));
+        let with_null = r#"{"parameters": {}, "covariance": null, "conditions": null}"#;
+        assert!(FitFile::parse(Path::new("f.json"), with_null).is_ok());
+    }
+
+    #[test]
+    fn a_malformed_covariance_or_condition_is_refused_at_its_line() {
+        let base = |cov: &str| {
+            format!(
+                "{{\n \"parameters\": {{\"c_in1\": {{\"value\": 7e-9, \"estimated\": true}}}},\n                  \"covariance\": {cov}\n}}"
+            )
+        };
+        for (cov, says) in [
+            (
+                r#"{"space": "theta", "parameters": ["c_in1"], "matrix": [[1e-6]]}"#,
+                "log",
+            ),
+            (
+                r#"{"space": "log", "parameters": ["c_in1"], "matrix": [[-1e-6]]}"#,
+                "positive",
+            ),
+            (
+                r#"{"space": "log", "parameters": ["c_in1"], "matrix": [[1, 2]]}"#,
+                "1×1",
+            ),
+            (
+                r#"{"space": "log", "parameters": ["visc"], "matrix": [[1e-6]]}"#,
+                "not marked",
+            ),
+            (
+                r#"{"space": "log", "parameters": ["c_nope"], "matrix": [[1e-6]]}"#,
+                "unknown",
+            ),
+        ] {
+            let e = FitFile::parse(Path::new("f.json"), &base(cov)).unwrap_err();
+            assert_eq!(e.line, Some(3), "{e}");
+            assert!(e.message.contains(says), "{e}");
+        }
+        let e = FitFile::parse(
+            Path::new("f.json"),
+            r#"{"conditions": {"p_atm_pa": 101325, "p_supply_range_pa": [7e5, 2e5]}}"#,
+        )
+        .unwrap_err();
+        assert!(e.message.contains("p_supply_range_pa"), "{e}");
+    }
+
+    #[test]
+    fn conditions_take_the_stated_supply_or_the_recorded_pressure() {
+        use crate::model::motor::Load;
+        use crate::sim::recording::{Column, Kind, Recording};
+        use crate::units::Unit;
+        let ex = |p_supply: Option<f64>, p_column: Option<Vec<f64>>| ExperimentData {
+            kind: Kind::PressureRamp,
+            file: "x.csv".into(),
+            p_supply_pa: p_supply,
+            load: Load::None,
+            weight: 1.0,
+            channel_weights: Default::default(),
+            recording: Recording {
+                file: "x.csv".into(),
+                columns: p_column
+                    .into_iter()
+                    .map(|si| Column {
+                        name: "p_port1_pa".into(),
+                        quantity: Quantity::PPort1,
+                        unit: Unit::Pa,
+                        raw: si.iter().map(|v| v.to_string()).collect(),
+                        si,
+                    })
+                    .collect(),
+                lines: vec![2, 3, 4],
+            },
+        };
+        let c = FitConditions::of(
+            1e5,
+            &[
+                ex(Some(7.3e5), None),
+                ex(None, Some(vec![1.1e5, 4e5, 7.5e5])),
+                ex(Some(5e5), Some(vec![9e5])),
+            ],
+        );
+        assert_eq!(c.p_supply_range_pa, Some([1.1e5, 7.5e5]));
+        assert_eq!(
+            FitConditions::of(1e5, &[ex(None, None)]).p_supply_range_pa,
+            None
+        );
     }
 
     #[test]

@@ -29,11 +29,14 @@ use super::settings::{MultiStartConfig, MultiStartSettings};
 use super::space::ParamSpace;
 use super::uncertainty::{self, Interval};
 use crate::data::dataset::Kind;
-use crate::data::fitfile::{FitFile, FitStatistics, ParamVerdict, RunInfo, Starts};
+use crate::data::fitfile::{
+    FitConditions, FitFile, FitStatistics, LogCovariance, ParamVerdict, RunInfo, Starts,
+};
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
+use nalgebra::DMatrix;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -128,6 +131,12 @@ pub struct FitOutcome {
     pub widening: Vec<(String, f64)>,
     /// 95% intervals (empty when not asked for).
     pub intervals: Vec<Interval>,
+    /// Covariance of θ (optimizer coordinates) from the curvature of χ², scaled as the
+    /// intervals are (`None` when no intervals were asked for or the curvature is not
+    /// positive definite); see [`FitOutcome::log_covariance`].
+    pub covariance: Option<DMatrix<f64>>,
+    /// The atmosphere and the supply pressures that the fitted recordings cover.
+    pub conditions: FitConditions,
     /// Local minima found by the starts.
     pub clusters: Vec<Cluster>,
     /// Every start.
@@ -143,6 +152,54 @@ impl FitOutcome {
     pub fn bic(&self) -> f64 {
         self.chi2 + self.theta.len() as f64 * (self.n_points.max(1) as f64).ln()
     }
+
+    /// The covariance of the estimated parameters' logarithms ([`log_covariance`]).
+    pub fn log_covariance(&self, space: &ParamSpace) -> Option<LogCovariance> {
+        log_covariance(space, &self.theta, self.covariance.as_ref()?)
+    }
+}
+
+/// The covariance of the estimated parameters' logarithms from that of the optimizer's
+/// coordinates θ: Σ_log = D·Σ_θ·D with D = diag(d ln v_j/dθ_j) at θ. With u = 1/(1 + e^(−θ))
+/// the position in the bounds, d ln v/dθ = (ln hi − ln lo)·u·(1 − u) on a log scale and
+/// (hi − lo)·u·(1 − u)/v on a linear one (`estimate::space`). Symmetrised against rounding.
+/// `None` when the sizes disagree or a linearly placed parameter is not positive (it has no
+/// logarithm).
+pub fn log_covariance(
+    space: &ParamSpace,
+    theta: &[f64],
+    cov: &DMatrix<f64>,
+) -> Option<LogCovariance> {
+    let k = space.len();
+    if cov.nrows() != k || cov.ncols() != k || theta.len() != k {
+        return None;
+    }
+    let d: Vec<f64> = space
+        .dims
+        .iter()
+        .zip(theta)
+        .map(|(dim, t)| {
+            let u = 1.0 / (1.0 + (-t).exp());
+            let slope = u * (1.0 - u);
+            if dim.log_scale {
+                Some((dim.hi.ln() - dim.lo.ln()) * slope)
+            } else {
+                let v = dim.value(*t);
+                (v > 0.0).then(|| (dim.hi - dim.lo) * slope / v)
+            }
+        })
+        .collect::<Option<_>>()?;
+    let matrix = (0..k)
+        .map(|i| {
+            (0..k)
+                .map(|j| d[i] * 0.5 * (cov[(i, j)] + cov[(j, i)]) * d[j])
+                .collect()
+        })
+        .collect();
+    Some(LogCovariance {
+        parameters: space.names(),
+        matrix,
+    })
 }
 
 /// Fits the space's parameters to the data on the engine's threads (see the module docs).
@@ -204,9 +261,9 @@ pub fn fit(
         .as_ref()
         .map(|sim| target.nuisance_estimates(sim))
         .unwrap_or_default();
-    let intervals = match &scored {
+    let (intervals, covariance) = match &scored {
         Some(g) => intervals(engine, &ml, &theta, chi2, g, &polished, setup),
-        None => Vec::new(),
+        None => (Vec::new(), None),
     };
     let at = problem.evaluate(&theta);
     Ok(FitOutcome {
@@ -221,6 +278,8 @@ pub fn fit(
         widening: ml_fit.widening,
         theta,
         intervals,
+        covariance,
+        conditions: data.conditions,
         clusters,
         evaluations: run.evaluations + problem.evaluations() + ml.evaluations(),
         run,
@@ -265,7 +324,8 @@ fn finish(
 /// The 95% intervals around the maximum-likelihood point `theta` (χ² `chi2_min`), widened
 /// where the model misses the noise, each marked when another polished optimum of the
 /// multi-start (`others`) fits as well with the parameter outside it; empty when not asked
-/// for.
+/// for. With them the curvature covariance of θ that sized the profiles' steps (kept for
+/// the fit file's joint uncertainty).
 fn intervals(
     engine: &Engine,
     ml: &Problem<'_>,
@@ -274,9 +334,9 @@ fn intervals(
     goodness: &GoodnessOfFit,
     others: &[Polished],
     setup: &FitSetup,
-) -> Vec<Interval> {
+) -> (Vec<Interval>, Option<DMatrix<f64>>) {
     if setup.uncertainty == UncertaintyMethod::None {
-        return Vec::new();
+        return (Vec::new(), None);
     }
     let threshold = goodness.threshold();
     let cov = uncertainty::curvature_covariance(ml, theta, 1e-3, goodness.interval_scale.powi(2));
@@ -294,7 +354,7 @@ fn intervals(
     };
     let rivals = competitors(others, chi2_min, threshold);
     mark_competitors(&mut out, &setup.space, &rivals);
-    out
+    (out, cov)
 }
 
 /// The experiment kind whose outputs move most (relative to typical sensor noise) when a
@@ -369,6 +429,8 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             threads: out.run.threads,
         }),
         extra: Vec::new(),
+        covariance: out.log_covariance(&setup.space),
+        conditions: Some(out.conditions),
         verdicts: out
             .intervals
             .iter()
@@ -402,5 +464,40 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
                 .map(|(k, v)| (k.clone(), (*v).into()))
                 .collect(),
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::effects::EffectSet;
+
+    #[test]
+    fn log_covariance_follows_the_coordinate_transforms() {
+        // c_in1 on a log scale, b_crit on a linear one: D_jj is the slope of ln v in θ.
+        let space = ParamSpace::new(
+            &["c_in1", "b_crit"],
+            MotorParams::default(),
+            EffectSet::empty(),
+        )
+        .unwrap();
+        let theta = vec![0.7, -0.4];
+        let cov = DMatrix::from_row_slice(2, 2, &[0.04, 0.01, 0.01, 0.09]);
+        let lc = log_covariance(&space, &theta, &cov).unwrap();
+        assert_eq!(lc.parameters, vec!["c_in1", "b_crit"]);
+        let h = 1e-6;
+        let slope: Vec<f64> = (0..2)
+            .map(|j| {
+                let d = &space.dims[j];
+                (d.value(theta[j] + h).ln() - d.value(theta[j] - h).ln()) / (2.0 * h)
+            })
+            .collect();
+        for i in 0..2 {
+            for j in 0..2 {
+                let want = slope[i] * cov[(i, j)] * slope[j];
+                assert!((lc.matrix[i][j] - want).abs() < 1e-7 * want.abs(), "{i}{j}");
+            }
+        }
+        assert!(log_covariance(&space, &theta[..1], &cov).is_none());
     }
 }

@@ -4,6 +4,7 @@
 
 use super::goodness::ChannelChi2;
 use crate::data::dataset::Dataset;
+use crate::data::fitfile::FitConditions;
 use crate::model::motor::Motor;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{CostError, CostModel, CostOptions};
@@ -22,6 +23,9 @@ pub struct FitData {
     pub target: Target,
     /// What the smoothing did to each input column.
     pub inputs: Vec<InputSmoothing>,
+    /// The atmosphere and the supply pressures the recordings cover (as recorded, before
+    /// any smoothing), exported with the fit.
+    pub conditions: FitConditions,
     /// `smoothed` with the recorded supply pressure raised by [`PRESSURE_STEP_PA`] (for the
     /// pressure sensor's offset; `None` when no experiment records that pressure).
     raised: Option<CostModel>,
@@ -47,6 +51,7 @@ impl FitData {
             smoothed,
             target,
             inputs,
+            conditions: FitConditions::of(ds.p_atm_pa, &ds.experiments),
             raised,
         })
     }

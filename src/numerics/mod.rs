@@ -1,7 +1,9 @@
-//! Numerical methods that know nothing of motors: stiff integration.
+//! Numerical methods that know nothing of motors: stiff integration, and roots and minima
+//! of functions of one variable.
 
 pub mod ode;
 pub mod rodas;
+pub mod scalar;
 
 /// The stiff solver every simulation uses unless it asks for another: Rodas4 (see
 /// [`rodas`] for why, and `examples/solver_accuracy.rs` for the measurements behind it).

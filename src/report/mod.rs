@@ -1,6 +1,8 @@
-//! Reports: SVG charts and the written results of fits, diagnoses and control studies.
+//! Reports: SVG charts and the written results of fits, diagnoses, control studies and
+//! predictions.
 
 pub mod control;
 pub mod diagnose;
 pub mod fit;
 pub mod plot;
+pub mod predict;

@@ -1,7 +1,8 @@
 //! Simulation: the reference experiments (SPEC §2) driven by recorded inputs, steady states,
-//! input schedules.
+//! steady operating points and catalogue figures, input schedules.
 
 pub mod experiment;
+pub mod operating_point;
 pub mod recording;
 pub mod schedule;
 pub mod steady;

@@ -2,8 +2,9 @@
 //! pressures, one per row; measured torque and flows against speed.
 
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, Setting, SimError, Simulated};
-use crate::model::motor::{idx, Boundary, Load, Motor, State};
+use crate::model::motor::{Boundary, Load, Motor, State};
 use crate::numerics::ode::StiffSolver;
+use crate::sim::operating_point::shaft_torque;
 use crate::sim::recording::ExperimentData;
 use crate::sim::steady;
 use crate::units::Quantity;
@@ -102,11 +103,7 @@ pub(super) fn steady_sweep(
             .map_err(|e| setting.fail(format!("row {}: {e}", i + 1)))?;
         let b = motor.balance(&x, &bc);
         // At standstill the brake holds the rotor against the full dry friction.
-        let torque = if speeds[i] == 0.0 {
-            b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
-        } else {
-            b.torque_shaft_nm()
-        };
+        let torque = shaft_torque(motor, &x, &b);
         results[i] = [torque, b.flow_port1_kg_s, b.flow_port2_kg_s];
         guess = Some(x);
     }

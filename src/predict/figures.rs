@@ -1,0 +1,142 @@
+//! The figures of one motor at every asked pressure, and their layout as one flat vector so
+//! that a band is propagated to each of them alike.
+//!
+//! Layout, for each asked pressure in order: the seven catalogue figures
+//! ([`super::ROW_FIGURES`]), the four correction factors ([`super::FACTORS`]), then for each
+//! curve speed its torque, power and air. Two versions: as shown (the maximum power and
+//! the figures at it on the speed grid) and smooth (the same at the continuous optimum of
+//! P(ω)): the grid point moves in steps of Δ as the parameters change, so the bands are the
+//! smooth figures' bands, centred on the shown values (the two differ by ½·P''·Δ² in power,
+//! less than 1e-7 relative on a 1 rpm grid).
+
+use super::{PredictError, PredictOptions};
+use crate::model::motor::Motor;
+use crate::sim::operating_point::{at_speeds, catalogue_row, CatalogueRow, OperatingPoint};
+
+/// Catalogue figures per pressure.
+pub(super) const N_ROW: usize = 7;
+/// Correction factors per pressure.
+pub(super) const N_FACTORS: usize = 4;
+/// Curve figures per speed (torque, power, air).
+pub(super) const N_CURVE: usize = 3;
+
+/// Everything one motor gives for the asked options.
+#[derive(Debug, Clone)]
+pub(super) struct Outcome {
+    /// The catalogue row at each asked pressure.
+    pub rows: Vec<CatalogueRow>,
+    /// The row at the reference pressure.
+    pub reference: CatalogueRow,
+    /// The curve at each asked pressure.
+    pub curves: Vec<Vec<OperatingPoint>>,
+}
+
+impl Outcome {
+    /// The figures of `motor`. The curves are at `curve_speeds` (rad/s, one list per asked
+    /// pressure) where given, else at `curve_points` speeds from 0 to each free speed. The
+    /// reference row is computed once and reused for an asked pressure equal to it, so that
+    /// the factors there are exactly 1 for every motor.
+    pub fn of(
+        motor: &Motor,
+        options: &PredictOptions,
+        curve_speeds: Option<&[Vec<f64>]>,
+    ) -> Result<Self, PredictError> {
+        let row_at = |p: f64| {
+            catalogue_row(motor, &options.conditions(p), options.speed_grid_rad_s).map_err(
+                |source| PredictError::AtPressure {
+                    p_supply_pa: p,
+                    source,
+                },
+            )
+        };
+        let reference = row_at(options.reference_pa)?;
+        let rows = options
+            .pressures_pa
+            .iter()
+            .map(|p| {
+                if *p == options.reference_pa {
+                    Ok(reference)
+                } else {
+                    row_at(*p)
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let n = options.curve_points;
+        let curves = rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let speeds = match curve_speeds {
+                    Some(s) => s[i].clone(),
+                    None => (0..n)
+                        .map(|k| r.free_speed_rad_s * k as f64 / (n - 1) as f64)
+                        .collect(),
+                };
+                at_speeds(motor, &options.conditions(r.p_supply_pa), &speeds).map_err(|e| {
+                    PredictError::AtPressure {
+                        p_supply_pa: r.p_supply_pa,
+                        source: e.into(),
+                    }
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            rows,
+            reference,
+            curves,
+        })
+    }
+
+    /// The flat vector of figures (see the module documentation), smooth or as shown.
+    pub fn flat(&self, smooth: bool) -> Vec<f64> {
+        let mut out = Vec::new();
+        for (row, curve) in self.rows.iter().zip(&self.curves) {
+            out.extend(row_figures(row, smooth));
+            out.extend(factors(row, &self.reference, smooth));
+            for p in curve {
+                out.extend([p.torque_nm, p.power_w, p.flow1_kg_s]);
+            }
+        }
+        out
+    }
+}
+
+/// The catalogue figures of a row in [`super::ROW_FIGURES`] order, SI.
+pub(super) fn row_figures(r: &CatalogueRow, smooth: bool) -> [f64; N_ROW] {
+    let at_max = if smooth {
+        let o = &r.optimum;
+        [o.power_w, o.speed_rad_s, o.torque_nm]
+    } else {
+        [
+            r.max_power_w,
+            r.speed_at_max_power_rad_s,
+            r.torque_at_max_power_nm,
+        ]
+    };
+    let air_at_max = if smooth {
+        r.optimum.flow1_kg_s
+    } else {
+        r.air_at_max_power_kg_s
+    };
+    [
+        r.free_speed_rad_s,
+        at_max[0],
+        at_max[1],
+        at_max[2],
+        r.stall_torque_nm,
+        air_at_max,
+        r.air_at_free_speed_kg_s,
+    ]
+}
+
+/// The correction factors of a row against the reference row, in [`super::FACTORS`]
+/// order: maximum power, free speed, stall torque and air at maximum power, each divided by
+/// the same figure at the reference pressure.
+pub(super) fn factors(
+    r: &CatalogueRow,
+    reference: &CatalogueRow,
+    smooth: bool,
+) -> [f64; N_FACTORS] {
+    let (a, b) = (row_figures(r, smooth), row_figures(reference, smooth));
+    [a[1] / b[1], a[0] / b[0], a[4] / b[4], a[5] / b[5]]
+}

@@ -1,0 +1,277 @@
+//! Predictions from a fit (issue 12, SPEC §7): what the fitted motor does at other supply
+//! pressures, or with an extra nozzle at its inlet or outlet, and how sure that is.
+//!
+//! For each asked supply pressure: the catalogue row of [`crate::sim::operating_point`]
+//! (free speed, maximum power on a speed grid with the speed, torque and air there, stall
+//! torque, air at free speed), the correction factors relative to a reference pressure
+//! (6.3 bar g unless asked otherwise), and curves of shaft torque, power and air
+//! consumption against speed from standstill to the free speed. The factors are
+//!
+//! * `power`: maximum power P_max(p)/P_max(p_ref),
+//! * `speed`: free speed ω_0(p)/ω_0(p_ref),
+//! * `torque`: stall torque T_stall(p)/T_stall(p_ref),
+//! * `air`: air consumption at maximum power ṁ_1(p)/ṁ_1(p_ref),
+//!
+//! each 1 at the reference pressure. Every figure carries a 95 % band propagated from the
+//! fit's parameter uncertainty ([`uncertainty`]); a pressure outside the supply pressures
+//! the fitted data covered is flagged as an extrapolation.
+
+mod figures;
+pub mod options;
+pub mod uncertainty;
+
+pub use options::{Nozzle, NozzlePort, PredictOptions};
+pub use uncertainty::{BandBasis, ParamUncertainty};
+
+use crate::data::fitfile::FitFile;
+use crate::model::motor::Motor;
+use crate::model::params::{ParamError, PARAMS};
+use crate::objective::likelihood::calibration_tolerance;
+use crate::sim::operating_point::{CatalogueRow, OperatingPointError};
+use crate::units::Quantity;
+use figures::{Outcome, N_CURVE, N_FACTORS, N_ROW};
+
+/// The catalogue figures of a row, in the order of [`PressurePrediction::figures`].
+pub const ROW_FIGURES: [&str; 7] = [
+    "free_speed",
+    "max_power",
+    "speed_at_max_power",
+    "torque_at_max_power",
+    "stall_torque",
+    "air_at_max_power",
+    "air_at_free_speed",
+];
+/// The correction factors, in the order of [`PressurePrediction::factors`].
+pub const FACTORS: [&str; 4] = ["power", "speed", "torque", "air"];
+
+/// Why a prediction failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PredictError {
+    /// No supply pressure was asked for.
+    #[error("no supply pressure to predict at")]
+    NoPressures,
+    /// A pressure is not a positive absolute pressure.
+    #[error("pressure {0} Pa is not a positive absolute pressure")]
+    BadPressure(f64),
+    /// The nozzle's conductance is not a positive number.
+    #[error("the nozzle's conductance {0:e} m3/(s*Pa) is not a positive number")]
+    BadNozzle(f64),
+    /// The speed grid is not a positive number.
+    #[error("the speed grid {0} rad/s is not a positive number")]
+    BadGrid(f64),
+    /// Fewer than two curve points.
+    #[error("a curve needs at least 2 points, not {0}")]
+    BadCurvePoints(usize),
+    /// The motor's figures at one supply pressure could not be found.
+    #[error("at {p_supply_pa:.0} Pa abs.: {source}")]
+    AtPressure {
+        /// Supply pressure, Pa absolute.
+        p_supply_pa: f64,
+        /// Why.
+        source: OperatingPointError,
+    },
+    /// A parameter set moved within the uncertainty is not a valid motor.
+    #[error("perturbing the parameters: {0}")]
+    Params(#[from] ParamError),
+}
+
+/// A predicted figure, SI, with its 95 % band (`None`: no band, see
+/// [`Prediction::uncertainty`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Banded {
+    /// The figure at the estimate.
+    pub value: f64,
+    /// Lower and upper end of its 95 % band.
+    pub band95: Option<[f64; 2]>,
+}
+
+/// One point of the curves against speed, SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurvePoint {
+    /// Imposed speed, rad/s.
+    pub speed_rad_s: f64,
+    /// Shaft torque, N·m.
+    pub torque_nm: Banded,
+    /// Shaft power, W.
+    pub power_w: Banded,
+    /// Air consumption (mass flow into port 1), kg/s.
+    pub air_kg_s: Banded,
+}
+
+/// Everything predicted at one supply pressure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressurePrediction {
+    /// Supply pressure, Pa absolute.
+    pub p_supply_pa: f64,
+    /// Outside the supply pressures the fitted data covered (`None`: the fit does not say).
+    pub extrapolated: Option<bool>,
+    /// The catalogue row at the estimate.
+    pub row: CatalogueRow,
+    /// The figures of [`ROW_FIGURES`], SI, with bands.
+    pub figures: [Banded; 7],
+    /// The factors of [`FACTORS`] relative to the reference pressure, with bands.
+    pub factors: [Banded; 4],
+    /// Torque, power and air against speed, from 0 to the free speed.
+    pub curve: Vec<CurvePoint>,
+}
+
+/// A prediction from a fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    /// What was asked.
+    pub options: PredictOptions,
+    /// The catalogue row at the reference pressure.
+    pub reference: CatalogueRow,
+    /// One per asked pressure, in the asked order.
+    pub pressures: Vec<PressurePrediction>,
+    /// The parameters' uncertainty the bands stand on, and what it leaves out.
+    pub uncertainty: ParamUncertainty,
+    /// Parameters the fit held fixed (taken as exact).
+    pub fixed: Vec<String>,
+    /// Supply pressures the fitted data covered, Pa absolute (`None`: not stated).
+    pub supply_range_pa: Option<[f64; 2]>,
+    /// How far outside that range a pressure may lie before it counts as extrapolated, Pa:
+    /// the supply-pressure sensor's calibration tolerance.
+    pub range_tolerance_pa: f64,
+    /// Discovered terms of the fit's model (their coefficients are taken as exact).
+    pub discovered_terms: usize,
+}
+
+/// The fit's motor, discovered terms included.
+fn fitted_motor(fit: &FitFile) -> Motor {
+    Motor::new(fit.params.clone(), fit.effects.clone()).with_extra(&fit.extra)
+}
+
+/// The figures at the estimate, and those of any motor at the same curve speeds (smooth).
+fn centre_and_figures(
+    fit: &FitFile,
+    options: &PredictOptions,
+) -> Result<(Outcome, Vec<Vec<f64>>), PredictError> {
+    options.check()?;
+    let centre = Outcome::of(&fitted_motor(fit), options, None)?;
+    let speeds = centre
+        .curves
+        .iter()
+        .map(|c| c.iter().map(|p| p.speed_rad_s).collect())
+        .collect();
+    Ok((centre, speeds))
+}
+
+/// Predicts the fitted motor under `options` with 95 % bands (see the module
+/// documentation and [`uncertainty`]).
+pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, PredictError> {
+    let (centre, speeds) = centre_and_figures(fit, options)?;
+    let unc = ParamUncertainty::of(fit);
+    let shown = centre.flat(false);
+    let figures = |m: &Motor| Outcome::of(m, options, Some(&speeds)).map(|o| o.flat(true));
+    let bands = unc.delta_bands(fit, &shown, &figures)?;
+    let band = |i: usize| Banded {
+        value: shown[i],
+        band95: bands.as_ref().map(|b| b[i]),
+    };
+    let tolerance = calibration_tolerance(Quantity::PPort1).unwrap_or(0.0);
+    let range = fit.conditions.and_then(|c| c.p_supply_range_pa);
+    let stride = N_ROW + N_FACTORS + N_CURVE * options.curve_points;
+    let pressures = centre
+        .rows
+        .iter()
+        .zip(&centre.curves)
+        .enumerate()
+        .map(|(i, (row, curve))| {
+            let at = i * stride;
+            let c0 = at + N_ROW + N_FACTORS;
+            PressurePrediction {
+                p_supply_pa: row.p_supply_pa,
+                extrapolated: range.map(|[lo, hi]| {
+                    row.p_supply_pa < lo - tolerance || row.p_supply_pa > hi + tolerance
+                }),
+                row: *row,
+                figures: std::array::from_fn(|k| band(at + k)),
+                factors: std::array::from_fn(|k| band(at + N_ROW + k)),
+                curve: curve
+                    .iter()
+                    .enumerate()
+                    .map(|(k, p)| CurvePoint {
+                        speed_rad_s: p.speed_rad_s,
+                        torque_nm: band(c0 + N_CURVE * k),
+                        power_w: band(c0 + N_CURVE * k + 1),
+                        air_kg_s: band(c0 + N_CURVE * k + 2),
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    Ok(Prediction {
+        options: options.clone(),
+        reference: centre.reference,
+        pressures,
+        uncertainty: unc,
+        fixed: fixed_parameters(fit),
+        supply_range_pa: range,
+        range_tolerance_pa: tolerance,
+        discovered_terms: fit.extra.len(),
+    })
+}
+
+/// The parameters of the fit's model (base and switched-on effects) that were not
+/// estimated.
+fn fixed_parameters(fit: &FitFile) -> Vec<String> {
+    PARAMS
+        .iter()
+        .filter(|s| s.effect.is_none_or(|e| fit.effects.contains(e)))
+        .filter(|s| !fit.estimated.iter().any(|n| n == s.name))
+        .map(|s| s.name.to_string())
+        .collect()
+}
+
+/// One figure's delta-method band beside its Monte-Carlo band.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BandCheck {
+    /// Which figure: `<pressure Pa> <figure>` (curves: `<pressure Pa> <quantity>@<rad/s>`).
+    pub label: String,
+    /// The smooth figure at the estimate.
+    pub value: f64,
+    /// Its delta-method 95 % band.
+    pub delta: [f64; 2],
+    /// Its Monte-Carlo 95 % band.
+    pub monte_carlo: [f64; 2],
+}
+
+/// The delta-method bands of every figure beside Monte-Carlo bands from `samples` draws
+/// of the parameters (seed `seed`): the check of [`predict`]'s bands (slow: each draw is a
+/// whole prediction). Empty when the fit gives no band.
+pub fn check_bands(
+    fit: &FitFile,
+    options: &PredictOptions,
+    samples: usize,
+    seed: u64,
+) -> Result<Vec<BandCheck>, PredictError> {
+    let (centre, speeds) = centre_and_figures(fit, options)?;
+    let unc = ParamUncertainty::of(fit);
+    let smooth = centre.flat(true);
+    let figures = |m: &Motor| Outcome::of(m, options, Some(&speeds)).map(|o| o.flat(true));
+    let delta = unc.delta_bands(fit, &smooth, &figures)?;
+    let mc = unc.monte_carlo_bands(fit, samples, seed, &figures)?;
+    let (Some(delta), Some(mc)) = (delta, mc) else {
+        return Ok(Vec::new());
+    };
+    let mut labels = Vec::new();
+    for (row, speeds) in centre.rows.iter().zip(&speeds) {
+        let p = row.p_supply_pa;
+        labels.extend(ROW_FIGURES.iter().map(|f| format!("{p:.0} {f}")));
+        labels.extend(FACTORS.iter().map(|f| format!("{p:.0} factor {f}")));
+        for w in speeds {
+            labels.extend(["torque", "power", "air"].map(|q| format!("{p:.0} {q}@{w:.2}")));
+        }
+    }
+    Ok(labels
+        .into_iter()
+        .enumerate()
+        .map(|(i, label)| BandCheck {
+            label,
+            value: smooth[i],
+            delta: delta[i],
+            monte_carlo: mc[i],
+        })
+        .collect())
+}

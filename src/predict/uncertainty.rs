@@ -1,0 +1,329 @@
+//! The parameters' joint uncertainty as a prediction uses it, and its propagation to any
+//! vector of predicted figures: the delta method (what `vanefit predict` reports) and a
+//! Monte-Carlo check of it.
+//!
+//! # The parameters' distribution
+//!
+//! ln θ of the covered parameters is taken as normal, N(ln θ̂, C) with C = S·R·S:
+//! R is the correlation of the fit file's `covariance` (the curvature of χ² at the estimate,
+//! in log space), and S = diag(σ_j) the marginal standard deviations, each taken from the
+//! parameter's profile-likelihood `ci95` where one exists (σ_j = (ln hi − ln lo)/(2·1.96):
+//! the two sides' half-widths in log space averaged, since a profile interval is the better
+//! marginal and the curvature only adds how the parameters move together), else from the
+//! covariance's own diagonal. A fit file without a covariance but with intervals gives the
+//! parameters as independent (R = I); without either there is no band.
+//!
+//! Not covered, and said so in every output: parameters held fixed in the fit, estimated
+//! parameters that are not identifiable (`"identifiable": false`) or have no interval, and
+//! the coefficients of discovered terms.
+//!
+//! # Delta method
+//!
+//! For a figure y(ln θ), g_j = ∂y/∂ln θ_j by central differences of step h_j = σ_j (clamped
+//! to [1e-4, 0.05]: one standard deviation probes the figure over the width the band is
+//! about, and stays far above the steady solver's 1e-9 relative noise), Var y = gᵀ·C·g and
+//! the band is y ± 1.96·√Var y (a 95 % band when y is close to linear over the parameters'
+//! spread).
+
+use super::PredictError;
+use crate::data::fitfile::FitFile;
+use crate::model::motor::Motor;
+use crate::model::params::{MotorParams, ParamSet};
+use nalgebra::{DMatrix, DVector};
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// The normal quantile of a two-sided 95 % band.
+pub const Z95: f64 = 1.959_963_984_540_054;
+
+/// What the bands stand on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BandBasis {
+    /// The fit's covariance (correlations) with profile-interval widths.
+    Covariance,
+    /// The parameters' intervals taken as independent: the fit file has no covariance.
+    Independent,
+    /// No band: the fit file has neither covariance nor intervals.
+    None,
+}
+
+impl BandBasis {
+    /// The basis in words, for notes.
+    pub fn describe(self) -> &'static str {
+        match self {
+            BandBasis::Covariance => {
+                "95 % bands by the delta method from the fit's covariance of the log-parameters \
+                 (correlations of the curvature, widths of the profile intervals)"
+            }
+            BandBasis::Independent => {
+                "95 % bands by the delta method with the parameters taken as INDEPENDENT: the \
+                 fit file has intervals but no covariance, so correlations are ignored"
+            }
+            BandBasis::None => "no bands: the fit file has neither a covariance nor intervals",
+        }
+    }
+}
+
+/// The covered parameters' distribution, and what it leaves out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamUncertainty {
+    /// What the bands stand on.
+    pub basis: BandBasis,
+    /// The covered parameters, in the matrix's order.
+    pub names: Vec<String>,
+    /// ln θ̂ of each covered parameter.
+    pub log_values: Vec<f64>,
+    /// Marginal standard deviation σ_j of ln θ_j.
+    pub sd: Vec<f64>,
+    /// C = S·R·S, the covariance of ln θ.
+    pub cov: DMatrix<f64>,
+    /// Estimated parameters the band does not cover, each with the reason.
+    pub uncovered: Vec<(String, String)>,
+}
+
+impl ParamUncertainty {
+    /// The distribution a fit file states (see the module documentation).
+    pub fn of(fit: &FitFile) -> Self {
+        let ci = |n: &str| fit.ci95.iter().find(|(m, _)| m == n).map(|(_, c)| *c);
+        let ci_sd = |n: &str| {
+            ci(n)
+                .filter(|[lo, hi]| *lo > 0.0 && hi > lo)
+                .map(|[lo, hi]| (hi.ln() - lo.ln()) / (2.0 * Z95))
+        };
+        let value = |n: &str| fit.params.get(n).filter(|v| *v > 0.0);
+        let not_identifiable =
+            |n: &str| fit.verdicts.iter().any(|v| v.name == n && !v.identifiable);
+        let mut uncovered = Vec::new();
+        let mut names = Vec::new();
+        let mut sd = Vec::new();
+        let mut source = Vec::new(); // index into the file's covariance, if any
+        for n in &fit.estimated {
+            let in_cov = fit
+                .covariance
+                .as_ref()
+                .and_then(|c| c.parameters.iter().position(|m| m == n));
+            let why = if not_identifiable(n) {
+                Some("not identifiable")
+            } else if value(n).is_none() {
+                Some("not positive (no logarithm)")
+            } else if fit.covariance.is_some() && in_cov.is_none() {
+                Some("not in the covariance")
+            } else if in_cov.is_none() && ci_sd(n).is_none() {
+                Some("no 95 % interval")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                uncovered.push((n.clone(), why.to_string()));
+                continue;
+            }
+            let m = fit.covariance.as_ref();
+            let own = in_cov.and_then(|i| m.map(|c| c.matrix[i][i].sqrt()));
+            names.push(n.clone());
+            sd.push(ci_sd(n).or(own).unwrap_or(0.0));
+            source.push(in_cov);
+        }
+        let k = names.len();
+        let corr = |a: usize, b: usize| -> f64 {
+            if a == b {
+                return 1.0;
+            }
+            match (&fit.covariance, source[a], source[b]) {
+                (Some(c), Some(i), Some(j)) => {
+                    c.matrix[i][j] / (c.matrix[i][i] * c.matrix[j][j]).sqrt()
+                }
+                _ => 0.0,
+            }
+        };
+        let cov = DMatrix::from_fn(k, k, |a, b| sd[a] * corr(a, b) * sd[b]);
+        let basis = match (k, &fit.covariance) {
+            (0, _) => BandBasis::None,
+            (_, Some(_)) => BandBasis::Covariance,
+            (_, None) => BandBasis::Independent,
+        };
+        Self {
+            basis,
+            log_values: names.iter().map(|n| value(n).unwrap_or(1.0).ln()).collect(),
+            names,
+            sd,
+            cov,
+            uncovered,
+        }
+    }
+
+    /// Number of covered parameters.
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    /// Nothing covered (no band).
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// The fit's motor with the covered parameters at ln θ = `log_values` (the rest as
+    /// fitted, discovered terms included).
+    pub fn motor_at(&self, fit: &FitFile, log_values: &[f64]) -> Result<Motor, PredictError> {
+        let mut set = ParamSet::from(fit.params.clone());
+        for (n, v) in self.names.iter().zip(log_values) {
+            set.set(n, v.exp())?;
+        }
+        let params: MotorParams = set.check()?;
+        Ok(Motor::new(params, fit.effects.clone()).with_extra(&fit.extra))
+    }
+
+    /// The delta-method 95 % bands of the figures `figures(motor)` about their values
+    /// `center` at the estimate (see the module documentation); `None` without covered
+    /// parameters. `figures` must give the same number of values for every motor.
+    pub fn delta_bands(
+        &self,
+        fit: &FitFile,
+        center: &[f64],
+        figures: &dyn Fn(&Motor) -> Result<Vec<f64>, PredictError>,
+    ) -> Result<Option<Vec<[f64; 2]>>, PredictError> {
+        if self.is_empty() {
+            return Ok(None);
+        }
+        let k = self.len();
+        let mut jac = DMatrix::<f64>::zeros(center.len(), k);
+        for j in 0..k {
+            let h = self.sd[j].clamp(1e-4, 0.05);
+            let mut at = self.log_values.clone();
+            at[j] = self.log_values[j] + h;
+            let plus = figures(&self.motor_at(fit, &at)?)?;
+            at[j] = self.log_values[j] - h;
+            let minus = figures(&self.motor_at(fit, &at)?)?;
+            for (i, (a, b)) in plus.iter().zip(&minus).enumerate() {
+                jac[(i, j)] = (a - b) / (2.0 * h);
+            }
+        }
+        let bands = (0..center.len())
+            .map(|i| {
+                let g = DVector::from_fn(k, |j, _| jac[(i, j)]);
+                let var = (g.transpose() * &self.cov * &g)[(0, 0)].max(0.0);
+                let half = Z95 * var.sqrt();
+                [center[i] - half, center[i] + half]
+            })
+            .collect();
+        Ok(Some(bands))
+    }
+
+    /// Monte-Carlo 95 % bands of the same figures: `samples` draws of ln θ ~ N(ln θ̂, C)
+    /// (seeded Xoshiro256++), each figure's 2.5 and 97.5 percentiles (linear interpolation
+    /// between order statistics). A check of [`Self::delta_bands`], slower by
+    /// samples/(2k); `None` without covered parameters or when C is not positive definite.
+    pub fn monte_carlo_bands(
+        &self,
+        fit: &FitFile,
+        samples: usize,
+        seed: u64,
+        figures: &dyn Fn(&Motor) -> Result<Vec<f64>, PredictError>,
+    ) -> Result<Option<Vec<[f64; 2]>>, PredictError> {
+        if self.is_empty() || samples < 2 {
+            return Ok(None);
+        }
+        let Some(chol) = self.cov.clone().cholesky() else {
+            return Ok(None);
+        };
+        let l = chol.l();
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let k = self.len();
+        let mut draws: Vec<Vec<f64>> = Vec::with_capacity(samples);
+        for _ in 0..samples {
+            let z = DVector::from_fn(k, |_, _| StandardNormal.sample(&mut rng));
+            let step = &l * z;
+            let at: Vec<f64> = (0..k).map(|j| self.log_values[j] + step[j]).collect();
+            draws.push(figures(&self.motor_at(fit, &at)?)?);
+        }
+        let n_fig = draws[0].len();
+        let bands = (0..n_fig)
+            .map(|i| {
+                let mut v: Vec<f64> = draws.iter().map(|d| d[i]).collect();
+                v.sort_by(f64::total_cmp);
+                [percentile(&v, 0.025), percentile(&v, 0.975)]
+            })
+            .collect();
+        Ok(Some(bands))
+    }
+}
+
+/// The q-quantile of sorted values, interpolating linearly between order statistics.
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    let x = q * (sorted.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x - x.floor());
+    let next = sorted[(i + 1).min(sorted.len() - 1)];
+    sorted[i] + f * (next - sorted[i])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::fitfile::{LogCovariance, ParamVerdict};
+    use crate::model::effects::EffectSet;
+
+    fn fit_file() -> FitFile {
+        let mut f = FitFile::from_params("t", MotorParams::default(), EffectSet::empty());
+        f.estimated = vec!["c_in1".into(), "c_ext".into(), "visc".into()];
+        let v = MotorParams::default();
+        let around = |n: &str, r: f64| {
+            let x = v.get(n).unwrap();
+            [x * (-r).exp(), x * r.exp()]
+        };
+        f.ci95 = vec![
+            ("c_in1".into(), around("c_in1", 0.02)),
+            ("c_ext".into(), around("c_ext", 0.04)),
+        ];
+        f.verdicts = vec![ParamVerdict {
+            name: "visc".into(),
+            bounds95: [None, Some(1e-4)],
+            identifiable: false,
+            why: Some("open below".into()),
+        }];
+        f
+    }
+
+    #[test]
+    fn widths_come_from_the_intervals_and_correlations_from_the_covariance() {
+        let mut f = fit_file();
+        let u = ParamUncertainty::of(&f);
+        assert_eq!(u.basis, BandBasis::Independent);
+        assert_eq!(u.names, vec!["c_in1", "c_ext"]);
+        assert!((u.sd[0] - 0.02 / Z95).abs() < 1e-12);
+        assert_eq!(u.cov[(0, 1)], 0.0);
+        assert_eq!(
+            u.uncovered,
+            vec![("visc".into(), "not identifiable".into())]
+        );
+        f.covariance = Some(LogCovariance {
+            parameters: vec!["c_in1".into(), "c_ext".into(), "visc".into()],
+            matrix: vec![
+                vec![1e-4, 1e-4, 0.0],
+                vec![1e-4, 4e-4, 0.0],
+                vec![0.0, 0.0, 1.0],
+            ],
+        });
+        let u = ParamUncertainty::of(&f);
+        assert_eq!(u.basis, BandBasis::Covariance);
+        // Correlation 0.5, rescaled to the intervals' widths.
+        let want = 0.5 * (0.02 / Z95) * (0.04 / Z95);
+        assert!((u.cov[(0, 1)] - want).abs() < 1e-15, "{}", u.cov);
+        f.ci95.clear();
+        f.covariance = None;
+        assert_eq!(ParamUncertainty::of(&f).basis, BandBasis::None);
+    }
+
+    #[test]
+    fn delta_and_monte_carlo_agree_on_a_linear_figure() {
+        let f = fit_file();
+        let u = ParamUncertainty::of(&f);
+        // y = ln c_in1 + 2 ln c_ext: exactly linear in the log-parameters.
+        let y = |m: &Motor| Ok(vec![m.params.c_in1().ln() + 2.0 * m.params.c_ext().ln()]);
+        let center = y(&u.motor_at(&f, &u.log_values).unwrap()).unwrap();
+        let delta = u.delta_bands(&f, &center, &y).unwrap().unwrap()[0];
+        let sd = ((0.02f64 / Z95).powi(2) + (2.0 * 0.04 / Z95).powi(2)).sqrt();
+        assert!(((delta[1] - delta[0]) / 2.0 - Z95 * sd).abs() < 1e-9);
+        let mc = u.monte_carlo_bands(&f, 4000, 7, &y).unwrap().unwrap()[0];
+        let ratio = (mc[1] - mc[0]) / (delta[1] - delta[0]);
+        assert!((ratio - 1.0).abs() < 0.06, "{ratio}");
+    }
+}

@@ -1,0 +1,639 @@
+//! The written results of `vanefit predict` (SPEC §7): `catalogue.csv`, `factors.csv`,
+//! `curves.csv`, `predict.md` and SVG figures, all written atomically.
+//!
+//! Units at this edge: supply pressure in the unit asked for (column `p_supply_<unit>`,
+//! a pressure unit of `p_port1` columns, SPEC §3; bar g unless asked otherwise), speeds in
+//! rpm, power in W, torque in N·m, air consumption in l/s ANR (the mass flow into port 1
+//! divided by ρ0 = 1.185 kg/m³, ISO 8778 / SPEC §1). Every figure has its 95 % band in
+//! `<column>_lo` and `<column>_hi` (empty when the fit gives no band); `extrapolated` is
+//! `true` for a pressure outside those the fitted data covered (empty when the fit does not
+//! say which).
+
+use crate::predict::{Banded, Prediction, PressurePrediction};
+use crate::report::plot::PlotError;
+use crate::units::Unit;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Why the results could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum PredictReportError {
+    /// A file could not be written.
+    #[error("{}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A figure could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
+
+/// How the supply pressure is shown: a unit of `p_port1` columns, and the atmosphere for
+/// gauge units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PressureDisplay {
+    /// The unit.
+    pub unit: Unit,
+    /// Atmosphere, Pa absolute.
+    pub p_atm_pa: f64,
+}
+
+impl PressureDisplay {
+    /// An absolute pressure (Pa) in the unit.
+    pub fn value(&self, p_pa: f64) -> f64 {
+        self.unit.from_si(p_pa, self.p_atm_pa)
+    }
+
+    /// The column name, `p_supply_<unit suffix>`.
+    pub fn column(&self) -> String {
+        format!("p_supply_{}", self.unit.suffix())
+    }
+
+    /// The unit for people: `bar g`, `mpa`, ….
+    pub fn label(&self) -> String {
+        self.unit.suffix().replace('_', " ")
+    }
+
+    /// A pressure as text: the value in the unit, shortest exact form.
+    pub fn text(&self, p_pa: f64) -> String {
+        short(self.value(p_pa))
+    }
+}
+
+/// A catalogue column: name with unit, heading for people, conversion from SI.
+struct Column {
+    name: &'static str,
+    heading: &'static str,
+    from_si: fn(f64) -> f64,
+}
+
+fn rpm(v: f64) -> f64 {
+    Unit::Rpm.from_si(v, 0.0)
+}
+fn same(v: f64) -> f64 {
+    v
+}
+fn l_s_anr(v: f64) -> f64 {
+    Unit::LSAnr.from_si(v, 0.0)
+}
+
+/// The catalogue's columns, in the order of `predict::ROW_FIGURES` (SPEC §7's names).
+const CATALOGUE: [Column; 7] = [
+    Column {
+        name: "free_speed_rpm",
+        heading: "free speed [rpm]",
+        from_si: rpm,
+    },
+    Column {
+        name: "max_power_w",
+        heading: "max. power [W]",
+        from_si: same,
+    },
+    Column {
+        name: "speed_at_max_power_rpm",
+        heading: "speed at max. power [rpm]",
+        from_si: rpm,
+    },
+    Column {
+        name: "torque_at_max_power_nm",
+        heading: "torque at max. power [N·m]",
+        from_si: same,
+    },
+    Column {
+        name: "stall_torque_nm",
+        heading: "stall torque [N·m]",
+        from_si: same,
+    },
+    Column {
+        name: "air_at_max_power_l_s_anr",
+        heading: "air at max. power [l/s ANR]",
+        from_si: l_s_anr,
+    },
+    Column {
+        name: "air_at_free_speed_l_s_anr",
+        heading: "air at free speed [l/s ANR]",
+        from_si: l_s_anr,
+    },
+];
+
+/// The factors' columns, in the order of `predict::FACTORS`.
+const FACTORS: [Column; 4] = [
+    Column {
+        name: "power",
+        heading: "power (max. power)",
+        from_si: same,
+    },
+    Column {
+        name: "speed",
+        heading: "speed (free speed)",
+        from_si: same,
+    },
+    Column {
+        name: "torque",
+        heading: "torque (stall torque)",
+        from_si: same,
+    },
+    Column {
+        name: "air",
+        heading: "air (at max. power)",
+        from_si: same,
+    },
+];
+
+/// The curves' columns: torque, power, air.
+const CURVE: [Column; 3] = [
+    Column {
+        name: "torque_nm",
+        heading: "shaft torque [N·m]",
+        from_si: same,
+    },
+    Column {
+        name: "power_w",
+        heading: "shaft power [W]",
+        from_si: same,
+    },
+    Column {
+        name: "air_l_s_anr",
+        heading: "air consumption [l/s ANR]",
+        from_si: l_s_anr,
+    },
+];
+
+/// A number for a CSV file: 7 significant digits, no exponent in the usual range.
+fn csv_number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let magnitude = v.abs().log10().floor() as i32;
+    if !(-4..9).contains(&magnitude) {
+        return format!("{v:.6e}");
+    }
+    let decimals = (6 - magnitude).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// The shortest text that reads back as `v` (for pressures as asked: 6.3, not 6.300000).
+fn short(v: f64) -> String {
+    let r = (v * 1e9).round() / 1e9;
+    format!("{r}")
+}
+
+/// A value with its band for people, rounded to the band: two significant digits of the
+/// band's half-width (four of the value when there is no band or it has no width).
+fn with_band(b: &Banded, from_si: fn(f64) -> f64) -> String {
+    let v = from_si(b.value);
+    let band = b.band95.map(|[lo, hi]| (from_si(lo), from_si(hi)));
+    let half = band.map_or(0.0, |(lo, hi)| 0.5 * (hi - lo).abs());
+    let lead = if half > 0.0 {
+        half
+    } else {
+        v.abs().max(1e-300) / 100.0
+    };
+    let decimals = (1 - lead.log10().floor() as i32).clamp(0, 9) as usize;
+    match band {
+        Some((lo, hi)) => format!("{v:.decimals$} [{lo:.decimals$}, {hi:.decimals$}]"),
+        None => format!("{v:.decimals$}"),
+    }
+}
+
+/// The extrapolation flag as the CSV writes it.
+fn flag(p: &PressurePrediction) -> &'static str {
+    match p.extrapolated {
+        Some(true) => "true",
+        Some(false) => "false",
+        None => "",
+    }
+}
+
+/// One CSV table: the header, then rows of cells.
+fn csv(header: &[String], rows: &[Vec<String>]) -> String {
+    let mut text = header.join(",") + "\n";
+    for r in rows {
+        text.push_str(&r.join(","));
+        text.push('\n');
+    }
+    text
+}
+
+/// Cells of banded figures: the values, then each figure's lo and hi.
+fn banded_cells(figures: &[Banded], columns: &[Column]) -> Vec<String> {
+    let mut cells: Vec<String> = figures
+        .iter()
+        .zip(columns)
+        .map(|(b, c)| csv_number((c.from_si)(b.value)))
+        .collect();
+    for (b, c) in figures.iter().zip(columns) {
+        match b.band95 {
+            Some([lo, hi]) => cells.extend([lo, hi].map(|v| csv_number((c.from_si)(v)))),
+            None => cells.extend([String::new(), String::new()]),
+        }
+    }
+    cells
+}
+
+/// The header of banded figures: the names, then `<name>_lo`, `<name>_hi` for each.
+fn banded_header(columns: &[Column]) -> Vec<String> {
+    let mut h: Vec<String> = columns.iter().map(|c| c.name.to_string()).collect();
+    for c in columns {
+        h.push(format!("{}_lo", c.name));
+        h.push(format!("{}_hi", c.name));
+    }
+    h
+}
+
+/// `catalogue.csv`: one row per pressure (SPEC §7's first eight columns, then the bands,
+/// `extrapolated` and the speed grid of the maximum power in rpm).
+pub fn catalogue_csv(pr: &Prediction, display: &PressureDisplay) -> String {
+    let mut header = vec![display.column()];
+    header.extend(banded_header(&CATALOGUE));
+    header.extend(["extrapolated".to_string(), "speed_grid_rpm".to_string()]);
+    let grid = csv_number(rpm(pr.options.speed_grid_rad_s));
+    let rows: Vec<Vec<String>> = pr
+        .pressures
+        .iter()
+        .map(|p| {
+            let mut r = vec![display.text(p.p_supply_pa)];
+            r.extend(banded_cells(&p.figures, &CATALOGUE));
+            r.extend([flag(p).to_string(), grid.clone()]);
+            r
+        })
+        .collect();
+    csv(&header, &rows)
+}
+
+/// `factors.csv`: one row per pressure (SPEC §7's five columns, then the bands and
+/// `extrapolated`).
+pub fn factors_csv(pr: &Prediction, display: &PressureDisplay) -> String {
+    let mut header = vec![display.column()];
+    header.extend(banded_header(&FACTORS));
+    header.push("extrapolated".into());
+    let rows: Vec<Vec<String>> = pr
+        .pressures
+        .iter()
+        .map(|p| {
+            let mut r = vec![display.text(p.p_supply_pa)];
+            r.extend(banded_cells(&p.factors, &FACTORS));
+            r.push(flag(p).to_string());
+            r
+        })
+        .collect();
+    csv(&header, &rows)
+}
+
+/// `curves.csv`: one row per pressure and speed.
+pub fn curves_csv(pr: &Prediction, display: &PressureDisplay) -> String {
+    let mut header = vec![display.column(), "speed_rpm".into()];
+    header.extend(banded_header(&CURVE));
+    header.push("extrapolated".into());
+    let mut rows = Vec::new();
+    for p in &pr.pressures {
+        for c in &p.curve {
+            let mut r = vec![display.text(p.p_supply_pa), csv_number(rpm(c.speed_rad_s))];
+            r.extend(banded_cells(&[c.torque_nm, c.power_w, c.air_kg_s], &CURVE));
+            r.push(flag(p).to_string());
+            rows.push(r);
+        }
+    }
+    csv(&header, &rows)
+}
+
+/// A Markdown table of banded figures, one row per pressure (an asterisk marks an
+/// extrapolation).
+fn markdown_table(
+    pr: &Prediction,
+    display: &PressureDisplay,
+    columns: &[Column],
+    cells: fn(&PressurePrediction) -> &[Banded],
+) -> String {
+    let mut text = format!("| p_supply [{}] |", display.label());
+    for c in columns {
+        text.push_str(&format!(" {} |", c.heading));
+    }
+    text.push_str(&format!("\n|---:|{}\n", "---:|".repeat(columns.len())));
+    for p in &pr.pressures {
+        let mark = if p.extrapolated == Some(true) {
+            " *"
+        } else {
+            ""
+        };
+        text.push_str(&format!("| {}{mark} |", display.text(p.p_supply_pa)));
+        for (b, c) in cells(p).iter().zip(columns) {
+            text.push_str(&format!(" {} |", with_band(b, c.from_si)));
+        }
+        text.push('\n');
+    }
+    text
+}
+
+/// The catalogue and the factors as Markdown tables (what the command line prints).
+pub fn tables_markdown(pr: &Prediction, display: &PressureDisplay) -> String {
+    format!(
+        "{}\nCorrection factors relative to {} {}:\n\n{}",
+        markdown_table(pr, display, &CATALOGUE, |p| &p.figures),
+        display.text(pr.options.reference_pa),
+        display.label(),
+        markdown_table(pr, display, &FACTORS, |p| &p.factors),
+    )
+}
+
+/// The notes every output carries: grid, what the factors are, the band's basis and what
+/// it leaves out, extrapolation, nozzle and atmosphere.
+pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
+    let o = &pr.options;
+    let mut notes = vec![
+        format!(
+            "Maximum power is exact on a grid of {} rpm: the grid speed of largest power near \
+             the continuous optimum of P(ω) = T(ω)·ω; torque and air at maximum power are at \
+             that grid speed.",
+            short(rpm(o.speed_grid_rad_s))
+        ),
+        "Free speed: shaft torque zero (no load). Stall torque: standstill, less the full \
+         friction at rest. Air: mass flow into port 1 in l/s ANR (ρ0 = 1.185 kg/m³)."
+            .into(),
+        format!(
+            "Factors relative to {} {}: power = max. power, speed = free speed, torque = stall \
+             torque, air = air consumption at max. power.",
+            display.text(o.reference_pa),
+            display.label()
+        ),
+        format!("{}.", pr.uncertainty.basis.describe()),
+    ];
+    for (name, why) in &pr.uncertainty.uncovered {
+        notes.push(format!("The band does not cover {name}: {why}."));
+    }
+    if !pr.fixed.is_empty() {
+        notes.push(format!(
+            "The band does not cover the parameters the fit held fixed (taken as exact): {}.",
+            pr.fixed.join(", ")
+        ));
+    }
+    if pr.discovered_terms > 0 {
+        notes.push(format!(
+            "The band does not cover the coefficients of the {} discovered term(s).",
+            pr.discovered_terms
+        ));
+    }
+    notes.push(match pr.supply_range_pa {
+        Some([lo, hi]) => {
+            let out: Vec<String> = pr
+                .pressures
+                .iter()
+                .filter(|p| p.extrapolated == Some(true))
+                .map(|p| display.text(p.p_supply_pa))
+                .collect();
+            let verdict = if out.is_empty() {
+                "every asked pressure lies within it".to_string()
+            } else {
+                format!(
+                    "EXTRAPOLATED (marked *): {} {}",
+                    out.join(", "),
+                    display.label()
+                )
+            };
+            format!(
+                "The fitted data covered supply pressures {} to {} {} (± {:.0} kPa, the \
+                 pressure sensor's tolerance); {verdict}.",
+                short((display.value(lo) * 1e4).round() / 1e4),
+                short((display.value(hi) * 1e4).round() / 1e4),
+                display.label(),
+                pr.range_tolerance_pa / 1e3
+            )
+        }
+        None => "The fit file does not say which supply pressures its data covered: \
+                 extrapolation cannot be flagged."
+            .into(),
+    });
+    notes.push(match o.nozzle {
+        Some(n) => format!(
+            "With an extra nozzle of C = {:e} m3/(s*Pa) in series at the {}.",
+            n.c_m3_s_pa,
+            n.port.name()
+        ),
+        None => "No extra nozzle.".into(),
+    });
+    notes.push(format!("Atmosphere {:.0} Pa.", o.p_atm_pa));
+    notes
+}
+
+/// `predict.md`: a title, the tables, the notes and the figures' names.
+pub fn markdown(pr: &Prediction, display: &PressureDisplay, source: &str) -> String {
+    let mut text = format!(
+        "# Predicted performance\n\nFrom `{source}`. Values with their 95 % bands \
+         [lo, hi].\n\n{}\n## Notes\n\n",
+        tables_markdown(pr, display)
+    );
+    for n in notes(pr, display) {
+        text.push_str(&format!("- {n}\n"));
+    }
+    text.push_str(
+        "\nFigures: `torque.svg`, `power.svg`, `air.svg` (against speed, one curve per \
+         pressure with its band shaded) and `factors.svg`.\n",
+    );
+    text
+}
+
+/// Writes every output into `dir` (which exists), telling `on_written` of each file.
+pub fn write(
+    pr: &Prediction,
+    display: &PressureDisplay,
+    source: &str,
+    dir: &Path,
+    on_written: &mut dyn FnMut(&Path),
+) -> Result<(), PredictReportError> {
+    let mut put = |name: &str, text: &str| {
+        let path = dir.join(name);
+        crate::io::write_atomic(&path, text.as_bytes()).map_err(|source| {
+            PredictReportError::Write {
+                path: path.clone(),
+                source,
+            }
+        })?;
+        on_written(&path);
+        Ok::<_, PredictReportError>(())
+    };
+    put("catalogue.csv", &catalogue_csv(pr, display))?;
+    put("factors.csv", &factors_csv(pr, display))?;
+    put("curves.csv", &curves_csv(pr, display))?;
+    put("predict.md", &markdown(pr, display, source))?;
+    for (k, c) in CURVE.iter().enumerate() {
+        let series = pr
+            .pressures
+            .iter()
+            .map(|p| BandSeries {
+                name: format!(
+                    "{} {}{}",
+                    display.text(p.p_supply_pa),
+                    display.label(),
+                    if p.extrapolated == Some(true) {
+                        " (extrapolated)"
+                    } else {
+                        ""
+                    }
+                ),
+                points: p
+                    .curve
+                    .iter()
+                    .map(|pt| {
+                        let b = [pt.torque_nm, pt.power_w, pt.air_kg_s][k];
+                        banded_point(rpm(pt.speed_rad_s), &b, c.from_si)
+                    })
+                    .collect(),
+            })
+            .collect::<Vec<_>>();
+        let title = format!("Predicted {} against speed", c.heading);
+        // Torque and power fall towards the free speed, air consumption rises.
+        let legend = if k == 2 {
+            SeriesLabelPosition::LowerRight
+        } else {
+            SeriesLabelPosition::UpperRight
+        };
+        let svg = band_chart(&title, "speed [rpm]", c.heading, &series, legend)?;
+        put(
+            &format!("{}.svg", c.name.split('_').next().unwrap_or(c.name)),
+            &svg,
+        )?;
+    }
+    let factors = FACTORS
+        .iter()
+        .enumerate()
+        .map(|(k, c)| BandSeries {
+            name: c.heading.to_string(),
+            points: pr
+                .pressures
+                .iter()
+                .map(|p| banded_point(display.value(p.p_supply_pa), &p.factors[k], same))
+                .collect(),
+        })
+        .collect::<Vec<_>>();
+    let title = format!(
+        "Correction factors relative to {} {}",
+        display.text(pr.options.reference_pa),
+        display.label()
+    );
+    let x = format!("supply pressure [{}]", display.label());
+    let svg = band_chart(
+        &title,
+        &x,
+        "factor",
+        &factors,
+        SeriesLabelPosition::UpperLeft,
+    )?;
+    put("factors.svg", &svg)
+}
+
+/// One point of a banded curve: (x, y, lo, hi) in display units (lo = hi = y without band).
+fn banded_point(x: f64, b: &Banded, from_si: fn(f64) -> f64) -> (f64, f64, f64, f64) {
+    let y = from_si(b.value);
+    let [lo, hi] = b.band95.map_or([y, y], |[l, h]| [from_si(l), from_si(h)]);
+    (x, y, lo, hi)
+}
+
+/// A curve with its band, for [`band_chart`].
+struct BandSeries {
+    name: String,
+    points: Vec<(f64, f64, f64, f64)>,
+}
+
+/// Line colours, in order (colour-blind-safe Tableau 10, as the other charts).
+const COLOURS: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+/// A tick label: at most four decimals, trailing zeros dropped (2000, not 2000.0).
+fn tick(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+        return format!("{v:.1e}");
+    }
+    let s = format!("{v:.4}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// An SVG chart of curves, each with its band as a shaded area under the line (the shared
+/// `report::plot` draws lines and markers only; this is the one chart that shades).
+fn band_chart(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[BandSeries],
+    legend: SeriesLabelPosition,
+) -> Result<String, PlotError> {
+    let err = |e: &dyn std::fmt::Display| PlotError(e.to_string());
+    let all = series.iter().flat_map(|s| s.points.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for &(x, _, lo, hi) in all.filter(|p| p.0.is_finite() && p.2.is_finite() && p.3.is_finite()) {
+        (x0, x1) = (x0.min(x), x1.max(x));
+        (y0, y1) = (y0.min(lo), y1.max(hi));
+    }
+    if x1.is_nan() || x0.is_nan() || x1 <= x0 {
+        (x0, x1) = (x0.min(0.0) - 1.0, x1.max(0.0) + 1.0);
+    }
+    if y1.is_nan() || y0.is_nan() || y1 <= y0 {
+        (y0, y1) = (y0.min(0.0) - 1.0, y1.max(0.0) + 1.0);
+    }
+    let pad = 0.04 * (y1 - y0);
+    let mut buf = String::new();
+    {
+        let root = SVGBackend::with_string(&mut buf, (720, 460)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let mut cc = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
+            .map_err(|e| err(&e))?;
+        let fmt = |v: &f64| tick(*v);
+        cc.configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .x_label_formatter(&fmt)
+            .y_label_formatter(&fmt)
+            .axis_desc_style(("sans-serif", 15))
+            .label_style(("sans-serif", 13))
+            .light_line_style(RGBColor(238, 238, 238))
+            .draw()
+            .map_err(|e| err(&e))?;
+        for (k, s) in series.iter().enumerate() {
+            let colour = COLOURS[k % COLOURS.len()];
+            let upper = s.points.iter().map(|p| (p.0, p.3));
+            let lower = s.points.iter().rev().map(|p| (p.0, p.2));
+            let area: Vec<(f64, f64)> = upper.chain(lower).collect();
+            cc.draw_series(std::iter::once(Polygon::new(
+                area,
+                colour.mix(0.25).filled(),
+            )))
+            .map_err(|e| err(&e))?;
+            let line: Vec<(f64, f64)> = s.points.iter().map(|p| (p.0, p.1)).collect();
+            cc.draw_series(LineSeries::new(line, colour.stroke_width(2)))
+                .map_err(|e| err(&e))?
+                .label(s.name.as_str())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+        }
+        cc.configure_series_labels()
+            .position(legend)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(160, 160, 160))
+            .label_font(("sans-serif", 13))
+            .draw()
+            .map_err(|e| err(&e))?;
+        root.present().map_err(|e| err(&e))?;
+    }
+    Ok(buf)
+}
