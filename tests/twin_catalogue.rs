@@ -55,7 +55,11 @@ fn predicted_catalogue_rows_agree_with_the_twin() {
             .args(["--unit", "bar_g", "--out", out.to_str().unwrap()])
             .output()
             .unwrap();
-        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
         let (header, rows) = read(&out.join("catalogue.csv"));
         let col = |name: &str| header.iter().position(|h| h == name).unwrap();
         for (row, bar_g) in rows.iter().zip(pressures) {
@@ -70,23 +74,29 @@ fn predicted_catalogue_rows_agree_with_the_twin() {
             let pairs = [
                 (v("free_speed_rpm"), t.free_speed_rad_s * rpm),
                 (v("max_power_w"), t.max_power_w),
-                (v("speed_at_max_power_rpm"), t.speed_at_max_power_rad_s * rpm),
+                (
+                    v("speed_at_max_power_rpm"),
+                    t.speed_at_max_power_rad_s * rpm,
+                ),
                 (v("torque_at_max_power_nm"), t.torque_at_max_power_nm),
                 (v("stall_torque_nm"), t.stall_torque_nm),
                 (v("air_at_max_power_l_s_anr"), t.air_at_max_power_kg_s * l_s),
-                (v("air_at_free_speed_l_s_anr"), t.air_at_free_speed_kg_s * l_s),
+                (
+                    v("air_at_free_speed_l_s_anr"),
+                    t.air_at_free_speed_kg_s * l_s,
+                ),
             ];
             for (i, (a, b)) in pairs.iter().enumerate() {
                 worst[i] = worst[i].max((a / b - 1.0).abs());
             }
         }
     }
-    println!("largest relative differences vanefit vs twin (free speed, max power, speed at max power, torque at max power, stall torque, air at max power, air at free speed): {worst:.2e?}");
-    // Figures at a point: the two steady-state solvers agree to ~1e-6; the max-power speed
+    println!("largest relative differences vanefit vs twin (free speed, max power, speed at max power, torque at max power, stall torque, air at max power, air at free speed): {:?}", worst.map(|w| format!("{w:.2e}")));
+    // Figures at a point: the two steady-state solvers agree to ~4e-7; the max-power speed
     // lies on a flat maximum (vanefit's is exact to its 1 rpm grid, the twin's continuous),
     // so it and the torque and air there agree to a few rpm.
     for (i, w) in worst.iter().enumerate() {
-        let tol = if matches!(i, 2 | 3 | 5) { 2e-3 } else { 1e-4 };
+        let tol = if matches!(i, 2 | 3 | 5) { 2e-3 } else { 1e-5 };
         assert!(*w < tol, "figure {i}: {w:e} > {tol:e}");
     }
 }

@@ -24,10 +24,13 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
         return;
     }
     if let Some(p) = ex.p_supply_pa {
+        let gauge = format!("{} bar(g)", num(Unit::BarG.from_si(p, p_atm_pa)));
         println!(
-            "    supply pressure {}{} bar(g) = {} Pa absolute; reading tolerance {} % of each curve's full scale",
-            ex.p_supply_written.as_deref().map_or(String::new(), |w| format!("{w} = ")),
-            num(Unit::BarG.from_si(p, p_atm_pa)),
+            "    supply pressure {} = {} Pa absolute; reading tolerance {} % of each curve's full scale",
+            match ex.p_supply_written.as_deref() {
+                Some(w) if w.trim() != gauge => format!("{w} = {gauge}"),
+                _ => gauge,
+            },
             num(p),
             num(100.0 * ex.tolerance.unwrap_or(0.0))
         );

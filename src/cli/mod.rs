@@ -114,7 +114,12 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             catalogue: true,
             pressures,
             ..
-        } => synth_catalogue(&out_dataset, params.as_deref(), effects.as_deref(), &pressures),
+        } => synth_catalogue(
+            &out_dataset,
+            params.as_deref(),
+            effects.as_deref(),
+            &pressures,
+        ),
         Command::Synth {
             out_dataset,
             params,
@@ -314,7 +319,10 @@ fn synth_catalogue(
     effects: Option<&str>,
     pressures: &[f64],
 ) -> Result<(), Failure> {
-    if let Some(p) = pressures.iter().find(|p| !(p.is_finite() && **p > 0.0 && **p < 40.0)) {
+    if let Some(p) = pressures
+        .iter()
+        .find(|p| !(p.is_finite() && **p > 0.0 && **p < 40.0))
+    {
         return Err(Failure(format!(
             "--pressures: {p} is not a supply pressure in bar(g) (0 to 40)"
         )));
@@ -383,7 +391,14 @@ fn synth(
         seed,
     )?;
     let description = format!("seed {seed}, noise x{noise}.");
-    write_dataset(out, &experiments, &plan, &motor, &motor.effects, &description)?;
+    write_dataset(
+        out,
+        &experiments,
+        &plan,
+        &motor,
+        &motor.effects,
+        &description,
+    )?;
     truth
         .write(&out.join("truth.json"))
         .map_err(|e| Failure(format!("{}: {e}", out.display())))?;

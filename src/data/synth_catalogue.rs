@@ -35,9 +35,7 @@ impl Default for CataloguePlan {
 
 /// `v` printed with `digits` significant digits, as a catalogue would.
 pub fn printed(v: f64, digits: usize) -> String {
-    let rounded: f64 = format!("{:.*e}", digits.max(1) - 1, v)
-        .parse()
-        .unwrap_or(v);
+    let rounded: f64 = format!("{:.*e}", digits.max(1) - 1, v).parse().unwrap_or(v);
     format!("{rounded}")
 }
 
@@ -59,7 +57,11 @@ const POINTS: [(f64, [bool; 3]); 9] = [
 ];
 
 /// One page: the curve file's text and the figures table of rig.toml, with the row.
-fn page(motor: &Motor, p_supply_pa: f64, plan: &CataloguePlan) -> Result<(String, String, CatalogueRow), String> {
+fn page(
+    motor: &Motor,
+    p_supply_pa: f64,
+    plan: &CataloguePlan,
+) -> Result<(String, String, CatalogueRow), String> {
     let conditions = Conditions::supplied(p_supply_pa, plan.p_atm_pa);
     let row = catalogue_row(motor, &conditions, GRID_RAD_S).map_err(|e| e.to_string())?;
     // Speeds as read off the axis: multiples of 100 rpm.
@@ -87,7 +89,10 @@ fn page(motor: &Motor, p_supply_pa: f64, plan: &CataloguePlan) -> Result<(String
         ("free_speed", rpm(row.free_speed_rad_s)),
         ("max_power", format!("{} kW", p(row.max_power_w / 1e3))),
         ("speed_at_max_power", rpm(row.speed_at_max_power_rad_s)),
-        ("torque_at_max_power", format!("{} N·m", p(row.torque_at_max_power_nm))),
+        (
+            "torque_at_max_power",
+            format!("{} N·m", p(row.torque_at_max_power_nm)),
+        ),
         ("stall_torque", format!("{} N·m", p(row.stall_torque_nm))),
         ("air_at_max_power", l_s(row.air_at_max_power_kg_s)),
         ("air_at_free_speed", l_s(row.air_at_free_speed_kg_s)),
