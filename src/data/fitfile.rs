@@ -821,6 +821,9 @@ mod tests {
             load: Load::None,
             weight: 1.0,
             channel_weights: Default::default(),
+            p_supply_written: None,
+            tolerance: None,
+            figures: Vec::new(),
             recording: Recording {
                 file: "x.csv".into(),
                 columns: p_column

@@ -385,6 +385,9 @@ mod tests {
             load: Load::None,
             weight: 1.0,
             channel_weights: Default::default(),
+            p_supply_written: None,
+            tolerance: None,
+            figures: Vec::new(),
             recording: Recording {
                 file: "d.csv".into(),
                 columns: vec![Column {

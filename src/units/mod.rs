@@ -444,7 +444,7 @@ mod tests {
     fn catalogue_units_agree_with_hand_calculation() {
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-300);
         // psi: 1 lbf/in² = 0.45359237·9.80665 N / 0.0254² m² = 6894.757293168361 Pa.
-        assert!(close(Unit::PsiA.to_si(1.0, 0.0), 6894.757_293_168_361));
+        assert!(close(Unit::PsiA.to_si(1.0, 0.0), 6_894.757_293_168_361));
         // 90 psi(g) at 101325 Pa: 90·6894.757293168361 + 101325 = 721853.1563851525 Pa.
         assert!(close(
             Unit::PsiG.to_si(90.0, 101_325.0),
