@@ -117,11 +117,11 @@ fn unknown_column_and_unknown_unit_are_located() {
     assert_eq!(e.column, Some((4, "temp_k".to_string())));
     assert!(e.message.contains("unknown column"), "{e}");
     let dir = dataset_with("ramp.csv", |t| {
-        Some(t.replacen("flow2_g_s", "flow2_scfm", 1))
+        Some(t.replacen("flow2_g_s", "flow2_furlongs", 1))
     });
     let e = load_error(&dir);
-    assert_eq!(e.column, Some((4, "flow2_scfm".to_string())));
-    assert!(e.message.contains("unknown unit 'scfm'"), "{e}");
+    assert_eq!(e.column, Some((4, "flow2_furlongs".to_string())));
+    assert!(e.message.contains("unknown unit 'furlongs'"), "{e}");
     assert!(e.message.contains("l_min_anr"), "{e}");
 }
 

@@ -77,6 +77,54 @@ impl From<MissingColumn> for DataError {
 /// The fewest rows a recording may have: a reference polynomial needs at least this many.
 pub const MIN_ROWS: usize = 4;
 
+/// The columns a CSV header names (quantity and unit of each), empty; a name that is not a
+/// quantity and its unit, or a quantity given twice, is refused at its column.
+fn header_columns(path: &Path, headers: &csv::StringRecord) -> Result<Vec<Column>, DataError> {
+    let mut columns: Vec<Column> = Vec::with_capacity(headers.len());
+    for (i, name) in headers.iter().enumerate() {
+        let (quantity, unit) = parse_column(name).map_err(|e| {
+            let msg = match e {
+                ColumnNameError::UnknownUnit { quantity, unit } => {
+                    let known: Vec<_> = quantity.units().iter().map(|u| u.suffix()).collect();
+                    format!(
+                        "unknown unit '{unit}' for {} (known: {})",
+                        quantity.prefix(),
+                        known.join(", ")
+                    )
+                }
+                ColumnNameError::UnknownColumn => {
+                    let known: Vec<_> = Quantity::ALL.iter().map(|q| q.prefix()).collect();
+                    format!(
+                        "unknown column (a name is a quantity and its unit; quantities: {})",
+                        known.join(", ")
+                    )
+                }
+            };
+            DataError::new(path, msg).at(1).col(i, name)
+        })?;
+        if let Some(prev) = columns.iter().position(|c: &Column| c.quantity == quantity) {
+            return Err(DataError::new(
+                path,
+                format!(
+                    "{} given twice (also column {})",
+                    quantity.prefix(),
+                    prev + 1
+                ),
+            )
+            .at(1)
+            .col(i, name));
+        }
+        columns.push(Column {
+            name: name.to_string(),
+            quantity,
+            unit,
+            si: Vec::new(),
+            raw: Vec::new(),
+        });
+    }
+    Ok(columns)
+}
+
 impl Recording {
     /// Reads and validates a CSV recording. `p_atm_pa` converts gauge pressures.
     pub fn read(path: &Path, p_atm_pa: f64) -> Result<Self, DataError> {
@@ -118,48 +166,7 @@ impl Recording {
             .headers()
             .map_err(|e| DataError::new(path, format!("unreadable header: {e}")).at(1))?
             .clone();
-        let mut columns = Vec::with_capacity(headers.len());
-        for (i, name) in headers.iter().enumerate() {
-            let (quantity, unit) = parse_column(name).map_err(|e| {
-                let msg = match e {
-                    ColumnNameError::UnknownUnit { quantity, unit } => {
-                        let known: Vec<_> = quantity.units().iter().map(|u| u.suffix()).collect();
-                        format!(
-                            "unknown unit '{unit}' for {} (known: {})",
-                            quantity.prefix(),
-                            known.join(", ")
-                        )
-                    }
-                    ColumnNameError::UnknownColumn => {
-                        let known: Vec<_> = Quantity::ALL.iter().map(|q| q.prefix()).collect();
-                        format!(
-                            "unknown column (a name is a quantity and its unit; quantities: {})",
-                            known.join(", ")
-                        )
-                    }
-                };
-                DataError::new(path, msg).at(1).col(i, name)
-            })?;
-            if let Some(prev) = columns.iter().position(|c: &Column| c.quantity == quantity) {
-                return Err(DataError::new(
-                    path,
-                    format!(
-                        "{} given twice (also column {})",
-                        quantity.prefix(),
-                        prev + 1
-                    ),
-                )
-                .at(1)
-                .col(i, name));
-            }
-            columns.push(Column {
-                name: name.to_string(),
-                quantity,
-                unit,
-                si: Vec::new(),
-                raw: Vec::new(),
-            });
-        }
+        let mut columns = header_columns(path, &headers)?;
         let mut lines: Vec<u64> = Vec::new();
         for record in reader.records() {
             let record = record.map_err(|e| {

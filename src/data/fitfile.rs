@@ -130,6 +130,17 @@ pub struct LogCovariance {
     pub matrix: Vec<Vec<f64>>,
 }
 
+/// What is wrong with one field of a fit file (located by the reader).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct FieldError(pub String);
+
+impl From<&str> for FieldError {
+    fn from(message: &str) -> Self {
+        FieldError(message.to_string())
+    }
+}
+
 impl LogCovariance {
     /// The JSON object of the file.
     fn to_json(&self) -> Value {
@@ -142,7 +153,7 @@ impl LogCovariance {
 
     /// Reads and checks the file's object: log space, known and distinct names, a square
     /// symmetric matrix of finite numbers with a positive diagonal.
-    fn from_json(v: &Value) -> Result<Self, String> {
+    fn from_json(v: &Value) -> Result<Self, FieldError> {
         if v.get("space").and_then(Value::as_str) != Some("log") {
             return Err("covariance.space must be \"log\"".into());
         }
@@ -152,10 +163,12 @@ impl LogCovariance {
             .ok_or("covariance.parameters must be a list of parameter names")?;
         for (i, n) in parameters.iter().enumerate() {
             if spec(n).is_none() {
-                return Err(format!("covariance: unknown parameter '{n}'"));
+                return Err(FieldError(format!("covariance: unknown parameter '{n}'")));
             }
             if parameters[..i].contains(n) {
-                return Err(format!("covariance: parameter '{n}' listed twice"));
+                return Err(FieldError(format!(
+                    "covariance: parameter '{n}' listed twice"
+                )));
             }
         }
         let matrix: Vec<Vec<f64>> = v
@@ -164,22 +177,24 @@ impl LogCovariance {
             .ok_or("covariance.matrix must be a list of rows of numbers")?;
         let k = parameters.len();
         if matrix.len() != k || matrix.iter().any(|r| r.len() != k) {
-            return Err(format!(
+            return Err(FieldError(format!(
                 "covariance.matrix must be {k}×{k}, one row per parameter"
-            ));
+            )));
         }
         for i in 0..k {
             if !(matrix[i][i].is_finite() && matrix[i][i] > 0.0) {
-                return Err(format!(
+                return Err(FieldError(format!(
                     "covariance.matrix: the variance of '{}' must be a positive number",
                     parameters[i]
-                ));
+                )));
             }
             for j in 0..i {
                 let (a, b) = (matrix[i][j], matrix[j][i]);
                 let scale = (matrix[i][i] * matrix[j][j]).sqrt();
                 if !(a.is_finite() && b.is_finite()) || (a - b).abs() > 1e-9 * scale {
-                    return Err("covariance.matrix must be symmetric and finite".into());
+                    return Err(FieldError(
+                        "covariance.matrix must be symmetric and finite".into(),
+                    ));
                 }
             }
         }
@@ -225,15 +240,17 @@ impl FitConditions {
     }
 
     /// Checks the file's values: a positive atmosphere, a range 0 < lo ≤ hi.
-    fn check(self) -> Result<Self, String> {
+    fn check(self) -> Result<Self, FieldError> {
         if !(self.p_atm_pa.is_finite() && self.p_atm_pa > 0.0) {
-            return Err("conditions.p_atm_pa must be a positive number of Pa".into());
+            return Err(FieldError(
+                "conditions.p_atm_pa must be a positive number of Pa".into(),
+            ));
         }
         if let Some([lo, hi]) = self.p_supply_range_pa {
             if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
-                return Err(
+                return Err(FieldError(
                     "conditions.p_supply_range_pa must be [lo, hi] Pa with 0 < lo ≤ hi".into(),
-                );
+                ));
             }
         }
         Ok(self)
@@ -525,7 +542,7 @@ impl Reader<'_> {
         let here = || self.line_of("\"covariance\"");
         let c = match obj.get("covariance") {
             None | Some(Value::Null) => return Ok(None),
-            Some(v) => LogCovariance::from_json(v).map_err(|m| self.fail(here(), m))?,
+            Some(v) => LogCovariance::from_json(v).map_err(|m| self.fail(here(), m.0))?,
         };
         match c.parameters.iter().find(|n| !estimated.contains(n)) {
             Some(n) => Err(self.fail(
@@ -542,10 +559,10 @@ impl Reader<'_> {
         match obj.get("conditions") {
             None | Some(Value::Null) => Ok(None),
             Some(v) => serde_json::from_value::<FitConditions>(v.clone())
-                .map_err(|e| format!("conditions: {e}"))
+                .map_err(|e| FieldError(format!("conditions: {e}")))
                 .and_then(FitConditions::check)
                 .map(Some)
-                .map_err(|m| self.fail(here(), m)),
+                .map_err(|m| self.fail(here(), m.0)),
         }
     }
 

@@ -6,7 +6,9 @@
 
 use crate::data::dataset::DataError;
 use crate::model::motor::Motor;
-use crate::sim::operating_point::{at_speeds, catalogue_row, CatalogueRow, Conditions};
+use crate::sim::operating_point::{
+    at_speeds, catalogue_row, CatalogueRow, Conditions, OperatingPointError,
+};
 use crate::units::Unit;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -61,16 +63,16 @@ fn page(
     motor: &Motor,
     p_supply_pa: f64,
     plan: &CataloguePlan,
-) -> Result<(String, String, CatalogueRow), String> {
+) -> Result<(String, String, CatalogueRow), OperatingPointError> {
     let conditions = Conditions::supplied(p_supply_pa, plan.p_atm_pa);
-    let row = catalogue_row(motor, &conditions, GRID_RAD_S).map_err(|e| e.to_string())?;
+    let row = catalogue_row(motor, &conditions, GRID_RAD_S)?;
     // Speeds as read off the axis: multiples of 100 rpm.
     let speeds: Vec<f64> = POINTS
         .iter()
         .map(|(f, _)| (f * Unit::Rpm.from_si(row.free_speed_rad_s, 0.0) / 100.0).round() * 100.0)
         .collect();
     let si: Vec<f64> = speeds.iter().map(|v| Unit::Rpm.to_si(*v, 0.0)).collect();
-    let points = at_speeds(motor, &conditions, &si).map_err(|e| e.to_string())?;
+    let points = at_speeds(motor, &conditions, &si)?;
     let p = |v: f64| printed(v, plan.digits);
     let mut csv = String::from("speed_rpm,torque_nm,power_kw,air_l_s\n");
     for ((rpm, (_, taken)), pt) in speeds.iter().zip(&POINTS).zip(&points) {
@@ -127,7 +129,7 @@ pub fn write_catalogue(
     for &bar_g in &plan.pressures_bar_g {
         let p_supply_pa = Unit::BarG.to_si(bar_g, plan.p_atm_pa);
         let (csv, figures, row) =
-            page(motor, p_supply_pa, plan).map_err(|m| fail(format!("at {bar_g} bar(g): {m}")))?;
+            page(motor, p_supply_pa, plan).map_err(|e| fail(format!("at {bar_g} bar(g): {e}")))?;
         let file = format!("curves-{bar_g}bar.csv");
         crate::io::write_atomic(&dir.join(&file), csv.as_bytes())
             .map_err(|e| fail(format!("{file}: {e}")))?;

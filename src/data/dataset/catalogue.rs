@@ -67,9 +67,38 @@ impl Source<'_> {
     }
 }
 
+/// Why a printed value ("0.12 kW") was not understood.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ValueError {
+    /// No number first.
+    #[error("'{0}' is not a number followed by a unit (e.g. '6.3 bar_g')")]
+    NotANumber(String),
+    /// A number without a unit.
+    #[error("'{text}' has no unit (e.g. '{example}')")]
+    NoUnit {
+        /// The text.
+        text: String,
+        /// The number with the quantity's SI unit.
+        example: String,
+    },
+    /// A unit that is not one of the quantity's.
+    #[error("'{unit}' is not a unit of {what} (known: {known})")]
+    WrongUnit {
+        /// The unit as printed.
+        unit: String,
+        /// The quantity in words.
+        what: &'static str,
+        /// The quantity's units.
+        known: String,
+    },
+    /// The value overflows.
+    #[error("'{0}' is not a finite number")]
+    NotFinite(String),
+}
+
 /// Reads "6.3 bar(g)", "0.12 kW", "12 lbf·ft", "7.4 cfm": a number and a unit of `q`,
 /// converted to SI. Returns (SI value, unit, the number as written).
-pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit, f64), String> {
+pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit, f64), ValueError> {
     let text = text.trim();
     let split = text
         .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E')))
@@ -86,26 +115,26 @@ pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit,
     let value: f64 = number
         .trim()
         .parse()
-        .map_err(|_| format!("'{text}' is not a number followed by a unit (e.g. '6.3 bar_g')"))?;
+        .map_err(|_| ValueError::NotANumber(text.to_string()))?;
     if unit.trim().is_empty() {
-        return Err(format!(
-            "'{text}' has no unit (e.g. '{value} {}')",
-            q.si_unit().suffix()
-        ));
+        return Err(ValueError::NoUnit {
+            text: text.to_string(),
+            example: format!("{value} {}", q.si_unit().suffix()),
+        });
     }
-    let name = normalise_unit(unit);
-    let unit = unit_of(q, &name).map_err(|_| {
-        let known: Vec<_> = q.units().iter().map(|u| u.suffix()).collect();
-        format!(
-            "'{}' is not a unit of {} (known: {})",
-            unit.trim(),
-            words(q),
-            known.join(", ")
-        )
+    let unit = unit_of(q, &normalise_unit(unit)).map_err(|_| ValueError::WrongUnit {
+        unit: unit.trim().to_string(),
+        what: words(q),
+        known: q
+            .units()
+            .iter()
+            .map(|u| u.suffix())
+            .collect::<Vec<_>>()
+            .join(", "),
     })?;
     let si = unit.to_si(value, p_atm_pa);
     if !si.is_finite() {
-        return Err(format!("'{text}' is not a finite number"));
+        return Err(ValueError::NotFinite(text.to_string()));
     }
     Ok((si, unit, value))
 }
@@ -482,11 +511,13 @@ mod tests {
         );
         assert_eq!(parse_value("1e3 rpm", Quantity::Speed, p).unwrap().2, 1e3);
         let e = parse_value("0.12 N·m", Quantity::Power, p).unwrap_err();
+        let e = e.to_string();
         assert!(e.contains("not a unit of power") && e.contains("kw"), "{e}");
         assert!(parse_value("kW", Quantity::Power, p).is_err());
-        assert!(parse_value("0.12", Quantity::Power, p)
-            .unwrap_err()
-            .contains("no unit"));
+        assert!(matches!(
+            parse_value("0.12", Quantity::Power, p),
+            Err(ValueError::NoUnit { .. })
+        ));
     }
 
     #[test]
