@@ -153,4 +153,37 @@ fn fixed_defaults_that_are_not_the_truth_leave_a_stated_error() {
     // 0.013; the factors stay within the 0.02.
     assert!(rows < 0.05, "{rows}");
     assert!(factors < 0.02, "{factors}");
+    // The fit's own bands leave the fixed defaults out and miss the stall torque; with the
+    // defaults taken as uncertain within ×/÷ 1.5 every truth lies in its band.
+    let spread = dir.path().join("spread");
+    let fit = dir.path().join("fit.json");
+    vanefit(&[
+        "predict",
+        fit.to_str().unwrap(),
+        "--fixed-spread",
+        "1.5",
+        "--out",
+        spread.to_str().unwrap(),
+    ]);
+    let (a, b) = (
+        table(&spread.join("catalogue.csv")),
+        table(&dir.path().join("truth/catalogue.csv")),
+    );
+    let missed = |a: &[std::collections::BTreeMap<String, f64>]| {
+        a.iter()
+            .zip(&b)
+            .flat_map(|(x, y)| {
+                ROW.map(|c| !(x[&format!("{c}_lo")] <= y[c] && y[c] <= x[&format!("{c}_hi")]))
+            })
+            .filter(|m| *m)
+            .count()
+    };
+    let without = table(&dir.path().join("fitted/catalogue.csv"));
+    println!(
+        "truths outside their band: {} of 35 without the spread, {} with",
+        missed(&without),
+        missed(&a)
+    );
+    assert!(missed(&without) > 0);
+    assert_eq!(missed(&a), 0);
 }

@@ -44,6 +44,11 @@ pub struct PredictArgs {
     /// Points of each curve from standstill to the free speed.
     #[arg(long, default_value_t = crate::predict::options::DEFAULT_CURVE_POINTS)]
     pub curve_points: usize,
+    /// Take the parameters a fit could estimate but held fixed or could not identify as
+    /// uncertain within this factor (95 %), so that the bands include them (e.g. 1.5 for a
+    /// catalogue fit's defaults).
+    #[arg(long)]
+    pub fixed_spread: Option<f64>,
     /// Output folder (created).
     #[arg(long, default_value = "predict")]
     pub out: PathBuf,
@@ -216,6 +221,16 @@ fn options(
         });
     }
     o.curve_points = args.curve_points;
+    if let Some(f) = args.fixed_spread {
+        if !(f.is_finite() && f > 1.0) {
+            return Err(PredictCommandError::Setting {
+                option: "fixed-spread",
+                value: f.to_string(),
+                why: "must be a factor > 1",
+            });
+        }
+    }
+    o.fixed_spread = args.fixed_spread;
     Ok((o, unit))
 }
 

@@ -59,6 +59,9 @@ pub enum PredictError {
     /// The speed grid is not a positive number.
     #[error("the speed grid {0} rad/s is not a positive number")]
     BadGrid(f64),
+    /// The fixed parameters' spread is not a factor above 1.
+    #[error("the fixed parameters' spread {0} is not a factor > 1")]
+    BadSpread(f64),
     /// Fewer than two curve points.
     #[error("a curve needs at least 2 points, not {0}")]
     BadCurvePoints(usize),
@@ -161,7 +164,7 @@ fn centre_and_figures(
 /// documentation and [`uncertainty`]).
 pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, PredictError> {
     let (centre, speeds) = centre_and_figures(fit, options)?;
-    let unc = ParamUncertainty::of(fit);
+    let unc = ParamUncertainty::of(fit, options.fixed_spread);
     let shown = centre.flat(false);
     let figures = |m: &Motor| Outcome::of(m, options, Some(&speeds)).map(|o| o.flat(true));
     let bands = unc.delta_bands(fit, &shown, &figures)?;
@@ -205,9 +208,12 @@ pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, Pr
         options: options.clone(),
         reference: centre.reference,
         pressures,
-        uncertainty: unc,
-        fixed: fixed_parameters(fit),
+        fixed: fixed_parameters(fit)
+            .into_iter()
+            .filter(|n| !unc.spread.iter().any(|m| m == n))
+            .collect(),
         supply_range_pa: range,
+        uncertainty: unc,
         range_tolerance_pa: tolerance,
         discovered_terms: fit.extra.len(),
     })
@@ -247,7 +253,7 @@ pub fn check_bands(
     seed: u64,
 ) -> Result<Vec<BandCheck>, PredictError> {
     let (centre, speeds) = centre_and_figures(fit, options)?;
-    let unc = ParamUncertainty::of(fit);
+    let unc = ParamUncertainty::of(fit, options.fixed_spread);
     let smooth = centre.flat(true);
     let figures = |m: &Motor| Outcome::of(m, options, Some(&speeds)).map(|o| o.flat(true));
     let delta = unc.delta_bands(fit, &smooth, &figures)?;

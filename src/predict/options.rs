@@ -63,6 +63,10 @@ pub struct PredictOptions {
     pub speed_grid_rad_s: f64,
     /// Points of each torque, power and air curve, from standstill to the free speed (≥ 2).
     pub curve_points: usize,
+    /// Factor F > 1 within which the parameters a fit could estimate but held fixed (or
+    /// could not identify) are taken as uncertain, 95 %: ln θ ~ N(ln θ̂, (ln F/1.96)²),
+    /// independent (`None`: such parameters are taken as exact and the band says so).
+    pub fixed_spread: Option<f64>,
 }
 
 impl PredictOptions {
@@ -79,6 +83,7 @@ impl PredictOptions {
             nozzle: None,
             speed_grid_rad_s: DEFAULT_SPEED_GRID_RAD_S,
             curve_points: DEFAULT_CURVE_POINTS,
+            fixed_spread: None,
         }
     }
 
@@ -104,6 +109,9 @@ impl PredictOptions {
         }
         if self.curve_points < 2 {
             return Err(PredictError::BadCurvePoints(self.curve_points));
+        }
+        if let Some(f) = self.fixed_spread.filter(|f| !(f.is_finite() && *f > 1.0)) {
+            return Err(PredictError::BadSpread(f));
         }
         Ok(())
     }

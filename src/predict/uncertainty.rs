@@ -15,7 +15,11 @@
 //!
 //! Not covered, and said so in every output: parameters held fixed in the fit, estimated
 //! parameters that are not identifiable (`"identifiable": false`) or have no interval, and
-//! the coefficients of discovered terms.
+//! the coefficients of discovered terms. With a stated spread F (`--fixed-spread`), the
+//! parameters a fit could estimate (the six conductances, `t_coulomb`, `visc`) that were
+//! held fixed or are not identifiable are covered too, independently, with
+//! σ = ln F/1.96: a catalogue fit keeps them at defaults scaled to the displacement, which
+//! are right to within such a factor at best.
 //!
 //! # Delta method
 //!
@@ -27,6 +31,7 @@
 
 use super::PredictError;
 use crate::data::fitfile::FitFile;
+use crate::estimate::space::DEFAULT_ESTIMATED;
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamSet};
 use nalgebra::{DMatrix, DVector};
@@ -43,6 +48,8 @@ pub enum BandBasis {
     Covariance,
     /// The parameters' intervals taken as independent: the fit file has no covariance.
     Independent,
+    /// Only the stated spread of the fixed parameters: the fit gives no usable uncertainty.
+    SpreadOnly,
     /// No band: the fit file has neither covariance nor intervals.
     None,
 }
@@ -58,6 +65,10 @@ impl BandBasis {
             BandBasis::Independent => {
                 "95 % bands by the delta method with the parameters taken as INDEPENDENT: the \
                  fit file has intervals but no covariance, so correlations are ignored"
+            }
+            BandBasis::SpreadOnly => {
+                "95 % bands by the delta method from the stated spread of the fixed parameters \
+                 only: the fit file gives no usable covariance or intervals"
             }
             BandBasis::None => "no bands: the fit file has neither a covariance nor intervals",
         }
@@ -79,11 +90,15 @@ pub struct ParamUncertainty {
     pub cov: DMatrix<f64>,
     /// Estimated parameters the band does not cover, each with the reason.
     pub uncovered: Vec<(String, String)>,
+    /// Parameters covered by the stated spread (held fixed or not identifiable).
+    pub spread: Vec<String>,
+    /// The spread factor F, when given.
+    pub spread_factor: Option<f64>,
 }
 
 impl ParamUncertainty {
     /// The distribution a fit file states (see the module documentation).
-    pub fn of(fit: &FitFile) -> Self {
+    pub fn of(fit: &FitFile, spread: Option<f64>) -> Self {
         let ci = |n: &str| fit.ci95.iter().find(|(m, _)| m == n).map(|(_, c)| *c);
         let ci_sd = |n: &str| {
             ci(n)
@@ -123,6 +138,21 @@ impl ParamUncertainty {
             sd.push(ci_sd(n).or(own).unwrap_or(0.0));
             source.push(in_cov);
         }
+        let covered_by_fit = names.len();
+        let mut spread_names = Vec::new();
+        if let Some(f) = spread {
+            for n in DEFAULT_ESTIMATED {
+                let held = !fit.estimated.iter().any(|m| m == n);
+                let flat = uncovered.iter().any(|(m, _)| m == n);
+                if (held || flat) && value(n).is_some() {
+                    uncovered.retain(|(m, _)| m != n);
+                    names.push(n.to_string());
+                    sd.push(f.ln() / Z95);
+                    source.push(None);
+                    spread_names.push(n.to_string());
+                }
+            }
+        }
         let k = names.len();
         let corr = |a: usize, b: usize| -> f64 {
             if a == b {
@@ -136,10 +166,11 @@ impl ParamUncertainty {
             }
         };
         let cov = DMatrix::from_fn(k, k, |a, b| sd[a] * corr(a, b) * sd[b]);
-        let basis = match (k, &fit.covariance) {
-            (0, _) => BandBasis::None,
-            (_, Some(_)) => BandBasis::Covariance,
-            (_, None) => BandBasis::Independent,
+        let basis = match (k, covered_by_fit, &fit.covariance) {
+            (0, _, _) => BandBasis::None,
+            (_, 0, _) => BandBasis::SpreadOnly,
+            (_, _, Some(_)) => BandBasis::Covariance,
+            (_, _, None) => BandBasis::Independent,
         };
         Self {
             basis,
@@ -148,6 +179,8 @@ impl ParamUncertainty {
             sd,
             cov,
             uncovered,
+            spread: spread_names,
+            spread_factor: spread,
         }
     }
 
@@ -285,7 +318,7 @@ mod tests {
     #[test]
     fn widths_come_from_the_intervals_and_correlations_from_the_covariance() {
         let mut f = fit_file();
-        let u = ParamUncertainty::of(&f);
+        let u = ParamUncertainty::of(&f, None);
         assert_eq!(u.basis, BandBasis::Independent);
         assert_eq!(u.names, vec!["c_in1", "c_ext"]);
         assert!((u.sd[0] - 0.02 / Z95).abs() < 1e-12);
@@ -302,20 +335,48 @@ mod tests {
                 vec![0.0, 0.0, 1.0],
             ],
         });
-        let u = ParamUncertainty::of(&f);
+        let u = ParamUncertainty::of(&f, None);
         assert_eq!(u.basis, BandBasis::Covariance);
         // Correlation 0.5, rescaled to the intervals' widths.
         let want = 0.5 * (0.02 / Z95) * (0.04 / Z95);
         assert!((u.cov[(0, 1)] - want).abs() < 1e-15, "{}", u.cov);
         f.ci95.clear();
         f.covariance = None;
-        assert_eq!(ParamUncertainty::of(&f).basis, BandBasis::None);
+        assert_eq!(ParamUncertainty::of(&f, None).basis, BandBasis::None);
+    }
+
+    #[test]
+    fn a_stated_spread_covers_the_fixed_and_the_flat_estimable_parameters() {
+        let mut f = fit_file();
+        f.ci95.clear();
+        f.covariance = None;
+        // Nothing from the fit: the spread alone gives the band.
+        let u = ParamUncertainty::of(&f, Some(1.5));
+        assert_eq!(u.basis, BandBasis::SpreadOnly);
+        // visc is estimated but not identifiable, c_in1 and c_ext have no interval left,
+        // the other five were never estimated: all eight take the spread, nothing else.
+        assert_eq!(u.spread.len(), 8);
+        assert!(u.spread.contains(&"visc".to_string()));
+        assert!(u.uncovered.is_empty());
+        assert!(u.spread.contains(&"t_coulomb".to_string()));
+        assert!(!u.spread.iter().any(|n| n == "b_crit" || n == "inertia"));
+        let j = u.names.iter().position(|n| n == "t_coulomb").unwrap();
+        assert!((u.sd[j] - 1.5f64.ln() / Z95).abs() < 1e-15);
+        assert!(!u.uncovered.iter().any(|(n, _)| n == "visc"));
+        // With the fit's intervals the fitted ones keep their widths, the spread adds the rest.
+        let g = fit_file();
+        let u = ParamUncertainty::of(&g, Some(2.0));
+        assert_eq!(u.basis, BandBasis::Independent);
+        assert_eq!(&u.names[..2], &["c_in1", "c_ext"]);
+        assert!((u.sd[0] - 0.02 / Z95).abs() < 1e-12);
+        assert_eq!(u.names.len(), 2 + u.spread.len());
+        assert!(!u.spread.iter().any(|n| n == "c_in1" || n == "c_ext"));
     }
 
     #[test]
     fn delta_and_monte_carlo_agree_on_a_linear_figure() {
         let f = fit_file();
-        let u = ParamUncertainty::of(&f);
+        let u = ParamUncertainty::of(&f, None);
         // y = ln c_in1 + 2 ln c_ext: exactly linear in the log-parameters.
         let y = |m: &Motor| Ok(vec![m.params.c_in1().ln() + 2.0 * m.params.c_ext().ln()]);
         let center = y(&u.motor_at(&f, &u.log_values).unwrap()).unwrap();

@@ -364,6 +364,15 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
     for (name, why) in &pr.uncertainty.uncovered {
         notes.push(format!("The band does not cover {name}: {why}."));
     }
+    if let (Some(f), false) = (
+        pr.uncertainty.spread_factor,
+        pr.uncertainty.spread.is_empty(),
+    ) {
+        notes.push(format!(
+            "The band covers {} (held fixed or not identifiable) as uncertain within ×/÷ {f} (95 %, independent; --fixed-spread).",
+            pr.uncertainty.spread.join(", ")
+        ));
+    }
     if !pr.fixed.is_empty() {
         notes.push(format!(
             "The band does not cover the parameters the fit held fixed (taken as exact): {}.",
