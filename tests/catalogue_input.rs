@@ -167,6 +167,9 @@ fn bad_catalogue_input_is_located() {
     let rig7 =
         "[[experiment]]\nkind = \"catalogue\"\n[experiment.figures]\nstall_torque = \"0.3 N·m\"\n";
     refused(rig7, &[], &["needs its supply pressure"]);
+    // A figure that cannot be placed on a curve.
+    let rig9 = "[[experiment]]\nkind = \"catalogue\"\np_supply = \"6.3 bar_g\"\n[experiment.figures]\nstall_torque = \"0.3 N·m\"\nair_at_free_speed = \"4 l/s\"\n";
+    refused(rig9, &[], &["rig.toml:12:1", "needs free_speed"]);
     // Negative values and a point without speed.
     let curves = "speed_rpm,torque_nm\n0,0.3\n,0.2\n";
     refused(rig, &[("c.csv", curves)], &["c.csv:3:1", "needs its speed"]);

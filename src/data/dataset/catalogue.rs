@@ -237,6 +237,12 @@ fn check_figures(src: &Source<'_>, figures: &[Figure]) -> Result<(), DataError> 
             ));
         }
     }
+    if get("air_at_free_speed").is_some() && get("free_speed").is_none() {
+        return Err(src.at(
+            "air_at_free_speed",
+            "air_at_free_speed needs free_speed: the model is compared at that speed".into(),
+        ));
+    }
     if let (Some(p), Some(t), Some(w)) = (
         get("max_power"),
         get("torque_at_max_power"),
@@ -518,6 +524,17 @@ mod tests {
             parse_value("0.12", Quantity::Power, p),
             Err(ValueError::NoUnit { .. })
         ));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_printed_value_is_read_or_refused_without_panic(text in "\\PC{0,24}") {
+            for q in [Quantity::Speed, Quantity::Torque, Quantity::Power, Quantity::Flow1, Quantity::PPort1] {
+                if let Ok((si, _, _)) = parse_value(&text, q, 101_325.0) {
+                    proptest::prop_assert!(si.is_finite());
+                }
+            }
+        }
     }
 
     #[test]
