@@ -24,11 +24,12 @@ mod twin;
 
 use std::fmt::Write as _;
 use vanefit::data::dataset::Dataset;
-use vanefit::estimate::fit::{fit, FitData, FitSetup, UncertaintyMethod};
+use vanefit::estimate::fit::{fit, fit_file, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::multistart::Silent;
 use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, DEFAULT_ESTIMATED};
 use vanefit::model::effects::EffectSet;
 use vanefit::objective::cost::CostOptions;
+use vanefit::predict::{predict, PredictOptions, ROW_FIGURES};
 
 /// One parameter of one fit against the truth.
 struct Check {
@@ -54,6 +55,81 @@ struct Case {
     noise_ratio: f64,
     noise_reached: bool,
     checks: Vec<Check>,
+    /// Each predicted catalogue figure (4 and 6.3 bar(g)): whether its 95 % band holds the
+    /// twin's own figure.
+    bands: Vec<(&'static str, bool)>,
+}
+
+/// `vanefit predict`'s catalogue rows at 4 and 6.3 bar(g) from the fit, each figure's band
+/// against the twin's figure for the true motor (its own steady states and search).
+fn band_checks(
+    file: &vanefit::data::fitfile::FitFile,
+    motor: &twin::TwinMotor,
+    p_atm_pa: f64,
+) -> Vec<(&'static str, bool)> {
+    let mut options = PredictOptions::new(p_atm_pa);
+    options.pressures_pa = vec![p_atm_pa + 4e5, p_atm_pa + 6.3e5];
+    let pr = predict(file, &options).unwrap();
+    let mut out = Vec::new();
+    for pp in &pr.pressures {
+        let c = twin::Conditions {
+            p_supply_pa: pp.p_supply_pa,
+            p_atm_pa,
+            ..twin::Conditions::default()
+        };
+        let t = twin::catalogue::catalogue_row(motor, &c).unwrap();
+        let truth = [
+            t.free_speed_rad_s,
+            t.max_power_w,
+            t.speed_at_max_power_rad_s,
+            t.torque_at_max_power_nm,
+            t.stall_torque_nm,
+            t.air_at_max_power_kg_s,
+            t.air_at_free_speed_kg_s,
+        ];
+        for ((name, b), y) in ROW_FIGURES.iter().zip(&pp.figures).zip(truth) {
+            let [lo, hi] = b.band95.expect("the fit has intervals");
+            if !(lo <= y && y <= hi) && std::env::var("BAND_DEBUG").is_ok() {
+                eprintln!("{name} at {:.0}: value {:.6e} band [{lo:.6e}, {hi:.6e}] truth {y:.6e} (half-width {:.2e}, miss by {:.2} half-widths)", pp.p_supply_pa, b.value, (hi - lo) / 2.0, (y - b.value).abs() / ((hi - lo) / 2.0));
+            }
+            out.push((*name, lo <= y && y <= hi));
+        }
+    }
+    out
+}
+
+/// Per figure: bands and how many hold the truth.
+fn band_table(cases: &[Case]) -> String {
+    let mut s = String::from(
+        "| predicted figure (4 and 6.3 bar g) | bands | hold the twin's truth |\n|---|---|---|\n",
+    );
+    for name in ROW_FIGURES {
+        let ks: Vec<bool> = cases
+            .iter()
+            .flat_map(|c| &c.bands)
+            .filter(|(n, _)| *n == name)
+            .map(|(_, k)| *k)
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} |",
+            ks.len(),
+            ks.iter().filter(|k| **k).count()
+        );
+    }
+    let all: Vec<bool> = cases
+        .iter()
+        .flat_map(|c| &c.bands)
+        .map(|(_, k)| *k)
+        .collect();
+    let held = all.iter().filter(|k| **k).count();
+    let _ = writeln!(
+        s,
+        "| all | {} | {held} ({:.1}%) |",
+        all.len(),
+        100.0 * held as f64 / all.len().max(1) as f64
+    );
+    s
 }
 
 fn truth_of(m: &twin::TwinMotor, name: &str) -> f64 {
@@ -111,7 +187,9 @@ fn run_case(seed: u64, starts: usize, engine: &Engine) -> Case {
             }
         })
         .collect();
+    let bands = band_checks(&fit_file("twin", &setup, &out, seed), &motor, ds.p_atm_pa);
     Case {
+        bands,
         seed,
         rate_hz: cfg.conditions.rate_hz,
         brake_torque: cfg.brake_torque,
@@ -192,6 +270,17 @@ fn intervals_cover_the_truth_on_twin_data() {
     eprintln!("{t}");
     let m = misses(&cases);
     assert!(m <= 7, "{m} of 48 intervals miss the truth:\n{t}");
+    let b = band_table(&cases);
+    eprintln!("{b}");
+    let held = cases
+        .iter()
+        .flat_map(|c| &c.bands)
+        .filter(|(_, k)| *k)
+        .count();
+    assert!(
+        held >= 70,
+        "{held} of 84 predicted bands hold the truth:\n{b}"
+    );
     let reached = cases.iter().filter(|c| c.noise_reached).count();
     assert!(
         reached >= 5,
@@ -213,7 +302,7 @@ fn coverage_table() {
         );
         cases.push(c);
     }
-    let t = table(&cases);
+    let t = table(&cases) + "\n" + &band_table(&cases);
     std::fs::create_dir_all("target").unwrap();
     std::fs::write("target/coverage-table.md", &t).unwrap();
     eprintln!("{t}");
