@@ -2,5 +2,6 @@
 
 pub mod control;
 pub mod diagnose;
+pub mod explain;
 pub mod fit;
 pub mod plot;
