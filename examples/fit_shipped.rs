@@ -9,8 +9,8 @@ use vanefit::estimate::fit::{fit, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::multistart::Silent;
 use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, DEFAULT_ESTIMATED};
 use vanefit::model::effects::EffectSet;
-use vanefit::model::params::spec;
 use vanefit::objective::cost::CostOptions;
+use vanefit::report::fit::{parameter_rows, terminal_table};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let starts = match std::env::args().nth(1) {
@@ -38,16 +38,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "{}: cost {:.4} after {} evaluations",
         ds.name, out.cost, out.evaluations
     );
-    println!(
-        "{:<10} {:>12} {:>25}  unit",
-        "parameter", "value", "95% interval"
-    );
-    for iv in &out.intervals {
-        let ci = iv.ci95().map_or("not identifiable".into(), |[lo, hi]| {
-            format!("[{lo:.4e}, {hi:.4e}]")
-        });
-        let unit = spec(&iv.name).map_or("", |s| s.unit);
-        println!("{:<10} {:>12.5e} {:>25}  {unit}", iv.name, iv.value, ci);
+    // Each parameter with its meaning; conductances in m3/(s*Pa) and dm3/(s*bar).
+    for line in terminal_table(&parameter_rows(&ds, &setup, &out)) {
+        println!("{line}");
     }
     Ok(())
 }

@@ -47,6 +47,32 @@ fn short_fit_exports_a_fit_that_simulate_reads_back_and_resume_reproduces() {
     assert_eq!(doc["parameters"]["inertia"]["estimated"], false);
     assert!(Path::new(&dir.path().join("short.starts.jsonl")).exists());
 
+    // Issue 12: the summary and the report name each parameter in words, give conductances
+    // in m3/(s*Pa) and dm3/(s*bar), and say what cost J, chi2/dof and the noise ratio are.
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    let report = std::fs::read_to_string(dir.path().join("short.report.md")).unwrap();
+    let c_in1 = doc["parameters"]["c_in1"]["value"].as_f64().unwrap();
+    let dm3 = format!("{:.3}", c_in1 * 1e8);
+    for text in [&printed, &report] {
+        for needle in [
+            "inlet port, supply → chamber 1",
+            "leak, inlet side → exhaust",
+            "Coulomb friction torque",
+            "m3/(s*Pa)",
+            "dm3/(s*bar)",
+            &dm3[..4],
+            "cost J = sum over experiments and channels",
+            "chi2/dof = chi2/(rows − estimated parameters)",
+            "noise ratio = √(mean over channels",
+        ] {
+            assert!(text.contains(needle), "{needle} missing from:\n{text}");
+        }
+    }
+    assert!(
+        report.contains("| `c_in1` | inlet port, supply → chamber 1 |"),
+        "{report}"
+    );
+
     // The exported fit simulates.
     let sim_dir = dir.path().join("sim");
     let o = vanefit(&[

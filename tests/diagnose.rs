@@ -537,6 +537,17 @@ fn clean_dataset_has_no_mismatch_and_the_output_follows_spec() {
     assert_eq!(to_json(&d), v);
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(report.contains("valve_dynamics"), "{report}");
+    // Issue 12: read without the source. Every parameter id with its meaning, conductances
+    // also in the catalogues' dm3/(s*bar), and what cost J and the noise ratio are.
+    for needle in [
+        "`c_1e` (leak, inlet side → exhaust)",
+        "`t_coulomb` (Coulomb friction torque)",
+        "dm3/(s*bar)",
+        "cost J = sum over experiments and channels",
+        "noise ratio = √(mean over channels",
+    ] {
+        assert!(report.contains(needle), "{needle}");
+    }
     for f in [
         "ranking.svg",
         "overlay.datasheet.svg",

@@ -26,6 +26,7 @@ use crate::control::throttle::Port;
 use crate::control::{rpm, ControlError};
 use crate::report::control::bode::RPM_PER_BAR;
 use crate::report::control::{describe_load, describe_pi, describe_valve, Writer};
+use crate::report::explain;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 
@@ -388,23 +389,23 @@ fn print_throttle(r: &ThrottleStudy) {
         return;
     };
     println!(
-        "{} throttle at {} MPa, {}: speed {:.0} rpm at C = {:.2e} .. {:.0} rpm at C = {:.2e} \
-        m3/(s*Pa) (unthrottled free speed without load {:.0} rpm)",
+        "{} throttle at {} MPa, {}: speed {:.0} rpm at C = {} .. {:.0} rpm at C = {} \
+        (unthrottled free speed without load {:.0} rpm)",
         r.settings.port().name(),
         r.settings.p_supply_mpa(),
         describe_load(&r.load),
         rpm(lo.speed_rad_s),
-        lo.c_m3_s_pa,
+        explain::conductance(lo.c_m3_s_pa, 3),
         rpm(hi.speed_rad_s),
-        hi.c_m3_s_pa,
+        explain::conductance(hi.c_m3_s_pa, 3),
         rpm(r.free_speed_rad_s)
     );
     if let Some(w) = r.speed.windows(2).find(|w| {
         w[0].speed_rad_s < 0.5 * hi.speed_rad_s && w[1].speed_rad_s >= 0.5 * hi.speed_rad_s
     }) {
         println!(
-            "  half of that speed at C ~ {:.2e} m3/(s*Pa)",
-            (w[0].c_m3_s_pa * w[1].c_m3_s_pa).sqrt()
+            "  half of that speed at C ~ {}",
+            explain::conductance((w[0].c_m3_s_pa * w[1].c_m3_s_pa).sqrt(), 3)
         );
     }
 }

@@ -3,9 +3,7 @@
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::fit::{
-    fit, fit_file, most_sensitive_experiment, FitData, FitOutcome, FitSetup, UncertaintyMethod,
-};
+use crate::estimate::fit::{fit, fit_file, FitData, FitOutcome, FitSetup, UncertaintyMethod};
 use crate::estimate::multistart::{RunObserver, StartResult};
 use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
@@ -13,6 +11,7 @@ use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::spec;
 use crate::objective::cost::{CostError, CostOptions};
+use crate::report::explain;
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
 use clap::{Args, ValueEnum};
@@ -148,7 +147,7 @@ impl RunObserver for Progress {
     }
     fn start_finished(&self, _r: &StartResult, best: f64) {
         self.0.inc(1);
-        self.0.set_message(format!("best cost {best:.4}"));
+        self.0.set_message(format!("best cost J {best:.4}"));
     }
     fn finished(&self) {
         self.0.finish_and_clear();
@@ -342,26 +341,34 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
             source,
         })?;
     print_summary(&ds, &setup, &outcome, &args.out);
+    let mut plots = Vec::new();
     if !args.no_plots {
         let best = Motor::new(outcome.params.clone(), setup.space.effects.clone());
         let waterfall = side_path(&args.out, "waterfall.svg");
         report::waterfall(&outcome.run.results, &waterfall)?;
-        let written = report::overlays(
+        plots.push(waterfall);
+        plots.extend(report::overlays(
             &ds,
             &data.cost,
             &[("fit", &best)],
             &args.out.with_extension(""),
-        )?;
+        )?);
         println!(
-            "plots: {} and {}",
-            waterfall.display(),
-            written
+            "plots: {}",
+            plots
                 .iter()
                 .map(|p| p.display().to_string())
                 .collect::<Vec<_>>()
                 .join(", ")
         );
     }
+    let md = side_path(&args.out, "report.md");
+    let text = report::markdown(&ds, &setup, &outcome, args.seed, &plots);
+    crate::io::write_atomic(&md, text.as_bytes()).map_err(|source| FitCommandError::Write {
+        path: md.clone(),
+        source,
+    })?;
+    println!("report: {}", md.display());
     Ok(())
 }
 
@@ -387,21 +394,25 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
         );
     }
     print_goodness(out);
-    print_parameters(ds, setup, out);
-    let fixed: Vec<String> = crate::model::params::PARAMS
-        .iter()
-        .filter(|s| s.effect.is_none_or(|e| setup.space.effects.contains(e)))
-        .filter(|s| !setup.space.dims.iter().any(|d| d.name == s.name))
-        .map(|s| format!("{}={}", s.name, out.params.get(s.name).unwrap_or(s.default)))
-        .collect();
-    println!("fixed: {}", fixed.join(", "));
+    for line in report::terminal_table(&report::parameter_rows(ds, setup, out)) {
+        println!("{line}");
+    }
+    println!("fixed (not estimated):");
+    for (s, v) in report::fixed_parameters(setup, out) {
+        println!(
+            "  {:<10} {:<42} {}",
+            s.name,
+            explain::value(s.name, v, 5),
+            s.description()
+        );
+    }
     let minima: Vec<String> = out
         .clusters
         .iter()
         .take(5)
         .map(|c| format!("{:.4} (x{})", c.cost, c.members.len()))
         .collect();
-    println!("local minima (cost x starts): {}", minima.join(", "));
+    println!("local minima (cost J x starts): {}", minima.join(", "));
     println!("wrote {}", path.display());
 }
 
@@ -445,39 +456,8 @@ fn print_goodness(out: &FitOutcome) {
         "cost J {:.4} at the estimate; the best start reached {:.4} (J weighs each channel by its reference polynomial's scatter, chi2 by the data's noise, so their optima differ a little)",
         out.cost, out.best_start_cost
     );
-}
-
-/// The table of estimated parameters with their intervals and identifiability.
-fn print_parameters(ds: &Dataset, setup: &FitSetup, out: &FitOutcome) {
-    let motor = Motor::new(out.params.clone(), setup.space.effects.clone());
-    println!(
-        "{:<12} {:>13} {:>27}  unit",
-        "parameter", "value", "95% interval"
-    );
-    for d in &setup.space.dims {
-        let v = out.params.get(&d.name).unwrap_or(f64::NAN);
-        let unit = spec(&d.name).map_or("", |s| s.unit);
-        let iv = out.intervals.iter().find(|i| i.name == d.name);
-        let interval = match iv {
-            None => "not computed".to_string(),
-            Some(i) => format!(
-                "[{}, {}]",
-                i.lo.map_or("open".into(), |x| format!("{x:.4e}")),
-                i.hi.map_or("open".into(), |x| format!("{x:.4e}"))
-            ),
-        };
-        let note = match iv.and_then(|i| i.why_not()) {
-            None => String::new(),
-            Some(why) => {
-                let hint = match most_sensitive_experiment(&motor, &d.name) {
-                    Some(k) if !ds.experiments.iter().any(|e| e.kind == k) => {
-                        format!("; adding the {} experiment would pin it down", k.id())
-                    }
-                    _ => String::new(),
-                };
-                format!("  NOT IDENTIFIABLE: {why}{hint}")
-            }
-        };
-        println!("{:<12} {:>13.5e} {:>27}  {unit}{note}", d.name, v, interval);
-    }
+    println!("  what these are: {}.", explain::NOISE_RATIO);
+    println!("  {}; {}.", explain::CHI2_PER_DOF, explain::CHI2_OFFSETS);
+    println!("  {}.", explain::COST_J);
+    println!("  {}.", explain::CONDUCTANCE_UNITS);
 }

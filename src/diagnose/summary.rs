@@ -1,6 +1,7 @@
 //! The one-paragraph summary of a diagnosis, for people.
 
 use super::{discover, Diagnosis};
+use crate::model::params::conductance_dm3_s_bar;
 
 /// A number for people.
 pub(crate) fn num(v: f64) -> String {
@@ -21,8 +22,24 @@ pub fn summary(d: &Diagnosis) -> String {
         } else {
             "under-predicts"
         };
+        // A conductance abscissa in the other unit too (1 dm3/(s*bar) = 1e-8 m3/(s*Pa)).
+        let catalogue = if l.x_column.ends_with("_dm3_s_bar") {
+            format!(
+                " ({} to {} m3/(s*Pa))",
+                num(l.x_range[0]),
+                num(l.x_range[1])
+            )
+        } else if l.x_column.starts_with("c_port") {
+            format!(
+                " ({} to {} dm3/(s*bar))",
+                num(conductance_dm3_s_bar(l.x_range[0])),
+                num(conductance_dm3_s_bar(l.x_range[1]))
+            )
+        } else {
+            String::new()
+        };
         s += &format!(
-            "{}, {}, for {} from {} to {}: baseline {verb} by {} {} on average ({:.1} sigma). ",
+            "{}, {}, for {} from {} to {}{catalogue}: baseline {verb} by {} {} on average ({:.1} sigma). ",
             l.kind.id(),
             l.column,
             l.x_column,

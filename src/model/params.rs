@@ -53,11 +53,36 @@ pub struct ParamSpec {
     pub effect: Option<Effect>,
     /// The value that switches the effect off.
     pub off: OffValue,
-    /// What the parameter means, for reports.
+    /// What the parameter is, in a few words for people (see [`ParamSpec::description`]).
     pub meaning: &'static str,
 }
 
+/// The SI unit of a sonic conductance, as fit files write it.
+pub const CONDUCTANCE_UNIT: &str = "m3/(s*Pa)";
+
+/// The unit in which catalogues and ISO 6358 give sonic conductances.
+pub const CATALOGUE_CONDUCTANCE_UNIT: &str = "dm3/(s*bar)";
+
 impl ParamSpec {
+    /// What the parameter is, in words, for every table and report that prints its id:
+    /// `c_1e` is "leak, inlet side → exhaust", `t_coulomb` "Coulomb friction torque". The
+    /// base model's descriptions are the table in this file; each effect's are in its file
+    /// under `model/effects/`.
+    pub fn description(&self) -> &'static str {
+        self.meaning
+    }
+
+    /// The id followed by its description, e.g. `c_in1 (inlet port, supply → chamber 1)`.
+    pub fn label(&self) -> String {
+        format!("{} ({})", self.name, self.meaning)
+    }
+
+    /// Whether the parameter is a sonic conductance (unit [`CONDUCTANCE_UNIT`]), which
+    /// reports give in [`CATALOGUE_CONDUCTANCE_UNIT`] too.
+    pub fn is_conductance(&self) -> bool {
+        self.unit == CONDUCTANCE_UNIT
+    }
+
     /// The value that switches this parameter's effect off, given the base parameters.
     pub fn off_value(&self, base: &MotorParams) -> f64 {
         let (lo, hi) = self.search;
@@ -84,7 +109,7 @@ macro_rules! base_params {
 
         impl MotorParams {
             $(
-                #[doc = concat!($meaning, ", ", $unit, ".")]
+                #[doc = concat!("`", stringify!($field), "`: ", $meaning, " (", $unit, ").")]
                 pub fn $field(&self) -> f64 { self.values[Base::$field as usize] }
             )*
         }
@@ -93,25 +118,25 @@ macro_rules! base_params {
 
 use Domain::{Integer, Interval, NonNegative, Positive};
 base_params! {
-    c_in1: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "sonic conductance of the inlet duct (port 1 to volume 1)";
-    c_out2: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "sonic conductance of the outlet duct (volume 2 to port 2)";
-    c_ext: "m3/(s*Pa)" = 1.170707e-8, Positive, (1e-9, 1e-7), "sonic conductance of the exhaust path (volume e to atmosphere)";
-    c_1e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leakage conductance volume 1 to volume e";
-    c_2e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leakage conductance volume 2 to volume e";
-    c_12: "m3/(s*Pa)" = 7.616275e-10, NonNegative, (1e-12, 1e-8), "leakage conductance volume 1 to volume 2";
+    c_in1: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "inlet port, supply → chamber 1";
+    c_out2: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "outlet port, chamber 2 → port 2";
+    c_ext: "m3/(s*Pa)" = 1.170707e-8, Positive, (1e-9, 1e-7), "exhaust port, exhaust chamber → atmosphere";
+    c_1e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leak, inlet side → exhaust";
+    c_2e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leak, outlet side → exhaust";
+    c_12: "m3/(s*Pa)" = 7.616275e-10, NonNegative, (1e-12, 1e-8), "leak, inlet side → outlet side";
     b_crit: "1" = 0.5, Interval(0.05, 0.95), (0.2, 0.6), "critical pressure ratio of every nozzle";
     z: "1" = 5.0, Integer(2, 16), (5.0, 5.0), "number of vanes";
-    v_disp: "m3" = 3.8e-6, Positive, (1e-7, 1e-3), "nominal displacement z*V_fill";
+    v_disp: "m3" = 3.8e-6, Positive, (1e-7, 1e-3), "nominal displacement z·V_fill";
     eps: "1" = 1.071, Interval(1.0, 2.0), (1.0, 1.5), "expansion ratio V_exp/V_fill";
     v_dead: "m3" = 0.10e-6, NonNegative, (0.0, 1e-6), "dead volume per compartment";
-    n_poly: "1" = 1.3, Interval(1.0, 1.4), (1.0, 1.4), "polytropic index";
-    vol1: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume at the port-1 inlet of the stator";
-    vol2: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume at the port-2 inlet of the stator";
-    vole: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume at the exhaust inlet of the stator";
+    n_poly: "1" = 1.3, Interval(1.0, 1.4), (1.0, 1.4), "polytropic index of expansion and compression";
+    vol1: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of chamber 1 (inlet side)";
+    vol2: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of chamber 2 (outlet side)";
+    vole: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of the exhaust chamber";
     inertia: "kg*m2" = 2e-4, Positive, (1e-6, 1e-2), "inertia of rotor, coupling and brake";
     t_coulomb: "N*m" = 0.02, NonNegative, (1e-3, 0.2), "Coulomb friction torque";
-    visc: "N*m*s/rad" = 6e-5, NonNegative, (1e-6, 1e-3), "viscous friction coefficient";
-    w_reg: "rad/s" = 0.2, Positive, (0.01, 5.0), "friction regularisation speed";
+    visc: "N*m*s/rad" = 6e-5, NonNegative, (1e-6, 1e-3), "viscous friction";
+    w_reg: "rad/s" = 0.2, Positive, (0.01, 5.0), "speed that regularises the Coulomb friction";
 }
 
 /// Number of parameters: the base model's and every catalog effect's.
@@ -234,6 +259,30 @@ fn position(name: &str) -> Option<usize> {
 /// Looks up a parameter's description by name.
 pub fn spec(name: &str) -> Option<&'static ParamSpec> {
     PARAMS.iter().find(|p| p.name == name)
+}
+
+/// A parameter's description in words by name (`None` for an unknown name); see
+/// [`ParamSpec::description`].
+pub fn description(name: &str) -> Option<&'static str> {
+    spec(name).map(ParamSpec::description)
+}
+
+/// A parameter's id with its description for people, e.g. `c_1e (leak, inlet side →
+/// exhaust)`; an unknown name is returned as it is.
+pub fn label(name: &str) -> String {
+    spec(name).map_or_else(|| name.to_string(), ParamSpec::label)
+}
+
+/// Whether the named parameter is a sonic conductance (false for an unknown name).
+pub fn is_conductance(name: &str) -> bool {
+    spec(name).is_some_and(ParamSpec::is_conductance)
+}
+
+/// A sonic conductance in dm³/(s·bar) (ISO 6358 catalogues) from m³/(s·Pa):
+/// 1 dm³/(s·bar) = 1e-3 m³/s per 1e5 Pa = 1e-8 m³/(s·Pa), so 6.76e-9 m³/(s·Pa) is
+/// 0.676 dm³/(s·bar).
+pub fn conductance_dm3_s_bar(c_m3_s_pa: f64) -> f64 {
+    crate::units::Unit::Dm3SBar.from_si(c_m3_s_pa, 0.0)
 }
 
 impl Default for MotorParams {
@@ -377,6 +426,35 @@ mod tests {
             p.effect_values(Effect::SpeedDependentLeakage),
             &[2.5, 300.0]
         );
+    }
+
+    #[test]
+    fn every_parameter_is_described_and_conductances_convert_to_catalogue_units() {
+        for p in PARAMS {
+            let d = p.description();
+            assert!(d.len() >= 6 && d != p.name, "{}: '{d}'", p.name);
+            assert_eq!(description(p.name), Some(d));
+            assert_eq!(label(p.name), format!("{} ({d})", p.name));
+        }
+        assert_eq!(description("c_1e"), Some("leak, inlet side → exhaust"));
+        assert_eq!(description("c_in1"), Some("inlet port, supply → chamber 1"));
+        assert_eq!(description("t_coulomb"), Some("Coulomb friction torque"));
+        assert_eq!(description("visc"), Some("viscous friction"));
+        assert_eq!(description("no_such"), None);
+        assert_eq!(label("no_such"), "no_such");
+        let conductances: Vec<_> = PARAMS
+            .iter()
+            .filter(|p| p.is_conductance())
+            .map(|p| p.name)
+            .collect();
+        assert_eq!(
+            conductances,
+            ["c_in1", "c_out2", "c_ext", "c_1e", "c_2e", "c_12"]
+        );
+        assert!(is_conductance("c_12") && !is_conductance("visc") && !is_conductance("x"));
+        // 1 dm³/(s·bar) = 1e-3 m³/s / 1e5 Pa.
+        assert!((conductance_dm3_s_bar(6.76e-9) - 0.676).abs() < 1e-12);
+        assert!((conductance_dm3_s_bar(1e-8) - 1.0).abs() < 1e-15);
     }
 
     #[test]

@@ -8,6 +8,9 @@
 
 use crate::diagnose::analysis::ChannelData;
 use crate::diagnose::{discover, num, summary, Candidate, Concealment, Diagnosis, ModelKind};
+use crate::model::effects::Effect;
+use crate::model::params::{conductance_dm3_s_bar, description, is_conductance, spec};
+use crate::report::explain;
 use crate::report::plot::{Chart, Figure, Legend, PlotError, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -135,8 +138,8 @@ fn write_figures(d: &Diagnosis, out: &Path) -> Result<Vec<(String, String, Strin
         Figure::new(residuals, cols).write_svg(&out.join(&r))?;
         figures.push((file.clone(), o, r));
     }
-    let mut ranking = Chart::new("Refitted models", "rank", "dBIC against the baseline")
-        .legend(Legend::LowerRight);
+    let mut ranking =
+        Chart::new("Refitted models", "rank", "dBIC against the baseline").legend(Legend::Right);
     for (i, c) in d.candidates.iter().enumerate().take(12) {
         ranking = ranking.with(Series::points(
             &c.label,
@@ -155,7 +158,7 @@ fn overlay_chart(file: &str, b: &ChannelData, e: &ChannelData, ext: &str, p_atm:
         .with(Series::points("data", curve(b, &b.data, p_atm, true)))
         .with(Series::line("baseline", curve(b, &b.sim, p_atm, true)))
         .with(Series::line(ext, curve(e, &e.sim, p_atm, true)))
-        .legend(Legend::UpperLeft);
+        .legend(Legend::Below);
     if b.abscissa.log10 {
         chart.log_x()
     } else {
@@ -175,7 +178,7 @@ fn residual_chart(file: &str, b: &ChannelData, e: &ChannelData, ext: &str, p_atm
         curve(b, &b.normalized(), p_atm, false),
     ))
     .with(Series::points(ext, curve(e, &e.normalized(), p_atm, false)))
-    .legend(Legend::UpperLeft);
+    .legend(Legend::Below);
     if b.abscissa.log10 {
         chart.log_x()
     } else {
@@ -200,14 +203,25 @@ fn overview(md: &mut String, d: &Diagnosis) {
     );
     let _ = writeln!(
         md,
-        "Noise ratio = RMS over channels of (simulation − recorded data)/σ, σ each channel's \
-         noise estimated from the data alone (second differences); ≈ 1 means explained to \
-         within noise. BIC = χ² + k·ln n (χ² of the recorded data over n = {} compared \
-         points, which every fit minimises; k estimated parameters); a model is selected only \
-         when it beats every simpler one by ΔBIC < −10. `cost` is the project's fitting cost J \
-         (against the reference polynomials) at the fitted parameters.\n",
-        d.baseline.fitted.n_points
+        "How to read the numbers:\n\n* {}.\n* {} (every fit of a diagnosis minimises it; no \
+         sensor offset is profiled out here: an offset would be a finding). BIC = χ² + k·ln n \
+         over the n = {} compared points, k estimated parameters; a model is selected only \
+         when it beats every simpler one by ΔBIC < −10.\n* `cost` is J at the fitted \
+         parameters: {}.\n* {}.\n",
+        explain::NOISE_RATIO,
+        explain::CHI2_PER_DOF,
+        d.baseline.fitted.n_points,
+        explain::COST_J,
+        explain::CONDUCTANCE_UNITS
     );
+}
+
+/// A parameter id for the report, in code style, with its meaning: `` `c_1e` (leak, ...) ``.
+fn md_label(name: &str) -> String {
+    match description(name) {
+        Some(words) => format!("`{name}` ({words})"),
+        None => format!("`{name}`"),
+    }
 }
 
 /// How the recorded inputs of the transients were smoothed.
@@ -260,12 +274,13 @@ fn locations(md: &mut String, d: &Diagnosis) {
         for l in &d.locations {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} {} .. {} | {:.2} | {} {} | {} |",
+                "| {} | {} | {} {} .. {}{} | {:.2} | {} {} | {} |",
                 l.kind.id(),
                 l.column,
                 l.x_column,
                 num(l.x_range_display[0]),
                 num(l.x_range_display[1]),
+                conductance_range(&l.x_column, l.x_range),
                 l.severity,
                 num(l.bias_display),
                 l.unit,
@@ -289,6 +304,30 @@ fn locations(md: &mut String, d: &Diagnosis) {
         );
     }
     let _ = writeln!(md);
+}
+
+/// For a conductance abscissa (`c_port…` columns), its range in both units (`x_range`: SI);
+/// nothing for other abscissae.
+fn conductance_range(x_column: &str, x_range: [f64; 2]) -> String {
+    if !x_column.starts_with("c_port") {
+        return String::new();
+    }
+    format!(
+        " (= {} .. {} m3/(s*Pa) = {} .. {} dm3/(s*bar))",
+        num(x_range[0]),
+        num(x_range[1]),
+        num(conductance_dm3_s_bar(x_range[0])),
+        num(conductance_dm3_s_bar(x_range[1]))
+    )
+}
+
+/// A parameter value for a table: a conductance also in dm³/(s·bar), in brackets.
+fn param_cell(name: &str, v: f64) -> String {
+    if is_conductance(name) {
+        format!("{} ({})", num(v), num(conductance_dm3_s_bar(v)))
+    } else {
+        num(v)
+    }
 }
 
 /// The concealment test: the statistic, each experiment's ratios and parameters.
@@ -334,7 +373,11 @@ fn concealment(md: &mut String, d: &Diagnosis) {
 
 /// The estimated parameters of the joint fit and of each experiment fitted alone.
 fn separate_parameters(md: &mut String, d: &Diagnosis, c: &Concealment) {
-    let _ = write!(md, "\n| parameter | joint |");
+    let _ = write!(
+        md,
+        "\nEstimated parameters, SI (conductances in m3/(s*Pa), in brackets in dm3/(s*bar)):\n\n\
+         | parameter | joint |"
+    );
     for e in &c.experiments {
         let _ = write!(md, " {} alone |", e.file);
     }
@@ -344,13 +387,19 @@ fn separate_parameters(md: &mut String, d: &Diagnosis, c: &Concealment) {
     }
     let _ = writeln!(md);
     for n in &d.estimated {
+        let unit = spec(n).map_or(String::new(), |s| format!(", {}", s.unit));
         let _ = write!(
             md,
-            "| {n} | {} |",
-            num(d.baseline.fitted.params.get(n).unwrap_or(f64::NAN))
+            "| {}{unit} | {} |",
+            md_label(n),
+            param_cell(n, d.baseline.fitted.params.get(n).unwrap_or(f64::NAN))
         );
         for e in &c.experiments {
-            let _ = write!(md, " {} |", num(e.alone_params.get(n).unwrap_or(f64::NAN)));
+            let _ = write!(
+                md,
+                " {} |",
+                param_cell(n, e.alone_params.get(n).unwrap_or(f64::NAN))
+            );
         }
         let _ = writeln!(md);
     }
@@ -372,6 +421,7 @@ fn candidates(md: &mut String, d: &Diagnosis) {
         candidate_row(md, c);
     }
     let _ = writeln!(md);
+    effects_tried(md, d);
     for s in &d.skipped {
         let _ = writeln!(md, "* `{}` not tried: {}.", s.effect.id(), s.reason);
     }
@@ -393,6 +443,30 @@ fn candidates(md: &mut String, d: &Diagnosis) {
         }
         let _ = writeln!(md);
     }
+}
+
+/// What each catalog effect among the candidates is, with its parameters in words.
+fn effects_tried(md: &mut String, d: &Diagnosis) {
+    let tried: Vec<Effect> = Effect::ALL
+        .into_iter()
+        .filter(|e| d.candidates.iter().any(|c| c.fitted.effects.contains(*e)))
+        .collect();
+    if tried.is_empty() {
+        return;
+    }
+    let _ = writeln!(md, "The catalog effects refitted:\n");
+    for e in tried {
+        let params: Vec<String> = e.specs().iter().map(|s| md_label(s.name)).collect();
+        let _ = writeln!(
+            md,
+            "* `{}` ({}): {}; parameters: {}.",
+            e.id(),
+            e.category().id(),
+            e.physics(),
+            params.join(", ")
+        );
+    }
+    let _ = writeln!(md);
 }
 
 /// One row of the candidates' table.
@@ -422,7 +496,14 @@ fn selected(md: &mut String, d: &Diagnosis) {
         let params: Vec<String> = s
             .parameters
             .iter()
-            .map(|(n, v, u)| format!("{n} = {} {u}", num(*v)))
+            .map(|(n, v, u)| {
+                let value = if is_conductance(n) {
+                    explain::conductance(*v, 4)
+                } else {
+                    format!("{} {u}", num(*v))
+                };
+                format!("{} = {value}", md_label(n))
+            })
             .collect();
         let _ = writeln!(
             md,
@@ -469,4 +550,29 @@ pub fn write_all(d: &Diagnosis, out: &Path) -> Result<(), ReportError> {
         write_file(out.join(name), text.as_bytes())?;
     }
     write(d, out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Conductances in the diagnosis report come in both units, ids with their meaning.
+    #[test]
+    fn conductances_in_both_units_and_ids_in_words() {
+        assert_eq!(
+            param_cell("c_1e", 2.077886e-9),
+            format!("{} ({})", num(2.077886e-9), num(0.2077886))
+        );
+        assert_eq!(param_cell("visc", 6e-5), num(6e-5));
+        assert_eq!(md_label("c_1e"), "`c_1e` (leak, inlet side → exhaust)");
+        assert_eq!(
+            md_label("t_static"),
+            "`t_static` (static (breakaway) friction torque)"
+        );
+        assert_eq!(md_label("k_poly"), "`k_poly`");
+        let range = conductance_range("c_port2_m3_s_pa", [3e-10, 1e-7]);
+        assert!(range.contains("3.000e-10 .. 1.000e-7 m3/(s*Pa)"), "{range}");
+        assert!(range.contains("0.030 .. 10.000 dm3/(s*bar)"), "{range}");
+        assert_eq!(conductance_range("p_port1_mpa", [1e5, 7e5]), "");
+    }
 }

@@ -1,15 +1,271 @@
-//! Pictures of a fit: the waterfall of final costs over the starts, and per experiment an
-//! overlay of data, reference polynomial and simulation for every channel.
+//! A fit for people: the table of its parameters (ids with their meaning, conductances in
+//! m³/(s·Pa) and dm³/(s·bar)), the report `<fit>.report.md`, and its pictures: the
+//! waterfall of final costs over the starts, and per experiment an overlay of data,
+//! reference polynomial and simulation for every channel.
 
 use crate::data::dataset::Dataset;
+use crate::estimate::fit::{most_sensitive_experiment, FitOutcome, FitSetup};
 use crate::model::motor::Motor;
+use crate::model::params::{conductance_dm3_s_bar, spec, ParamSpec, PARAMS};
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
+use crate::report::explain::{self, number};
 use crate::report::plot::{Chart, Figure, PlotError, Series};
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::estimate::multistart::StartResult;
+
+/// One estimated parameter of a fit, as the summary and the report print it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamRow {
+    /// The parameter's id.
+    pub name: String,
+    /// What it is, in words ([`ParamSpec::description`]).
+    pub description: &'static str,
+    /// The estimate, SI.
+    pub value: f64,
+    /// Its SI unit.
+    pub unit: &'static str,
+    /// The 95% interval's ends (`None` on an open side); `None` when not computed.
+    pub interval: Option<(Option<f64>, Option<f64>)>,
+    /// A sonic conductance (also printed in dm³/(s·bar)).
+    pub conductance: bool,
+    /// Why the parameter is not identifiable, and which experiment would pin it down.
+    pub not_identifiable: Option<String>,
+}
+
+impl ParamRow {
+    /// The interval in SI, `[lo, hi]` with `open` for an open side, or `not computed`.
+    fn interval_text(&self, convert: fn(f64) -> f64, digits: usize) -> String {
+        match self.interval {
+            None => "not computed".into(),
+            Some((lo, hi)) => {
+                let end = |x: Option<f64>| x.map_or("open".into(), |x| number(convert(x), digits));
+                format!("[{}, {}]", end(lo), end(hi))
+            }
+        }
+    }
+}
+
+/// The estimated parameters of a fit, in the order of its search space.
+pub fn parameter_rows(ds: &Dataset, setup: &FitSetup, out: &FitOutcome) -> Vec<ParamRow> {
+    let motor = Motor::new(out.params.clone(), setup.space.effects.clone());
+    setup
+        .space
+        .dims
+        .iter()
+        .map(|d| {
+            let s = spec(&d.name);
+            let iv = out.intervals.iter().find(|i| i.name == d.name);
+            let not_identifiable = iv.and_then(|i| i.why_not()).map(|why| {
+                let hint = match most_sensitive_experiment(&motor, &d.name) {
+                    Some(k) if !ds.experiments.iter().any(|e| e.kind == k) => {
+                        format!("; adding the {} experiment would pin it down", k.id())
+                    }
+                    _ => String::new(),
+                };
+                format!("{why}{hint}")
+            });
+            ParamRow {
+                name: d.name.clone(),
+                description: s.map_or("", ParamSpec::description),
+                value: out.params.get(&d.name).unwrap_or(f64::NAN),
+                unit: s.map_or("", |s| s.unit),
+                interval: iv.map(|i| (i.lo, i.hi)),
+                conductance: s.is_some_and(ParamSpec::is_conductance),
+                not_identifiable,
+            }
+        })
+        .collect()
+}
+
+/// The parameters a fit held fixed (the base model's and those of the effects switched on
+/// that were not estimated), with their values.
+pub fn fixed_parameters(setup: &FitSetup, out: &FitOutcome) -> Vec<(&'static ParamSpec, f64)> {
+    PARAMS
+        .iter()
+        .filter(|s| s.effect.is_none_or(|e| setup.space.effects.contains(e)))
+        .filter(|s| !setup.space.dims.iter().any(|d| d.name == s.name))
+        .map(|s| (s, out.params.get(s.name).unwrap_or(s.default)))
+        .collect()
+}
+
+/// The parameter table for a terminal: one line per parameter (id, value, 95% interval,
+/// unit, meaning) and, under a conductance, the same in dm³/(s·bar); a parameter that is not
+/// identifiable says why on a line of its own.
+pub fn terminal_table(rows: &[ParamRow]) -> Vec<String> {
+    let si = |v: f64| v;
+    let mut lines = vec![format!(
+        "{:<10} {:>12} {:>26}  {:<11}  meaning",
+        "parameter", "value", "95% interval", "unit"
+    )];
+    for r in rows {
+        lines.push(format!(
+            "{:<10} {:>12} {:>26}  {:<11}  {}",
+            r.name,
+            number(r.value, 5),
+            r.interval_text(si, 5),
+            r.unit,
+            r.description
+        ));
+        if r.conductance {
+            lines.push(format!(
+                "{:<10} {:>12} {:>26}  {}",
+                "",
+                number(conductance_dm3_s_bar(r.value), 5),
+                r.interval_text(conductance_dm3_s_bar, 5),
+                crate::model::params::CATALOGUE_CONDUCTANCE_UNIT
+            ));
+        }
+        if let Some(why) = &r.not_identifiable {
+            lines.push(format!("{:<10} NOT IDENTIFIABLE: {why}", ""));
+        }
+    }
+    lines
+}
+
+/// The report of a fit, `<fit>.report.md`: run, goodness of fit with what its numbers mean,
+/// estimated and fixed parameters, systematic errors, and the plots (`plots`: file names
+/// next to the report).
+pub fn markdown(
+    ds: &Dataset,
+    setup: &FitSetup,
+    out: &FitOutcome,
+    seed: u64,
+    plots: &[PathBuf],
+) -> String {
+    let mut md = String::new();
+    let run = &out.run;
+    let _ = writeln!(md, "# Fit of `{}`\n", ds.name);
+    let effects = if setup.space.effects.is_empty() {
+        "the base model (no catalog effect)".to_string()
+    } else {
+        format!("effects {}", setup.space.effects.ids().join(", "))
+    };
+    let _ = writeln!(
+        md,
+        "{} starts (seed {seed}, {} converged to the best minimum), {} evaluations, {:.1} s on \
+         {} thread(s); {effects}. The estimate is the maximum of the likelihood of the recorded \
+         rows, reached from the best start; intervals by {}.\n",
+        run.results.len(),
+        run.converged(),
+        out.evaluations,
+        out.wall_s,
+        run.threads,
+        out.method.id()
+    );
+    goodness_section(&mut md, out);
+    parameter_section(&mut md, &parameter_rows(ds, setup, out));
+    let _ = writeln!(
+        md,
+        "## Fixed parameters\n\n| parameter | meaning | value |\n|---|---|---|"
+    );
+    for (s, v) in fixed_parameters(setup, out) {
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {} |",
+            s.name,
+            s.description(),
+            explain::value(s.name, v, 5)
+        );
+    }
+    let _ = writeln!(md);
+    if !out.nuisances.is_empty() {
+        let _ = writeln!(
+            md,
+            "## Systematic errors at the estimate\n\nSensor offsets (in the sensor's SI unit) \
+             and the supply-pressure sensor's offset (Pa), profiled out within their \
+             calibration tolerances:\n\n| offset | value (SI) |\n|---|---|"
+        );
+        for (k, v) in &out.nuisances {
+            let _ = writeln!(md, "| {k} | {} |", number(*v, 4));
+        }
+        let _ = writeln!(md);
+    }
+    if !plots.is_empty() {
+        let _ = writeln!(md, "## Plots\n");
+        for p in plots {
+            let name = p
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            let _ = writeln!(md, "![{name}]({name})\n");
+        }
+    }
+    md
+}
+
+/// The goodness of fit and the cost, each with one line on what it is.
+fn goodness_section(md: &mut String, out: &FitOutcome) {
+    let _ = writeln!(md, "## How well it fits\n");
+    if let Some(g) = &out.goodness {
+        let verdict = if g.noise_reached {
+            "the model reaches the noise".to_string()
+        } else {
+            format!(
+                "the model does NOT reach the noise: intervals widened {:.2}×",
+                g.interval_scale
+            )
+        };
+        let _ = writeln!(
+            md,
+            "* noise ratio {:.3} (limit {:.3}): {verdict}\n* chi2 {:.1} over {} rows, \
+             chi2/dof {:.3} (dof {})",
+            g.noise_ratio, g.noise_ratio_limit, g.chi2, g.n_points, g.chi2_per_dof, g.dof
+        );
+    } else {
+        let _ = writeln!(md, "* chi2 {:.1} over {} rows", out.chi2, out.n_points);
+    }
+    let _ = writeln!(
+        md,
+        "* cost J {:.4} at the estimate; the best start reached {:.4}\n\n\
+         What these are:\n\n* {}.\n* {}; {}.\n* {}.\n",
+        out.cost,
+        out.best_start_cost,
+        explain::NOISE_RATIO,
+        explain::CHI2_PER_DOF,
+        explain::CHI2_OFFSETS,
+        explain::COST_J
+    );
+}
+
+/// The table of estimated parameters, conductances in both units.
+fn parameter_section(md: &mut String, rows: &[ParamRow]) {
+    let _ = writeln!(
+        md,
+        "## Estimated parameters\n\nValues and 95% intervals in SI; {}.\n\n\
+         | parameter | meaning | value | 95% interval | unit | in dm3/(s*bar) | identifiable |\n\
+         |---|---|---|---|---|---|---|",
+        explain::CONDUCTANCE_UNITS
+    );
+    for r in rows {
+        let catalogue = if r.conductance {
+            format!(
+                "{} {}",
+                number(conductance_dm3_s_bar(r.value), 5),
+                r.interval_text(conductance_dm3_s_bar, 5)
+            )
+        } else {
+            String::new()
+        };
+        let identifiable = match (&r.not_identifiable, r.interval) {
+            (Some(why), _) => format!("no: {why}"),
+            (None, None) => "not computed".into(),
+            (None, Some(_)) => "yes".into(),
+        };
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {} | {} | {} | {catalogue} | {identifiable} |",
+            r.name,
+            r.description,
+            number(r.value, 5),
+            r.interval_text(|v| v, 5),
+            r.unit
+        );
+    }
+    let _ = writeln!(md);
+}
 
 /// Sorted final costs of every start (log scale): a flat floor reached by many starts is a
 /// well-found minimum; steps are distinct local minima.
@@ -22,9 +278,9 @@ pub fn waterfall(results: &[StartResult], path: &Path) -> Result<(), PlotError> 
         .map(|(i, c)| ((i + 1) as f64, *c))
         .collect();
     Chart::new(
-        "Final cost of every start, sorted",
+        "Final cost J of every start, sorted",
         "start (sorted by cost)",
-        "cost",
+        "cost J",
     )
     .log_y()
     .with(Series::points("final cost", points))
@@ -137,5 +393,83 @@ fn axis_label(ax: &Abscissa) -> String {
         format!("{} (log scale)", ax.column)
     } else {
         ax.column.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(name: &str, value: f64, interval: Option<(Option<f64>, Option<f64>)>) -> ParamRow {
+        let s = spec(name).unwrap();
+        ParamRow {
+            name: name.into(),
+            description: s.description(),
+            value,
+            unit: s.unit,
+            interval,
+            conductance: s.is_conductance(),
+            not_identifiable: None,
+        }
+    }
+
+    /// Conductances are printed in m³/(s·Pa) and dm³/(s·bar), every id with its meaning.
+    #[test]
+    fn terminal_table_gives_meanings_and_both_conductance_units() {
+        let mut open = row("c_12", 7.6e-10, Some((Some(5e-10), None)));
+        open.not_identifiable = Some("the data do not bound it from above".into());
+        let rows = [
+            row(
+                "c_in1",
+                6.758344e-9,
+                Some((Some(6.7531e-9), Some(6.7636e-9))),
+            ),
+            row("t_coulomb", 0.0201, None),
+            open,
+        ];
+        let lines = terminal_table(&rows);
+        let text = lines.join("\n");
+        assert!(lines[0].contains("meaning") && lines[0].contains("unit"));
+        assert!(lines[1].starts_with("c_in1") && lines[1].contains("6.7583e-9"));
+        assert!(lines[1].contains("[6.7531e-9, 6.7636e-9]") && lines[1].contains("m3/(s*Pa)"));
+        assert!(lines[1].contains("inlet port, supply → chamber 1"));
+        assert!(lines[2].contains("0.67583") && lines[2].contains("[0.67531, 0.67636]"));
+        assert!(lines[2].contains("dm3/(s*bar)"));
+        assert!(lines[3].contains("t_coulomb") && lines[3].contains("Coulomb friction torque"));
+        assert!(lines[3].contains("not computed") && lines[3].contains("N*m"));
+        assert!(!lines[3].contains("dm3") && !lines[4].starts_with("  "));
+        assert!(lines[4].contains("leak, inlet side → outlet side"));
+        assert!(
+            lines[5].contains("0.076") && lines[5].contains("[0.05, open]"),
+            "{text}"
+        );
+        assert!(lines[6].contains("NOT IDENTIFIABLE: the data do not bound it from above"));
+        assert_eq!(lines.len(), 7);
+    }
+
+    #[test]
+    fn markdown_parameter_table_has_both_units() {
+        let mut md = String::new();
+        parameter_section(
+            &mut md,
+            &[
+                row("c_1e", 2.077886e-9, Some((Some(2.0e-9), Some(2.2e-9)))),
+                row("visc", 6e-5, None),
+            ],
+        );
+        assert!(md.contains("dm3/(s*bar)") && md.contains("1e-8 m3/(s*Pa)"));
+        assert!(
+            md.contains(
+                "| `c_1e` | leak, inlet side → exhaust | 2.0779e-9 | [2e-9, 2.2e-9] | m3/(s*Pa) \
+             | 0.20779 [0.2, 0.22] | yes |"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "| `visc` | viscous friction | 6e-5 | not computed | N*m*s/rad |  | not computed |"
+            ),
+            "{md}"
+        );
     }
 }

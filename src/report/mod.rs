@@ -3,6 +3,7 @@
 
 pub mod control;
 pub mod diagnose;
+pub mod explain;
 pub mod fit;
 pub mod plot;
 pub mod predict;

@@ -4,6 +4,13 @@
 //! estimate, so no system font (fontconfig, freetype) is needed to make a chart; the viewer
 //! picks a sans-serif font when it renders the file.
 //!
+//! Legends sit outside the plotting area, to its right or below it, so that they never hide
+//! data; the figure grows to hold them. A logarithmic axis is labelled at every power of ten
+//! (every second or third one when it spans more than [`MAX_LOG_LABELS`] decades), with light
+//! grid lines at the multiples 2–9 between; an axis is widened to whole decades, so that
+//! both ends carry a label, where that adds at most half the data's span, and an axis with
+//! fewer than two powers of ten inside is labelled at 1, 2 and 5 times them as well.
+//!
 //! ```no_run
 //! use vanefit::report::plot::{Chart, Series};
 //! let chart = Chart::new("Speed", "time [s]", "speed [rpm]")
@@ -11,9 +18,11 @@
 //! chart.write_svg(std::path::Path::new("speed.svg")).unwrap();
 //! ```
 
+use plotters::coord::combinators::{LogCoord, WithKeyPoints};
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::fmt;
 use std::path::Path;
 
@@ -59,20 +68,32 @@ impl Series {
     }
 }
 
-/// Where the legend goes inside the plotting area.
+/// Where the legend goes: always outside the plotting area, so that it covers no data.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Legend {
     #[default]
-    /// Top right corner.
-    UpperRight,
-    /// Top left corner.
-    UpperLeft,
-    /// Bottom right corner.
-    LowerRight,
-    /// Bottom left corner.
-    LowerLeft,
+    /// To the right of the plotting area, top-aligned with it; the panel widens to hold it.
+    Right,
+    /// Below the x-axis title, entries side by side (wrapped into rows); the panel grows
+    /// taller to hold it.
+    Below,
     /// No legend.
     Hidden,
+    /// As [`Legend::Right`] (kept for callers written when legends sat inside the plot).
+    UpperRight,
+    /// As [`Legend::Right`] (kept for callers written when legends sat inside the plot).
+    UpperLeft,
+    /// As [`Legend::Right`] (kept for callers written when legends sat inside the plot).
+    LowerRight,
+    /// As [`Legend::Right`] (kept for callers written when legends sat inside the plot).
+    LowerLeft,
+}
+
+impl Legend {
+    /// Whether the legend goes below the plot (else, unless hidden, to its right).
+    fn below(self) -> bool {
+        self == Legend::Below
+    }
 }
 
 /// A chart with one pair of axes.
@@ -110,9 +131,29 @@ impl fmt::Display for PlotError {
 
 impl std::error::Error for PlotError {}
 
-/// Size of one panel, pixels.
+/// Size of one panel's chart (title, axes and plotting area), pixels; a legend adds to it.
 const PANEL_W: u32 = 640;
 const PANEL_H: u32 = 420;
+
+/// Legend text size as given to plotters (the SVG gets 13/1.24 ≈ 10.5 px, as tick labels).
+const LEGEND_FONT: u32 = 13;
+/// Width of one legend character, pixels: a generous average for a sans-serif font at
+/// 10.5 px (≈ 0.6 em), so that the box holds its text in the usual viewers.
+const LEGEND_CHAR_W: f64 = 6.2;
+/// Height of one legend row, pixels.
+const LEGEND_ROW_H: i32 = 18;
+/// Length of a legend's line sample, pixels.
+const LEGEND_GLYPH_W: i32 = 18;
+/// Padding inside the legend box, pixels.
+const LEGEND_PAD: i32 = 6;
+/// Space between a legend glyph and its text, and after an entry in a row, pixels.
+const LEGEND_SPACE: i32 = 6;
+/// Widest row of a legend below the chart, pixels.
+const LEGEND_BELOW_W: i32 = PANEL_W as i32 - 100;
+
+/// The most decades a logarithmic axis labels one by one; beyond, every second (third, ...)
+/// power of ten is labelled and the others get grid lines.
+pub const MAX_LOG_LABELS: usize = 12;
 
 /// Line colours, in order (colour-blind-safe Tableau 10).
 const COLOURS: [RGBColor; 8] = [
@@ -197,6 +238,8 @@ impl Chart {
         if log {
             if hi <= lo * 1.0001 {
                 (lo / 2.0, hi * 2.0)
+            } else if let Some(range) = whole_decades(lo, hi) {
+                range
             } else {
                 let pad = (hi / lo).powf(0.03);
                 (lo / pad, hi * pad)
@@ -209,6 +252,98 @@ impl Chart {
             (lo - pad, hi + pad)
         }
     }
+}
+
+/// One legend entry: a named series that has something to show.
+struct Entry<'a> {
+    name: &'a str,
+    style: Style,
+    colour: RGBColor,
+}
+
+impl Chart {
+    /// The legend's entries (none when it is hidden).
+    fn legend_entries(&self) -> Vec<Entry<'_>> {
+        if self.legend == Legend::Hidden {
+            return Vec::new();
+        }
+        self.series
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| !s.name.is_empty() && s.points.iter().any(|p| self.visible(p)))
+            .map(|(k, s)| Entry {
+                name: &s.name,
+                style: s.style,
+                colour: COLOURS[k % COLOURS.len()],
+            })
+            .collect()
+    }
+
+    /// The room (width, height) the legend takes beside or below the chart, pixels.
+    fn legend_extent(&self) -> (u32, u32) {
+        let entries = self.legend_entries();
+        if entries.is_empty() {
+            return (0, 0);
+        }
+        if self.legend.below() {
+            let ((_, h), _) = legend_layout(&entries, Some(LEGEND_BELOW_W));
+            (0, (h + 2 + LEGEND_PAD) as u32)
+        } else {
+            let ((w, _), _) = legend_layout(&entries, None);
+            (w as u32 + 12, 0)
+        }
+    }
+}
+
+/// Estimated width of a legend text, pixels.
+fn text_width(text: &str) -> i32 {
+    (LEGEND_CHAR_W * text.chars().count() as f64).ceil() as i32
+}
+
+/// Width of one legend entry (glyph, space, text), pixels.
+fn entry_width(e: &Entry) -> i32 {
+    LEGEND_GLYPH_W + LEGEND_SPACE + text_width(e.name)
+}
+
+/// The legend box's (width, height) and each entry's anchor (left end of its glyph, centre
+/// line of its row) relative to the box: one column, or rows no wider than `max_w`.
+type LegendLayout = ((i32, i32), Vec<(i32, i32)>);
+
+fn legend_layout(entries: &[Entry], max_w: Option<i32>) -> LegendLayout {
+    let row_centre = |row: i32| LEGEND_PAD + row * LEGEND_ROW_H + LEGEND_ROW_H / 2;
+    let Some(max_w) = max_w else {
+        let w = entries.iter().map(entry_width).max().unwrap_or(0) + 2 * LEGEND_PAD;
+        let anchors = (0..entries.len() as i32)
+            .map(|i| (LEGEND_PAD, row_centre(i)))
+            .collect();
+        return (
+            (w, 2 * LEGEND_PAD + entries.len() as i32 * LEGEND_ROW_H),
+            anchors,
+        );
+    };
+    let (mut x, mut row, mut w) = (LEGEND_PAD, 0, 0);
+    let mut anchors = Vec::with_capacity(entries.len());
+    for e in entries {
+        let ew = entry_width(e);
+        if x > LEGEND_PAD && x + ew + LEGEND_PAD > max_w {
+            row += 1;
+            x = LEGEND_PAD;
+        }
+        anchors.push((x, row_centre(row)));
+        w = w.max(x + ew + LEGEND_PAD);
+        x += ew + 3 * LEGEND_SPACE;
+    }
+    ((w, 2 * LEGEND_PAD + (row + 1) * LEGEND_ROW_H), anchors)
+}
+
+/// A pixel rectangle \[x0, y0, x1, y1\], absolute in the SVG.
+type PixelRect = [i32; 4];
+
+/// Where a panel's plotting area (the data rectangle) and its legend box were drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct PanelGeometry {
+    plot: PixelRect,
+    legend: Option<PixelRect>,
 }
 
 /// Several charts on a grid, filled row by row.
@@ -226,23 +361,41 @@ impl Figure {
         Self { panels, columns }
     }
 
-    /// The figure as a standalone SVG document.
+    /// The figure as a standalone SVG document. Every cell of the grid is a chart of
+    /// `PANEL_W` × `PANEL_H` pixels; a column is widened by the widest legend beside its
+    /// charts, a row made taller by the tallest legend below them.
     pub fn to_svg(&self) -> Result<String, PlotError> {
+        self.render().map(|(svg, _)| svg)
+    }
+
+    /// The SVG and, per panel, where its plotting area and legend ended up.
+    fn render(&self) -> Result<(String, Vec<PanelGeometry>), PlotError> {
         let cols = self.columns.max(1).min(self.panels.len().max(1));
         let rows = self.panels.len().div_ceil(cols).max(1);
+        let (mut widths, mut heights) = (vec![PANEL_W; cols], vec![PANEL_H; rows]);
+        for (i, chart) in self.panels.iter().enumerate() {
+            let (w, h) = chart.legend_extent();
+            widths[i % cols] = widths[i % cols].max(PANEL_W + w);
+            heights[i / cols] = heights[i / cols].max(PANEL_H + h);
+        }
+        let offset = |sizes: &[u32], k: usize| sizes[..k].iter().sum::<u32>();
+        let mut geometry = Vec::with_capacity(self.panels.len());
         let mut buf = String::new();
         {
-            let root =
-                SVGBackend::with_string(&mut buf, (PANEL_W * cols as u32, PANEL_H * rows as u32))
-                    .into_drawing_area();
+            let size = (widths.iter().sum::<u32>(), heights.iter().sum::<u32>());
+            let root = SVGBackend::with_string(&mut buf, size).into_drawing_area();
             root.fill(&WHITE).map_err(err)?;
-            let areas = root.split_evenly((rows, cols));
-            for (chart, area) in self.panels.iter().zip(&areas) {
-                draw_any(area, chart)?;
+            for (i, chart) in self.panels.iter().enumerate() {
+                let (c, r) = (i % cols, i / cols);
+                let cell = root.clone().shrink(
+                    (offset(&widths, c), offset(&heights, r)),
+                    (widths[c], heights[r]),
+                );
+                geometry.push(draw_panel(&cell, chart)?);
             }
             root.present().map_err(err)?;
         }
-        Ok(buf)
+        Ok((buf, geometry))
     }
 
     /// Writes the SVG atomically (`fsutil::write_atomic`).
@@ -260,19 +413,163 @@ fn err<E: std::error::Error>(e: E) -> PlotError {
     PlotError(e.to_string())
 }
 
-/// Dispatches on the axis kinds (plotters types linear and log axes differently).
+/// Draws a chart and its legend in one cell of a figure: the chart in the cell's top-left
+/// `PANEL_W` × `PANEL_H` pixels, the legend outside its plotting area.
+fn draw_panel<DB: DrawingBackend>(
+    cell: &DrawingArea<DB, Shift>,
+    chart: &Chart,
+) -> Result<PanelGeometry, PlotError> {
+    let area = cell.clone().shrink((0, 0), (PANEL_W, PANEL_H));
+    let plot = draw_any(&area, chart)?;
+    let entries = chart.legend_entries();
+    if entries.is_empty() {
+        return Ok(PanelGeometry { plot, legend: None });
+    }
+    let (bx, by) = cell.get_base_pixel();
+    let (origin, max_w) = if chart.legend.below() {
+        ((plot[0] - bx, PANEL_H as i32 + 2), Some(LEGEND_BELOW_W))
+    } else {
+        ((PANEL_W as i32, plot[1] - by), None)
+    };
+    let (size, anchors) = legend_layout(&entries, max_w);
+    draw_legend(cell, origin, size, &entries, &anchors)?;
+    let legend = [
+        bx + origin.0,
+        by + origin.1,
+        bx + origin.0 + size.0,
+        by + origin.1 + size.1,
+    ];
+    Ok(PanelGeometry {
+        plot,
+        legend: Some(legend),
+    })
+}
+
+/// Draws a legend box at `(x0, y0)` of `cell` (cell pixels) with its entries at `anchors`.
+fn draw_legend<DB: DrawingBackend>(
+    cell: &DrawingArea<DB, Shift>,
+    (x0, y0): (i32, i32),
+    (w, h): (i32, i32),
+    entries: &[Entry],
+    anchors: &[(i32, i32)],
+) -> Result<(), PlotError> {
+    let corners = [(x0, y0), (x0 + w, y0 + h)];
+    cell.draw(&Rectangle::new(corners, WHITE.filled()))
+        .map_err(err)?;
+    cell.draw(&Rectangle::new(
+        corners,
+        RGBColor(160, 160, 160).stroke_width(1),
+    ))
+    .map_err(err)?;
+    let font = ("sans-serif", LEGEND_FONT)
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    for (e, (dx, dy)) in entries.iter().zip(anchors) {
+        let (x, y) = (x0 + dx, y0 + dy);
+        match e.style {
+            Style::Line => cell.draw(&PathElement::new(
+                vec![(x, y), (x + LEGEND_GLYPH_W, y)],
+                e.colour.stroke_width(2),
+            )),
+            Style::Points => cell.draw(&Circle::new(
+                (x + LEGEND_GLYPH_W / 2, y),
+                3,
+                e.colour.filled(),
+            )),
+        }
+        .map_err(err)?;
+        let text_x = x + LEGEND_GLYPH_W + LEGEND_SPACE;
+        cell.draw(&Text::new(e.name, (text_x, y), font.clone()))
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// Dispatches on the axis kinds (plotters types linear and log axes differently); returns
+/// the plotting area's pixels.
 fn draw_any<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     chart: &Chart,
-) -> Result<(), PlotError> {
+) -> Result<PixelRect, PlotError> {
     let (x0, x1) = chart.data_range(0, chart.log_x, chart.x_range);
     let (y0, y1) = chart.data_range(1, chart.log_y, chart.y_range);
     match (chart.log_x, chart.log_y) {
         (false, false) => draw(area, chart, x0..x1, y0..y1),
-        (true, false) => draw(area, chart, (x0..x1).log_scale(), y0..y1),
-        (false, true) => draw(area, chart, x0..x1, (y0..y1).log_scale()),
-        (true, true) => draw(area, chart, (x0..x1).log_scale(), (y0..y1).log_scale()),
+        (true, false) => draw(area, chart, log_axis(x0, x1), y0..y1),
+        (false, true) => draw(area, chart, x0..x1, log_axis(y0, y1)),
+        (true, true) => draw(area, chart, log_axis(x0, x1), log_axis(y0, y1)),
     }
+}
+
+/// A logarithmic axis from `lo` to `hi` with the labels and grid lines of [`log_ticks`].
+fn log_axis(lo: f64, hi: f64) -> WithKeyPoints<LogCoord<f64>> {
+    let (major, minor) = log_ticks(lo, hi);
+    (lo..hi)
+        .log_scale()
+        .with_key_points(major)
+        .with_light_points(minor)
+}
+
+/// The data range `lo..hi` widened to whole decades, with 2% of the span to spare so that
+/// the end labels' data are not drawn on the frame; `None` when that would take more than
+/// 1.5 times the data's own span (a short range keeps its data filling the axis).
+fn whole_decades(lo: f64, hi: f64) -> Option<(f64, f64)> {
+    let span = (hi / lo).log10();
+    let a = (lo.log10() + 1e-9).floor();
+    let b = (hi.log10() - 1e-9).ceil();
+    if b - a > 1.5 * span {
+        return None;
+    }
+    let pad = 0.02 * (b - a);
+    Some((10f64.powf(a - pad), 10f64.powf(b + pad)))
+}
+
+/// 10^d as the nearest double (as the literal `1e{d}` reads).
+fn power_of_ten(d: i32) -> f64 {
+    format!("1e{d}").parse().expect("a number")
+}
+
+/// Labelled ticks and light grid lines of a logarithmic axis from `lo` to `hi` (> 0): a
+/// label at every power of ten inside (every second, third, ... when there are more than
+/// [`MAX_LOG_LABELS`]) and grid lines at the multiples 1–9 of each decade that carry no
+/// label. An axis with fewer than two powers of ten inside is labelled at 1, 2 and 5 times
+/// them (or every multiple, or its ends).
+fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+    let inside = |v: &f64| *v >= lo * (1.0 - 1e-12) && *v <= hi * (1.0 + 1e-12);
+    let (first, last) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let multiples = |ms: &[u32]| -> Vec<f64> {
+        (first..=last)
+            .flat_map(|d| ms.iter().map(move |m| f64::from(*m) * power_of_ten(d)))
+            .filter(inside)
+            .collect()
+    };
+    let decades: Vec<i32> = (first..=last)
+        .filter(|d| inside(&power_of_ten(*d)))
+        .collect();
+    let all = multiples(&[1, 2, 3, 4, 5, 6, 7, 8, 9]);
+    let major = if decades.len() >= 2 {
+        let step = decades.len().div_ceil(MAX_LOG_LABELS) as i32;
+        decades
+            .iter()
+            .filter(|d| d.rem_euclid(step) == 0)
+            .map(|d| power_of_ten(*d))
+            .collect()
+    } else {
+        let one_two_five = multiples(&[1, 2, 5]);
+        if one_two_five.len() >= 2 {
+            one_two_five
+        } else if all.len() >= 2 {
+            all.clone()
+        } else {
+            vec![lo, hi]
+        }
+    };
+    let minor = all
+        .into_iter()
+        .filter(|v| !major.iter().any(|m| (m - v).abs() <= 1e-9 * m))
+        .collect();
+    (major, minor)
 }
 
 /// A tick label: short, fixed point in the usual range, scientific otherwise.
@@ -290,7 +587,13 @@ fn tick(v: f64) -> String {
     }
 }
 
-fn draw<DB, X, Y>(area: &DrawingArea<DB, Shift>, chart: &Chart, x: X, y: Y) -> Result<(), PlotError>
+/// Draws the title, axes and series of a chart on `area`; returns the plotting area's pixels.
+fn draw<DB, X, Y>(
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart,
+    x: X,
+    y: Y,
+) -> Result<PixelRect, PlotError>
 where
     DB: DrawingBackend,
     X: AsRangedCoord<Value = f64>,
@@ -316,7 +619,6 @@ where
         .light_line_style(RGBColor(238, 238, 238))
         .draw()
         .map_err(err)?;
-    let mut named = false;
     for (k, s) in chart.series.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()];
         // Split at points that cannot be shown, so that a line is broken there.
@@ -328,9 +630,8 @@ where
                 runs.push(Vec::new());
             }
         }
-        let mut first = true;
         for run in runs.into_iter().filter(|r| !r.is_empty()) {
-            let anno = match s.style {
+            match s.style {
                 Style::Line => cc
                     .draw_series(LineSeries::new(run, colour.stroke_width(2)))
                     .map_err(err)?,
@@ -338,38 +639,10 @@ where
                     .draw_series(run.into_iter().map(|p| Circle::new(p, 3, colour.filled())))
                     .map_err(err)?,
             };
-            if first && !s.name.is_empty() {
-                named = true;
-                let anno = anno.label(s.name.as_str());
-                match s.style {
-                    Style::Line => anno.legend(move |(lx, ly)| {
-                        PathElement::new(vec![(lx, ly), (lx + 18, ly)], colour.stroke_width(2))
-                    }),
-                    Style::Points => {
-                        anno.legend(move |(lx, ly)| Circle::new((lx + 9, ly), 3, colour.filled()))
-                    }
-                };
-            }
-            first = false;
         }
     }
-    let pos = match chart.legend {
-        Legend::UpperRight => SeriesLabelPosition::UpperRight,
-        Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
-        Legend::LowerRight => SeriesLabelPosition::LowerRight,
-        Legend::LowerLeft => SeriesLabelPosition::LowerLeft,
-        Legend::Hidden => return Ok(()),
-    };
-    if named {
-        cc.configure_series_labels()
-            .position(pos)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(160, 160, 160))
-            .label_font(("sans-serif", 13))
-            .draw()
-            .map_err(err)?;
-    }
-    Ok(())
+    let (xs, ys) = cc.plotting_area().get_pixel_range();
+    Ok([xs.start, ys.start, xs.end, ys.end])
 }
 
 #[cfg(test)]
@@ -425,7 +698,10 @@ mod tests {
         for t in ["Bode magnitude", "Bode phase", "empty"] {
             assert!(svg.contains(t), "missing {t}");
         }
-        assert!(svg.contains("width=\"1280\"") && svg.contains("height=\"840\""));
+        // Two columns of charts widened by the legend beside them; no legend below.
+        let width: u32 = attr(&svg, "svg", "width") as u32;
+        assert!(width > 2 * PANEL_W && width % 2 == 0, "{width}");
+        assert!(svg.contains("height=\"840\""));
         assert!(!svg.contains("NaN") && !svg.contains("inf"));
     }
 
@@ -440,6 +716,167 @@ mod tests {
             .unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(text.starts_with("<svg") && text.contains("<text"), "{text}");
+    }
+
+    /// The value of attribute `name` of the first `<tag ...>` element.
+    fn attr(svg: &str, tag: &str, name: &str) -> f64 {
+        let el = svg.split(&format!("<{tag} ")).nth(1).expect("element");
+        attribute(el, name).expect("attribute")
+    }
+
+    fn attribute(element: &str, name: &str) -> Option<f64> {
+        let key = format!(" {name}=\"");
+        let rest = &format!(" {element}")[..];
+        let i = rest.find(&key)? + key.len();
+        rest[i..].split('"').next()?.parse().ok()
+    }
+
+    /// Every `<text>` element: x, y, text-anchor and content.
+    fn texts(svg: &str) -> Vec<(f64, f64, String, String)> {
+        svg.split("<text ")
+            .skip(1)
+            .map(|t| {
+                let anchor = t
+                    .split("text-anchor=\"")
+                    .nth(1)
+                    .and_then(|r| r.split('"').next())
+                    .unwrap_or("start")
+                    .to_string();
+                let body = &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()];
+                let x = attribute(t, "x").unwrap();
+                let y = attribute(t, "y").unwrap();
+                (x, y, anchor, body.trim().to_string())
+            })
+            .collect()
+    }
+
+    /// The numbers written as x-axis tick labels (centred under their tick).
+    fn x_tick_labels(svg: &str) -> Vec<(f64, f64)> {
+        texts(svg)
+            .into_iter()
+            .filter(|t| t.2 == "middle")
+            .filter_map(|t| t.3.parse::<f64>().ok().map(|v| (t.0, v)))
+            .collect()
+    }
+
+    /// The legend is drawn to the right of the data: every legend text lies right of the
+    /// last x-axis tick label (the data span the whole axis), its box clear of the plotting
+    /// area and inside the (widened) SVG; below the chart, the box lies under the area.
+    #[test]
+    fn legend_lies_outside_the_data_rectangle() {
+        let full = (0..=60)
+            .map(|k| (k as f64 / 10.0, (k as f64 / 10.0).sin()))
+            .collect::<Vec<_>>();
+        let chart = Chart::new("legend", "x", "y")
+            .with(Series::line("simulated", full.clone()))
+            .with(Series::points("measured", full));
+        let svg = chart.to_svg().unwrap();
+        let last_tick = x_tick_labels(&svg)
+            .iter()
+            .map(|t| t.0)
+            .fold(f64::MIN, f64::max);
+        for name in ["simulated", "measured"] {
+            let t = texts(&svg).into_iter().find(|t| t.3 == name).unwrap();
+            assert!(
+                t.0 > last_tick,
+                "{name} at x {} inside the data (last tick {last_tick})",
+                t.0
+            );
+        }
+        for (at, width_grows) in [(Legend::Right, true), (Legend::Below, false)] {
+            let fig = Figure::new(vec![chart.clone().legend(at)], 1);
+            let (svg, geometry) = fig.render().unwrap();
+            let [px0, py0, px1, py1] = geometry[0].plot;
+            let [lx0, ly0, lx1, ly1] = geometry[0].legend.unwrap();
+            assert!(
+                lx0 >= px1 || ly0 >= py1,
+                "{at:?}: legend {:?} overlaps plot {:?}",
+                geometry[0].legend,
+                geometry[0].plot
+            );
+            assert!(lx1 > lx0 && ly1 > ly0 && px0 < px1 && py0 < py1);
+            let (w, h) = (attr(&svg, "svg", "width"), attr(&svg, "svg", "height"));
+            assert!(
+                f64::from(lx1) <= w && f64::from(ly1) <= h,
+                "{at:?}: legend outside {w}x{h}"
+            );
+            assert_eq!(w > f64::from(PANEL_W), width_grows, "{at:?}");
+            assert_eq!(h > f64::from(PANEL_H), !width_grows, "{at:?}");
+            // The box is drawn where the geometry says, and holds its widest text.
+            assert!(
+                svg.contains(&format!("<rect x=\"{lx0}\" y=\"{ly0}\"")),
+                "{at:?}"
+            );
+            assert!(lx1 - lx0 > text_width("simulated") + LEGEND_GLYPH_W);
+        }
+        let hidden = Figure::new(vec![chart.legend(Legend::Hidden)], 1)
+            .render()
+            .unwrap();
+        assert_eq!(hidden.1[0].legend, None);
+        assert!(hidden.0.contains("width=\"640\""));
+    }
+
+    /// A conductance axis over about three decades (the outlet-throttle study's) is
+    /// labelled at each power of ten from 1e-9 to 1e-6, and at nothing else.
+    #[test]
+    fn log_axis_is_labelled_at_every_decade() {
+        let data: Vec<(f64, f64)> = (0..=40)
+            .map(|k| (2e-9 * 400f64.powf(k as f64 / 40.0), k as f64))
+            .collect();
+        let charts = [
+            Chart::new("c", "C [m3/(s*Pa)]", "speed").log_x(),
+            Chart {
+                x_range: Some((1e-9, 1e-6)),
+                ..Chart::new("c", "C [m3/(s*Pa)]", "speed").log_x()
+            },
+        ];
+        for chart in charts {
+            let svg = chart
+                .with(Series::line("s", data.clone()))
+                .to_svg()
+                .unwrap();
+            let labels: Vec<f64> = x_tick_labels(&svg).iter().map(|t| t.1).collect();
+            assert!(labels.len() >= 3, "{labels:?}");
+            for v in &labels {
+                let d = v.log10();
+                assert!(
+                    (d - d.round()).abs() < 1e-9,
+                    "label {v} is not a power of ten"
+                );
+            }
+            for d in [-9, -8, -7, -6] {
+                assert!(
+                    labels.contains(&power_of_ten(d)),
+                    "1e{d} missing: {labels:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn log_ticks_label_decades_and_grid_the_multiples() {
+        let (major, minor) = log_ticks(1e-9, 1e-6);
+        assert_eq!(major, [1e-9, 1e-8, 1e-7, 1e-6]);
+        assert_eq!(minor.len(), 3 * 8);
+        assert!(minor.iter().any(|v| (v / 2e-9 - 1.0).abs() < 1e-12));
+        // Many decades: every second one labelled, the others still grid lines.
+        let (major, minor) = log_ticks(1e-12, 1e10);
+        assert!(
+            major.len() >= 6 && major.len() <= MAX_LOG_LABELS,
+            "{major:?}"
+        );
+        assert!(minor.iter().any(|v| (v / 1e-11 - 1.0).abs() < 1e-12));
+        // Less than a decade: 1, 2 and 5 times a power of ten.
+        assert_eq!(log_ticks(1.5e-9, 6e-9).0, [2e-9, 5e-9]);
+        assert_eq!(log_ticks(2.1, 2.9).0, [2.1, 2.9]);
+        // Data over a few decades fill whole decades ...
+        let (lo, hi) = whole_decades(2e-9, 8e-7).unwrap();
+        assert!(
+            lo < 1e-9 && lo > 0.8e-9 && hi > 1e-6 && hi < 1.2e-6,
+            "{lo} {hi}"
+        );
+        // ... unless that would leave much of the axis empty.
+        assert_eq!(whole_decades(1.5e-9, 3e-8), None);
     }
 
     #[test]

@@ -34,7 +34,7 @@ pub const PARAMS: &[ParamSpec] = &[
         search: (1.0, 500.0),
         effect: Some(Effect::BreakawayFriction),
         off: OffValue::Default,
-        meaning: "Stribeck speed",
+        meaning: "Stribeck speed (the excess over Coulomb falls to 1/e)",
     },
 ];
 

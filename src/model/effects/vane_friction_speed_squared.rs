@@ -19,7 +19,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     search: (1e-10, 1e-6),
     effect: Some(Effect::VaneFrictionSpeedSquared),
     off: OffValue::SearchLower,
-    meaning: "speed-squared friction coefficient",
+    meaning: "friction torque per (rad/s)² (vane tips, windage)",
 }];
 
 impl Term for VaneFrictionSpeedSquared {

@@ -104,12 +104,12 @@ fn figure(r: &BodeStudy) -> Figure {
         ),
         pairs(f, &mags(&r.fitted, RPM_PER_BAR)),
     ))
-    .legend(Legend::LowerLeft);
+    .legend(Legend::Right);
     let phase = Chart::new(&format!("{title}: phase"), "f [Hz]", "phase [deg]")
         .log_x()
         .with(Series::line("model", pairs(f, &r.motor_phase_deg)))
         .with(Series::line("two lags", pairs(f, &r.fitted_phase_deg)))
-        .legend(Legend::LowerLeft);
+        .legend(Legend::Right);
     let pmag = Chart::new(
         "Valve + motor (open loop, Fig. 17)",
         "f [Hz]",
@@ -121,13 +121,13 @@ fn figure(r: &BodeStudy) -> Figure {
         "valve + motor",
         pairs(f, &mags(&r.valve_motor, r.pi.speed_unit_rpm)),
     ))
-    .legend(Legend::LowerLeft);
+    .legend(Legend::Right);
     let pph = Chart::new("Valve + motor: phase", "f [Hz]", "phase [deg]")
         .log_x()
         .with(Series::line(
             "valve + motor",
             pairs(f, &r.valve_motor_phase_deg),
         ))
-        .legend(Legend::LowerLeft);
+        .legend(Legend::Right);
     Figure::new(vec![mag, phase, pmag, pph], 2)
 }

@@ -47,7 +47,7 @@ fn figure(r: &DesignStudy) -> Figure {
         .with(Series::line("1", vec![(f[0], 1.0), (f[f.len() - 1], 1.0)]));
     let ph = Chart::new("Open loop phase", "f [Hz]", "phase [deg]")
         .log_x()
-        .legend(Legend::LowerLeft)
+        .legend(Legend::Right)
         .with(Series::line("designed", pairs(f, &d.open_loop_phase_deg)))
         .with(Series::line(
             "paper (0.85 s + 4)/s",
@@ -65,7 +65,7 @@ fn figure(r: &DesignStudy) -> Figure {
         "t [s]",
         "speed [rpm]",
     )
-    .legend(Legend::LowerRight)
+    .legend(Legend::Right)
     .with(Series::line(
         "set-point",
         xy(&d.trace, &d.trace.setpoint_rad_s),

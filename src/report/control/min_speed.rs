@@ -50,7 +50,7 @@ fn ramp_chart(r: &MinSpeedStudy) -> Chart {
         "supply pressure [MPa abs]",
         "speed [rpm]",
     )
-    .legend(Legend::UpperLeft)
+    .legend(Legend::Right)
     .with(Series::line(
         "steady states (p_eq)",
         open.curve.iter().map(|(w, p)| (p / 1e6, rpm(*w))).collect(),

@@ -3,9 +3,10 @@
 //! and the printed summaries share.
 //!
 //! CSV columns carry their unit in the name, as the data files do (SPEC §3): speeds in rpm,
-//! pressures in MPa absolute, conductances in m3/(s*Pa), torques in N*m, flows in g/s,
-//! commands in V. Every file is written atomically; the caller hears of each one written
-//! (the command line prints `wrote <path>`).
+//! pressures in MPa absolute, conductances in m3/(s*Pa) (and in dm3/(s*bar), the catalogues'
+//! unit, in an extra last column), torques in N*m, flows in g/s, commands in V. Every file is
+//! written atomically; the caller hears of each one written (the command line prints
+//! `wrote <path>`).
 
 pub mod bode;
 pub mod closed_loop;
@@ -173,10 +174,10 @@ fn trace_figure(title: &str, runs: &[(&str, &Trace)]) -> Figure {
             .collect::<Vec<_>>()
     };
     let mut speed =
-        Chart::new(&format!("{title}: speed"), "t [s]", "speed [rpm]").legend(Legend::LowerRight);
-    let mut cmd = Chart::new("valve command y", "t [s]", "command [V]").legend(Legend::LowerRight);
+        Chart::new(&format!("{title}: speed"), "t [s]", "speed [rpm]").legend(Legend::Right);
+    let mut cmd = Chart::new("valve command y", "t [s]", "command [V]").legend(Legend::Right);
     let mut pres = Chart::new("pressure at the motor inlet", "t [s]", "pressure [MPa abs]")
-        .legend(Legend::LowerRight);
+        .legend(Legend::Right);
     if let Some((_, tr)) = runs.first() {
         speed.series.push(Series::line(
             "set-point",

@@ -1,20 +1,32 @@
 //! Tables and figure of `throttle-inlet` / `throttle-outlet` (paper Figs. 14, 15):
 //! `throttle_<port>_speed.csv`, `throttle_<port>_torque_speed.csv`, `throttle_<port>.svg`.
+//!
+//! The throttle's conductance is written in m³/(s·Pa) (first column, as before) and, as
+//! catalogues and ISO 6358 give it, in dm³/(s·bar) (last column, `c_port<n>_dm3_s_bar`).
 
 use super::{describe_load, ControlReportError, Table, Writer};
 use crate::control::rpm;
 use crate::control::study::throttle::ThrottleStudy;
 use crate::control::throttle::Port;
+use crate::model::params::conductance_dm3_s_bar;
+use crate::report::explain;
 use crate::report::plot::{Chart, Figure, Legend, Series};
 
 /// Writes the tables and the figure of a throttling study.
 pub fn write(w: &mut Writer, r: &ThrottleStudy) -> Result<(), ControlReportError> {
     let port = r.settings.port();
-    let c_col = match port {
-        Port::Inlet => "c_port1_m3_s_pa",
-        Port::Outlet => "c_port2_m3_s_pa",
+    let (c_col, c_catalogue) = match port {
+        Port::Inlet => ("c_port1_m3_s_pa", "c_port1_dm3_s_bar"),
+        Port::Outlet => ("c_port2_m3_s_pa", "c_port2_dm3_s_bar"),
     };
-    let mut t = Table::new(&[c_col, "speed_rpm", "torque_nm", "flow1_g_s", "p1_mpa"]);
+    let mut t = Table::new(&[
+        c_col,
+        "speed_rpm",
+        "torque_nm",
+        "flow1_g_s",
+        "p1_mpa",
+        c_catalogue,
+    ]);
     for p in &r.speed {
         t.push(vec![
             p.c_m3_s_pa,
@@ -22,19 +34,22 @@ pub fn write(w: &mut Writer, r: &ThrottleStudy) -> Result<(), ControlReportError
             p.torque_nm,
             p.flow_kg_s * 1e3,
             p.p1_pa / 1e6,
+            conductance_dm3_s_bar(p.c_m3_s_pa),
         ]);
     }
     let stem = format!("throttle_{}", port.name());
     w.csv(&format!("{stem}_speed.csv"), &t)?;
-    let mut tq = Table::new(&[c_col, "speed_rpm", "torque_nm", "flow1_g_s"]);
+    let mut tq = Table::new(&[c_col, "speed_rpm", "torque_nm", "flow1_g_s", c_catalogue]);
     for curve in &r.curves {
         for p in &curve.points {
             // No throttle is written as conductance 0 in the table.
+            let c = curve.c_m3_s_pa.unwrap_or(0.0);
             tq.push(vec![
-                curve.c_m3_s_pa.unwrap_or(0.0),
+                c,
                 rpm(p.speed_rad_s),
                 p.torque_nm,
                 p.flow_kg_s * 1e3,
+                conductance_dm3_s_bar(c),
             ]);
         }
     }
@@ -55,11 +70,14 @@ fn speed_chart(r: &ThrottleStudy) -> Chart {
             r.settings.p_supply_mpa(),
             describe_load(&r.load)
         ),
-        &format!("{} throttle conductance [m3/(s*Pa)]", port.name()),
+        &format!(
+            "{} throttle conductance [m3/(s*Pa)]; 1e-8 m3/(s*Pa) = 1 dm3/(s*bar)",
+            port.name()
+        ),
         "speed [rpm]",
     )
     .log_x()
-    .legend(Legend::LowerRight)
+    .legend(Legend::Right)
     .with(Series::line(
         "speed",
         r.speed
@@ -85,9 +103,9 @@ fn torque_chart(r: &ThrottleStudy) -> Chart {
         .curves
         .iter()
         .map(|curve| {
-            let name = curve
-                .c_m3_s_pa
-                .map_or("no throttle".to_string(), |c| format!("C = {c:.2e}"));
+            let name = curve.c_m3_s_pa.map_or("no throttle".to_string(), |c| {
+                format!("C = {}", explain::conductance(c, 3))
+            });
             Series::line(
                 &name,
                 curve
