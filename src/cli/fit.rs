@@ -3,7 +3,9 @@
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::fit::{fit, fit_file, FitData, FitOutcome, FitSetup, UncertaintyMethod};
+use crate::estimate::fit::{
+    fit, fit_file, most_sensitive_experiment, FitData, FitOutcome, FitSetup, UncertaintyMethod,
+};
 use crate::estimate::multistart::{RunObserver, StartResult};
 use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
@@ -419,7 +421,7 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
 /// What the estimate is, how well it fits, and cost against χ².
 fn print_goodness(out: &FitOutcome) {
     println!(
-        "estimate: the maximum-likelihood point of the recorded rows (chi2 {:.1} over {} points, noise from the data, sensor offsets within calibration tolerance profiled out)",
+        "estimate: the maximum-likelihood point of the recorded rows (chi2 {:.1} over {} points; each channel's σ from the data's noise, a catalogue's from its reading tolerance; recorded sensors' offsets within calibration tolerance profiled out)",
         out.chi2, out.n_points
     );
     if !out.nuisances.is_empty() {

@@ -493,13 +493,7 @@ pub fn write(
             })
             .collect::<Vec<_>>();
         let title = format!("Predicted {} against speed", c.heading);
-        // Torque and power fall towards the free speed, air consumption rises.
-        let legend = if k == 2 {
-            SeriesLabelPosition::LowerRight
-        } else {
-            SeriesLabelPosition::UpperRight
-        };
-        let svg = band_chart(&title, "speed [rpm]", c.heading, &series, legend)?;
+        let svg = band_chart(&title, "speed [rpm]", c.heading, &series)?;
         put(
             &format!("{}.svg", c.name.split('_').next().unwrap_or(c.name)),
             &svg,
@@ -523,13 +517,7 @@ pub fn write(
         display.label()
     );
     let x = format!("supply pressure [{}]", display.label());
-    let svg = band_chart(
-        &title,
-        &x,
-        "factor",
-        &factors,
-        SeriesLabelPosition::UpperLeft,
-    )?;
+    let svg = band_chart(&title, &x, "factor", &factors)?;
     put("factors.svg", &svg)
 }
 
@@ -569,12 +557,39 @@ fn tick(v: f64) -> String {
 
 /// An SVG chart of curves, each with its band as a shaded area under the line (the shared
 /// `report::plot` draws lines and markers only; this is the one chart that shades).
+/// Width of the legend strip beside a band chart, px.
+const LEGEND_W: u32 = 190;
+
+/// The legend of a band chart in its own strip: one line and name per series, then what the
+/// shading is.
+fn side_legend<DB: DrawingBackend>(
+    strip: &DrawingArea<DB, plotters::coord::Shift>,
+    series: &[BandSeries],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let font = ("sans-serif", 13).into_font().color(&BLACK);
+    let mut y = 56;
+    for (k, s) in series.iter().enumerate() {
+        let colour = COLOURS[k % COLOURS.len()];
+        strip.draw(&Rectangle::new(
+            [(6, y - 7), (28, y + 7)],
+            colour.mix(0.25).filled(),
+        ))?;
+        strip.draw(&PathElement::new(
+            vec![(6, y), (28, y)],
+            colour.stroke_width(2),
+        ))?;
+        strip.draw(&Text::new(s.name.clone(), (34, y - 7), font.clone()))?;
+        y += 22;
+    }
+    strip.draw(&Text::new("shaded: 95 % band", (6, y + 4), font))?;
+    Ok(())
+}
+
 fn band_chart(
     title: &str,
     x_label: &str,
     y_label: &str,
     series: &[BandSeries],
-    legend: SeriesLabelPosition,
 ) -> Result<String, PlotError> {
     let err = |e: &dyn std::fmt::Display| PlotError(e.to_string());
     let all = series.iter().flat_map(|s| s.points.iter());
@@ -597,8 +612,11 @@ fn band_chart(
     let pad = 0.04 * (y1 - y0);
     let mut buf = String::new();
     {
-        let root = SVGBackend::with_string(&mut buf, (720, 460)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut buf, (720 + LEGEND_W, 460)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
+        // The legend gets its own strip right of the plot, so it never covers a curve.
+        let (root, strip) = root.split_horizontally(720);
+        side_legend(&strip, series).map_err(|e| err(&e))?;
         let mut cc = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 18))
             .margin(12)
@@ -629,19 +647,8 @@ fn band_chart(
             .map_err(|e| err(&e))?;
             let line: Vec<(f64, f64)> = s.points.iter().map(|p| (p.0, p.1)).collect();
             cc.draw_series(LineSeries::new(line, colour.stroke_width(2)))
-                .map_err(|e| err(&e))?
-                .label(s.name.as_str())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                });
+                .map_err(|e| err(&e))?;
         }
-        cc.configure_series_labels()
-            .position(legend)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(160, 160, 160))
-            .label_font(("sans-serif", 13))
-            .draw()
-            .map_err(|e| err(&e))?;
         root.present().map_err(|e| err(&e))?;
     }
     Ok(buf)
