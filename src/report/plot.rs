@@ -155,8 +155,8 @@ const LEGEND_BELOW_W: i32 = PANEL_W as i32 - 100;
 /// power of ten is labelled and the others get grid lines.
 pub const MAX_LOG_LABELS: usize = 12;
 
-/// Line colours, in order (colour-blind-safe Tableau 10).
-const COLOURS: [RGBColor; 8] = [
+/// Line colours, in order (colour-blind-safe Tableau 10), for every chart.
+pub(crate) const COLOURS: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),

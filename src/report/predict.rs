@@ -10,7 +10,7 @@
 //! say which).
 
 use crate::predict::{Banded, Prediction, PressurePrediction};
-use crate::report::plot::PlotError;
+use crate::report::plot::{PlotError, COLOURS};
 use crate::units::Unit;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -533,18 +533,6 @@ struct BandSeries {
     name: String,
     points: Vec<(f64, f64, f64, f64)>,
 }
-
-/// Line colours, in order (colour-blind-safe Tableau 10, as the other charts).
-const COLOURS: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-];
 
 /// A tick label: at most four decimals, trailing zeros dropped (2000, not 2000.0).
 fn tick(v: f64) -> String {
