@@ -6,10 +6,10 @@
 //! stall torque and the max-power point into points on these curves), so the stall row at
 //! ω = 0 follows the datasheet's stall convention.
 
-use super::datasheet::steady_sweep;
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, Setting, SimError, Simulated};
 use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
+use crate::sim::operating_point::{at_speeds, Conditions};
 use crate::sim::recording::ExperimentData;
 use crate::units::Quantity;
 use std::sync::Arc;
@@ -44,7 +44,7 @@ impl ExperimentKind for Catalogue {
             message: "a catalogue needs its supply pressure".into(),
         })?;
         Ok(Arc::new(CatalogueSweep {
-            p_supply: vec![p_supply_pa; speeds.len()],
+            p_supply_pa,
             speeds,
         }))
     }
@@ -54,7 +54,7 @@ impl ExperimentKind for Catalogue {
 #[derive(Debug, Clone)]
 struct CatalogueSweep {
     speeds: Vec<f64>,
-    p_supply: Vec<f64>,
+    p_supply_pa: f64,
 }
 
 impl Drive for CatalogueSweep {
@@ -68,16 +68,15 @@ impl Drive for CatalogueSweep {
         motor: &Motor,
         _solver: &dyn StiffSolver,
     ) -> Result<Simulated, SimError> {
-        let rows = steady_sweep(setting, motor, &self.speeds, &self.p_supply)?;
+        // The operating points `predict` uses: one stall convention, one sweep.
+        let conditions = Conditions::supplied(self.p_supply_pa, setting.p_atm_pa);
+        let points = at_speeds(motor, &conditions, &self.speeds)
+            .map_err(|e| setting.fail(e.to_string()))?;
         Ok(Simulated {
             outputs: vec![
-                (Quantity::Torque, rows.iter().map(|r| r[0]).collect()),
-                // Shaft power P = T·ω, W (0 at stall).
-                (
-                    Quantity::Power,
-                    rows.iter().zip(&self.speeds).map(|(r, w)| r[0] * w).collect(),
-                ),
-                (Quantity::Flow1, rows.iter().map(|r| r[1]).collect()),
+                (Quantity::Torque, points.iter().map(|p| p.torque_nm).collect()),
+                (Quantity::Power, points.iter().map(|p| p.power_w).collect()),
+                (Quantity::Flow1, points.iter().map(|p| p.flow1_kg_s).collect()),
             ],
         })
     }

@@ -80,9 +80,10 @@ impl Drive for SteadySweep {
 }
 
 /// Steady states at imposed speeds (rad/s) and supply pressures (Pa), one per row, in the
-/// rows' order: `[shaft torque N·m, port-1 flow kg/s, port-2 flow kg/s]`. Shared by every
-/// steady experiment (datasheet, catalogue) so that they follow one stall convention.
-pub(super) fn steady_sweep(
+/// rows' order: `[shaft torque N·m, port-1 flow kg/s, port-2 flow kg/s]`; each row may have
+/// its own supply pressure (a p_port1 column), which `operating_point::at_speeds` (one
+/// pressure) does not allow.
+fn steady_sweep(
     setting: &Setting<'_>,
     motor: &Motor,
     speeds: &[f64],
