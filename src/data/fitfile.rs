@@ -92,6 +92,22 @@ pub struct FitStatistics {
     /// intervals, by "file column": the factor (> 1).
     #[serde(default)]
     pub widened_noise: serde_json::Map<String, Value>,
+    /// χ² of the likelihood that the estimate minimises and the intervals are profiled on:
+    /// each channel's σ widened per `widened_noise`, the nuisances' prior terms
+    /// (β̂/τ)² included. (`chi2` above is the goodness of fit: the rows against the data's
+    /// own σ, without the priors.) `None` in files written before it existed.
+    #[serde(default)]
+    pub likelihood_chi2: Option<f64>,
+    /// Rise of `likelihood_chi2` that bounds a 95 % profile interval, χ²₁(0.95)·s² with s
+    /// the widened likelihood's own interval scale. `None` in files written before it
+    /// existed or when no interval could be computed.
+    #[serde(default)]
+    pub profile_threshold: Option<f64>,
+    /// The estimated parameters' values (SI) at which the supply-pressure sensor offset's
+    /// effect on the rows was linearised; with `widened_noise` it rebuilds the likelihood
+    /// exactly (`estimate::fit_likelihood`). Empty in files written before it existed.
+    #[serde(default)]
+    pub linearised_at: serde_json::Map<String, Value>,
 }
 
 /// Number of starts and how many converged.

@@ -115,8 +115,12 @@ pub struct FitOutcome {
     pub cost: f64,
     /// J of the best start (the multi-start's optimum, before the likelihood's polish).
     pub best_start_cost: f64,
-    /// The likelihood's χ² at the estimate.
+    /// The likelihood's χ² at the estimate: the function the estimate minimises and the
+    /// intervals are profiled on (σ widened per [`FitOutcome::widening`], the nuisances'
+    /// prior terms included).
     pub chi2: f64,
+    /// Rise of that χ² that bounds a 95 % profile interval (`None` without a simulation).
+    pub threshold: Option<f64>,
     /// Data points behind χ².
     pub n_points: usize,
     /// Goodness of fit against the data's noise (`None` if the estimate cannot be simulated).
@@ -129,6 +133,9 @@ pub struct FitOutcome {
     /// Channels whose noise estimate was widened to their residual scatter ("file column",
     /// factor > 1), widened where the residuals at the estimate scatter more than the data's σ.
     pub widening: Vec<(String, f64)>,
+    /// The estimated parameters (name, SI value) at which the supply-pressure offset's effect
+    /// on the rows was linearised ([`FitData::target_at`]).
+    pub linearised_at: Vec<(String, f64)>,
     /// 95% intervals (empty when not asked for).
     pub intervals: Vec<Interval>,
     /// Covariance of θ (optimizer coordinates) from the curvature of χ², scaled as the
@@ -238,6 +245,15 @@ pub fn fit(
             .map(|c| c.theta.clone()),
     );
     let ml_fit = maximum_likelihood(engine, data, &setup.space, &points)?;
+    let linearised_at = setup
+        .space
+        .names()
+        .into_iter()
+        .map(|n| {
+            let v = ml_fit.linearised_at.params.get(&n).unwrap_or(f64::NAN);
+            (n, v)
+        })
+        .collect();
     let (target, widened, mut polished) = (ml_fit.target, ml_fit.widened, ml_fit.polished);
     let likelihood = Likelihood {
         cost: &data.smoothed,
@@ -271,11 +287,13 @@ pub fn fit(
         cost: at.cost,
         best_start_cost: best.cost,
         chi2,
+        threshold: scored.as_ref().map(GoodnessOfFit::threshold),
         n_points: data.target.n_points(),
         goodness,
         method: setup.uncertainty,
         nuisances,
         widening: ml_fit.widening,
+        linearised_at,
         theta,
         intervals,
         covariance,
@@ -460,6 +478,13 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
                 .collect(),
             widened_noise: out
                 .widening
+                .iter()
+                .map(|(k, v)| (k.clone(), (*v).into()))
+                .collect(),
+            likelihood_chi2: Some(out.chi2),
+            profile_threshold: out.threshold,
+            linearised_at: out
+                .linearised_at
                 .iter()
                 .map(|(k, v)| (k.clone(), (*v).into()))
                 .collect(),

@@ -32,6 +32,9 @@ pub(crate) struct MlFit {
     pub widening: Vec<(String, f64)>,
     /// The points, each polished on the widened target's χ².
     pub polished: Vec<Polished>,
+    /// The motor at which the supply-pressure offset's effect was linearised (the best
+    /// point of the first polish): exported so that the likelihood can be rebuilt exactly.
+    pub linearised_at: Motor,
 }
 
 /// The likelihood's target and `points` (the best start first, then the multi-start's other
@@ -68,8 +71,8 @@ pub(crate) fn maximum_likelihood(
     let thetas = |p: Vec<Polished>| -> Vec<Vec<f64>> { p.into_iter().map(|(t, _)| t).collect() };
     let first = data.target_at(&motor(&points[0])?);
     let polished = polish_all(&first, points);
-    let best = motor(&polished[lowest(&polished)].0)?;
-    let target = data.target_at(&best);
+    let linearised_at = motor(&polished[lowest(&polished)].0)?;
+    let target = data.target_at(&linearised_at);
     let polished = polish_all(&target, &thetas(polished));
     let best = motor(&polished[lowest(&polished)].0)?;
     let channels = data
@@ -93,5 +96,6 @@ pub(crate) fn maximum_likelihood(
         widened,
         widening,
         polished,
+        linearised_at,
     })
 }

@@ -10,6 +10,7 @@ pub mod engine;
 pub mod error;
 pub mod fit;
 pub mod fit_data;
+pub mod fit_likelihood;
 pub mod goodness;
 pub mod history;
 pub mod least_squares;
