@@ -726,6 +726,30 @@ mod tests {
         assert!(svg.starts_with("<svg") && svg.contains("Valve + motor"));
     }
 
+    /// `design.json` states the gains and margins in numbers: the designed loop has the
+    /// requested phase margin, the paper's loop the paper's gains (0.85 s + 4)/s on krpm, and
+    /// the designed step settles.
+    #[test]
+    fn design_writes_its_summary_in_numbers() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("design");
+        let out_s = out.to_str().unwrap();
+        run(cli(&["design", "--out", out_s, "--pm-deg", "55"])).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("design.json")).unwrap())
+                .unwrap();
+        let (d, p) = (&json["designed"], &json["paper"]);
+        let num = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
+        assert!((num(d, "phase_margin_deg") - 55.0).abs() < 0.5, "{d}");
+        assert_eq!(
+            (num(p, "kp_v_per_unit"), num(p, "ki_v_per_unit_s")),
+            (0.85, 4.0)
+        );
+        assert_eq!(num(p, "speed_unit_rpm"), 1000.0);
+        assert!(num(d, "settling_time_s") > 0.0 && num(d, "final_error_rpm").abs() < 6.0);
+        assert!(num(&json, "speed_rpm") > 1000.0 && num(&json, "p_mean_pa") > 1e5);
+    }
+
     #[test]
     fn bad_options_are_refused_naming_the_option() {
         let dir = tempfile::tempdir().unwrap();

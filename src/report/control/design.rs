@@ -1,10 +1,11 @@
 //! Tables and figure of `design`: `design_step.csv`, `design_step_paper_gains.csv`,
-//! `design_open_loop.csv`, `design.svg`.
+//! `design_open_loop.csv`, `design.svg`, and `design.json` (both controllers' gains,
+//! margins and step figures, for programs: the printed summary in numbers).
 
 use super::{pairs, trace_table, ControlReportError, Table, Writer};
 use crate::control::closed_loop::Trace;
 use crate::control::rpm;
-use crate::control::study::design::DesignStudy;
+use crate::control::study::design::{DesignRun, DesignStudy};
 use crate::report::plot::{Chart, Figure, Legend, Series};
 
 /// Writes the tables and the figure of `design`.
@@ -29,7 +30,37 @@ pub fn write(w: &mut Writer, r: &DesignStudy) -> Result<(), ControlReportError> 
         ]);
     }
     w.csv("design_open_loop.csv", &t)?;
+    w.json("design.json", &summary(r))?;
     w.figure("design.svg", &figure(r))
+}
+
+/// The printed summary of `design` in numbers: the operating point and, per controller, its
+/// gains (V per speed unit, V per speed unit and second; the speed unit in rpm), margins on
+/// the linear loop and figures of the simulated step. Units in the keys; a figure that does
+/// not exist (no settling within the run) is `null`.
+fn summary(r: &DesignStudy) -> serde_json::Value {
+    let finite = |v: f64| v.is_finite().then_some(v);
+    let run = |d: &DesignRun| {
+        serde_json::json!({
+            "kp_v_per_unit": d.pi.kp,
+            "ki_v_per_unit_s": d.pi.ki,
+            "speed_unit_rpm": d.pi.speed_unit_rpm,
+            "crossover_rad_s": finite(d.margins.crossover_rad_s),
+            "phase_margin_deg": finite(d.margins.phase_margin_deg),
+            "gain_margin_db": finite(d.margins.gain_margin_db),
+            "overshoot_pct": finite(d.metrics.overshoot_pct),
+            "rise_time_s": finite(d.metrics.rise_time_s),
+            "settling_time_s": finite(d.metrics.settling_time_s),
+            "final_error_rpm": finite(rpm(d.metrics.final_error_rad_s)),
+        })
+    };
+    serde_json::json!({
+        "p_mean_pa": r.settings.p_mean_pa(),
+        "speed_rpm": rpm(r.w0_rad_s),
+        "step_rpm": r.settings.step_rpm(),
+        "designed": run(&r.designed),
+        "paper": run(&r.paper),
+    })
 }
 
 /// Open-loop magnitude and phase of both controllers, and their simulated steps.

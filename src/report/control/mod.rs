@@ -65,6 +65,12 @@ impl<'a> Writer<'a> {
         self.bytes(name, t.text().as_bytes())
     }
 
+    /// Writes a JSON document (pretty-printed).
+    fn json(&mut self, name: &str, v: &serde_json::Value) -> Result<(), ControlReportError> {
+        let text = serde_json::to_string_pretty(v).unwrap_or_default() + "\n";
+        self.bytes(name, text.as_bytes())
+    }
+
     /// Writes a figure as SVG.
     fn figure(&mut self, name: &str, fig: &Figure) -> Result<(), ControlReportError> {
         let svg = fig.to_svg()?;
