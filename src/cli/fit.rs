@@ -1,6 +1,7 @@
 //! `vanefit fit` (SPEC §6): options, progress, summary and export.
 
 use crate::data::dataset::{DataError, Dataset, Kind};
+use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::fit::{
@@ -304,8 +305,30 @@ fn catalogue_estimates(
     })
 }
 
-/// Runs `vanefit fit`: fit, fit file, summary, plots.
-pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
+/// A finished fit as `vanefit fit` makes it: the dataset, its fit data, what was estimated,
+/// the outcome and the fit file (not yet written).
+pub struct FitRun {
+    /// The dataset fitted.
+    pub dataset: Dataset,
+    /// Its cost and likelihood.
+    pub data: FitData,
+    /// What was estimated and how.
+    pub setup: FitSetup,
+    /// The estimate, its intervals and every start.
+    pub outcome: FitOutcome,
+    /// The fit file of the outcome.
+    pub file: FitFile,
+}
+
+/// Loads the dataset and fits it as `vanefit fit` does (the catalogue's subset, the search
+/// space, the multi-start, the intervals), reporting starts to `observer` and recording them
+/// in `results_file` (`None`: kept in memory only). The command line and the Python package
+/// both fit through here, so a seed gives the same fit in both.
+pub fn fit_run(
+    args: &FitArgs,
+    results_file: Option<PathBuf>,
+    observer: &dyn RunObserver,
+) -> Result<FitRun, FitCommandError> {
     if args.starts == 0 {
         return Err(FitCommandError::NoStarts);
     }
@@ -330,13 +353,35 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
             Uncertainty::Curvature => UncertaintyMethod::Curvature,
             Uncertainty::None => UncertaintyMethod::None,
         },
-        results_file: Some(side_path(&args.out, "starts.jsonl")),
+        results_file,
         resume: args.resume,
     };
     // The one thread pool of the run.
     let engine = Engine::with_threads(args.threads)?;
-    let outcome = fit(&engine, &data, &setup, &progress())?;
+    let outcome = fit(&engine, &data, &setup, observer)?;
     let file = fit_file(&ds.name, &setup, &outcome, args.seed);
+    Ok(FitRun {
+        dataset: ds,
+        data,
+        setup,
+        outcome,
+        file,
+    })
+}
+
+/// Runs `vanefit fit`: fit, fit file, summary, plots.
+pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
+    let FitRun {
+        dataset: ds,
+        data,
+        setup,
+        outcome,
+        file,
+    } = fit_run(
+        args,
+        Some(side_path(&args.out, "starts.jsonl")),
+        &progress(),
+    )?;
     file.write(&args.out)
         .map_err(|source| FitCommandError::Write {
             path: args.out.clone(),

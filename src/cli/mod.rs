@@ -264,17 +264,42 @@ pub fn params_for(
     Ok((ds.nominal_params()?, EffectSet::empty()))
 }
 
-fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure> {
-    let ds = Dataset::load(dir)?;
-    let fit = params.map(FitFile::read).transpose()?;
-    let (p, effects) = params_for(&ds, fit.as_ref())?;
-    let extra = fit.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
-    let motor = Motor::new(p, effects).with_extra(&extra);
+/// One column of a simulated recording: the recording's column name (with its unit) and
+/// the values in that unit; `raw` holds an input column's cells exactly as recorded.
+#[derive(Debug, Clone)]
+pub struct SimulatedColumn {
+    /// The recording's column name, unit included.
+    pub name: String,
+    /// Values in the column's unit (an input's as recorded, NaN for an empty cell).
+    pub values: Vec<f64>,
+    /// An input column's cells as recorded (`None` for a simulated output).
+    pub raw: Option<Vec<String>>,
+}
+
+/// A recording simulated as `vanefit simulate` writes it: the inputs as recorded, then
+/// every simulated output that the recording has, in the recording's units, same rows.
+#[derive(Debug, Clone)]
+pub struct SimulatedTable {
+    /// The recording's file name.
+    pub file: String,
+    /// Inputs first, then outputs.
+    pub columns: Vec<SimulatedColumn>,
+}
+
+/// The motor of a dataset under an optional fit file (its parameters, effects and
+/// discovered terms; without one the rig's nominal motor).
+pub fn motor_for(ds: &Dataset, fit: Option<&FitFile>) -> Result<Motor, Failure> {
+    let (p, effects) = params_for(ds, fit)?;
+    let extra = fit.map(|f| f.extra.clone()).unwrap_or_default();
+    Ok(Motor::new(p, effects).with_extra(&extra))
+}
+
+/// Every experiment of `ds` simulated with `motor` (the tables `vanefit simulate` writes).
+pub fn simulated_tables(ds: &Dataset, motor: &Motor) -> Result<Vec<SimulatedTable>, Failure> {
     let solver = DefaultSolver::default();
-    std::fs::create_dir_all(out)
-        .map_err(|e| Failure(format!("{}: cannot create: {e}", out.display())))?;
+    let mut out = Vec::new();
     for data in &ds.experiments {
-        let sim = Experiment::new(data, ds.p_atm_pa)?.simulate(&motor, &solver)?;
+        let sim = Experiment::new(data, ds.p_atm_pa)?.simulate(motor, &solver)?;
         let rec = &data.recording;
         let inputs: &[Quantity] = match data.kind {
             Kind::Datasheet | Kind::Catalogue => {
@@ -282,29 +307,61 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
             }
             _ => &[Quantity::Time, Quantity::PPort1, Quantity::CPort2],
         };
-        let mut header = Vec::new();
-        let mut cols: Vec<Vec<String>> = Vec::new();
-        for c in rec.columns.iter().filter(|c| inputs.contains(&c.quantity)) {
-            header.push(c.name.clone());
-            cols.push(c.raw.clone());
-        }
+        let mut columns: Vec<SimulatedColumn> = rec
+            .columns
+            .iter()
+            .filter(|c| inputs.contains(&c.quantity))
+            .map(|c| SimulatedColumn {
+                name: c.name.clone(),
+                values: c
+                    .raw
+                    .iter()
+                    .map(|v| v.trim().parse().unwrap_or(f64::NAN))
+                    .collect(),
+                raw: Some(c.raw.clone()),
+            })
+            .collect();
         for c in rec.columns.iter().filter(|c| !inputs.contains(&c.quantity)) {
             if let Some(v) = sim.channel(c.quantity) {
-                header.push(c.name.clone());
-                cols.push(
-                    v.iter()
-                        .map(|x| format!("{:.6e}", c.unit.from_si(*x, ds.p_atm_pa)))
-                        .collect(),
-                );
+                columns.push(SimulatedColumn {
+                    name: c.name.clone(),
+                    values: v.iter().map(|x| c.unit.from_si(*x, ds.p_atm_pa)).collect(),
+                    raw: None,
+                });
             }
         }
+        out.push(SimulatedTable {
+            file: data.file.clone(),
+            columns,
+        });
+    }
+    Ok(out)
+}
+
+fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure> {
+    let ds = Dataset::load(dir)?;
+    let fit = params.map(FitFile::read).transpose()?;
+    let motor = motor_for(&ds, fit.as_ref())?;
+    std::fs::create_dir_all(out)
+        .map_err(|e| Failure(format!("{}: cannot create: {e}", out.display())))?;
+    for table in simulated_tables(&ds, &motor)? {
+        let header: Vec<&str> = table.columns.iter().map(|c| c.name.as_str()).collect();
+        let cells: Vec<Vec<String>> = table
+            .columns
+            .iter()
+            .map(|c| match &c.raw {
+                Some(raw) => raw.clone(),
+                None => c.values.iter().map(|x| format!("{x:.6e}")).collect(),
+            })
+            .collect();
         let mut text = header.join(",") + "\n";
-        for r in 0..rec.rows() {
-            let row: Vec<&str> = cols.iter().map(|c| c[r].as_str()).collect();
+        let rows = cells.first().map_or(0, Vec::len);
+        for r in 0..rows {
+            let row: Vec<&str> = cells.iter().map(|c| c[r].as_str()).collect();
             text.push_str(&row.join(","));
             text.push('\n');
         }
-        let path = out.join(&data.file);
+        let path = out.join(&table.file);
         crate::io::write_atomic(&path, text.as_bytes())
             .map_err(|e| Failure(format!("{}: {e}", path.display())))?;
         println!("wrote {}", path.display());

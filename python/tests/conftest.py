@@ -1,0 +1,42 @@
+"""Shared fixtures: the repository, the command-line binary, and one short fit made by the
+command line (the reference the Python side is compared with)."""
+
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+DATASET = ROOT / "measurements" / "ar034-synthetic"
+
+
+def vanefit_bin() -> str:
+    """The CLI binary: $VANEFIT_BIN, or the release build of this checkout."""
+    return os.environ.get("VANEFIT_BIN", str(ROOT / "target" / "release" / "vanefit"))
+
+
+def run_cli(*args, check=True):
+    """Runs the CLI from the repository root; returns the CompletedProcess."""
+    p = subprocess.run(
+        [vanefit_bin(), *map(str, args)], cwd=ROOT, capture_output=True, text=True
+    )
+    if check and p.returncode != 0:
+        raise AssertionError(f"vanefit {' '.join(map(str, args))} failed:\n{p.stderr}")
+    return p
+
+
+@pytest.fixture(scope="session")
+def root() -> Path:
+    return ROOT
+
+
+@pytest.fixture(scope="session")
+def cli_fit(tmp_path_factory) -> Path:
+    """A short fit of the shipped dataset by the CLI (3 starts, curvature intervals)."""
+    out = tmp_path_factory.mktemp("cli") / "fit.json"
+    run_cli("fit", DATASET, "--starts", 3, "--seed", 5, "--max-iters", 150,
+            "--uncertainty", "curvature", "--no-plots", "--out", out)
+    assert json.loads(out.read_text())["statistics"]["likelihood_chi2"] > 0
+    return out
