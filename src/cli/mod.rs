@@ -1,6 +1,7 @@
 //! Command line (SPEC §6). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
 //! (clap reports usage errors with status 2 itself).
 
+pub mod batch;
 pub mod catalogue;
 pub mod control;
 pub mod diagnose;
@@ -85,6 +86,11 @@ pub enum Command {
     /// catalogue figures, correction factors and curves with 95% bands (SPEC section 7).
     #[command(allow_negative_numbers = true)]
     Predict(crate::cli::predict::PredictArgs),
+    /// Run a manifest's fleet of datasets (fit, diagnose, predict) in resumable shards,
+    /// here or on Slurm (SPEC section 7).
+    Batch(crate::cli::batch::BatchArgs),
+    /// Merge a batch folder into summary.csv, summary.md and fleet.svg (SPEC section 7).
+    Merge(crate::cli::batch::MergeArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -137,6 +143,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Control(args) => crate::cli::control::run(args),
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
         Command::Predict(args) => Ok(crate::cli::predict::run(&args)?),
+        Command::Batch(args) => crate::cli::batch::run(&args),
+        Command::Merge(args) => crate::cli::batch::merge(&args),
     }
 }
 
