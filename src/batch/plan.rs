@@ -58,12 +58,17 @@ impl std::fmt::Display for Shard {
     }
 }
 
+/// A `--shard` value that is not `i/N` with 1 ≤ i ≤ N.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{0}' is not i/N with 1 <= i <= N (e.g. 2/8)")]
+pub struct BadShard(pub String);
+
 impl std::str::FromStr for Shard {
-    type Err = String;
+    type Err = BadShard;
 
     /// `i/N` with 1 ≤ i ≤ N (clap shows the message with the option named).
-    fn from_str(s: &str) -> Result<Self, String> {
-        let bad = || format!("'{s}' is not i/N with 1 <= i <= N (e.g. 2/8)");
+    fn from_str(s: &str) -> Result<Self, BadShard> {
+        let bad = || BadShard(s.to_string());
         let (i, n) = s.split_once('/').ok_or_else(bad)?;
         let index: usize = i.trim().parse().map_err(|_| bad())?;
         let count: usize = n.trim().parse().map_err(|_| bad())?;
