@@ -144,20 +144,32 @@ fn summary_md(record: &BatchRecord, rows: &[Row], names: &[&str]) -> String {
     let fits: Vec<&Row> = rows.iter().filter(|r| r.fit.is_some()).collect();
     if !fits.is_empty() {
         let _ = writeln!(s, "## Parameters\n");
-        let _ = writeln!(s, "| dataset | cost J | {} |", names.join(" | "));
-        let _ = writeln!(s, "|---|---|{}", "---|".repeat(names.len()));
-        for r in &fits {
+        let _ = writeln!(s, "| # | dataset | cost J | {} |", names.join(" | "));
+        let _ = writeln!(s, "|---|---|---|{}", "---|".repeat(names.len()));
+        for (k, r) in fits.iter().enumerate() {
             let f = r.fit.as_ref().expect("filtered");
             let cells: Vec<String> = names
                 .iter()
-                .map(|n| match estimate(f, n) {
-                    (Some(v), Some([lo, hi])) => format!("{v:.4e} [{lo:.4e}, {hi:.4e}]"),
-                    (Some(v), None) => format!("{v:.4e}"),
-                    _ => "-".into(),
+                .map(|n| {
+                    let flag = match f.verdicts.iter().find(|v| v.name == *n) {
+                        Some(v) if !v.identifiable => " (not identifiable)",
+                        _ => "",
+                    };
+                    match estimate(f, n) {
+                        (Some(v), Some([lo, hi])) => format!("{v:.4e} [{lo:.4e}, {hi:.4e}]{flag}"),
+                        (Some(v), None) => format!("{v:.4e}{flag}"),
+                        _ => "-".into(),
+                    }
                 })
                 .collect();
             let cost = f.cost.map_or("-".into(), |c| format!("{c:.4}"));
-            let _ = writeln!(s, "| {} | {cost} | {} |", r.unit.dataset, cells.join(" | "));
+            let _ = writeln!(
+                s,
+                "| {} | {} | {cost} | {} |",
+                k + 1,
+                r.unit.dataset,
+                cells.join(" | ")
+            );
         }
         let _ = writeln!(s, "\n![each parameter across the motors](fleet.svg)\n");
     }
@@ -223,8 +235,10 @@ fn diagnoses_md(s: &mut String, rows: &[Row]) {
     let _ = writeln!(s);
 }
 
-/// `fleet.svg`: one panel per parameter, the motors (in summary order, numbered from 1)
-/// along x, each estimate a point and its 95 % interval a vertical bar.
+/// `fleet.svg`: one panel per parameter, the motors (numbered as in `summary.md`) along x,
+/// each estimate a point and its 95 % interval a vertical bar, in percent from the fleet's
+/// median, so that an odd motor stands out and the axis labels read as the spread (the
+/// values themselves differ in the 4th digit, which absolute tick labels would not show).
 fn fleet_plot(rows: &[Row], names: &[&str]) -> Option<Figure> {
     let fits: Vec<&FitFile> = rows.iter().filter_map(|r| r.fit.as_ref()).collect();
     if fits.is_empty() || names.is_empty() {
@@ -233,25 +247,28 @@ fn fleet_plot(rows: &[Row], names: &[&str]) -> Option<Figure> {
     let panels = names
         .iter()
         .map(|n| {
+            let mut values: Vec<f64> = fits.iter().filter_map(|f| estimate(f, n).0).collect();
+            values.sort_by(f64::total_cmp);
+            let median = values.get(values.len() / 2).copied().unwrap_or(f64::NAN);
+            let pct = |v: f64| 100.0 * (v / median - 1.0);
             let (mut points, mut bars) = (Vec::new(), Vec::new());
             for (i, f) in fits.iter().enumerate() {
                 let x = (i + 1) as f64;
                 let (v, ci) = estimate(f, n);
                 if let Some(v) = v {
-                    points.push((x, v));
+                    points.push((x, pct(v)));
                 }
                 if let Some([lo, hi]) = ci {
                     // A non-finite point breaks the line: one bar per motor.
-                    bars.extend([(x, lo), (x, hi), (f64::NAN, f64::NAN)]);
+                    bars.extend([(x, pct(lo)), (x, pct(hi)), (f64::NAN, f64::NAN)]);
                 }
             }
             let unit = crate::model::params::spec(n).map_or("", |s| s.unit);
-            let mut chart = Chart::new(n, "motor (row of the summary's fits)", unit)
-                .with(Series::points("estimate", points.clone()))
+            let title = format!("{n} (fleet median {median:.5e} {unit})");
+            let mut chart = Chart::new(&title, "motor (# of summary.md)", "% from the median")
+                .with(Series::points("estimate", points))
                 .with(Series::line("95 % interval", bars));
-            if points.iter().all(|(_, v)| *v > 0.0) {
-                chart = chart.log_y();
-            }
+            chart.x_range = Some((0.5, fits.len() as f64 + 0.5));
             chart
         })
         .collect();
