@@ -61,7 +61,19 @@ pub enum UnitError {
     Panic(String),
 }
 
-/// Runs the units of `opts.shard` of `manifest` into `opts.out`.
+/// What became of a unit in this run.
+enum Ran {
+    /// Finished by an earlier run (its status then).
+    Skipped(UnitStatus),
+    /// Run now (its new status).
+    Now(UnitStatus),
+}
+
+/// Runs the units of `opts.shard` of `manifest` into `opts.out`: the shard's groups side by
+/// side on the engine's threads (rayon), a group's units in order (a predict after its fit),
+/// every fit's starts on the same threads by work stealing. Units write only into their own
+/// folders, and each unit's result is independent of the others, so the parallelism changes
+/// nothing but the time.
 pub fn run(manifest: &Manifest, opts: &RunOptions) -> Result<RunOutcome, BatchError> {
     let record = BatchRecord::of(manifest);
     record.claim(&opts.out)?;
@@ -74,49 +86,76 @@ pub fn run(manifest: &Manifest, opts: &RunOptions) -> Result<RunOutcome, BatchEr
         record.units.len(),
         engine.threads()
     ));
-    let mut outcome = RunOutcome {
-        units: units.len(),
-        ..Default::default()
-    };
-    for unit in &units {
-        let folder = unit.folder(&opts.out);
-        let before = UnitStatus::read(&folder);
-        let finished = before.as_ref().is_some_and(|s| {
-            s.status == State::Done || (s.status == State::Failed && !opts.retry_failed)
-        });
-        if let (true, Some(s)) = (finished, before) {
-            progress.unit_finished();
-            progress.line(&format!(
-                "{}: {} before, skipped",
-                unit.label(),
-                s.status.id()
-            ));
-            outcome.skipped += 1;
-            if s.status == State::Failed {
-                outcome.failed.push((unit.label(), s.message));
-            }
-            continue;
+    let mut groups: Vec<Vec<Unit>> = Vec::new();
+    for u in units {
+        match groups.last_mut() {
+            Some(g) if g[0].group == u.group => g.push(u),
+            _ => groups.push(vec![u]),
         }
-        let status = run_one(&engine, manifest, unit, &opts.out, &progress)?;
-        progress.unit_finished();
-        match status.status {
-            State::Done => {
-                outcome.done += 1;
-                progress.line(&format!(
-                    "{}: done in {:.1} s ({})",
-                    unit.label(),
-                    status.wall_s,
-                    status.message
-                ));
+    }
+    let ran = engine.map(&groups, |group| {
+        group
+            .iter()
+            .map(|u| run_or_skip(&engine, manifest, u, opts, &progress).map(|r| (u.label(), r)))
+            .collect::<Result<Vec<_>, BatchError>>()
+    });
+    let mut outcome = RunOutcome::default();
+    for (label, r) in ran
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .flatten()
+    {
+        outcome.units += 1;
+        match r {
+            Ran::Skipped(s) => {
+                outcome.skipped += 1;
+                if s.status == State::Failed {
+                    outcome.failed.push((label, s.message));
+                }
             }
-            _ => {
-                progress.line(&format!("{}: FAILED: {}", unit.label(), status.message));
-                outcome.failed.push((unit.label(), status.message));
-            }
+            Ran::Now(s) if s.status == State::Done => outcome.done += 1,
+            Ran::Now(s) => outcome.failed.push((label, s.message)),
         }
     }
     progress.line("shard finished");
     Ok(outcome)
+}
+
+/// Skips a finished unit (done, or failed unless `retry_failed`), runs any other, and says
+/// so on the progress lines.
+fn run_or_skip(
+    engine: &Engine,
+    manifest: &Manifest,
+    unit: &Unit,
+    opts: &RunOptions,
+    progress: &BatchProgress,
+) -> Result<Ran, BatchError> {
+    let before = UnitStatus::read(&unit.folder(&opts.out));
+    if let Some(s) = before
+        .filter(|s| s.status == State::Done || (s.status == State::Failed && !opts.retry_failed))
+    {
+        progress.unit_finished();
+        progress.line(&format!(
+            "{}: {} before, skipped",
+            unit.label(),
+            s.status.id()
+        ));
+        return Ok(Ran::Skipped(s));
+    }
+    let status = run_one(engine, manifest, unit, &opts.out, progress)?;
+    progress.unit_finished();
+    if status.status == State::Done {
+        progress.line(&format!(
+            "{}: done in {:.1} s ({})",
+            unit.label(),
+            status.wall_s,
+            status.message
+        ));
+    } else {
+        progress.line(&format!("{}: FAILED: {}", unit.label(), status.message));
+    }
+    Ok(Ran::Now(status))
 }
 
 /// Runs one unit between its `running` and its final status file; a panic is caught and
