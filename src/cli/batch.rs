@@ -142,8 +142,13 @@ fn slurm(manifest: &Manifest, args: &BatchArgs) -> Result<(), Failure> {
         s.array_job, s.merge_job, s.array_job, s.merge_job
     );
     match s.merge_ok {
+        Some(false) if out.join("summary.csv").exists() => Err(Failure(format!(
+            "the merge job {} ran and found failed or unfinished units: see {}",
+            s.merge_job,
+            out.join("summary.md").display()
+        ))),
         Some(false) => Err(Failure(format!(
-            "the merge job {} did not end well (an array task failed or was cancelled, or units failed): see sacct -j {},{} and {}",
+            "the merge job {} did not run or failed (an array task failed or was cancelled?): see sacct -j {},{} and the logs in {}",
             s.merge_job,
             s.array_job,
             s.merge_job,

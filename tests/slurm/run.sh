@@ -246,5 +246,27 @@ say "the same manifest on this machine, without Slurm"
   || fail "local run: $(tail -3 "$WORK/local.err")"
 check "16 units done in the Slurm summary" test "$(grep -c ',done,' "$OUT/summary.csv")" -eq 16
 check "summary.csv of the Slurm run == the local run's, byte for byte" cmp "$OUT/summary.csv" "$F/local/summary.csv"
+say "a batch with a broken dataset: the array ends well, the merge reports the failure"
+mkdir -p "$F/broken"
+printf '[motor\n' >"$F/broken/rig.toml"
+cat >"$F/failing.toml" <<'EOF'
+[batch]
+datasets = ["ds/m1", "broken"]
+tasks = ["fit"]
+
+[fit]
+starts = 2
+max_iters = 200
+uncertainty = "none"
+plots = false
+EOF
+chmod -R a+rX "$F"
+(cd "$F" && timeout 120 "$BIN" batch failing.toml --out "$F/failing" --slurm --wait) >"$WORK/submit3.txt" 2>&1
+rc=$?
+tail -2 "$WORK/submit3.txt"
+check "--wait exits 1 when a unit failed (exit $rc)" test "$rc" -eq 1
+check "the merge ran and recorded the failure with its place" \
+  grep -q '^broken,fit,failed,.*rig.toml:1:' "$F/failing/summary.csv"
+check "the good unit of that batch is done" grep -q '^m1,fit,done,' "$F/failing/summary.csv"
 say "took $(($(date +%s) - T0)) s"
 finish
