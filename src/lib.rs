@@ -5,7 +5,7 @@
 //!
 //! The folders are the layers, and each depends only on the ones before it:
 //! `units` → `io` → `numerics` → `model` → `sim` → `data` → `objective` → `estimate` →
-//! {`diagnose`, `control`, `predict`} → `report` → `cli`. SI units everywhere inside; `units`
+//! {`diagnose`, `control`, `predict`, `export`} → `report` → `cli`. SI units everywhere inside; `units`
 //! converts at the file edge.
 
 pub mod cli;
@@ -13,6 +13,7 @@ pub mod control;
 pub mod data;
 pub mod diagnose;
 pub mod estimate;
+pub mod export;
 pub mod io;
 pub mod model;
 pub mod numerics;

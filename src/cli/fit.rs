@@ -394,6 +394,20 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
         let waterfall = side_path(&args.out, "waterfall.svg");
         report::waterfall(&outcome.run.results, &waterfall)?;
         plots.push(waterfall);
+        let across = side_path(&args.out, "parameters.svg");
+        let estimate: Vec<f64> = outcome
+            .theta
+            .iter()
+            .zip(&setup.space.dims)
+            .map(|(t, d)| d.value(*t))
+            .collect();
+        report::parameters_across_starts(&outcome.run.results, &setup.space, &estimate, &across)?;
+        plots.push(across);
+        plots.extend(report::profiles(
+            &outcome.intervals,
+            outcome.threshold,
+            &side_path(&args.out, "profiles.svg"),
+        )?);
         plots.extend(report::overlays(
             &ds,
             &data.cost,

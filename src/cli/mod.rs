@@ -4,6 +4,7 @@
 pub mod catalogue;
 pub mod control;
 pub mod diagnose;
+pub mod export;
 pub mod fit;
 pub mod predict;
 
@@ -85,6 +86,9 @@ pub enum Command {
     /// catalogue figures, correction factors and curves with 95% bands (SPEC section 7).
     #[command(allow_negative_numbers = true)]
     Predict(crate::cli::predict::PredictArgs),
+    /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
+    /// tables, an SBML document declaring the model's symbols, and the problem YAML.
+    ExportPetab(crate::cli::export::ExportPetabArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -137,6 +141,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Control(args) => crate::cli::control::run(args),
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
         Command::Predict(args) => Ok(crate::cli::predict::run(&args)?),
+        Command::ExportPetab(args) => crate::cli::export::run(&args),
     }
 }
 
