@@ -45,6 +45,7 @@ __all__ = [
     "cost",
     "fit",
     "likelihood",
+    "export_petab",
     "diagnose",
     "predict",
     "control",
@@ -240,6 +241,13 @@ class Likelihood:
     def __call__(self, x: Sequence[float]) -> float:
         return self._core.chi2_or_penalty([float(v) for v in x])
 
+    def residuals(self, x: Sequence[float]) -> np.ndarray:
+        """The residual vector at ``x`` (SI) whose squares sum to :meth:`chi2`: every compared
+        row, (simulated − recorded)/σ after the nuisances' correction, then one row per
+        nuisance prior (β̂/τ). For least-squares optimizers (pyPESTO's ``res``, SciPy's
+        ``least_squares``). Raises like :meth:`chi2`."""
+        return np.asarray(self._core.residuals([float(v) for v in x]))
+
     def breakdown(self, x: Sequence[float]) -> Dict[str, Any]:
         """χ² at ``x`` split into the rows' part and the nuisance priors' part, with every
         compared row (``channels``: file, column, rows, data, sigma, simulated, residuals)
@@ -254,6 +262,26 @@ class Likelihood:
 def likelihood(ds: Dataset, fit: PathLike) -> Likelihood:
     """The :class:`Likelihood` of the fit file ``fit`` on ``ds``."""
     return Likelihood(ds, fit)
+
+
+def export_petab(
+    fit: PathLike, out: PathLike, dataset: Optional[PathLike] = None
+) -> Dict[str, Any]:
+    """Writes the fit as a PEtab v1 problem into ``out`` (as ``vanefit export-petab``):
+    ``parameters.tsv``, ``observables.tsv``, ``measurements.tsv``, ``conditions.tsv``,
+    ``model.xml`` (SBML declaring the model's symbols; the dynamics are vanefit's),
+    ``problem.yaml`` and ``vanefit_export.json``. ``dataset``: the fit's dataset folder
+    (default: ``measurements/<name>`` beside the fit file's folder). Returns
+    ``vanefit_export.json`` as a dict (χ² of the tables at the fit, split into the rows and
+    the nuisance priors) with ``yaml``, the problem file's path. See :mod:`vanefit.petab` to
+    evaluate the tables with vanefit's simulation."""
+    args = ["export-petab", os.fspath(fit), "--out", os.fspath(out)]
+    if dataset is not None:
+        args += ["--dataset", os.fspath(dataset)]
+    _core.run_command(args, 1)
+    summary = json.loads((Path(out) / "vanefit_export.json").read_text())
+    summary["yaml"] = os.fspath(Path(out) / "problem.yaml")
+    return summary
 
 
 def diagnose(

@@ -499,10 +499,17 @@ fn xml_escape(text: &str) -> String {
 
 /// `vanefit_export.json`: where the problem came from and vanefit's χ² of it at the fit.
 fn summary_json(ds: &Dataset, fit: &FitFile, fit_path: &Path, s: &PetabSummary) -> String {
+    // Absolute paths: tools read this file from wherever they run.
+    let absolute = |p: &Path| {
+        std::fs::canonicalize(p)
+            .unwrap_or_else(|_| p.to_path_buf())
+            .display()
+            .to_string()
+    };
     let doc = serde_json::json!({
         "format": "vanefit.petab_export/1",
-        "fit": fit_path.display().to_string(),
-        "dataset": ds.dir.display().to_string(),
+        "fit": absolute(fit_path),
+        "dataset": absolute(&ds.dir),
         "measurements": s.measurements,
         "observables": s.observables,
         "conditions": s.conditions,
