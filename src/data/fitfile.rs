@@ -609,6 +609,18 @@ impl Reader<'_> {
         }
     }
 
+    /// The first line from line `from` on (1-based) that contains `needle`: a key inside an
+    /// object whose name also appears before it.
+    fn line_after(&self, from: Option<usize>, needle: &str) -> Option<usize> {
+        let skip = from?.saturating_sub(1);
+        self.text
+            .lines()
+            .enumerate()
+            .skip(skip)
+            .find(|(_, l)| l.contains(needle))
+            .map(|(i, _)| i + 1)
+    }
+
     /// `covariance` (absent or null: none). Predictions compute with it, so a malformed one
     /// is refused rather than left out.
     /// Its parameters must be estimated ones (`estimated`).
@@ -655,7 +667,9 @@ impl Reader<'_> {
         entries
             .iter()
             .map(|(name, v)| {
-                let at = self.line_of(&format!("\"{name}\": {{")).or_else(here);
+                let at = self
+                    .line_after(here(), &format!("\"{name}\""))
+                    .or_else(here);
                 serde_json::from_value::<ProfilePath>(v.clone())
                     .map_err(|e| FieldError(format!("profiles.{name}: {e}")))
                     .and_then(|p| {
