@@ -49,7 +49,10 @@ def _kernel_name() -> str:
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
-def test_notebook_runs_headless(path, capsys):
+def test_notebook_runs_headless(path, capsys, tmp_path, monkeypatch):
+    # The notebooks write into tempfile.mkdtemp(); the kernel inherits TMPDIR, so what they
+    # write lands in pytest's temporary folder, not in the machine's /tmp.
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     nb = nbformat.read(path, as_version=4)

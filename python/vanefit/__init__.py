@@ -20,6 +20,7 @@ Example::
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import os
@@ -54,8 +55,8 @@ __all__ = [
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
-#: Parameters: ``None`` (the dataset's nominal motor), a fit file's path, a fit result of
-#: :func:`fit` (a dict with ``"out"`` or read with :func:`read_fit` from a file), or a dict
+#: Parameters: ``None`` (the dataset's nominal motor), a fit file's path, a fit document
+#: (a result of :func:`fit`, :func:`read_fit`, or a diagnosis' ``extended_fit``), or a dict
 #: ``{name: SI value}`` overriding the nominal motor.
 Params = Union[None, PathLike, Mapping[str, Any]]
 Table = Dict[str, np.ndarray]
@@ -107,6 +108,34 @@ def read_fit(path: PathLike) -> Dict[str, Any]:
     return json.loads(_core.read_fit(os.fspath(path)))
 
 
+_DOCUMENT_KEYS = ("start_results", "out", "summary")
+
+
+class _FitDocument(str):
+    """The path of a fit document written to a temporary file for one call."""
+
+
+def _fit_document_file(doc: Mapping[str, Any]) -> str:
+    """Writes a fit document (without the Python-only keys) to a temporary file; the
+    caller removes it (:func:`_params`)."""
+    clean = {k: v for k, v in doc.items() if k not in _DOCUMENT_KEYS}
+    fd, path = tempfile.mkstemp(prefix="vanefit-fit-", suffix=".json")
+    with os.fdopen(fd, "w") as f:
+        json.dump(clean, f)
+    return _FitDocument(path)
+
+
+@contextlib.contextmanager
+def _params(params: Params):
+    """(fit file path or None, overrides) for the Rust side, for the duration of a call."""
+    path, overrides = _split_params(params)
+    try:
+        yield path, overrides
+    finally:
+        if isinstance(path, _FitDocument):
+            os.remove(path)
+
+
 def _split_params(params: Params) -> Tuple[Optional[str], List[Tuple[str, float]]]:
     """(fit file path or None, overrides) for the Rust side."""
     if params is None:
@@ -114,13 +143,12 @@ def _split_params(params: Params) -> Tuple[Optional[str], List[Tuple[str, float]
     if isinstance(params, (str, os.PathLike)):
         return os.fspath(params), []
     if isinstance(params, Mapping):
-        if "out" in params and isinstance(params.get("parameters"), Mapping):
-            if params["out"] is None:
-                raise ParameterError(
-                    "this fit result was not written to a file: call fit(..., out=path) "
-                    "or pass a dict of parameter values"
-                )
+        if params.get("out") is not None and isinstance(params.get("parameters"), Mapping):
             return os.fspath(params["out"]), []
+        if params.get("format") == "vanefit.fit/1" or isinstance(params.get("parameters"), Mapping):
+            # A fit document in memory (read_fit, fit without out, a diagnosis'
+            # extended_fit): checked by the same reader as a file.
+            return _fit_document_file(params), []
         overrides = []
         for name, v in params.items():
             try:
@@ -137,16 +165,16 @@ def simulate(ds: Dataset, params: Params = None) -> Dict[str, Table]:
     """Every experiment simulated, by recording file: the recording's input columns as
     recorded, then each simulated output under the recording's column name and unit, same
     rows (what ``vanefit simulate`` writes, at full precision)."""
-    fit_path, overrides = _split_params(params)
-    tables = _core.simulate(ds._core, fit_path, overrides)
+    with _params(params) as (fit_path, overrides):
+        tables = _core.simulate(ds._core, fit_path, overrides)
     return {file: {name: np.asarray(v, dtype=float) for name, v in cols} for file, cols in tables}
 
 
 def cost(ds: Dataset, params: Params = None) -> Dict[str, Any]:
     """The cost J that :func:`fit` minimises (SPEC §2) and its χ², with each channel's term:
     ``{"cost", "chi2", "n_points", "failed", "channels": [...]}``."""
-    fit_path, overrides = _split_params(params)
-    return json.loads(_core.cost(ds._core, fit_path, overrides))
+    with _params(params) as (fit_path, overrides):
+        return json.loads(_core.cost(ds._core, fit_path, overrides))
 
 
 def fit(
@@ -422,3 +450,8 @@ def synth(
         args += ["--effects", ",".join(effects)]
     _core.run_command(args, 1)
     return load_dataset(out)
+
+
+# Submodules; each imports its optional dependency (matplotlib, petab, pypesto) only when
+# one of its functions is called.
+from . import pesto, petab, plot  # noqa: E402
