@@ -171,8 +171,12 @@ def simulate(ds: Dataset, params: Params = None) -> Dict[str, Table]:
 
 
 def cost(ds: Dataset, params: Params = None) -> Dict[str, Any]:
-    """The cost J that :func:`fit` minimises (SPEC §2) and its χ², with each channel's term:
-    ``{"cost", "chi2", "n_points", "failed", "channels": [...]}``."""
+    """The cost J that :func:`fit`'s multi-start minimises (SPEC §2), with each channel's
+    term: ``{"cost", "chi2", "n_points", "failed", "channels": [...]}``. Its ``chi2`` is the
+    cost's own: the simulation against each channel's reference polynomial, in units of
+    the polynomial's residual σ. It is not the fit file's ``statistics.chi2`` (the recorded
+    rows against the data's noise) nor ``likelihood_chi2`` (what the estimate maximises;
+    see :class:`Likelihood`)."""
     with _params(params) as (fit_path, overrides):
         return json.loads(_core.cost(ds._core, fit_path, overrides))
 
