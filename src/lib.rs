@@ -5,8 +5,8 @@
 //!
 //! The folders are the layers, and each depends only on the ones before it:
 //! `units` → `io` → `numerics` → `model` → `sim` → `data` → `objective` → `estimate` →
-//! {`diagnose`, `control`, `predict`} → `report` → `task` → `batch` → `cli`. SI units
-//! everywhere inside; `units` converts at the file edge. `task` holds the work of the
+//! {`diagnose`, `control`, `predict`, `export`} → `report` → `task` → `batch` → `cli`. SI
+//! units everywhere inside; `units` converts at the file edge. `task` holds the work of the
 //! `fit`, `diagnose` and `predict` commands as library functions; `batch` runs them over a
 //! fleet of datasets in deterministic shards and merges the results (issue 14).
 
@@ -16,6 +16,7 @@ pub mod control;
 pub mod data;
 pub mod diagnose;
 pub mod estimate;
+pub mod export;
 pub mod io;
 pub mod model;
 pub mod numerics;

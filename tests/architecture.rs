@@ -18,7 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["data"],
     &["objective"],
     &["estimate"],
-    &["diagnose", "control", "predict"],
+    &["diagnose", "control", "predict", "export"],
     &["report"],
     &["task"],
     &["batch"],

@@ -94,6 +94,30 @@ fn short_fit_exports_a_fit_that_simulate_reads_back_and_resume_reproduces() {
         serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
     assert_eq!(again["parameters"], doc["parameters"]);
     assert_eq!(again["cost"], doc["cost"]);
+
+    // A last record torn by an interruption (a kill, a full disk) is cut off on resume, not
+    // glued to: that start runs again, every line parses, each index once, same result.
+    let starts = dir.path().join("short.starts.jsonl");
+    let text = std::fs::read_to_string(&starts).unwrap();
+    std::fs::write(&starts, &text[..text.len() - 25]).unwrap();
+    let o = vanefit(&[&args[..], &["--resume"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&starts).unwrap();
+    assert!(text.ends_with('\n'));
+    let mut indices: Vec<u64> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).expect(l)["index"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    indices.sort_unstable();
+    assert_eq!(indices, vec![0, 1, 2]);
+    let torn: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    assert_eq!(torn["parameters"], doc["parameters"]);
 }
 
 #[test]

@@ -373,6 +373,13 @@ impl PyLikelihood {
             .map_err(likelihood_err)
     }
 
+    /// The residual vector at `x` (SI): the compared rows after the nuisances' correction,
+    /// then one row per nuisance prior; its squares sum to χ². Raises like `chi2`.
+    fn residuals(&self, py: Python<'_>, x: Vec<f64>) -> PyResult<Vec<f64>> {
+        py.detach(|| self.inner.residuals(&x))
+            .map_err(likelihood_err)
+    }
+
     /// χ² at `x` for an optimizer: always finite (a large penalty where `x` is invalid or
     /// the simulation fails).
     fn chi2_or_penalty(&self, py: Python<'_>, x: Vec<f64>) -> f64 {

@@ -40,3 +40,14 @@ def cli_fit(tmp_path_factory) -> Path:
             "--uncertainty", "curvature", "--no-plots", "--out", out)
     assert json.loads(out.read_text())["statistics"]["likelihood_chi2"] > 0
     return out
+
+
+@pytest.fixture(scope="session")
+def profile_fit(tmp_path_factory) -> Path:
+    """A full fit of the shipped dataset by the CLI (16 starts, profile-likelihood
+    intervals): the reference for pyPESTO's optimum and profiles."""
+    out = tmp_path_factory.mktemp("cli_profile") / "fit.json"
+    run_cli("fit", DATASET, "--starts", 16, "--seed", 1, "--no-plots", "--out", out)
+    doc = json.loads(out.read_text())
+    assert doc["statistics"]["uncertainty"] == "profile"
+    return out

@@ -185,3 +185,23 @@ def test_predict_control_and_synth_tables(cli_fit, tmp_path):
     sim, rec = vanefit.simulate(new, cli_fit)["ramp.csv"], new.recording("ramp.csv")
     for c in ("speed_rpm", "flow1_g_s"):
         np.testing.assert_allclose(sim[c], rec[c], rtol=1e-4, atol=1e-3 * np.abs(rec[c]).max())
+
+
+def test_fit_documents_in_memory_are_parameters(ds, cli_fit, tmp_path):
+    """A fit read into memory (or returned without a file) simulates and costs like its file,
+    and the temporary file it goes through is removed."""
+    import glob
+    import tempfile
+
+    doc = vanefit.read_fit(cli_fit)
+    before = set(glob.glob(f"{tempfile.gettempdir()}/vanefit-fit-*"))
+    assert vanefit.cost(ds, doc)["cost"] == vanefit.cost(ds, cli_fit)["cost"]
+    a, b = vanefit.simulate(ds, doc), vanefit.simulate(ds, cli_fit)
+    for file in a:
+        for col in a[file]:
+            np.testing.assert_array_equal(a[file][col], b[file][col])
+    assert set(glob.glob(f"{tempfile.gettempdir()}/vanefit-fit-*")) == before
+    # A malformed document is refused like a malformed file.
+    bad = dict(doc, parameters={"c_in1": {"value": "x"}})
+    with pytest.raises(vanefit.DataError, match="c_in1"):
+        vanefit.cost(ds, bad)

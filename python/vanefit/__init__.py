@@ -20,6 +20,7 @@ Example::
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import os
@@ -45,6 +46,7 @@ __all__ = [
     "cost",
     "fit",
     "likelihood",
+    "export_petab",
     "diagnose",
     "predict",
     "control",
@@ -53,8 +55,8 @@ __all__ = [
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
-#: Parameters: ``None`` (the dataset's nominal motor), a fit file's path, a fit result of
-#: :func:`fit` (a dict with ``"out"`` or read with :func:`read_fit` from a file), or a dict
+#: Parameters: ``None`` (the dataset's nominal motor), a fit file's path, a fit document
+#: (a result of :func:`fit`, :func:`read_fit`, or a diagnosis' ``extended_fit``), or a dict
 #: ``{name: SI value}`` overriding the nominal motor.
 Params = Union[None, PathLike, Mapping[str, Any]]
 Table = Dict[str, np.ndarray]
@@ -106,6 +108,34 @@ def read_fit(path: PathLike) -> Dict[str, Any]:
     return json.loads(_core.read_fit(os.fspath(path)))
 
 
+_DOCUMENT_KEYS = ("start_results", "out", "summary")
+
+
+class _FitDocument(str):
+    """The path of a fit document written to a temporary file for one call."""
+
+
+def _fit_document_file(doc: Mapping[str, Any]) -> str:
+    """Writes a fit document (without the Python-only keys) to a temporary file; the
+    caller removes it (:func:`_params`)."""
+    clean = {k: v for k, v in doc.items() if k not in _DOCUMENT_KEYS}
+    fd, path = tempfile.mkstemp(prefix="vanefit-fit-", suffix=".json")
+    with os.fdopen(fd, "w") as f:
+        json.dump(clean, f)
+    return _FitDocument(path)
+
+
+@contextlib.contextmanager
+def _params(params: Params):
+    """(fit file path or None, overrides) for the Rust side, for the duration of a call."""
+    path, overrides = _split_params(params)
+    try:
+        yield path, overrides
+    finally:
+        if isinstance(path, _FitDocument):
+            os.remove(path)
+
+
 def _split_params(params: Params) -> Tuple[Optional[str], List[Tuple[str, float]]]:
     """(fit file path or None, overrides) for the Rust side."""
     if params is None:
@@ -113,13 +143,12 @@ def _split_params(params: Params) -> Tuple[Optional[str], List[Tuple[str, float]
     if isinstance(params, (str, os.PathLike)):
         return os.fspath(params), []
     if isinstance(params, Mapping):
-        if "out" in params and isinstance(params.get("parameters"), Mapping):
-            if params["out"] is None:
-                raise ParameterError(
-                    "this fit result was not written to a file: call fit(..., out=path) "
-                    "or pass a dict of parameter values"
-                )
+        if params.get("out") is not None and isinstance(params.get("parameters"), Mapping):
             return os.fspath(params["out"]), []
+        if params.get("format") == "vanefit.fit/1" or isinstance(params.get("parameters"), Mapping):
+            # A fit document in memory (read_fit, fit without out, a diagnosis'
+            # extended_fit): checked by the same reader as a file.
+            return _fit_document_file(params), []
         overrides = []
         for name, v in params.items():
             try:
@@ -136,16 +165,20 @@ def simulate(ds: Dataset, params: Params = None) -> Dict[str, Table]:
     """Every experiment simulated, by recording file: the recording's input columns as
     recorded, then each simulated output under the recording's column name and unit, same
     rows (what ``vanefit simulate`` writes, at full precision)."""
-    fit_path, overrides = _split_params(params)
-    tables = _core.simulate(ds._core, fit_path, overrides)
+    with _params(params) as (fit_path, overrides):
+        tables = _core.simulate(ds._core, fit_path, overrides)
     return {file: {name: np.asarray(v, dtype=float) for name, v in cols} for file, cols in tables}
 
 
 def cost(ds: Dataset, params: Params = None) -> Dict[str, Any]:
-    """The cost J that :func:`fit` minimises (SPEC §2) and its χ², with each channel's term:
-    ``{"cost", "chi2", "n_points", "failed", "channels": [...]}``."""
-    fit_path, overrides = _split_params(params)
-    return json.loads(_core.cost(ds._core, fit_path, overrides))
+    """The cost J that :func:`fit`'s multi-start minimises (SPEC §2), with each channel's
+    term: ``{"cost", "chi2", "n_points", "failed", "channels": [...]}``. Its ``chi2`` is the
+    cost's own: the simulation against each channel's reference polynomial, in units of
+    the polynomial's residual σ. It is not the fit file's ``statistics.chi2`` (the recorded
+    rows against the data's noise) nor ``likelihood_chi2`` (what the estimate maximises;
+    see :class:`Likelihood`)."""
+    with _params(params) as (fit_path, overrides):
+        return json.loads(_core.cost(ds._core, fit_path, overrides))
 
 
 def fit(
@@ -240,6 +273,13 @@ class Likelihood:
     def __call__(self, x: Sequence[float]) -> float:
         return self._core.chi2_or_penalty([float(v) for v in x])
 
+    def residuals(self, x: Sequence[float]) -> np.ndarray:
+        """The residual vector at ``x`` (SI) whose squares sum to :meth:`chi2`: every compared
+        row, (simulated − recorded)/σ after the nuisances' correction, then one row per
+        nuisance prior (β̂/τ). For least-squares optimizers (pyPESTO's ``res``, SciPy's
+        ``least_squares``). Raises like :meth:`chi2`."""
+        return np.asarray(self._core.residuals([float(v) for v in x]))
+
     def breakdown(self, x: Sequence[float]) -> Dict[str, Any]:
         """χ² at ``x`` split into the rows' part and the nuisance priors' part, with every
         compared row (``channels``: file, column, rows, data, sigma, simulated, residuals)
@@ -254,6 +294,26 @@ class Likelihood:
 def likelihood(ds: Dataset, fit: PathLike) -> Likelihood:
     """The :class:`Likelihood` of the fit file ``fit`` on ``ds``."""
     return Likelihood(ds, fit)
+
+
+def export_petab(
+    fit: PathLike, out: PathLike, dataset: Optional[PathLike] = None
+) -> Dict[str, Any]:
+    """Writes the fit as a PEtab v1 problem into ``out`` (as ``vanefit export-petab``):
+    ``parameters.tsv``, ``observables.tsv``, ``measurements.tsv``, ``conditions.tsv``,
+    ``model.xml`` (SBML declaring the model's symbols; the dynamics are vanefit's),
+    ``problem.yaml`` and ``vanefit_export.json``. ``dataset``: the fit's dataset folder
+    (default: ``measurements/<name>`` beside the fit file's folder). Returns
+    ``vanefit_export.json`` as a dict (χ² of the tables at the fit, split into the rows and
+    the nuisance priors) with ``yaml``, the problem file's path. See :mod:`vanefit.petab` to
+    evaluate the tables with vanefit's simulation."""
+    args = ["export-petab", os.fspath(fit), "--out", os.fspath(out)]
+    if dataset is not None:
+        args += ["--dataset", os.fspath(dataset)]
+    _core.run_command(args, 1)
+    summary = json.loads((Path(out) / "vanefit_export.json").read_text())
+    summary["yaml"] = os.fspath(Path(out) / "problem.yaml")
+    return summary
 
 
 def diagnose(
@@ -394,3 +454,8 @@ def synth(
         args += ["--effects", ",".join(effects)]
     _core.run_command(args, 1)
     return load_dataset(out)
+
+
+# Submodules; each imports its optional dependency (matplotlib, petab, pypesto) only when
+# one of its functions is called.
+from . import pesto, petab, plot  # noqa: E402

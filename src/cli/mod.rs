@@ -5,6 +5,7 @@ pub mod batch;
 pub mod catalogue;
 pub mod control;
 pub mod diagnose;
+pub mod export;
 pub mod fit;
 pub mod predict;
 
@@ -91,6 +92,9 @@ pub enum Command {
     Batch(crate::cli::batch::BatchArgs),
     /// Merge a batch folder into summary.csv, summary.md and fleet.svg (SPEC section 7).
     Merge(crate::cli::batch::MergeArgs),
+    /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
+    /// tables, an SBML document declaring the model's symbols, and the problem YAML.
+    ExportPetab(crate::cli::export::ExportPetabArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -145,6 +149,7 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Predict(args) => Ok(crate::cli::predict::run(&args)?),
         Command::Batch(args) => crate::cli::batch::run(&args),
         Command::Merge(args) => crate::cli::batch::merge(&args),
+        Command::ExportPetab(args) => crate::cli::export::run(&args),
     }
 }
 

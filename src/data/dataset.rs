@@ -125,6 +125,31 @@ fn header_columns(path: &Path, headers: &csv::StringRecord) -> Result<Vec<Column
     Ok(columns)
 }
 
+/// Refuses a header separated by semicolons or tabs (as spreadsheets write where the comma
+/// is the decimal mark), naming what was found, instead of reading it as one unknown column.
+fn refuse_other_separators(path: &Path, text: &str) -> Result<(), DataError> {
+    let header = text.lines().next().unwrap_or("");
+    if header.contains(',') {
+        return Ok(());
+    }
+    let found = [(';', "semicolons"), ('\t', "tabs")]
+        .into_iter()
+        .map(|(c, name)| (header.matches(c).count(), name))
+        .find(|(n, _)| *n > 0);
+    match found {
+        Some((n, name)) => Err(DataError::new(
+            path,
+            format!(
+                "the header's columns are separated by {name} ({n} found, no comma): vanefit \
+                 reads comma-separated files with '.' as the decimal mark; save the sheet as \
+                 CSV with ',' between columns and '.' in numbers"
+            ),
+        )
+        .at(1)),
+        None => Ok(()),
+    }
+}
+
 impl Recording {
     /// Reads and validates a CSV recording. `p_atm_pa` converts gauge pressures.
     pub fn read(path: &Path, p_atm_pa: f64) -> Result<Self, DataError> {
@@ -151,6 +176,15 @@ impl Recording {
     ) -> Result<Self, DataError> {
         // A byte-order mark (as spreadsheet programs write) is not part of the first name.
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        // CRLF line ends (Windows exports): the csv reader places a record after CR on the
+        // line before, so located errors would name the line above the bad one.
+        let unix;
+        let text = if text.contains('\r') {
+            unix = text.replace("\r\n", "\n");
+            unix.as_str()
+        } else {
+            text
+        };
         if text.trim().is_empty() {
             return Err(DataError::new(
                 path,
@@ -158,6 +192,7 @@ impl Recording {
             )
             .at(1));
         }
+        refuse_other_separators(path, text)?;
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(true)
             .trim(csv::Trim::All)
@@ -861,6 +896,28 @@ mod tests {
 
     fn parse(text: &str) -> Result<Recording, DataError> {
         Recording::parse(Path::new("x.csv"), text, 101_325.0)
+    }
+
+    #[test]
+    fn other_separators_are_named_not_read_as_one_column() {
+        let e = parse("t_s;speed_rpm;torque_nm\n0;1,5;0,2\n").unwrap_err();
+        assert_eq!(e.line, Some(1));
+        assert!(
+            e.to_string().contains("separated by semicolons (2 found"),
+            "{e}"
+        );
+        let e = parse("t_s\tspeed_rpm\n0\t1.5\n").unwrap_err();
+        assert!(e.to_string().contains("separated by tabs"), "{e}");
+        // One column needs no separator.
+        assert!(parse("t_s\n0\n0.1\n0.2\n").is_ok());
+    }
+
+    #[test]
+    fn crlf_errors_name_the_bad_line() {
+        let e = parse("t_s,flow1_g_s\r\n0,1.0\r\n0.1,abc\r\n0.2,1.0\r\n").unwrap_err();
+        assert_eq!(e.line, Some(3), "{e}");
+        let e = parse("t_s,flow1_g_s\r\n0,1.0\r\n0.1,1.0\r\n0.1,1.0\r\n").unwrap_err();
+        assert_eq!(e.line, Some(4), "{e}");
     }
 
     #[test]

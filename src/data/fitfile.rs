@@ -304,6 +304,55 @@ pub struct FitFile {
     pub covariance: Option<LogCovariance>,
     /// What the fitted data covered (files written before it existed: `None`).
     pub conditions: Option<FitConditions>,
+    /// The likelihood profiles the intervals were read from, one per estimated parameter
+    /// (empty without profile intervals).
+    pub profiles: Vec<ProfilePath>,
+}
+
+/// A parameter's likelihood profile as a fit file keeps it: the parameter held at each
+/// `value` (SI, increasing), the others re-optimised, and the rise of χ² there above its
+/// minimum; the interval ends where it crosses `statistics.profile_threshold`. Written as
+/// `"profiles": {"<name>": {"value": [...], "delta_chi2": [...]}}`, columns that pandas and
+/// pyPESTO users read directly.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProfilePath {
+    /// The parameter.
+    #[serde(skip)]
+    pub parameter: String,
+    /// Its values along the profile, SI, increasing.
+    pub value: Vec<f64>,
+    /// χ² − χ²_min at each value.
+    pub delta_chi2: Vec<f64>,
+}
+
+impl ProfilePath {
+    /// Checks a path read from a file: equal lengths, finite numbers, values increasing.
+    fn check(self) -> Result<Self, FieldError> {
+        let name = &self.parameter;
+        if self.value.len() != self.delta_chi2.len() {
+            return Err(FieldError(format!(
+                "profiles.{name}: {} values but {} delta_chi2",
+                self.value.len(),
+                self.delta_chi2.len()
+            )));
+        }
+        if self
+            .value
+            .iter()
+            .chain(&self.delta_chi2)
+            .any(|v| !v.is_finite())
+        {
+            return Err(FieldError(format!(
+                "profiles.{name}: numbers must be finite"
+            )));
+        }
+        if self.value.windows(2).any(|w| w[1] < w[0]) {
+            return Err(FieldError(format!(
+                "profiles.{name}: values must be increasing"
+            )));
+        }
+        Ok(self)
+    }
 }
 
 impl FitFile {
@@ -324,6 +373,7 @@ impl FitFile {
             statistics: None,
             covariance: None,
             conditions: None,
+            profiles: Vec::new(),
         }
     }
 
@@ -396,6 +446,17 @@ impl FitFile {
                 serde_json::to_value(c).expect("plain data"),
             );
         }
+        if !self.profiles.is_empty() {
+            let profiles: Map<String, Value> = self
+                .profiles
+                .iter()
+                .map(|p| {
+                    let v = serde_json::to_value(p).expect("plain data");
+                    (p.parameter.clone(), v)
+                })
+                .collect();
+            doc.insert("profiles".into(), Value::Object(profiles));
+        }
         doc.insert("version".into(), env!("CARGO_PKG_VERSION").into());
         Value::Object(doc)
     }
@@ -461,6 +522,7 @@ impl FitFile {
                 .and_then(|v| serde_json::from_value(v.clone()).ok()),
             covariance,
             conditions: r.conditions(obj)?,
+            profiles: r.profiles(obj)?,
         })
     }
 }
@@ -547,6 +609,18 @@ impl Reader<'_> {
         }
     }
 
+    /// The first line from line `from` on (1-based) that contains `needle`: a key inside an
+    /// object whose name also appears before it.
+    fn line_after(&self, from: Option<usize>, needle: &str) -> Option<usize> {
+        let skip = from?.saturating_sub(1);
+        self.text
+            .lines()
+            .enumerate()
+            .skip(skip)
+            .find(|(_, l)| l.contains(needle))
+            .map(|(i, _)| i + 1)
+    }
+
     /// `covariance` (absent or null: none). Predictions compute with it, so a malformed one
     /// is refused rather than left out.
     /// Its parameters must be estimated ones (`estimated`).
@@ -580,6 +654,34 @@ impl Reader<'_> {
                 .map(Some)
                 .map_err(|m| self.fail(here(), m.0)),
         }
+    }
+
+    /// `profiles` (absent or null: none): each entry an object of two equal-length columns.
+    fn profiles(&self, obj: &Map<String, Value>) -> Result<Vec<ProfilePath>, FitFileError> {
+        let here = || self.line_of("\"profiles\"");
+        let entries = match obj.get("profiles") {
+            None | Some(Value::Null) => return Ok(Vec::new()),
+            Some(Value::Object(m)) => m,
+            Some(_) => return Err(self.fail(here(), "profiles must be an object".into())),
+        };
+        entries
+            .iter()
+            .map(|(name, v)| {
+                let at = self
+                    .line_after(here(), &format!("\"{name}\""))
+                    .or_else(here);
+                serde_json::from_value::<ProfilePath>(v.clone())
+                    .map_err(|e| FieldError(format!("profiles.{name}: {e}")))
+                    .and_then(|p| {
+                        ProfilePath {
+                            parameter: name.clone(),
+                            ..p
+                        }
+                        .check()
+                    })
+                    .map_err(|m| self.fail(at, m.0))
+            })
+            .collect()
     }
 
     /// `parameters`: defaults overridden by each entry (a number or an object with value,

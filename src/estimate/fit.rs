@@ -30,7 +30,8 @@ use super::space::ParamSpace;
 use super::uncertainty::{self, Interval};
 use crate::data::dataset::Kind;
 use crate::data::fitfile::{
-    FitConditions, FitFile, FitStatistics, LogCovariance, ParamVerdict, RunInfo, Starts,
+    FitConditions, FitFile, FitStatistics, LogCovariance, ParamVerdict, ProfilePath, RunInfo,
+    Starts,
 };
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
@@ -449,6 +450,16 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
         extra: Vec::new(),
         covariance: out.log_covariance(&setup.space),
         conditions: Some(out.conditions),
+        profiles: out
+            .intervals
+            .iter()
+            .filter(|iv| !iv.path.is_empty())
+            .map(|iv| ProfilePath {
+                parameter: iv.name.clone(),
+                value: iv.path.iter().map(|p| p.value).collect(),
+                delta_chi2: iv.path.iter().map(|p| p.delta_chi2).collect(),
+            })
+            .collect(),
         verdicts: out
             .intervals
             .iter()

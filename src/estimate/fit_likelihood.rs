@@ -91,6 +91,10 @@ pub struct ChannelRows {
     /// Normalised residuals after the nuisances' correction, (y_sim − y + (A·β̂)_i·σ)/σ: their
     /// squares summed over every channel are `chi2_data`.
     pub residuals: Vec<f64>,
+    /// Per nuisance (in [`Breakdown::nuisances`]' order), how one unit of it moves each of
+    /// these rows, SI (a_k restricted to the channel: 1 on the rows of an offset sensor's
+    /// own channel, the linearised response to the supply pressure's offset, 0 elsewhere).
+    pub nuisance_shapes: Vec<Vec<f64>>,
 }
 
 /// χ² at a parameter vector, split into its parts.
@@ -251,6 +255,21 @@ impl FitLikelihood {
             .ok_or(FitLikelihoodError::Simulation)
     }
 
+    /// The residual vector at `values` (the compared rows after the nuisances' correction,
+    /// then one row per nuisance's prior): its squares sum to χ², so least-squares optimizers
+    /// (Levenberg–Marquardt, pyPESTO's `res`) can use it directly.
+    pub fn residuals(&self, values: &[f64]) -> Result<Vec<f64>, FitLikelihoodError> {
+        let motor = self.motor(values)?;
+        self.target
+            .residuals(&self.data.smoothed, &motor, &self.solver)
+            .ok_or(FitLikelihoodError::Simulation)
+    }
+
+    /// The estimated parameters' search dimensions (bounds, scales), in the fit file's order.
+    pub fn dimensions(&self) -> &[Dimension] {
+        &self.dims
+    }
+
     /// χ² at `values` for an optimizer: finite always, the cost module's
     /// [`FAILURE_PENALTY`] where the values are invalid or the simulation fails.
     pub fn chi2(&self, values: &[f64]) -> f64 {
@@ -269,6 +288,11 @@ impl FitLikelihood {
         if r.iter().any(|v| !v.is_finite()) {
             return Err(FitLikelihoodError::Simulation);
         }
+        let shapes: Vec<&[f64]> = self
+            .target
+            .nuisances()
+            .map(|n| n.items().iter().map(|it| it.shape.as_slice()).collect())
+            .unwrap_or_default();
         let mut start = 0;
         let channels: Vec<ChannelRows> = self
             .target
@@ -277,7 +301,9 @@ impl FitLikelihood {
             .zip(self.data.smoothed.references())
             .zip(simulated)
             .map(|((c, reference), sim)| {
-                let part = r[start..start + c.rows.len()].to_vec();
+                let span = start..start + c.rows.len();
+                let part = r[span.clone()].to_vec();
+                let nuisance_shapes = shapes.iter().map(|a| a[span.clone()].to_vec()).collect();
                 start += c.rows.len();
                 ChannelRows {
                     file: c.file.clone(),
@@ -287,6 +313,7 @@ impl FitLikelihood {
                     sigma: c.sigma,
                     simulated: sim,
                     residuals: part,
+                    nuisance_shapes,
                 }
             })
             .collect();

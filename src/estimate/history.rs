@@ -81,6 +81,7 @@ impl ResultsFile {
             return Err(self.bad_line(1, "belongs to a different run (seed, starts, parameters or effects differ); remove it or drop --resume".into()));
         }
         let mut out = Vec::new();
+        self.cut_torn_line()?;
         for (i, line) in lines.enumerate() {
             let line = line.map_err(|e| self.bad_line(i + 2, e.to_string()))?;
             // A line cut short by an interruption is simply not finished.
@@ -91,6 +92,23 @@ impl ResultsFile {
             }
         }
         Ok(out)
+    }
+
+    /// Cuts off a last line that an interruption (a kill, a full disk) left without its
+    /// newline, so that the next record is appended on a line of its own instead of being
+    /// glued to the torn one (and the torn start, not being finished, is simply run again).
+    fn cut_torn_line(&self) -> Result<(), EstimateError> {
+        let bytes = std::fs::read(&self.path).map_err(|e| self.io(e))?;
+        if bytes.last().is_none_or(|b| *b == b'\n') {
+            return Ok(());
+        }
+        let keep = bytes.iter().rposition(|b| *b == b'\n').map_or(0, |i| i + 1);
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&self.path)
+            .map_err(|e| self.io(e))?;
+        f.set_len(keep as u64).map_err(|e| self.io(e))?;
+        f.sync_data().map_err(|e| self.io(e))
     }
 
     /// Starts the file with the run's header.

@@ -24,6 +24,9 @@ use serde::Serialize;
 
 /// χ²₁ quantile at 95%.
 pub const CHI2_95: f64 = 3.841_458_820_694_124;
+/// Where, as fractions of the way from the estimate to an interval's end, a profile is
+/// evaluated once more for its path.
+const PATH_FRACTIONS: [f64; 3] = [0.3, 0.7, 1.4];
 /// Beyond this |θ| the logistic map is at its bound to 1 part in 3e6.
 const THETA_EDGE: f64 = 15.0;
 
@@ -54,6 +57,21 @@ pub struct Interval {
     /// Another local optimum, as good within the threshold, puts the parameter here (SI),
     /// outside the interval.
     pub other_optimum: Option<f64>,
+    /// The profile's points in increasing value, the estimate (Δχ² = 0) among them; empty
+    /// for a curvature interval.
+    pub path: Vec<ProfilePoint>,
+}
+
+/// One point of a likelihood profile: the parameter held at `value` (SI), every other
+/// estimated parameter re-optimised, and the rise of χ² there above its minimum,
+/// Δχ² = χ²(value) − χ²_min (the pyPESTO profile's `fval_path` less its minimum; its
+/// likelihood ratio is exp(−Δχ²/2)).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ProfilePoint {
+    /// The parameter's value, SI.
+    pub value: f64,
+    /// χ² − χ²_min with the others re-optimised.
+    pub delta_chi2: f64,
 }
 
 impl Interval {
@@ -169,6 +187,7 @@ pub fn curvature_intervals(
                 hi: sd.and_then(|s| within(theta[j] + 1.96 * s)),
                 method: Method::Curvature,
                 other_optimum: None,
+                path: Vec::new(),
             }
         })
         .collect()
@@ -212,8 +231,40 @@ impl Profile<'_> {
         (template, c)
     }
 
-    /// Where the profile crosses χ²_min + threshold on one side (`dir` = ±1), in θ_j.
-    fn crossing(&self, theta_hat: &[f64], chi2_min: f64, dir: f64, step0: f64) -> Option<f64> {
+    /// Where the profile crosses χ²_min + threshold on one side (`dir` = ±1), in θ_j, and
+    /// every point it evaluated on the way as (θ_j, Δχ²).
+    fn crossing(
+        &self,
+        theta_hat: &[f64],
+        chi2_min: f64,
+        dir: f64,
+        step0: f64,
+    ) -> (Option<f64>, Vec<(f64, f64)>) {
+        let mut path = Vec::new();
+        let end = self.walk(theta_hat, chi2_min, dir, step0, &mut path);
+        if let Some(e) = end {
+            // The search itself evaluates few points, most near the crossing or far beyond
+            // it: a few more draw the profile's shape (√Δχ² is near linear in θ, so these
+            // fall near Δχ² = 0.1, 0.5 and 2 thresholds).
+            let t0 = theta_hat[self.j];
+            for f in PATH_FRACTIONS {
+                let t = t0 + f * (e - t0);
+                let (_, c) = self.at(theta_hat, t);
+                path.push((t, c - chi2_min));
+            }
+        }
+        (end, path)
+    }
+
+    /// [`Profile::crossing`]'s search, pushing each evaluated point onto `path`.
+    fn walk(
+        &self,
+        theta_hat: &[f64],
+        chi2_min: f64,
+        dir: f64,
+        step0: f64,
+        path: &mut Vec<(f64, f64)>,
+    ) -> Option<f64> {
         let t0 = theta_hat[self.j];
         let (mut t_in, mut d_in): (f64, f64) = (t0, 0.0);
         let mut base = theta_hat.to_vec();
@@ -225,6 +276,7 @@ impl Profile<'_> {
             }
             let (b, c) = self.at(&base, t);
             let delta = c - chi2_min;
+            path.push((t, delta));
             if delta >= self.threshold {
                 // √Δ is close to linear in θ near the optimum: interpolate it, then refine once.
                 let mut t_out = t;
@@ -234,6 +286,7 @@ impl Profile<'_> {
                     let tc = t_in + (self.threshold.sqrt() - a) / (z - a) * (t_out - t_in);
                     let (_, cc) = self.at(&b, tc);
                     let dc = cc - chi2_min;
+                    path.push((tc, dc));
                     if (dc - self.threshold).abs() < 0.05 {
                         return Some(tc);
                     }
@@ -289,21 +342,45 @@ pub fn profile_intervals(
             slope,
         };
         let d = &problem.space.dims[j];
-        profile
-            .crossing(theta_hat, chi2_min, dir, step)
-            .map(|t| d.value(t))
+        let (end, path) = profile.crossing(theta_hat, chi2_min, dir, step);
+        let points: Vec<ProfilePoint> = path
+            .into_iter()
+            .filter(|(_, delta)| delta.is_finite())
+            .map(|(t, delta)| ProfilePoint {
+                value: d.value(t),
+                delta_chi2: delta,
+            })
+            .collect();
+        (end.map(|t| d.value(t)), points)
     });
     (0..k)
         .map(|j| {
             let d = &problem.space.dims[j];
+            let value = d.value(theta_hat[j]);
+            let (lo, below) = &ends[2 * j];
+            let (hi, above) = &ends[2 * j + 1];
             Interval {
                 name: d.name.clone(),
-                value: d.value(theta_hat[j]),
-                lo: ends[2 * j],
-                hi: ends[2 * j + 1],
+                value,
+                lo: *lo,
+                hi: *hi,
                 method: Method::Profile,
                 other_optimum: None,
+                path: profile_path(value, below, above),
             }
         })
         .collect()
+}
+
+/// The two sides' points and the estimate (Δχ² = 0) in increasing value. The map from θ to
+/// the SI value is increasing, so each side only needs ordering, not sorting by search.
+fn profile_path(value: f64, below: &[ProfilePoint], above: &[ProfilePoint]) -> Vec<ProfilePoint> {
+    let mut path: Vec<ProfilePoint> = below.to_vec();
+    path.push(ProfilePoint {
+        value,
+        delta_chi2: 0.0,
+    });
+    path.extend_from_slice(above);
+    path.sort_by(|a, b| a.value.total_cmp(&b.value));
+    path
 }

@@ -5,13 +5,15 @@
 
 use crate::data::dataset::Dataset;
 use crate::estimate::fit::{most_sensitive_experiment, FitOutcome, FitSetup};
+use crate::estimate::space::ParamSpace;
+use crate::estimate::uncertainty::Interval;
 use crate::model::motor::Motor;
 use crate::model::params::{conductance_dm3_s_bar, spec, ParamSpec, PARAMS};
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
 use crate::report::explain::{self, number};
-use crate::report::plot::{Chart, Figure, PlotError, Series};
+use crate::report::plot::{Chart, Figure, Legend, PlotError, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -285,6 +287,108 @@ pub fn waterfall(results: &[StartResult], path: &Path) -> Result<(), PlotError> 
     .log_y()
     .with(Series::points("final cost", points))
     .write_svg(path)
+}
+
+/// Each estimated parameter's likelihood profile, one panel each: Δχ² with the others
+/// re-optimised against the parameter's value, and the threshold whose crossings are the 95 %
+/// interval's ends (pyPESTO's profile plot). `None` when no profile was computed.
+pub fn profiles(
+    intervals: &[Interval],
+    threshold: Option<f64>,
+    path: &Path,
+) -> Result<Option<PathBuf>, PlotError> {
+    let panels: Vec<Chart> = intervals
+        .iter()
+        .filter(|iv| iv.path.len() > 1)
+        .map(|iv| profile_panel(iv, threshold))
+        .collect();
+    if panels.is_empty() {
+        return Ok(None);
+    }
+    Figure::new(panels, 3).write_svg(path)?;
+    Ok(Some(path.to_path_buf()))
+}
+
+/// One profile's panel: the path, the estimate, the threshold across the path's range. A
+/// log x axis where every value is positive (conductances and friction span decades).
+fn profile_panel(iv: &Interval, threshold: Option<f64>) -> Chart {
+    // The far points where the search overshot (Δχ² in the thousands) would flatten the
+    // interesting part: the panel shows Δχ² up to three thresholds.
+    let cap = threshold.map_or(f64::INFINITY, |t| 3.0 * t);
+    let points: Vec<(f64, f64)> = iv
+        .path
+        .iter()
+        .filter(|p| p.delta_chi2 <= cap)
+        .map(|p| (p.value, p.delta_chi2))
+        .collect();
+    let (lo, hi) = points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (x, _)| {
+            (a.min(*x), b.max(*x))
+        });
+    let unit = spec(&iv.name).map_or("", |s| s.unit);
+    let mut chart = Chart::new(&iv.name, &format!("{} / {unit}", iv.name), "Δχ²")
+        .with(Series::line("profile", points))
+        .with(Series::points("estimate", vec![(iv.value, 0.0)]))
+        .legend(Legend::Below);
+    if let Some(t) = threshold {
+        chart = chart.with(Series::line("95 % threshold", vec![(lo, t), (hi, t)]));
+    }
+    // A log axis only where the path spans a decade: over a narrow span it would label
+    // nothing between its ends.
+    if lo > 0.0 && hi > 10.0 * lo {
+        chart = chart.log_x();
+    }
+    chart
+}
+
+/// Every estimated parameter across the starts, one panel each: the end point of each start
+/// against its rank by final cost (best first), and the estimate. Starts that agree with
+/// the best on a parameter form a flat run at the left; a parameter that scatters among
+/// equally good starts is poorly determined (pyPESTO's parameters plot, one axis each).
+pub fn parameters_across_starts(
+    results: &[StartResult],
+    space: &ParamSpace,
+    estimate: &[f64],
+    path: &Path,
+) -> Result<(), PlotError> {
+    let mut order: Vec<&StartResult> = results.iter().collect();
+    order.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    let panels: Vec<Chart> = space
+        .dims
+        .iter()
+        .enumerate()
+        .map(|(j, d)| {
+            let points = order
+                .iter()
+                .enumerate()
+                .filter_map(|(rank, r)| r.theta.get(j).map(|t| ((rank + 1) as f64, d.value(*t))))
+                .collect::<Vec<_>>();
+            let (lo, hi) = points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (_, v)| {
+                    (a.min(*v), b.max(*v))
+                });
+            let positive = lo > 0.0 && hi > 10.0 * lo;
+            let unit = spec(&d.name).map_or("", |s| s.unit);
+            let mut chart = Chart::new(
+                &d.name,
+                "start (by final cost)",
+                &format!("{} / {unit}", d.name),
+            )
+            .with(Series::points("end of start", points))
+            .legend(Legend::Below);
+            if let Some(v) = estimate.get(j) {
+                let n = order.len().max(1) as f64;
+                chart = chart.with(Series::line("estimate", vec![(1.0, *v), (n, *v)]));
+            }
+            if positive {
+                chart = chart.log_y();
+            }
+            chart
+        })
+        .collect();
+    Figure::new(panels, 3).write_svg(path)
 }
 
 /// One figure per experiment: for each channel, the recorded data, the reference polynomial

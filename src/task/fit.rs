@@ -382,6 +382,26 @@ pub fn write_fit(
         let waterfall = side_path(out, "waterfall.svg");
         report::waterfall(&run.outcome.run.results, &waterfall)?;
         written.plots.push(waterfall);
+        let across = side_path(out, "parameters.svg");
+        let estimate: Vec<f64> = run
+            .outcome
+            .theta
+            .iter()
+            .zip(&run.setup.space.dims)
+            .map(|(t, d)| d.value(*t))
+            .collect();
+        report::parameters_across_starts(
+            &run.outcome.run.results,
+            &run.setup.space,
+            &estimate,
+            &across,
+        )?;
+        written.plots.push(across);
+        written.plots.extend(report::profiles(
+            &run.outcome.intervals,
+            run.outcome.threshold,
+            &side_path(out, "profiles.svg"),
+        )?);
         written.plots.extend(report::overlays(
             &run.dataset,
             &run.data.cost,

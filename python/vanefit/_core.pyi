@@ -1,0 +1,87 @@
+"""Type stubs of the compiled extension ``vanefit._core`` (pyo3). Users call the wrappers in
+:mod:`vanefit`; these are the raw functions they use. Paths are ``str`` or ``os.PathLike``;
+values are SI unless a column name says otherwise; JSON documents are returned as ``str``."""
+
+import os
+from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
+
+_Path = Union[str, "os.PathLike[str]"]
+_Columns = List[Tuple[str, List[float]]]
+
+__version__: str
+
+class VanefitError(Exception):
+    """Anything vanefit refuses or fails at."""
+
+class DataError(VanefitError):
+    """A dataset, recording or fit file that cannot be read or used; the message names the
+    file, line and column."""
+
+class ParameterError(VanefitError):
+    """A bad option, parameter name or parameter value; the message names it."""
+
+class PyDataset:
+    """A dataset read and checked (rig.toml and its recordings)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def path(self) -> str: ...
+    def experiments_json(self) -> str: ...
+    def recording(self, file: str) -> _Columns: ...
+
+class PyLikelihood:
+    """A fit's likelihood rebuilt from its fit file, over the estimated parameters (SI)."""
+
+    def __init__(self, ds: PyDataset, fit: _Path) -> None: ...
+    @property
+    def names(self) -> List[str]: ...
+    @property
+    def bounds(self) -> List[Tuple[float, float]]: ...
+    @property
+    def log_scale(self) -> List[bool]: ...
+    @property
+    def estimate(self) -> List[float]: ...
+    @property
+    def chi2_min(self) -> float: ...
+    @property
+    def threshold(self) -> float: ...
+    def chi2(self, x: Sequence[float]) -> float: ...
+    def residuals(self, x: Sequence[float]) -> List[float]: ...
+    def chi2_or_penalty(self, x: Sequence[float]) -> float: ...
+    def breakdown(self, x: Sequence[float]) -> str: ...
+
+def load_dataset(path: _Path) -> PyDataset: ...
+def nominal_parameters(ds: PyDataset) -> List[Tuple[str, float]]: ...
+def read_fit(path: _Path) -> str: ...
+def simulate(
+    ds: PyDataset,
+    fit: Optional[_Path] = None,
+    overrides: Sequence[Tuple[str, float]] = ...,
+) -> List[Tuple[str, _Columns]]: ...
+def cost(
+    ds: PyDataset,
+    fit: Optional[_Path] = None,
+    overrides: Sequence[Tuple[str, float]] = ...,
+) -> str: ...
+def fit(
+    dataset: _Path,
+    starts: int,
+    seed: int,
+    threads: Optional[int],
+    effects: str,
+    estimate: Optional[str],
+    uncertainty: str,
+    max_iters: int,
+    out: Optional[_Path],
+    progress: Optional[Callable[[int, int, float], Any]],
+) -> str: ...
+def diagnose(
+    ds: PyDataset,
+    starts: int,
+    seed: int,
+    threads: Optional[int],
+    out: Optional[_Path],
+    progress: Optional[Callable[[float, str], Any]],
+) -> str: ...
+def run_command(args: Sequence[str], error: int) -> None: ...

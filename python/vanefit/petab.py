@@ -1,0 +1,126 @@
+"""PEtab problems written by ``vanefit export-petab``, evaluated with vanefit's simulation.
+
+A vanefit PEtab export declares the model's symbols in SBML but not its dynamics: the
+simulated outputs come from vanefit. :func:`simulation_table` gives PEtab's simulation table
+(the measurement table with a ``simulation`` column) at the fit, by evaluating every
+observable's formula with the ``petab`` library's own parser on vanefit's simulated rows,
+the nuisance parameters' nominal values and each row's ``observableParameters``;
+:func:`chi2` then lets ``petab.calculate_chi2`` compute χ² from the tables.
+
+Needs the optional packages ``petab``, ``pandas`` and ``sympy``
+(``pip install petab``)."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Dict, Optional, Union
+
+import numpy as np
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _problem(problem_yaml: PathLike):
+    from petab import v1 as petab
+
+    return petab.Problem.from_yaml(os.fspath(problem_yaml))
+
+
+def _summary(problem_yaml: PathLike) -> Dict[str, Any]:
+    return json.loads((Path(problem_yaml).parent / "vanefit_export.json").read_text())
+
+
+def simulation_table(
+    problem_yaml: PathLike,
+    dataset: Optional[PathLike] = None,
+    fit: Optional[PathLike] = None,
+):
+    """PEtab's simulation table of an exported problem at the fit: the measurement table
+    with ``measurement`` replaced by the simulated observable under column ``simulation``.
+
+    ``dataset``/``fit``: where the dataset and fit file are, if not where
+    ``vanefit_export.json`` says (paths there are as given on the command line, relative to
+    the folder it was run in)."""
+    import sympy
+    from petab.v1.math import sympify_petab
+
+    from . import Likelihood, load_dataset
+
+    problem = _problem(problem_yaml)
+    summary = _summary(problem_yaml)
+    ds = load_dataset(dataset if dataset is not None else summary["dataset"])
+    lik = Likelihood(ds, fit if fit is not None else summary["fit"])
+    rows = lik.breakdown(lik.x_hat)
+    observables = problem.observable_df
+    by_name = {name: oid for oid, name in observables["observableName"].items()}
+    nominal = problem.parameter_df["nominalValue"].astype(float).to_dict()
+    m = problem.measurement_df.copy()
+    sim = np.full(len(m), np.nan)
+    for channel in rows["channels"]:
+        oid = by_name[f"{channel['file']} {channel['column']}"]
+        where = np.flatnonzero((m["observableId"] == oid).to_numpy())
+        if len(where) != len(channel["rows"]) or not np.array_equal(
+            m["measurement"].to_numpy()[where], channel["data"]
+        ):
+            raise ValueError(
+                f"observable {oid}: the measurement table does not hold the fit's rows"
+            )
+        expr = sympify_petab(observables.loc[oid, "observableFormula"])
+        values = {}
+        for sym in expr.free_symbols:
+            name = str(sym)
+            if name.startswith("observableParameter"):
+                k = int(name[len("observableParameter") :].split("_", 1)[0]) - 1
+                cells = m["observableParameters"].to_numpy()[where]
+                values[sym] = np.array([float(str(c).split(";")[k]) for c in cells])
+            elif name in nominal:
+                values[sym] = nominal[name]
+            else:
+                # The model output: vanefit's simulated rows.
+                values[sym] = np.asarray(channel["simulated"], dtype=float)
+        f = sympy.lambdify(list(values), expr, modules="numpy")
+        sim[where] = np.broadcast_to(f(*values.values()), where.shape)
+    if np.isnan(sim).any():
+        raise ValueError("some measurements belong to no channel the fit compares")
+    out = m.rename(columns={"measurement": "simulation"})
+    out["simulation"] = sim
+    return out
+
+
+def prior_chi2(problem_yaml: PathLike) -> float:
+    """Σ((nominal − mean)/sd)² over the parameters with a normal ``objectivePrior`` (the
+    nuisances): the priors' part of χ² at the nominal values, which
+    ``petab.calculate_chi2`` (measurements only) does not count."""
+    p = _problem(problem_yaml).parameter_df
+    total = 0.0
+    if "objectivePriorType" not in p:
+        return total
+    for _, row in p.iterrows():
+        if row.get("objectivePriorType") == "normal":
+            mean, sd = (float(v) for v in str(row["objectivePriorParameters"]).split(";"))
+            total += ((float(row["nominalValue"]) - mean) / sd) ** 2
+    return total
+
+
+def chi2(
+    problem_yaml: PathLike,
+    dataset: Optional[PathLike] = None,
+    fit: Optional[PathLike] = None,
+) -> Dict[str, float]:
+    """χ² of the exported problem at the fit as PEtab computes it:
+    ``rows`` (``petab.calculate_chi2`` on the tables with :func:`simulation_table`),
+    ``priors`` (:func:`prior_chi2`) and their sum ``total`` — which is the fit file's
+    ``statistics.likelihood_chi2``."""
+    from petab import v1 as petab
+
+    problem = _problem(problem_yaml)
+    sim = simulation_table(problem_yaml, dataset, fit)
+    rows = float(
+        petab.calculate_chi2(
+            problem.measurement_df, sim, problem.observable_df, problem.parameter_df
+        )
+    )
+    priors = prior_chi2(problem_yaml)
+    return {"rows": rows, "priors": priors, "total": rows + priors}

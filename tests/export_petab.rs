@@ -1,0 +1,353 @@
+//! `vanefit export-petab` (SPEC §7) and the profile paths of the fit file.
+//!
+//! The PEtab tables are read back here as plain TSV, independently of the exporter: every
+//! compared row is present once with its recorded value, every observable's formula names
+//! only symbols that the model, the parameter table or its own per-row parameters define,
+//! the nuisances' nominal values reproduce the fit's χ² when the residuals are recomputed
+//! from the tables and the simulated rows, and bad input is refused with exit status 1.
+//! (The PEtab library's own linter and χ² are run on the same export by the Python tests.)
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+use std::process::Command;
+use vanefit::data::dataset::Dataset;
+use vanefit::data::fitfile::FitFile;
+use vanefit::estimate::fit_likelihood::FitLikelihood;
+
+const DATASET: &str = "measurements/ar034-synthetic";
+
+fn vanefit(args: &[&str], cwd: Option<&Path>) -> std::process::Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_vanefit"));
+    c.args(args);
+    if let Some(d) = cwd {
+        c.current_dir(d);
+    }
+    c.output().unwrap()
+}
+
+/// A fit of the shipped dataset by the CLI with profile intervals (few starts: seconds).
+fn profile_fit(dir: &Path) -> std::path::PathBuf {
+    let out = dir.join("fit.json");
+    let o = vanefit(
+        &[
+            "fit",
+            DATASET,
+            "--starts",
+            "6",
+            "--seed",
+            "2",
+            "--no-plots",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
+/// A TSV file as (header, rows of cells).
+fn tsv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let split = |l: &str| l.split('\t').map(str::to_string).collect::<Vec<_>>();
+    let header = split(lines.next().unwrap());
+    let rows: Vec<Vec<String>> = lines.map(split).collect();
+    for r in &rows {
+        assert_eq!(
+            r.len(),
+            header.len(),
+            "{}: ragged row {r:?}",
+            path.display()
+        );
+    }
+    (header, rows)
+}
+
+fn column<'a>(t: &'a (Vec<String>, Vec<Vec<String>>), name: &str) -> Vec<&'a str> {
+    let j = t.0.iter().position(|h| h == name).unwrap_or_else(|| {
+        panic!("no column {name} in {:?}", t.0);
+    });
+    t.1.iter().map(|r| r[j].as_str()).collect()
+}
+
+fn is_petab_id(s: &str) -> bool {
+    let mut c = s.chars();
+    c.next()
+        .is_some_and(|f| f.is_ascii_alphabetic() || f == '_')
+        && c.all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+}
+
+#[test]
+fn the_tables_hold_the_fits_likelihood() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit_path = profile_fit(dir.path());
+    let out = dir.path().join("petab");
+    let o = vanefit(
+        &[
+            "export-petab",
+            fit_path.to_str().unwrap(),
+            "--dataset",
+            DATASET,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "parameters.tsv",
+        "observables.tsv",
+        "measurements.tsv",
+        "conditions.tsv",
+        "model.xml",
+        "problem.yaml",
+        "vanefit_export.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+
+    let params = tsv(&out.join("parameters.tsv"));
+    let obs = tsv(&out.join("observables.tsv"));
+    let meas = tsv(&out.join("measurements.tsv"));
+    let cond = tsv(&out.join("conditions.tsv"));
+    let model = std::fs::read_to_string(out.join("model.xml")).unwrap();
+
+    // Every id is a PEtab identifier; every measurement's condition and observable exist.
+    let obs_ids = column(&obs, "observableId");
+    let cond_ids: BTreeSet<&str> = column(&cond, "conditionId").into_iter().collect();
+    for id in obs_ids.iter().chain(cond_ids.iter()) {
+        assert!(is_petab_id(id), "{id}");
+    }
+    for (o, c) in column(&meas, "observableId")
+        .iter()
+        .zip(column(&meas, "simulationConditionId"))
+    {
+        assert!(obs_ids.contains(o) && cond_ids.contains(c), "{o} {c}");
+    }
+
+    // Formulas name only what the model, the parameter table or their own per-row
+    // parameters define.
+    let declared: BTreeSet<String> = model
+        .split("<parameter id=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap().to_string())
+        .collect();
+    let table: BTreeMap<&str, usize> = column(&params, "parameterId")
+        .into_iter()
+        .enumerate()
+        .map(|(i, p)| (p, i))
+        .collect();
+    for (id, f) in obs_ids.iter().zip(column(&obs, "observableFormula")) {
+        for token in f.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')) {
+            if token.is_empty() || token.parse::<f64>().is_ok() {
+                continue;
+            }
+            let per_row = token.starts_with("observableParameter") && token.ends_with(id);
+            assert!(
+                per_row || declared.contains(token) || table.contains_key(token),
+                "{id}: '{token}' is defined nowhere"
+            );
+        }
+    }
+
+    // The estimated parameters carry the fit's values; nuisance priors are N(0, τ²), τ > 0.
+    let fit = FitFile::read(&fit_path).unwrap();
+    let nominal = column(&params, "nominalValue");
+    for name in &fit.estimated {
+        let v: f64 = nominal[table[name.as_str()]].parse().unwrap();
+        assert_eq!(v, fit.params.get(name).unwrap(), "{name}");
+    }
+    let priors = column(&params, "objectivePriorParameters");
+    let mut chi2_priors = 0.0;
+    for (i, kind) in column(&params, "objectivePriorType").iter().enumerate() {
+        if *kind == "normal" {
+            let (m, s) = priors[i].split_once(';').unwrap();
+            let (m, s): (f64, f64) = (m.parse().unwrap(), s.parse().unwrap());
+            assert!(m == 0.0 && s > 0.0);
+            let b: f64 = nominal[i].parse().unwrap();
+            chi2_priors += (b / s).powi(2);
+        }
+    }
+
+    // χ² recomputed from the tables and the simulated rows equals the fit's.
+    let ds = Dataset::load(Path::new(DATASET)).unwrap();
+    let lik = FitLikelihood::from_fit(&ds, &fit).unwrap();
+    let b = lik.breakdown(&lik.estimate()).unwrap();
+    let values: Vec<f64> = column(&meas, "measurement")
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let mut chi2_rows = 0.0;
+    for c in &b.channels {
+        let name = format!("{} {}", c.file, c.column);
+        let k = column(&obs, "observableName")
+            .iter()
+            .position(|n| *n == name)
+            .unwrap();
+        let id = obs_ids[k];
+        let sigma: f64 = column(&obs, "noiseFormula")[k].parse().unwrap();
+        let formula = column(&obs, "observableFormula")[k];
+        let rows: Vec<usize> = column(&meas, "observableId")
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| **o == id)
+            .map(|(i, _)| i)
+            .collect();
+        assert_eq!(rows.len(), c.rows.len(), "{name}");
+        let extra = column(&meas, "observableParameters");
+        for (n, &i) in rows.iter().enumerate() {
+            assert_eq!(values[i], c.data[n]);
+            // y_model + Σ β_k·a_k: the plain offsets, then the per-row terms in order.
+            let mut y = c.simulated[n];
+            let mut per_row = extra[i].split(';').filter(|s| !s.is_empty());
+            for term in formula.split(" + ").skip(1) {
+                let (beta_id, scaled) = match term.split_once(" * ") {
+                    Some((p, _)) => (p, per_row.next().unwrap().parse::<f64>().unwrap()),
+                    None => (term, 1.0),
+                };
+                let beta: f64 = nominal[table[beta_id]].parse().unwrap();
+                y += beta * scaled;
+            }
+            chi2_rows += ((values[i] - y) / sigma).powi(2);
+        }
+    }
+    let want = fit.statistics.unwrap().likelihood_chi2.unwrap();
+    let got = chi2_rows + chi2_priors;
+    assert!(
+        ((got - want) / want).abs() < 1e-9,
+        "tables' chi2 {got} vs fit's {want}"
+    );
+}
+
+#[test]
+fn export_refuses_bad_input_with_exit_status_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A missing fit file: named.
+    let o = vanefit(&["export-petab", "nope.json", "--out", "x"], Some(d));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nope.json"));
+    // A fit file of plain parameters (no statistics): says it was not written by a fit.
+    std::fs::write(
+        d.join("plain.json"),
+        "{\"format\": \"vanefit.fit/1\", \"dataset\": \"ar034-synthetic\", \"parameters\": {\"c_in1\": 7e-9}}\n",
+    )
+    .unwrap();
+    let ds = std::fs::canonicalize(DATASET).unwrap();
+    let o = vanefit(
+        &[
+            "export-petab",
+            "plain.json",
+            "--dataset",
+            ds.to_str().unwrap(),
+            "--out",
+            "y",
+        ],
+        Some(d),
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("vanefit fit"));
+    assert!(!d.join("y").exists(), "nothing written on failure");
+    // --out naming a file.
+    std::fs::write(d.join("afile"), "x").unwrap();
+    let o = vanefit(&["export-petab", "plain.json", "--out", "afile"], Some(d));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--out afile"));
+}
+
+#[test]
+fn fit_file_profiles_round_trip_and_bad_ones_are_located() {
+    let good = r#"{
+  "format": "vanefit.fit/1",
+  "parameters": { "c_in1": { "value": 7e-9, "estimated": true } },
+  "profiles": {
+    "c_in1": { "value": [6.9e-9, 7e-9, 7.1e-9], "delta_chi2": [4.1, 0.0, 3.9] }
+  }
+}
+"#;
+    let f = FitFile::parse(Path::new("p.json"), good).unwrap();
+    assert_eq!(f.profiles.len(), 1);
+    assert_eq!(f.profiles[0].parameter, "c_in1");
+    assert_eq!(f.profiles[0].delta_chi2, vec![4.1, 0.0, 3.9]);
+    let again = FitFile::parse(Path::new("q.json"), &f.to_json().to_string()).unwrap();
+    assert_eq!(again.profiles, f.profiles);
+    for (bad, says) in [
+        (
+            good.replace("[4.1, 0.0, 3.9]", "[4.1, 0.0]"),
+            "2 delta_chi2",
+        ),
+        (
+            good.replace("[6.9e-9, 7e-9, 7.1e-9]", "[7.1e-9, 7e-9, 6.9e-9]"),
+            "increasing",
+        ),
+        (good.replace("\"delta_chi2\"", "\"chi2\""), "delta_chi2"),
+    ] {
+        let e = FitFile::parse(Path::new("p.json"), &bad).unwrap_err();
+        assert_eq!(e.line, Some(5), "{e}");
+        assert!(e.to_string().contains(says), "{e}");
+    }
+}
+
+#[test]
+fn a_fit_draws_its_profiles_and_its_parameters_across_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.json");
+    let o = vanefit(
+        &[
+            "fit",
+            DATASET,
+            "--starts",
+            "3",
+            "--seed",
+            "4",
+            "--estimate",
+            "c_in1,c_ext,t_coulomb",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let profiles = doc["profiles"].as_object().unwrap();
+    assert_eq!(
+        profiles.keys().collect::<Vec<_>>(),
+        ["c_in1", "c_ext", "t_coulomb"]
+    );
+    let report = std::fs::read_to_string(dir.path().join("f.report.md")).unwrap();
+    for (file, what) in [
+        ("f.profiles.svg", "Δχ²"),
+        ("f.parameters.svg", "start (by final cost)"),
+    ] {
+        let svg = std::fs::read_to_string(dir.path().join(file)).unwrap();
+        assert!(svg.contains(what), "{file}");
+        for p in ["c_in1", "c_ext", "t_coulomb"] {
+            assert!(svg.contains(p), "{file} lacks {p}");
+        }
+        assert!(report.contains(file), "the report does not show {file}");
+    }
+    // Each path holds the estimate at Δχ² = 0 and rises past the threshold on both sides.
+    let t = doc["statistics"]["profile_threshold"].as_f64().unwrap();
+    for (name, p) in profiles {
+        let d: Vec<f64> = p["delta_chi2"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let i = d
+            .iter()
+            .position(|v| *v == 0.0)
+            .expect("estimate on the path");
+        assert!(d[..i].iter().any(|v| *v > t), "{name}: no rise below");
+        assert!(d[i + 1..].iter().any(|v| *v > t), "{name}: no rise above");
+    }
+}
