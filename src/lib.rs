@@ -5,9 +5,12 @@
 //!
 //! The folders are the layers, and each depends only on the ones before it:
 //! `units` → `io` → `numerics` → `model` → `sim` → `data` → `objective` → `estimate` →
-//! {`diagnose`, `control`, `predict`, `export`} → `report` → `cli`. SI units everywhere inside; `units`
-//! converts at the file edge.
+//! {`diagnose`, `control`, `predict`, `export`} → `report` → `task` → `batch` → `cli`. SI
+//! units everywhere inside; `units` converts at the file edge. `task` holds the work of the
+//! `fit`, `diagnose` and `predict` commands as library functions; `batch` runs them over a
+//! fleet of datasets in deterministic shards and merges the results (issue 14).
 
+pub mod batch;
 pub mod cli;
 pub mod control;
 pub mod data;
@@ -21,4 +24,5 @@ pub mod objective;
 pub mod predict;
 pub mod report;
 pub mod sim;
+pub mod task;
 pub mod units;

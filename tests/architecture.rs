@@ -20,6 +20,8 @@ const LAYERS: &[&[&str]] = &[
     &["estimate"],
     &["diagnose", "control", "predict", "export"],
     &["report"],
+    &["task"],
+    &["batch"],
     &["cli"],
 ];
 

@@ -1,6 +1,7 @@
 //! Command line (SPEC §6). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
 //! (clap reports usage errors with status 2 itself).
 
+pub mod batch;
 pub mod catalogue;
 pub mod control;
 pub mod diagnose;
@@ -89,6 +90,11 @@ pub enum Command {
     /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
     /// tables, an SBML document declaring the model's symbols, and the problem YAML.
     ExportPetab(crate::cli::export::ExportPetabArgs),
+    /// Run a manifest's fleet of datasets (fit, diagnose, predict) in resumable shards,
+    /// here or on Slurm (SPEC section 7).
+    Batch(crate::cli::batch::BatchArgs),
+    /// Merge a batch folder into summary.csv, summary.md and fleet.svg (SPEC section 7).
+    Merge(crate::cli::batch::MergeArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -142,6 +148,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
         Command::Predict(args) => Ok(crate::cli::predict::run(&args)?),
         Command::ExportPetab(args) => crate::cli::export::run(&args),
+        Command::Batch(args) => crate::cli::batch::run(&args),
+        Command::Merge(args) => crate::cli::batch::merge(&args),
     }
 }
 

@@ -583,8 +583,19 @@ fn experiment_data(
 }
 
 fn locate_toml_error(path: &Path, text: &str, e: &toml::de::Error) -> DataError {
-    let mut err = DataError::new(path, e.message().to_string());
-    if let Some(span) = e.span() {
+    locate_span(path, text, e.span(), e.message())
+}
+
+/// A problem with the TOML text `text` of `path` at the byte range `span` (a parser's or a
+/// `toml::Spanned` value's), as a located error: line, column and the offending token.
+pub fn locate_span(
+    path: &Path,
+    text: &str,
+    span: Option<std::ops::Range<usize>>,
+    message: &str,
+) -> DataError {
+    let mut err = DataError::new(path, message.to_string());
+    if let Some(span) = span {
         // Spans are byte offsets; never slice inside a character.
         let mut start = span.start.min(text.len());
         while !text.is_char_boundary(start) {

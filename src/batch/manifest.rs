@@ -1,0 +1,422 @@
+//! The batch manifest (`manifest.toml`, SPEC §7): which datasets, which tasks, and the shared
+//! options of each task. Every problem is refused at its place in the file (line and
+//! column, from the TOML parser's spans), before any unit runs.
+//!
+//! ```toml
+//! [batch]
+//! datasets = ["measurements/*"]        # globs of dataset folders, relative to this file
+//! tasks = ["fit", "diagnose", "predict"]
+//!
+//! [fit]                                # the options of `vanefit fit`, same names
+//! starts = 32
+//! seed = 1
+//!
+//! [diagnose]
+//! starts = 4
+//!
+//! [predict]
+//! pressures = [3, 4, 5, 6, 7]
+//! ```
+
+use crate::data::dataset::{locate_span, DataError};
+use crate::data::fitfile::FitFile;
+use crate::model::effects::EffectSet;
+use crate::task::diagnose::DiagnoseArgs;
+use crate::task::fit::{parse_bounds, FitArgs, Uncertainty};
+use crate::task::predict::{options as predict_options, PredictArgs};
+use clap::ValueEnum;
+use serde::{Deserialize, Serialize};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// The work a unit does to its dataset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TaskKind {
+    /// `vanefit fit`: the estimate, its intervals, the fit file.
+    Fit,
+    /// `vanefit diagnose`: missing physics.
+    Diagnose,
+    /// `vanefit predict` from the dataset's fit (needs `fit` among the tasks).
+    Predict,
+}
+
+impl TaskKind {
+    /// The name in manifests, folders and `summary.csv`.
+    pub fn id(self) -> &'static str {
+        match self {
+            TaskKind::Fit => "fit",
+            TaskKind::Diagnose => "diagnose",
+            TaskKind::Predict => "predict",
+        }
+    }
+}
+
+/// A dataset of the batch: its name (the folder's, unique in the batch) and its folder.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DatasetEntry {
+    /// Folder name: the dataset's name in unit folders and the summary.
+    pub name: String,
+    /// The folder (absolute: relative globs are resolved against the manifest's folder).
+    pub path: PathBuf,
+}
+
+/// A checked manifest.
+#[derive(Debug, Clone)]
+pub struct Manifest {
+    /// The manifest file (absolute).
+    pub path: PathBuf,
+    /// The datasets, sorted by name.
+    pub datasets: Vec<DatasetEntry>,
+    /// The tasks, in the order fit, diagnose, predict (predict reads the fit's file).
+    pub tasks: Vec<TaskKind>,
+    /// Options of every fit (`dataset` and `out` are set per unit).
+    pub fit: FitArgs,
+    /// Options of every diagnosis (`dataset` and `out` set per unit); `quick` effort or not.
+    pub diagnose: DiagnoseArgs,
+    /// Reduced diagnosis effort (`DiagnoseOptions::quick`).
+    pub diagnose_quick: bool,
+    /// Options of every prediction (`fit` and `out` set per unit).
+    pub predict: PredictArgs,
+    /// The task tables as written, so that a batch folder knows what made it.
+    pub settings: serde_json::Value,
+}
+
+/// A manifest that cannot be used: `file:line:column: message` where the place is known.
+#[derive(Debug, thiserror::Error)]
+#[error(transparent)]
+pub struct ManifestError(#[from] pub DataError);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawManifest {
+    batch: RawBatch,
+    fit: Option<Spanned<RawFit>>,
+    diagnose: Option<RawDiagnose>,
+    predict: Option<Spanned<RawPredict>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBatch {
+    datasets: Spanned<Vec<Spanned<String>>>,
+    tasks: Spanned<Vec<Spanned<TaskKind>>>,
+}
+
+#[derive(Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawFit {
+    starts: Option<Spanned<usize>>,
+    seed: Option<u64>,
+    max_iters: Option<u64>,
+    uncertainty: Option<Spanned<String>>,
+    effects: Option<Spanned<Vec<String>>>,
+    estimate: Option<Vec<String>>,
+    bounds: Option<Spanned<String>>,
+    start_range: Option<Spanned<String>>,
+    start_spread: Option<Spanned<f64>>,
+    plots: Option<bool>,
+}
+
+#[derive(Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawDiagnose {
+    starts: Option<Spanned<usize>>,
+    seed: Option<u64>,
+    effort: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawPredict {
+    pressures: Option<Vec<f64>>,
+    unit: Option<String>,
+    reference: Option<f64>,
+    inlet_nozzle: Option<f64>,
+    outlet_nozzle: Option<f64>,
+    speed_grid_rpm: Option<f64>,
+    curve_points: Option<usize>,
+    fixed_spread: Option<f64>,
+}
+
+/// Parses the options of a command exactly as its command line would, so that a task's
+/// defaults are the command's defaults (one place), not copies.
+fn command_defaults<T: clap::Args>(argv: &[&str]) -> T {
+    let matches = T::augment_args(clap::Command::new("vanefit"))
+        .try_get_matches_from(argv)
+        .expect("the command's own defaults parse");
+    T::from_arg_matches(&matches).expect("the command's own defaults parse")
+}
+
+/// Where the manifest's text is, for located messages.
+struct Source<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+impl Source<'_> {
+    fn at(&self, span: Range<usize>, message: impl AsRef<str>) -> ManifestError {
+        ManifestError(locate_span(
+            self.path,
+            self.text,
+            Some(span),
+            message.as_ref(),
+        ))
+    }
+}
+
+impl Manifest {
+    /// Reads and checks the manifest at `path`: TOML syntax, known keys, task names, dataset
+    /// globs that match at least one folder, unique dataset names and valid task options.
+    pub fn load(path: &Path) -> Result<Self, ManifestError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| ManifestError(DataError::new(path, format!("cannot read: {e}"))))?;
+        let abs = std::fs::canonicalize(path)
+            .map_err(|e| ManifestError(DataError::new(path, format!("cannot read: {e}"))))?;
+        Self::parse(&abs, path, &text)
+    }
+
+    /// Checks manifest text; `abs` is the file's absolute path (globs resolve against its
+    /// folder), `shown` the path messages name.
+    fn parse(abs: &Path, shown: &Path, text: &str) -> Result<Self, ManifestError> {
+        let src = Source { path: shown, text };
+        let raw: RawManifest = toml::from_str(text)
+            .map_err(|e| ManifestError(locate_span(shown, text, e.span(), e.message())))?;
+        let base = abs.parent().unwrap_or(Path::new("/"));
+        let datasets = datasets(&src, base, &raw.batch.datasets)?;
+        let tasks = tasks(&src, &raw.batch.tasks)?;
+        let fit_raw = raw
+            .fit
+            .unwrap_or_else(|| Spanned::new(0..0, RawFit::default()));
+        let fit = fit_args(&src, fit_raw.get_ref())?;
+        let diag_raw = raw.diagnose.unwrap_or_default();
+        let (diagnose, diagnose_quick) = diagnose_args(&src, &diag_raw)?;
+        let pred_raw = raw
+            .predict
+            .unwrap_or_else(|| Spanned::new(0..0, RawPredict::default()));
+        let predict = predict_args(&src, &pred_raw)?;
+        let settings = serde_json::json!({
+            "fit": settings_json(fit_raw.get_ref()),
+            "diagnose": settings_json(&diag_raw),
+            "predict": settings_json(pred_raw.get_ref()),
+        });
+        Ok(Self {
+            path: abs.to_path_buf(),
+            datasets,
+            tasks,
+            fit,
+            diagnose,
+            diagnose_quick,
+            predict,
+            settings,
+        })
+    }
+}
+
+/// A task table as plain JSON (spans dropped), for the batch folder's record.
+fn settings_json<T: Serialize>(t: &T) -> serde_json::Value {
+    let v = toml::Value::try_from(t).unwrap_or(toml::Value::Table(Default::default()));
+    serde_json::to_value(v).unwrap_or_default()
+}
+
+/// The dataset folders the globs match, sorted by name; a glob that matches no folder, a bad
+/// pattern and two folders of one name are refused at the glob.
+fn datasets(
+    src: &Source<'_>,
+    base: &Path,
+    globs: &Spanned<Vec<Spanned<String>>>,
+) -> Result<Vec<DatasetEntry>, ManifestError> {
+    if globs.get_ref().is_empty() {
+        return Err(src.at(globs.span(), "give at least one dataset folder or glob"));
+    }
+    let mut out: Vec<DatasetEntry> = Vec::new();
+    for g in globs.get_ref() {
+        let pattern = base.join(g.get_ref());
+        let entries = glob::glob(&pattern.to_string_lossy())
+            .map_err(|e| src.at(g.span(), format!("not a glob pattern: {e}")))?;
+        let mut found = 0;
+        for entry in entries {
+            let path = entry.map_err(|e| src.at(g.span(), format!("cannot read: {e}")))?;
+            if !path.is_dir() {
+                continue; // a README next to the datasets is no dataset
+            }
+            found += 1;
+            let name = path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            match out.iter().find(|d| d.name == name) {
+                Some(d) if d.path == path => {}
+                Some(d) => {
+                    return Err(src.at(
+                        g.span(),
+                        format!(
+                            "two datasets are named '{name}' ({} and {}): unit folders and the summary go by folder name",
+                            d.path.display(),
+                            path.display()
+                        ),
+                    ))
+                }
+                None => out.push(DatasetEntry { name, path }),
+            }
+        }
+        if found == 0 {
+            return Err(src.at(
+                g.span(),
+                format!("'{}' matches no dataset folder", g.get_ref()),
+            ));
+        }
+    }
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(out)
+}
+
+/// The tasks in their run order; `predict` needs `fit`, since it predicts from its file.
+fn tasks(
+    src: &Source<'_>,
+    list: &Spanned<Vec<Spanned<TaskKind>>>,
+) -> Result<Vec<TaskKind>, ManifestError> {
+    let mut tasks: Vec<TaskKind> = list.get_ref().iter().map(|t| *t.get_ref()).collect();
+    if tasks.is_empty() {
+        return Err(src.at(
+            list.span(),
+            "give at least one task: fit, diagnose, predict",
+        ));
+    }
+    tasks.sort();
+    tasks.dedup();
+    if tasks.contains(&TaskKind::Predict) && !tasks.contains(&TaskKind::Fit) {
+        let at = list
+            .get_ref()
+            .iter()
+            .find(|t| *t.get_ref() == TaskKind::Predict)
+            .map_or(list.span(), |t| t.span());
+        return Err(src.at(
+            at,
+            "predict needs fit among the tasks: it predicts from the dataset's fit",
+        ));
+    }
+    Ok(tasks)
+}
+
+/// `[fit]` as the options of `vanefit fit`, the command's defaults for what it leaves out.
+fn fit_args(src: &Source<'_>, raw: &RawFit) -> Result<FitArgs, ManifestError> {
+    let mut a: FitArgs = command_defaults(&["fit", ".", "--out", "fit.json"]);
+    if let Some(s) = &raw.starts {
+        if *s.get_ref() == 0 {
+            return Err(src.at(s.span(), "starts must be at least 1"));
+        }
+        a.starts = *s.get_ref();
+    }
+    a.seed = raw.seed.unwrap_or(a.seed);
+    a.max_iters = raw.max_iters.unwrap_or(a.max_iters);
+    if let Some(u) = &raw.uncertainty {
+        a.uncertainty = Uncertainty::from_str(u.get_ref(), false).map_err(|_| {
+            src.at(
+                u.span(),
+                "uncertainty must be \"profile\", \"curvature\" or \"none\"",
+            )
+        })?;
+    }
+    if let Some(e) = &raw.effects {
+        a.effects = e.get_ref().join(",");
+        EffectSet::parse_list(&a.effects).map_err(|m| src.at(e.span(), m.to_string()))?;
+    }
+    a.estimate = raw.estimate.as_ref().map(|v| v.join(","));
+    for (value, field, option) in [
+        (&raw.bounds, &mut a.bounds, "bounds"),
+        (&raw.start_range, &mut a.start_range, "start_range"),
+    ] {
+        if let Some(v) = value {
+            parse_bounds(v.get_ref(), "")
+                .map_err(|_| src.at(v.span(), format!("{option}: give name=lo:hi,...")))?;
+            *field = Some(v.get_ref().clone());
+        }
+    }
+    if let Some(s) = &raw.start_spread {
+        if !(s.get_ref().is_finite() && *s.get_ref() > 1.0) {
+            return Err(src.at(s.span(), "start_spread must be a number > 1"));
+        }
+        a.start_spread = *s.get_ref();
+    }
+    a.no_plots = !raw.plots.unwrap_or(true);
+    Ok(a)
+}
+
+/// `[diagnose]` as the options of `vanefit diagnose` plus its effort.
+fn diagnose_args(
+    src: &Source<'_>,
+    raw: &RawDiagnose,
+) -> Result<(DiagnoseArgs, bool), ManifestError> {
+    let mut a: DiagnoseArgs = command_defaults(&["diagnose", ".", "--out", "."]);
+    if let Some(s) = &raw.starts {
+        if *s.get_ref() == 0 {
+            return Err(src.at(s.span(), "starts must be at least 1"));
+        }
+        a.starts = *s.get_ref();
+    }
+    a.seed = raw.seed.unwrap_or(a.seed);
+    let quick = match raw
+        .effort
+        .as_ref()
+        .map(|e| (e.get_ref().as_str(), e.span()))
+    {
+        None | Some(("full", _)) => false,
+        Some(("quick", _)) => true,
+        Some((_, span)) => return Err(src.at(span, "effort must be \"full\" or \"quick\"")),
+    };
+    Ok((a, quick))
+}
+
+/// `[predict]` as the options of `vanefit predict`, checked as the command checks them
+/// (at the standard atmosphere; the fit's own is used when the unit runs).
+fn predict_args(src: &Source<'_>, raw: &Spanned<RawPredict>) -> Result<PredictArgs, ManifestError> {
+    let mut a: PredictArgs = command_defaults(&["predict", "fit.json"]);
+    let r = raw.get_ref();
+    a.pressures = r.pressures.as_ref().map(|v| {
+        v.iter()
+            .map(|p| p.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    });
+    if let Some(u) = &r.unit {
+        a.unit = u.clone();
+    }
+    a.reference = r.reference.or(a.reference);
+    a.inlet_nozzle = r.inlet_nozzle;
+    a.outlet_nozzle = r.outlet_nozzle;
+    a.speed_grid_rpm = r.speed_grid_rpm.unwrap_or(a.speed_grid_rpm);
+    a.curve_points = r.curve_points.unwrap_or(a.curve_points);
+    a.fixed_spread = r.fixed_spread;
+    let probe = FitFile::from_params("", Default::default(), EffectSet::empty());
+    predict_options(&a, &probe).map_err(|e| src.at(raw.span(), format!("[predict]: {e}")))?;
+    Ok(a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Manifest, ManifestError> {
+        let dir = std::env::temp_dir();
+        Manifest::parse(&dir.join("m.toml"), Path::new("m.toml"), text)
+    }
+
+    /// Syntax errors, unknown keys and bad values name line and column.
+    #[test]
+    fn errors_are_located() {
+        let e = parse("[batch]\ndatasets = [\"x\"]\ntasks = [\"fitt\"]\n").unwrap_err();
+        assert!(e.to_string().starts_with("m.toml:3:10"), "{e}");
+        let e = parse("[batch]\ndatasets = [\"/\"]\ntasks = [\"fit\"]\n[fit]\nstart = 3\n")
+            .unwrap_err();
+        assert!(e.to_string().starts_with("m.toml:5:1"), "{e}");
+        let e = parse(
+            "[batch]\ndatasets = [\"/\"]\ntasks = [\"fit\"]\n[fit]\nuncertainty = \"exact\"\n",
+        )
+        .unwrap_err();
+        assert!(e.to_string().starts_with("m.toml:5:15"), "{e}");
+        let e = parse("[batch]\ndatasets = [\"/\"]\ntasks = [\"predict\"]\n").unwrap_err();
+        assert!(e.to_string().contains("predict needs fit"), "{e}");
+    }
+}

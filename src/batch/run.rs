@@ -1,0 +1,283 @@
+//! Running a shard: every unit of the shard in order, each in its own folder. A unit already
+//! finished is skipped, an interrupted fit resumes from its starts file, and a unit that
+//! fails is recorded with its reason while the others go on.
+
+use super::manifest::{Manifest, TaskKind};
+use super::plan::{self, Shard, Unit};
+use super::progress::BatchProgress;
+use super::status::{State, UnitStatus};
+use super::{BatchError, BatchRecord};
+use crate::diagnose::DiagnoseOptions;
+use crate::estimate::Engine;
+use crate::task::diagnose::{diagnose_to, DiagnoseTaskError};
+use crate::task::fit::{fit_run_on, side_path, write_fit, FitCommandError};
+use crate::task::predict::{predict_to, PredictCommandError};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// How to run a shard.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// The batch folder.
+    pub out: PathBuf,
+    /// Which shard.
+    pub shard: Shard,
+    /// Worker threads (None: one per core); results do not depend on it.
+    pub threads: Option<usize>,
+    /// Run units that failed before again (by default a failed unit is finished).
+    pub retry_failed: bool,
+}
+
+/// What a shard did.
+#[derive(Debug, Clone, Default)]
+pub struct RunOutcome {
+    /// Units of the shard.
+    pub units: usize,
+    /// Units run now and done.
+    pub done: usize,
+    /// Units skipped because an earlier run finished them.
+    pub skipped: usize,
+    /// Units that failed (now or before), with their reason.
+    pub failed: Vec<(String, String)>,
+}
+
+/// Why a unit failed (recorded in its status file; the batch goes on).
+#[derive(Debug, thiserror::Error)]
+pub enum UnitError {
+    /// The fit failed.
+    #[error(transparent)]
+    Fit(#[from] FitCommandError),
+    /// The diagnosis failed.
+    #[error(transparent)]
+    Diagnose(#[from] DiagnoseTaskError),
+    /// The prediction failed.
+    #[error(transparent)]
+    Predict(#[from] PredictCommandError),
+    /// A prediction without a finished fit of its dataset.
+    #[error("no fit to predict from: the fit of this dataset is {0}")]
+    NoFit(String),
+    /// A bug: the unit panicked (the batch goes on).
+    #[error("internal error: {0}")]
+    Panic(String),
+}
+
+/// What became of a unit in this run.
+enum Ran {
+    /// Finished by an earlier run (its status then).
+    Skipped(UnitStatus),
+    /// Run now (its new status).
+    Now(UnitStatus),
+}
+
+/// Runs the units of `opts.shard` of `manifest` into `opts.out`: the shard's groups side by
+/// side on the engine's threads (rayon), a group's units in order (a predict after its fit),
+/// every fit's starts on the same threads by work stealing. Units write only into their own
+/// folders, and each unit's result is independent of the others, so the parallelism changes
+/// nothing but the time.
+pub fn run(manifest: &Manifest, opts: &RunOptions) -> Result<RunOutcome, BatchError> {
+    let record = BatchRecord::of(manifest);
+    record.claim(&opts.out)?;
+    let units = plan::select(&record.units, opts.shard);
+    let engine = Engine::with_threads(opts.threads)?;
+    let progress = BatchProgress::new(units.len(), opts.shard.to_string());
+    progress.line(&format!(
+        "{} of {} units on {} thread(s)",
+        units.len(),
+        record.units.len(),
+        engine.threads()
+    ));
+    let mut groups: Vec<Vec<Unit>> = Vec::new();
+    for u in units {
+        match groups.last_mut() {
+            Some(g) if g[0].group == u.group => g.push(u),
+            _ => groups.push(vec![u]),
+        }
+    }
+    let ran = engine.map(&groups, |group| {
+        group
+            .iter()
+            .map(|u| run_or_skip(&engine, manifest, u, opts, &progress).map(|r| (u.label(), r)))
+            .collect::<Result<Vec<_>, BatchError>>()
+    });
+    let mut outcome = RunOutcome::default();
+    for (label, r) in ran
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .flatten()
+    {
+        outcome.units += 1;
+        match r {
+            Ran::Skipped(s) => {
+                outcome.skipped += 1;
+                if s.status == State::Failed {
+                    outcome.failed.push((label, s.message));
+                }
+            }
+            Ran::Now(s) if s.status == State::Done => outcome.done += 1,
+            Ran::Now(s) => outcome.failed.push((label, s.message)),
+        }
+    }
+    progress.line("shard finished");
+    Ok(outcome)
+}
+
+/// Skips a finished unit (done, or failed unless `retry_failed`), runs any other, and says
+/// so on the progress lines.
+fn run_or_skip(
+    engine: &Engine,
+    manifest: &Manifest,
+    unit: &Unit,
+    opts: &RunOptions,
+    progress: &BatchProgress,
+) -> Result<Ran, BatchError> {
+    let before = UnitStatus::read(&unit.folder(&opts.out));
+    if let Some(s) = before
+        .filter(|s| s.status == State::Done || (s.status == State::Failed && !opts.retry_failed))
+    {
+        progress.unit_finished();
+        progress.line(&format!(
+            "{}: {} before, skipped",
+            unit.label(),
+            s.status.id()
+        ));
+        return Ok(Ran::Skipped(s));
+    }
+    let status = run_one(engine, manifest, unit, &opts.out, progress)?;
+    progress.unit_finished();
+    if status.status == State::Done {
+        progress.line(&format!(
+            "{}: done in {:.1} s ({})",
+            unit.label(),
+            status.wall_s,
+            status.message
+        ));
+    } else {
+        progress.line(&format!("{}: FAILED: {}", unit.label(), status.message));
+    }
+    Ok(Ran::Now(status))
+}
+
+/// Runs one unit between its `running` and its final status file; a panic is caught and
+/// recorded, so that one bad unit never takes the batch down.
+fn run_one(
+    engine: &Engine,
+    manifest: &Manifest,
+    unit: &Unit,
+    out: &Path,
+    progress: &BatchProgress,
+) -> Result<UnitStatus, BatchError> {
+    let folder = unit.folder(out);
+    let write = |s: &UnitStatus| {
+        s.write(&folder).map_err(|source| BatchError::Io {
+            path: folder.join("status.json"),
+            source,
+        })
+    };
+    let (dataset, task) = (unit.dataset.as_str(), unit.task.id());
+    write(&UnitStatus::new(
+        dataset,
+        task,
+        State::Running,
+        String::new(),
+        0.0,
+    ))?;
+    progress.line(&format!("{}: started", unit.label()));
+    let t0 = Instant::now();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        execute(engine, manifest, unit, out, progress)
+    }))
+    .unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_default();
+        Err(UnitError::Panic(what))
+    });
+    let wall_s = t0.elapsed().as_secs_f64();
+    let status = match result {
+        Ok(message) => UnitStatus::new(dataset, task, State::Done, message, wall_s),
+        Err(e) => UnitStatus::new(dataset, task, State::Failed, e.to_string(), wall_s),
+    };
+    write(&status)?;
+    Ok(status)
+}
+
+/// Does a unit's work through the same task function as its command; the result in one
+/// line for the status file and the summary.
+fn execute(
+    engine: &Engine,
+    manifest: &Manifest,
+    unit: &Unit,
+    out: &Path,
+    progress: &BatchProgress,
+) -> Result<String, UnitError> {
+    let folder = unit.folder(out);
+    let observer = progress.unit(&unit.label());
+    match unit.task {
+        TaskKind::Fit => {
+            let mut args = manifest.fit.clone();
+            args.dataset = unit.path.clone();
+            args.out = folder.join("fit.json");
+            // A fit interrupted before resumes from the starts it finished.
+            args.resume = true;
+            let starts = side_path(&args.out, "starts.jsonl");
+            let fitted = fit_run_on(engine, &args, Some(starts), &observer)?;
+            write_fit(&fitted, &args.out, args.seed, !args.no_plots)?;
+            Ok(match &fitted.outcome.goodness {
+                Some(g) => format!(
+                    "cost J {:.4}, noise ratio {:.3} (limit {:.3})",
+                    fitted.outcome.cost, g.noise_ratio, g.noise_ratio_limit
+                ),
+                None => format!("cost J {:.4}", fitted.outcome.cost),
+            })
+        }
+        TaskKind::Diagnose => {
+            let a = &manifest.diagnose;
+            let opts = if manifest.diagnose_quick {
+                DiagnoseOptions {
+                    starts: a.starts,
+                    ..DiagnoseOptions::quick(a.seed)
+                }
+            } else {
+                DiagnoseOptions::full(a.starts, a.seed)
+            };
+            let d = diagnose_to(engine, &unit.path, &opts, &observer, &folder)?;
+            let (before, after) = d.noise_ratios();
+            Ok(if d.selected.is_empty() && !d.mismatch {
+                format!("no mismatch (noise ratio {before:.3})")
+            } else {
+                let names: Vec<&str> = d.selected.iter().map(|s| s.effect.as_str()).collect();
+                format!(
+                    "mismatch: {} (noise ratio {before:.3} -> {after:.3})",
+                    if names.is_empty() {
+                        "nothing selected".to_string()
+                    } else {
+                        names.join(" + ")
+                    }
+                )
+            })
+        }
+        TaskKind::Predict => {
+            let fit_folder = out.join(&unit.dataset).join(TaskKind::Fit.id());
+            match UnitStatus::read(&fit_folder).map(|s| s.status) {
+                Some(State::Done) => {}
+                other => {
+                    return Err(UnitError::NoFit(
+                        other.unwrap_or(State::Pending).id().into(),
+                    ))
+                }
+            }
+            let mut args = manifest.predict.clone();
+            args.fit = fit_folder.join("fit.json");
+            args.out = folder;
+            let p = predict_to(&args)?;
+            Ok(format!(
+                "{} pressure(s), {} file(s)",
+                p.prediction.pressures.len(),
+                p.written.len()
+            ))
+        }
+    }
+}
