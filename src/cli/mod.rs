@@ -87,14 +87,14 @@ pub enum Command {
     /// catalogue figures, correction factors and curves with 95% bands (SPEC section 7).
     #[command(allow_negative_numbers = true)]
     Predict(crate::cli::predict::PredictArgs),
+    /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
+    /// tables, an SBML document declaring the model's symbols, and the problem YAML.
+    ExportPetab(crate::cli::export::ExportPetabArgs),
     /// Run a manifest's fleet of datasets (fit, diagnose, predict) in resumable shards,
     /// here or on Slurm (SPEC section 7).
     Batch(crate::cli::batch::BatchArgs),
     /// Merge a batch folder into summary.csv, summary.md and fleet.svg (SPEC section 7).
     Merge(crate::cli::batch::MergeArgs),
-    /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
-    /// tables, an SBML document declaring the model's symbols, and the problem YAML.
-    ExportPetab(crate::cli::export::ExportPetabArgs),
 }
 
 /// A failure to report: message for stderr, exit status 1.
@@ -147,9 +147,9 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Control(args) => crate::cli::control::run(args),
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
         Command::Predict(args) => Ok(crate::cli::predict::run(&args)?),
+        Command::ExportPetab(args) => crate::cli::export::run(&args),
         Command::Batch(args) => crate::cli::batch::run(&args),
         Command::Merge(args) => crate::cli::batch::merge(&args),
-        Command::ExportPetab(args) => crate::cli::export::run(&args),
     }
 }
 

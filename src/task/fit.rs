@@ -356,7 +356,8 @@ pub fn fit_run_on(
 /// The files a fit left next to its fit file.
 #[derive(Debug, Clone, Default)]
 pub struct FitWritten {
-    /// The SVG plots (waterfall, one overlay per experiment); empty with `--no-plots`.
+    /// The SVG plots (waterfall, parameters across starts, profiles, one overlay per
+    /// experiment); empty with `--no-plots`.
     pub plots: Vec<PathBuf>,
     /// The report for people (`<out>.report.md`).
     pub report: PathBuf,
