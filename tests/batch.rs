@@ -368,3 +368,45 @@ fn a_bad_manifest_is_refused_where_it_is_wrong() {
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not a batch folder"));
 }
+
+/// A diagnose unit writes the command's files, its verdict goes into the status message, a
+/// row of `summary.csv` without fit columns, and the diagnoses table of `summary.md`.
+#[test]
+fn a_diagnose_unit_is_summarised() {
+    let dir = fleet(1, false, "\"diagnose\"");
+    let p = dir.path();
+    let manifest = read(&p.join("m.toml")) + "\n[diagnose]\nstarts = 1\neffort = \"quick\"\n";
+    std::fs::write(p.join("m.toml"), manifest).unwrap();
+    let o = vanefit(&["batch", "m.toml", "--out", "r"], p);
+    assert!(o.status.success(), "{}", text(&o));
+    for f in ["diagnosis.json", "report.md", "extended.json"] {
+        assert!(p.join("r/m1/diagnose").join(f).exists(), "{f}");
+    }
+    let status = status_of(&p.join("r"), "m1/diagnose");
+    assert_eq!(status["status"], "done");
+    let d: serde_json::Value =
+        serde_json::from_str(&read(&p.join("r/m1/diagnose/diagnosis.json"))).unwrap();
+    let mismatch = d["mismatch"].as_bool().unwrap();
+    let msg = status["message"].as_str().unwrap();
+    assert_eq!(msg.starts_with("mismatch"), mismatch, "{msg}");
+    let o = vanefit(&["merge", "r"], p);
+    assert!(o.status.success(), "{}", text(&o));
+    let csv = read(&p.join("r/summary.csv"));
+    assert_eq!(
+        csv,
+        format!("dataset,task,status,message,cost\nm1,diagnose,done,{msg}\n")
+            .replace(&format!(",{msg}\n"), &format!(",{},\n", csv_cell(msg)))
+    );
+    let md = read(&p.join("r/summary.md"));
+    let verdict = if mismatch { "yes" } else { "no" };
+    assert!(md.contains(&format!("| m1 | {verdict} |")), "{md}");
+}
+
+/// A CSV cell as the csv crate writes it (quoted when it holds a comma or a quote).
+fn csv_cell(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}

@@ -120,6 +120,7 @@ fn slurm(manifest: &Manifest, args: &BatchArgs) -> Result<(), Failure> {
         wait: args.wait,
     };
     let exe = std::env::current_exe().map_err(|e| Failure(format!("vanefit's own path: {e}")))?;
+    let submitted = std::time::SystemTime::now();
     let s = submit(&exe, &manifest.path, &out, &opts, &|what, id| {
         println!("submitted {what} job {id}");
         if what == "merge" {
@@ -142,7 +143,7 @@ fn slurm(manifest: &Manifest, args: &BatchArgs) -> Result<(), Failure> {
         s.array_job, s.merge_job, s.array_job, s.merge_job
     );
     match s.merge_ok {
-        Some(false) if out.join("summary.csv").exists() => Err(Failure(format!(
+        Some(false) if merged_since(&out, submitted) => Err(Failure(format!(
             "the merge job {} ran and found failed or unfinished units: see {}",
             s.merge_job,
             out.join("summary.md").display()
@@ -160,6 +161,13 @@ fn slurm(manifest: &Manifest, args: &BatchArgs) -> Result<(), Failure> {
         }
         None => Ok(()),
     }
+}
+
+/// Whether a merge wrote `summary.csv` after `since` (the merge job ran).
+fn merged_since(out: &std::path::Path, since: std::time::SystemTime) -> bool {
+    std::fs::metadata(out.join("summary.csv"))
+        .and_then(|m| m.modified())
+        .is_ok_and(|t| t >= since)
 }
 
 /// `vanefit merge`: the summary files; exit 1 when units failed or are unfinished.
