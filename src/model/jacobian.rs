@@ -49,15 +49,42 @@ pub type SlopedFlow = (f64, f64, f64);
 /// Slopes, like the flow, are taken at the p_m the solver returns; a choked first nozzle
 /// (∂_m ṁ_1 = 0) makes the flow independent of p_b, as it should.
 pub fn series_flow_with_slopes(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> SlopedFlow {
+    let (m, d_a, d_b, _) = series_flow_sensitivities(first, second, p_a, p_b);
+    (m, d_a, d_b)
+}
+
+/// As [`series_flow_with_slopes`], and the slope ∂ṁ/∂ln C_2 of the flow in the logarithm
+/// of the second nozzle's conductance, kg/s (how an outlet throttle that moves in time
+/// moves the flow).
+///
+/// ṁ_2 = C_2·ρ0·p_m·ψ(p_b/p_m) is proportional to C_2, so ∂ṁ_2/∂ln C_2 = ṁ; at fixed
+/// p_a, p_b the balance g(p_m) = 0 gives dp_m/dln C_2 = −ṁ/D, and
+/// ∂ṁ/∂ln C_2 = ∂_m ṁ_1 · dp_m/dln C_2 = −∂_m ṁ_1 · ṁ / D (≥ 0: a wider throttle passes more).
+pub fn series_flow_sensitivities(
+    first: &Nozzle,
+    second: &Nozzle,
+    p_a: f64,
+    p_b: f64,
+) -> (f64, f64, f64, f64) {
     let (m, p_m) = series_flow(first, second, p_a, p_b);
     let (_, d1_a, d1_m) = first.flow_with_slopes(p_a, p_m);
     let (_, d2_m, d2_b) = second.flow_with_slopes(p_m, p_b);
     let den = d2_m - d1_m;
     if den.is_nan() || den <= 0.0 {
         // Only with non-positive pressures, where both nozzles pass nothing.
-        return (m, 0.0, 0.0);
+        return (m, 0.0, 0.0, 0.0);
     }
-    (m, d1_a * d2_m / den, -d1_m * d2_b / den)
+    (m, d1_a * d2_m / den, -d1_m * d2_b / den, -d1_m * m / den)
+}
+
+/// How fast the boundary of a transient moves: the time derivatives of the inputs that
+/// [`Motor::time_slope`] needs.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BoundaryRate {
+    /// dp_port1/dt, Pa/s (a supply-pressure ramp).
+    pub p_port1_pa_s: f64,
+    /// d ln(C_port2)/dt, 1/s (an outlet throttle that opens or closes; 0 without one).
+    pub ln_c_port2_per_s: f64,
 }
 
 impl Load {
@@ -180,6 +207,43 @@ impl Motor {
             row.iter_mut().for_each(|v| *v *= s);
         }
         Some((self.derivatives_from(&b), g))
+    }
+
+    /// ∂(dx/dt)/∂t at state `x` under `bc` whose inputs move at `rate`: the model depends on
+    /// time only through its boundary, so
+    ///
+    /// ```text
+    /// ∂f_1/∂t = R·T0/V_1 · ∂ṁ_port1/∂p_port1 · dp_port1/dt
+    /// ∂f_2/∂t = −R·T0/V_2 · ∂ṁ_port2/∂ln C_port2 · d ln C_port2/dt
+    /// ∂f_e/∂t = ∂f_ω/∂t = 0
+    /// ```
+    ///
+    /// (units of dx/dt per second). A stiff integrator takes this instead of a forward
+    /// difference in time, which costs one more right-hand side per step (issue 10).
+    /// `None` under the same conditions as [`Motor::jacobian`] (effects or extra terms).
+    pub fn time_slope(&self, x: &State, bc: &Boundary, rate: &BoundaryRate) -> Option<State> {
+        if !self.effects.is_empty() || !self.extra.is_empty() {
+            return None;
+        }
+        let p = &self.params;
+        let mut f_t = [0.0; N_STATES];
+        if rate.p_port1_pa_s != 0.0 {
+            let (_, d_supply, _) = self.port_flow_with_slopes(
+                p.c_in1(),
+                bc.c_port1_m3_s_pa,
+                bc.p_port1_pa,
+                x[idx::P1],
+            );
+            f_t[idx::P1] = RT0 / p.vol1() * d_supply * rate.p_port1_pa_s;
+        }
+        if let (Some(c), true) = (bc.c_port2_m3_s_pa, rate.ln_c_port2_per_s != 0.0) {
+            let duct = self.sloped_nozzle(p.c_out2());
+            let throttle = self.sloped_nozzle(c);
+            let (_, _, _, d_ln_c) =
+                series_flow_sensitivities(&duct, &throttle, x[idx::P2], bc.p_port2_pa);
+            f_t[idx::P2] = -RT0 / p.vol2() * d_ln_c * rate.ln_c_port2_per_s;
+        }
+        Some(f_t)
     }
 
     /// A nozzle of conductance `c` with the motor's critical ratio (as the motor builds it).
@@ -457,6 +521,40 @@ mod tests {
                     (db - fd_b).abs() <= 1e-5 * scale,
                     "{c:e} {pa} {pb}: {db} vs {fd_b}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn time_slope_matches_central_differences_in_the_inputs() {
+        // f depends on t only through p_port1 and C_port2: move them at the given rates.
+        let rate = BoundaryRate {
+            p_port1_pa_s: 1.2e4,
+            ln_c_port2_per_s: -0.08,
+        };
+        let h = 1e-3;
+        for m in motors() {
+            for bc in boundaries() {
+                let at = |dt: f64| Boundary {
+                    p_port1_pa: bc.p_port1_pa + rate.p_port1_pa_s * dt,
+                    c_port2_m3_s_pa: bc
+                        .c_port2_m3_s_pa
+                        .map(|c| c * (rate.ln_c_port2_per_s * dt).exp()),
+                    ..bc
+                };
+                for x in STATES {
+                    let f_t = m.time_slope(&x, &bc, &rate).unwrap();
+                    let (up, down) = (m.derivatives(&x, &at(h)), m.derivatives(&x, &at(-h)));
+                    for i in 0..N_STATES {
+                        let fd = (up[i] - down[i]) / (2.0 * h);
+                        let scale = ROW_SCALE[i] * 1e-3;
+                        assert!(
+                            (f_t[i] - fd).abs() <= 1e-5 * fd.abs().max(scale),
+                            "x {x:?} bc {bc:?} row {i}: {} vs {fd}",
+                            f_t[i]
+                        );
+                    }
+                }
             }
         }
     }

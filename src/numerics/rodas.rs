@@ -19,7 +19,7 @@
 //! nothing. Coefficients: Hairer & Wanner's RODAS (γ = 1/4), as tabulated in the Fortran
 //! `rodas.f` and in OrdinaryDiffEq.jl's `Rodas4Tableau`; the tests below check the order.
 
-use super::ode::{Jacobian, Rhs, SolveError, State, StiffSolver, Tolerances, N_STATES};
+use super::ode::{Jacobian, Rhs, Slopes, SolveError, State, StiffSolver, Tolerances, N_STATES};
 
 /// γ, the diagonal of the method.
 const GAMMA: f64 = 0.25;
@@ -150,9 +150,8 @@ impl Step {
     }
 }
 
-/// The local linearisation at (t, y): f, J = ∂f/∂y and ∂f/∂t. J is the model's own where it
-/// has one, else forward differences (4 evaluations of f); ∂f/∂t is a forward difference
-/// (1 evaluation).
+/// The local linearisation at (t, y): f, J = ∂f/∂y and ∂f/∂t. J and ∂f/∂t are the model's
+/// own where it has them, else forward differences (4 evaluations of f for J, 1 for ∂f/∂t).
 #[derive(Debug, Clone, Copy)]
 pub struct Linearisation {
     /// f(t, y).
@@ -173,8 +172,8 @@ impl Linearisation {
             let fh = rhs(t + dt, y);
             std::array::from_fn(|i| (fh[i] - f[i]) / dt)
         };
-        if let Some((f, jac)) = jacobian(t, y) {
-            let f_t = time_slope(&f);
+        if let Some(Slopes { f, jac, f_t }) = jacobian(t, y) {
+            let f_t = f_t.unwrap_or_else(|| time_slope(&f));
             return Self { f, jac, f_t };
         }
         let f = rhs(t, y);
