@@ -23,7 +23,7 @@
 
 use crate::model::motor::{idx, Balance, Boundary, Load, Motor, State, N_STATES};
 use crate::model::nozzle::{series_flow, Nozzle};
-use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
+use crate::model::thermo::{displacement_flows, Cycle, DisplacementFlows};
 use crate::units::constants::{OMEGA_BLEND_RAD_S, RT0};
 use std::f64::consts::PI;
 
@@ -154,7 +154,9 @@ fn displacement_with_slopes(cycle: &Cycle, x: &State) -> (DisplacementFlows, Sta
 /// ∂T/∂ω = w'(ω)·(T_fwd − T_rev) with w' = ½(1 − tanh²(ω/ω_b))/ω_b.
 fn ideal_torque_with_slopes(cycle: &Cycle, x: &State) -> (f64, State) {
     let [p1, p2, pe, omega] = *x;
-    let w = forward_weight(omega);
+    // w = forward_weight(ω), written out so that tanh is taken once for w and w'.
+    let th = (omega / OMEGA_BLEND_RAD_S).tanh();
+    let w = 0.5 * (1.0 + th);
     let t_fwd = cycle.torque_one_way(p1, p2, pe);
     let t_rev = -cycle.torque_one_way(p2, p1, pe);
     let torque = w * t_fwd + (1.0 - w) * t_rev;
@@ -163,7 +165,6 @@ fn ideal_torque_with_slopes(cycle: &Cycle, x: &State) -> (f64, State) {
         cycle.torque_one_way(0.0, 1.0, 0.0),
         cycle.torque_one_way(0.0, 0.0, 1.0),
     );
-    let th = (omega / OMEGA_BLEND_RAD_S).tanh();
     let dw = 0.5 * (1.0 - th * th) / OMEGA_BLEND_RAD_S;
     let grad = [
         w * a - (1.0 - w) * b,
@@ -191,10 +192,32 @@ impl Motor {
     /// Rows: ∂f_i/∂x = R·T0/V_i · ∂(Σṁ_i)/∂x for the three volumes and
     /// ∂f_ω/∂x = ∂(T − T_f − T_load)/∂x / J.
     pub fn derivatives_and_jacobian(&self, x: &State, bc: &Boundary) -> Option<(State, Jacobian)> {
+        self.linearise(x, bc).map(|(f, j, _)| (f, j))
+    }
+
+    /// dx/dt, ∂(dx/dt)/∂x (as [`Motor::derivatives_and_jacobian`]) and ∂(dx/dt)/∂t (as
+    /// [`Motor::time_slope`]) together, sharing the port flows' slopes: what a stiff
+    /// integrator asks for at every step of a transient.
+    pub fn derivatives_jacobian_and_time_slope(
+        &self,
+        x: &State,
+        bc: &Boundary,
+        rate: &BoundaryRate,
+    ) -> Option<(State, Jacobian, State)> {
+        let (f, j, inputs) = self.linearise(x, bc)?;
+        Some((f, j, self.time_slope_from(&inputs, rate)))
+    }
+
+    /// dx/dt, ∂(dx/dt)/∂x and the port flows' slopes in the boundary's moving inputs
+    /// (∂ṁ_port1/∂p_port1, kg/(s·Pa); ∂ṁ_port2/∂ln C_port2, kg/s).
+    ///
+    /// Rows: ∂f_i/∂x = R·T0/V_i · ∂(Σṁ_i)/∂x for the three volumes and
+    /// ∂f_ω/∂x = ∂(T − T_f − T_load)/∂x / J.
+    fn linearise(&self, x: &State, bc: &Boundary) -> Option<(State, Jacobian, [f64; 2])> {
         if !self.effects.is_empty() || !self.extra.is_empty() {
             return None;
         }
-        let (mut b, mut g) = self.flows_with_slopes(x, bc);
+        let (mut b, mut g, inputs) = self.flows_with_slopes(x, bc);
         self.torques_with_slopes(x, bc, &mut b, &mut g);
         let p = &self.params;
         let scale = [
@@ -206,7 +229,7 @@ impl Motor {
         for (row, s) in g.iter_mut().zip(scale) {
             row.iter_mut().for_each(|v| *v *= s);
         }
-        Some((self.derivatives_from(&b), g))
+        Some((self.derivatives_from(&b), g, inputs))
     }
 
     /// ∂(dx/dt)/∂t at state `x` under `bc` whose inputs move at `rate`: the model depends on
@@ -226,24 +249,21 @@ impl Motor {
             return None;
         }
         let p = &self.params;
+        let (_, d_supply, _, _) =
+            self.port_flow_with_slopes(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, x[idx::P1]);
+        let (_, _, _, d_ln_c) =
+            self.port_flow_with_slopes(p.c_out2(), bc.c_port2_m3_s_pa, x[idx::P2], bc.p_port2_pa);
+        Some(self.time_slope_from(&[d_supply, d_ln_c], rate))
+    }
+
+    /// ∂(dx/dt)/∂t from the port flows' slopes in the moving inputs (see
+    /// [`Motor::time_slope`]).
+    fn time_slope_from(&self, [d_supply, d_ln_c]: &[f64; 2], rate: &BoundaryRate) -> State {
+        let p = &self.params;
         let mut f_t = [0.0; N_STATES];
-        if rate.p_port1_pa_s != 0.0 {
-            let (_, d_supply, _) = self.port_flow_with_slopes(
-                p.c_in1(),
-                bc.c_port1_m3_s_pa,
-                bc.p_port1_pa,
-                x[idx::P1],
-            );
-            f_t[idx::P1] = RT0 / p.vol1() * d_supply * rate.p_port1_pa_s;
-        }
-        if let (Some(c), true) = (bc.c_port2_m3_s_pa, rate.ln_c_port2_per_s != 0.0) {
-            let duct = self.sloped_nozzle(p.c_out2());
-            let throttle = self.sloped_nozzle(c);
-            let (_, _, _, d_ln_c) =
-                series_flow_sensitivities(&duct, &throttle, x[idx::P2], bc.p_port2_pa);
-            f_t[idx::P2] = -RT0 / p.vol2() * d_ln_c * rate.ln_c_port2_per_s;
-        }
-        Some(f_t)
+        f_t[idx::P1] = RT0 / p.vol1() * d_supply * rate.p_port1_pa_s;
+        f_t[idx::P2] = -RT0 / p.vol2() * d_ln_c * rate.ln_c_port2_per_s;
+        f_t
     }
 
     /// A nozzle of conductance `c` with the motor's critical ratio (as the motor builds it).
@@ -252,25 +272,30 @@ impl Motor {
     }
 
     /// Flow through a duct with an optional throttle in series from `p_a` to `p_b`, with its
-    /// slopes; the same nozzles in the same order as the motor's port flow.
+    /// slopes (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b, ∂ṁ/∂ln C_throttle; the last 0 without a throttle); the
+    /// same nozzles in the same order as the motor's port flow.
     fn port_flow_with_slopes(
         &self,
         c_duct: f64,
         c_thr: Option<f64>,
         p_a: f64,
         p_b: f64,
-    ) -> SlopedFlow {
+    ) -> (f64, f64, f64, f64) {
         let duct = self.sloped_nozzle(c_duct);
         match c_thr {
-            None => duct.flow_with_slopes(p_a, p_b),
-            Some(c) => series_flow_with_slopes(&duct, &self.sloped_nozzle(c), p_a, p_b),
+            None => {
+                let (m, d_a, d_b) = duct.flow_with_slopes(p_a, p_b);
+                (m, d_a, d_b, 0.0)
+            }
+            Some(c) => series_flow_sensitivities(&duct, &self.sloped_nozzle(c), p_a, p_b),
         }
     }
 
     /// Every mass flow of [`Motor::balance`] (base model) and the gradients of the net mass
     /// flows dm_1, dm_2, dm_e (rows P1, P2, PE of the result; row OMEGA left zero), kg/s
-    /// per state unit.
-    fn flows_with_slopes(&self, x: &State, bc: &Boundary) -> (Balance, Jacobian) {
+    /// per state unit; and the port flows' slopes in the moving inputs
+    /// (∂ṁ_port1/∂p_port1, ∂ṁ_port2/∂ln C_port2).
+    fn flows_with_slopes(&self, x: &State, bc: &Boundary) -> (Balance, Jacobian, [f64; 2]) {
         use idx::{P1, P2, PE};
         let p = &self.params;
         let [p1, p2, pe, _] = *x;
@@ -317,7 +342,7 @@ impl Motor {
             dme_kg_s: leak_1e.0 + leak_2e.0 - exhaust.0 + displacement.into_e_kg_s,
             ..Balance::default()
         };
-        (b, g)
+        (b, g, [port1.1, port2.3])
     }
 
     /// Fills the torques of `b` (base model) and row OMEGA of `g` with the gradient of
@@ -325,13 +350,13 @@ impl Motor {
     /// dT_f/dω = T_c·(1 − tanh²(ω/ω_reg))/ω_reg + d.
     fn torques_with_slopes(&self, x: &State, bc: &Boundary, b: &mut Balance, g: &mut Jacobian) {
         let p = &self.params;
-        let [p1, p2, pe, omega] = *x;
+        let omega = x[idx::OMEGA];
         let (torque, mut grad) = ideal_torque_with_slopes(self.cycle(), x);
-        let p_in = if omega >= 0.0 { p1 } else { p2 };
         b.torque_ideal_nm = torque;
-        b.torque_friction_nm = self.friction_torque(omega, p_in, pe);
-        b.torque_load_nm = bc.load.torque(omega);
         let th = (omega / p.w_reg()).tanh();
+        // The base model's friction_torque(ω) = T_c·tanh(ω/ω_reg) + d·ω, with tanh taken once.
+        b.torque_friction_nm = p.t_coulomb() * th + p.visc() * omega;
+        b.torque_load_nm = bc.load.torque(omega);
         let d_friction = p.t_coulomb() * (1.0 - th * th) / p.w_reg() + p.visc();
         grad[idx::OMEGA] -= d_friction + bc.load.torque_slope(omega);
         g[idx::OMEGA] = grad;

@@ -103,9 +103,13 @@ impl Drive for Transient {
         let rhs = |t: f64, x: &State| motor.derivatives(x, &self.boundary_at(setting, t));
         let jacobian = |t: f64, x: &State| {
             let bc = self.boundary_at(setting, t);
-            let (f, jac) = motor.derivatives_and_jacobian(x, &bc)?;
-            let f_t = motor.time_slope(x, &bc, &self.rate_at(setting, t));
-            Some(Slopes { f, jac, f_t })
+            let rate = self.rate_at(setting, t);
+            let (f, jac, f_t) = motor.derivatives_jacobian_and_time_slope(x, &bc, &rate)?;
+            Some(Slopes {
+                f,
+                jac,
+                f_t: Some(f_t),
+            })
         };
         let states = solver
             .solve_with_jacobian(&rhs, &jacobian, t0, x0, times)
