@@ -202,7 +202,9 @@ mod tests {
         for time in [-0.5, 0.3, 1.7, 2.5, 3.9, 4.5] {
             let h = 1e-6;
             let fd = (s.at(time + h) - s.at(time - h)) / (2.0 * h);
-            assert!((s.slope_at(time) - fd).abs() < 1e-7, "t = {time}");
+            // At a knot (t = 2.5) the difference straddles two cubics: C¹, so it agrees to
+            // O(h·jump of the second derivative).
+            assert!((s.slope_at(time) - fd).abs() < 1e-5, "t = {time}");
         }
         assert_eq!(Schedule::constant(3.0).slope_at(1.0), 0.0);
     }

@@ -42,10 +42,10 @@ impl Transient {
         }
     }
 
-    /// How fast the inputs move at time t (zero supply slope where the supply is held at
-    /// its floor, as [`boundary`] holds it).
-    fn rate_at(&self, setting: &Setting<'_>, t: f64) -> BoundaryRate {
-        let held = self.p_supply.at(t) < setting.p_atm_pa * 0.5;
+    /// How fast the inputs move at time t, where the supply schedule is at `p_supply` (zero
+    /// supply slope where the supply is held at its floor, as [`boundary`] holds it).
+    fn rate_at(&self, setting: &Setting<'_>, t: f64, p_supply: f64) -> BoundaryRate {
+        let held = p_supply < setting.p_atm_pa * 0.5;
         BoundaryRate {
             p_port1_pa_s: if held { 0.0 } else { self.p_supply.slope_at(t) },
             ln_c_port2_per_s: self
@@ -102,8 +102,9 @@ impl Drive for Transient {
             .map_err(|e| setting.fail(format!("initial state: {e}")))?;
         let rhs = |t: f64, x: &State| motor.derivatives(x, &self.boundary_at(setting, t));
         let jacobian = |t: f64, x: &State| {
-            let bc = self.boundary_at(setting, t);
-            let rate = self.rate_at(setting, t);
+            let inputs = inputs_at(&self.p_supply, self.log10_c_port2.as_ref(), t);
+            let bc = boundary(setting, inputs);
+            let rate = self.rate_at(setting, t, inputs.0);
             let (f, jac, f_t) = motor.derivatives_jacobian_and_time_slope(x, &bc, &rate)?;
             Some(Slopes {
                 f,
