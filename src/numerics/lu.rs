@@ -21,6 +21,8 @@ impl Lu {
     /// Plain index loops over the fixed size, so that the compiler unrolls them (issue 10:
     /// with iterator adapters one factorisation took ~700 instructions).
     #[inline]
+    // Index loops on purpose: the pivot row and the row it updates are rows of one array.
+    #[allow(clippy::needless_range_loop)]
     pub fn new(mut a: [State; N_STATES]) -> Option<Self> {
         let mut perm = [0, 1, 2, 3];
         for col in 0..N_STATES {

@@ -114,12 +114,15 @@ impl Default for Rodas4 {
     /// rtol 3e-7 with 3 mPa on pressures and 1e-3 rad/s on speed, chosen by measurement
     /// (`cargo run --release --example solver_accuracy`, issue 10). The largest deviation
     /// of any simulated output of the shipped dataset's experiments from an rtol-1e-12
-    /// reference, in units of that channel's noise σ: 0.0017σ for the default motor and
-    /// 0.0015σ for one with 3× the cross leak and 2× the friction (diffsol's BDF at its
-    /// default rtol 3e-8: 0.0030σ and 0.0017σ), for 2.5–3× fewer instructions per
+    /// reference, in units of that channel's noise σ: 0.0018σ for the default motor and
+    /// 0.0020σ for one with 3× the cross leak and 2× the friction (diffsol's BDF at its
+    /// default rtol 3e-8: 0.0030σ and 0.0017σ), for about 3× fewer instructions per
     /// evaluation. The absolute tolerance on pressures is what matters near atmosphere,
     /// where the laminar range of the nozzles turns millipascals into measurable flow; the
-    /// worst deviations sit at the start of the pressure ramp for every solver.
+    /// worst deviations sit at the start of the pressure ramp for every solver, where the
+    /// nozzles cross their laminar thresholds one after another. There the figure depends
+    /// on where the steps happen to fall against those kinks more than on the tolerance:
+    /// neighbouring settings (rtol 2e-7 to 3e-7, 1.5–3 mPa) gave 0.0013σ to 0.0034σ.
     fn default() -> Self {
         Self {
             tol: Tolerances {
