@@ -494,11 +494,15 @@ fn draw_any<DB: DrawingBackend>(
 ) -> Result<PixelRect, PlotError> {
     let (x0, x1) = chart.data_range(0, chart.log_x, chart.x_range);
     let (y0, y1) = chart.data_range(1, chart.log_y, chart.y_range);
+    let spans = [
+        (!chart.log_x).then_some((x0, x1)),
+        (!chart.log_y).then_some((y0, y1)),
+    ];
     match (chart.log_x, chart.log_y) {
-        (false, false) => draw(area, chart, x0..x1, y0..y1),
-        (true, false) => draw(area, chart, log_axis(x0, x1), y0..y1),
-        (false, true) => draw(area, chart, x0..x1, log_axis(y0, y1)),
-        (true, true) => draw(area, chart, log_axis(x0, x1), log_axis(y0, y1)),
+        (false, false) => draw(area, chart, x0..x1, y0..y1, spans),
+        (true, false) => draw(area, chart, log_axis(x0, x1), y0..y1, spans),
+        (false, true) => draw(area, chart, x0..x1, log_axis(y0, y1), spans),
+        (true, true) => draw(area, chart, log_axis(x0, x1), log_axis(y0, y1), spans),
     }
 }
 
@@ -572,6 +576,32 @@ fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
     (major, minor)
 }
 
+/// A tick label on a linear axis spanning `lo..hi`: as many significant digits as tell
+/// neighbouring ticks apart (about a tenth of the span), so that a narrow span far from zero
+/// (a conductance known to 0.1 %) is not labelled with one number repeated.
+fn tick_in(v: f64, lo: f64, hi: f64) -> String {
+    // Ticks fall at most a twentieth of the span apart.
+    let step = (hi - lo).abs() / 20.0;
+    let m = lo.abs().max(hi.abs());
+    if !(step > 0.0 && m > 0.0 && step.is_finite() && m.is_finite()) || v == 0.0 {
+        return tick(v);
+    }
+    let step_exp = step.log10().floor() as i32;
+    if !(1e-3..1e5).contains(&m) {
+        // One precision for every tick of the axis, trailing zeros kept.
+        let prec = (m.log10().floor() as i32 - step_exp).clamp(1, 9) as usize;
+        format!("{v:.prec$e}")
+    } else {
+        let decimals = (-step_exp).clamp(0, 10) as usize;
+        let s = format!("{v:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    }
+}
+
 /// A tick label: short, fixed point in the usual range, scientific otherwise.
 fn tick(v: f64) -> String {
     let a = v.abs();
@@ -593,6 +623,7 @@ fn draw<DB, X, Y>(
     chart: &Chart,
     x: X,
     y: Y,
+    spans: [Option<(f64, f64)>; 2],
 ) -> Result<PixelRect, PlotError>
 where
     DB: DrawingBackend,
@@ -608,12 +639,24 @@ where
         .y_label_area_size(64)
         .build_cartesian_2d(x, y)
         .map_err(err)?;
-    let fmt = |v: &f64| tick(*v);
+    let label = |axis: usize| {
+        move |v: &f64| match spans[axis] {
+            Some((lo, hi)) => tick_in(*v, lo, hi),
+            None => tick(*v),
+        }
+    };
+    let (fx, fy) = (label(0), label(1));
+    // Long scientific labels on a linear x axis: fewer of them, so that they do not touch.
+    let scientific = |span: Option<(f64, f64)>| {
+        span.is_some_and(|(lo, hi)| !(1e-3..1e5).contains(&lo.abs().max(hi.abs())))
+    };
+    let x_labels = if scientific(spans[0]) { 6 } else { 10 };
     cc.configure_mesh()
+        .x_labels(x_labels)
         .x_desc(chart.x_label.as_str())
         .y_desc(chart.y_label.as_str())
-        .x_label_formatter(&fmt)
-        .y_label_formatter(&fmt)
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
         .axis_desc_style(("sans-serif", 15))
         .label_style(("sans-serif", 13))
         .light_line_style(RGBColor(238, 238, 238))
@@ -656,6 +699,23 @@ mod tests {
                 (x, x.sin())
             })
             .collect()
+    }
+
+    #[test]
+    fn linear_ticks_tell_neighbours_apart() {
+        // A conductance known to 0.1 %: ticks 1e-12 apart on 6.75e-9.
+        let (lo, hi) = (6.745e-9, 6.77e-9);
+        let labels: Vec<String> = (0..=5)
+            .map(|k| tick_in(lo + k as f64 * 5e-12, lo, hi))
+            .collect();
+        let mut unique = labels.clone();
+        unique.dedup();
+        assert_eq!(unique.len(), labels.len(), "{labels:?}");
+        assert_eq!(tick_in(6.75e-9, lo, hi), "6.750e-9");
+        // The usual range keeps short labels.
+        assert_eq!(tick_in(250.0, 0.0, 1000.0), "250");
+        assert_eq!(tick_in(0.25, 0.0, 1.0), "0.25");
+        assert_eq!(tick_in(0.0, -1.0, 1.0), "0");
     }
 
     #[test]
