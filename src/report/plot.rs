@@ -586,6 +586,10 @@ fn tick_in(v: f64, lo: f64, hi: f64) -> String {
     if !(step > 0.0 && m > 0.0 && step.is_finite() && m.is_finite()) || v == 0.0 {
         return tick(v);
     }
+    // A tick at zero computed as a difference of rounded numbers (−2.2e-16) is zero.
+    if v.abs() < step * 1e-6 {
+        return "0".into();
+    }
     let step_exp = step.log10().floor() as i32;
     if !(1e-3..1e5).contains(&m) {
         // One precision for every tick of the axis, trailing zeros kept.
@@ -716,6 +720,7 @@ mod tests {
         assert_eq!(tick_in(250.0, 0.0, 1000.0), "250");
         assert_eq!(tick_in(0.25, 0.0, 1.0), "0.25");
         assert_eq!(tick_in(0.0, -1.0, 1.0), "0");
+        assert_eq!(tick_in(-2.2e-16, -1.0, 1.0), "0");
     }
 
     #[test]
