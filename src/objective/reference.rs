@@ -25,9 +25,11 @@
 //!   infinite weight in the cost.
 //! * **Jumps.** A pressure ramp can hold the motor at standstill until it breaks away and
 //!   jumps to speed. One polynomial would smear that jump. With at least
-//!   [`MIN_POINTS_FOR_SPLIT`] points, a change-point search tries every split position
-//!   (on a grid of ≈100, then refined to single points) and fits both pieces with their own
-//!   CV-chosen degree. A split is accepted only when it is clearly better than one piece:
+//!   [`MIN_POINTS_FOR_SPLIT`] points, a change-point search tries split positions on a
+//!   grid of ≈100, then around the best a tenth of the grid step at a time down to single
+//!   points (so its time is linear in n), and fits both pieces with their own CV-chosen
+//!   degree; a segment longer than 4096 points is searched on every s-th point and the
+//!   split found is judged on all of them. A split is accepted only when it is clearly better than one piece:
 //!   PRESS must fall by at least the factor [`SPLIT_GAIN`] *and* by more than a BIC-like
 //!   penalty, n·ln(PRESS₁/PRESS₂) > (p₂ − p₁ + 1)·ln n. Splitting is repeated on the pieces
 //!   (binary segmentation) up to [`FitOptions::max_pieces`]. Points in the middle of the
