@@ -293,3 +293,43 @@ fn check_is_linear_in_the_rows() {
     let limit = if cfg!(debug_assertions) { 60 } else { 8 };
     assert!(took < Duration::from_secs(limit), "check took {took:?}");
 }
+
+#[test]
+fn duplicated_columns_and_decimal_commas_are_located_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = |name: &str, edit: &dyn Fn(&str) -> String| {
+        let ds = dir.path().join(name);
+        std::fs::create_dir(&ds).unwrap();
+        for f in ["rig.toml", "datasheet.csv", "ramp.csv", "throttle.csv"] {
+            let text = std::fs::read_to_string(Path::new(DATASET).join(f)).unwrap();
+            let text = if f == "ramp.csv" { edit(&text) } else { text };
+            std::fs::write(ds.join(f), text).unwrap();
+        }
+        ds
+    };
+    let twice = copy("twice", &|t| t.replacen("flow2_g_s", "flow1_g_s", 1));
+    let o = vanefit(&["check", twice.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("ramp.csv:1:4 (column 'flow1_g_s'): flow1 given twice"),
+        "{}",
+        stderr(&o)
+    );
+    let commas = copy("commas", &|t| {
+        let mut lines = t.lines();
+        let mut out = format!("{}\n", lines.next().unwrap());
+        for l in lines {
+            out.push_str(&l.replace('.', ","));
+            out.push('\n');
+        }
+        out
+    });
+    let o = vanefit(&["check", commas.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("ramp.csv:2: malformed row: 10 fields where the header has 5"),
+        "{e}"
+    );
+    assert!(e.contains("decimal comma"), "{e}");
+}
