@@ -333,3 +333,84 @@ fn duplicated_columns_and_decimal_commas_are_located_and_named() {
     );
     assert!(e.contains("decimal comma"), "{e}");
 }
+
+/// The shipped fit file with one parameter's value replaced.
+fn fit_with(dir: &Path, name: &str, value: f64) -> String {
+    let text = std::fs::read_to_string("fits/ar034-synthetic.json").unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    doc["parameters"][name]["value"] = serde_json::json!(value);
+    let path = dir.join(format!("{name}.json"));
+    std::fs::write(&path, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// Every CSV under `dir` free of NaN (a command's output is valid or not written).
+fn no_nan_in(dir: &Path) {
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let text = std::fs::read_to_string(e.path()).unwrap_or_default();
+        assert!(
+            !text.to_lowercase().contains("nan"),
+            "{}",
+            e.path().display()
+        );
+    }
+}
+
+#[test]
+fn numerical_faults_end_with_a_message_or_a_valid_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A motor that cannot turn (friction 100 N·m): simulate gives a valid standstill,
+    // predict says why it has no catalogue.
+    let stuck = fit_with(d, "t_coulomb", 100.0);
+    let out = d.join("sim-stuck");
+    let o = vanefit(&[
+        "simulate",
+        DATASET,
+        "--params",
+        &stuck,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    no_nan_in(&out);
+    let o = vanefit(&[
+        "predict",
+        &stuck,
+        "--out",
+        d.join("p-stuck").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the motor does not start"),
+        "{}",
+        stderr(&o)
+    );
+    no_nan_in(&d.join("p-stuck"));
+    // A nozzle of zero conductance: refused, naming the option.
+    let fit = "fits/ar034-synthetic.json";
+    let o = vanefit(&[
+        "predict",
+        fit,
+        "--inlet-nozzle",
+        "0",
+        "--out",
+        d.join("p0").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--inlet-nozzle 0"), "{}", stderr(&o));
+    // An inlet that all but stalls the motor: a message, no panic, no NaN written.
+    let choked = fit_with(d, "c_in1", 1e-15);
+    let out = d.join("sim-choked");
+    let o = vanefit(&[
+        "simulate",
+        DATASET,
+        "--params",
+        &choked,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    assert!(o.status.code() == Some(1) || o.status.success());
+    no_nan_in(&out);
+}
