@@ -70,10 +70,11 @@ impl OutputLock {
                 continue;
             }
             let me = std::process::id();
-            file.set_len(0).map_err(io)?;
-            file.seek(SeekFrom::Start(0)).map_err(io)?;
-            writeln!(file, "{me}").map_err(io)?;
-            file.sync_all().map_err(io)?;
+            if let Err(e) = write_pid(&mut file, me) {
+                // Held by us and useless (a full disk): not left behind.
+                let _ = std::fs::remove_file(path);
+                return Err(io(e));
+            }
             return Ok(OutputLock {
                 _file: file,
                 path: path.to_path_buf(),
@@ -119,6 +120,14 @@ fn try_lock(file: &File) -> std::io::Result<bool> {
 #[cfg(not(unix))]
 fn try_lock(_file: &File) -> std::io::Result<bool> {
     Ok(true)
+}
+
+/// Replaces the lock file's content by `pid`.
+fn write_pid(file: &mut File, pid: u32) -> std::io::Result<()> {
+    file.set_len(0)?;
+    file.seek(SeekFrom::Start(0))?;
+    writeln!(file, "{pid}")?;
+    file.sync_all()
 }
 
 /// The pid written in a lock file, if any.
