@@ -102,10 +102,12 @@ impl RunObserver for Progress {
             Progress::Bar(bar) => {
                 let mut bar = bar.lock().unwrap_or_else(|p| p.into_inner());
                 bar.finish_and_clear();
-                *bar = new_bar(steps as u64, &format!("{{pos}}/{{len}} {name}"));
-                if steps == 0 {
-                    bar.set_message(name.to_string());
-                }
+                let what = if steps > 0 {
+                    format!("{{pos}}/{{len}} {name}")
+                } else {
+                    name.to_string()
+                };
+                *bar = new_bar(steps as u64, &what);
             }
             Progress::Lines(l) => {
                 *l.phase.lock().unwrap_or_else(|p| p.into_inner()) = (name.to_string(), steps);
