@@ -99,3 +99,40 @@ fn fit_killed_anywhere_and_resumed_equals_an_uninterrupted_run() {
     assert_eq!(estimate(&out), estimate(&reference));
     assert!(!out.with_extension("lock").exists(), "lock released");
 }
+
+#[test]
+fn diagnose_killed_at_random_moments_leaves_whole_files_and_reruns_to_the_same_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_vanefit"))
+            .args(["diagnose", DATASET, "--starts", "2", "--out"])
+            .arg(out)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let reference = dir.path().join("ref");
+    let t0 = Instant::now();
+    assert!(run(&reference).wait().unwrap().success());
+    let full = t0.elapsed();
+    let out = dir.path().join("killed");
+    // A diagnosis does not resume: each kill must leave its files whole (or absent), and the
+    // lock of the killed run must not block the next.
+    for frac in [0.2, 0.55, 0.9, 0.97] {
+        let mut child = run(&out);
+        std::thread::sleep(full.mul_f64(frac));
+        child.kill().unwrap();
+        child.wait().unwrap();
+        no_half_written_results(&out);
+    }
+    assert!(run(&out).wait().unwrap().success());
+    let read = |d: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join("diagnosis.json")).unwrap()).unwrap()
+    };
+    let (a, b) = (read(&reference), read(&out));
+    for key in ["mismatch", "selected", "candidates", "locations"] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+    assert!(!out.join(".vanefit.lock").exists(), "lock released");
+}
