@@ -126,17 +126,26 @@ fn bad_options_name_the_option_and_exit_1() {
     let out = dir.path().join("x.json");
     let out = out.to_str().unwrap();
     for (extra, needle) in [
-        (vec!["--starts", "0"], "--starts"),
-        (vec!["--effects", "magic_friction"], "--effects"),
         (vec!["--estimate", "c_in1,c_nope"], "c_nope"),
         (vec!["--bounds", "c_in1=1e-8:1e-9"], "c_in1"),
         (vec!["--bounds", "visc=abc"], "--bounds"),
-        (vec!["--threads", "0"], "--threads"),
     ] {
         let mut args = vec!["fit", DATASET, "--out", out];
         args.extend(extra);
         let o = vanefit(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    }
+    // Issue 15: values clap can check alone are bad usage, status 2 as the README says.
+    for (extra, needle) in [
+        (vec!["--starts", "0"], "--starts"),
+        (vec!["--effects", "magic_friction"], "--effects"),
+        (vec!["--threads", "0"], "--threads"),
+    ] {
+        let mut args = vec!["fit", DATASET, "--out", out];
+        args.extend(extra);
+        let o = vanefit(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
         assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
     }
     assert_eq!(

@@ -4,6 +4,7 @@
 
 use crate::data::dataset::catalogue::FIGURES;
 use crate::data::dataset::{ExperimentData, Kind};
+use crate::io::say;
 use crate::units::{Quantity, Unit};
 
 /// A number for people: 5 significant digits.
@@ -25,7 +26,7 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
     }
     if let Some(p) = ex.p_supply_pa {
         let gauge = format!("{} bar(g)", num(Unit::BarG.from_si(p, p_atm_pa)));
-        println!(
+        say!(
             "    supply pressure {} = {} Pa absolute; reading tolerance {} % of each curve's full scale",
             match ex.p_supply_written.as_deref() {
                 Some(w) if w.trim() != gauge => format!("{w} = {gauge}"),
@@ -43,7 +44,7 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
         } else {
             ""
         };
-        println!(
+        say!(
             "    {:<28} {:>10} {:<10} = {:>12} {}{note}",
             what,
             num(f.written),
@@ -66,7 +67,7 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
         .iter()
         .map(|c| format!("{} = {}", c.name, c.quantity.si_unit().suffix()))
         .collect();
-    println!("    points (as written → SI): {}", header.join(" | "));
+    say!("    points (as written → SI): {}", header.join(" | "));
     for r in 0..rec.rows() {
         let cells: Vec<String> = cols
             .iter()
@@ -75,7 +76,7 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
                 false => format!("{:>9}   {:<11}", "-", ""),
             })
             .collect();
-        println!("      line {:>3}: {}", rec.lines[r], cells.join(" "));
+        say!("      line {:>3}: {}", rec.lines[r], cells.join(" "));
     }
     let mut units: Vec<Unit> = cols.iter().map(|c| c.unit).collect();
     units.extend(ex.figures.iter().map(|f| f.unit));
@@ -84,7 +85,7 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
     for u in units {
         if let Some(conditions) = u.reference_conditions() {
             if !shown.contains(&conditions) {
-                println!(
+                say!(
                     "    air consumption in {} counts air at {conditions}",
                     u.suffix()
                 );

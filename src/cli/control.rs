@@ -24,6 +24,9 @@ use crate::control::study::{
 };
 use crate::control::throttle::Port;
 use crate::control::{rpm, ControlError};
+use crate::io::lock::OutputLock;
+use crate::io::out::prepare_dir;
+use crate::io::say;
 use crate::report::control::bode::RPM_PER_BAR;
 use crate::report::control::{describe_load, describe_pi, describe_valve, Writer};
 use crate::report::explain;
@@ -72,7 +75,7 @@ pub struct CommonArgs {
     #[arg(long)]
     params: Option<PathBuf>,
     /// Effects to switch on (comma-separated ids), overriding the fit file's.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::task::effects_arg)]
     effects: Option<String>,
     /// Output folder (created); default `./control-<study>`.
     #[arg(long)]
@@ -294,16 +297,19 @@ impl CommonArgs {
     }
 
     /// The checked motor and load, and the output folder (created; default
-    /// `./control-<study>`).
-    fn setup(&self, study: &str, default_brake: f64) -> Result<(Plant, PathBuf), Failure> {
+    /// `./control-<study>`), checked writable and locked for this run before any work.
+    fn setup(
+        &self,
+        study: &str,
+        default_brake: f64,
+    ) -> Result<(Plant, PathBuf, OutputLock), Failure> {
         let plant = self.options().check(default_brake)?;
         let out = self
             .out
             .clone()
             .unwrap_or_else(|| PathBuf::from(format!("control-{study}")));
-        std::fs::create_dir_all(&out)
-            .map_err(|e| Failure(format!("--out {}: cannot create: {e}", out.display())))?;
-        Ok((plant, out))
+        let lock = prepare_dir(&out).map_err(|e| Failure(format!("--out {e}")))?;
+        Ok((plant, out, lock))
     }
 }
 
@@ -348,7 +354,7 @@ fn write_report<R>(
     r: &R,
     write: fn(&mut Writer, &R) -> Result<(), crate::report::control::ControlReportError>,
 ) -> Result<(), Failure> {
-    let mut print = |p: &Path| println!("wrote {}", p.display());
+    let mut print = |p: &Path| say!("wrote {}", p.display());
     write(&mut Writer::new(out, &mut print), r)?;
     Ok(())
 }
@@ -367,7 +373,7 @@ fn describe_loop(lp: &Loop) -> String {
 // The studies: check, compute, write, print
 
 fn run_throttle(a: &ThrottleArgs, port: Port) -> Result<(), Failure> {
-    let (plant, out) = a.common.setup(&format!("throttle-{}", port.name()), 1e-4)?;
+    let (plant, out, _lock) = a.common.setup(&format!("throttle-{}", port.name()), 1e-4)?;
     let settings = ThrottleOptions {
         port,
         p_supply_mpa: a.p_supply_mpa,
@@ -388,7 +394,7 @@ fn print_throttle(r: &ThrottleStudy) {
     let (Some(lo), Some(hi)) = (r.speed.first(), r.speed.last()) else {
         return;
     };
-    println!(
+    say!(
         "{} throttle at {} MPa, {}: speed {:.0} rpm at C = {} .. {:.0} rpm at C = {} \
         (unthrottled free speed without load {:.0} rpm)",
         r.settings.port().name(),
@@ -403,7 +409,7 @@ fn print_throttle(r: &ThrottleStudy) {
     if let Some(w) = r.speed.windows(2).find(|w| {
         w[0].speed_rad_s < 0.5 * hi.speed_rad_s && w[1].speed_rad_s >= 0.5 * hi.speed_rad_s
     }) {
-        println!(
+        say!(
             "  half of that speed at C ~ {}",
             explain::conductance((w[0].c_m3_s_pa * w[1].c_m3_s_pa).sqrt(), 3)
         );
@@ -411,7 +417,7 @@ fn print_throttle(r: &ThrottleStudy) {
 }
 
 fn run_bode(a: &BodeArgs) -> Result<(), Failure> {
-    let (plant, out) = a.common.setup("bode", 1e-4)?;
+    let (plant, out, _lock) = a.common.setup("bode", 1e-4)?;
     let settings = BodeOptions {
         p_mean_mpa: a.p_mean_mpa,
         f_min_hz: a.f_min_hz,
@@ -430,7 +436,7 @@ fn run_bode(a: &BodeArgs) -> Result<(), Failure> {
 fn print_bode(r: &BodeStudy) {
     let op = &r.lin.op;
     let lags = r.fit.lags;
-    println!(
+    say!(
         "operating point {:.3} MPa, {}: {:.0} rpm; static gain {:.1} rpm/bar; poles {}",
         op.bc.p_port1_pa / 1e6,
         describe_load(&op.bc.load),
@@ -442,7 +448,7 @@ fn print_bode(r: &BodeStudy) {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    println!(
+    say!(
         "two lags {:.1} rpm/bar / ((1 + {:.4} s)(1 + {:.5} s)): T1 = {:.4} s, T2 = {:.3} ms; fit \
         error {:.3} dB rms ({:.3} max), {:.2} deg rms ({:.2} max) over {}-{} Hz",
         lags.k * RPM_PER_BAR,
@@ -457,11 +463,11 @@ fn print_bode(r: &BodeStudy) {
         r.settings.f_min_hz(),
         r.settings.f_max_hz()
     );
-    println!("{}", describe_valve(r.settings.valve()));
+    say!("{}", describe_valve(r.settings.valve()));
 }
 
 fn run_step(a: &StepArgs) -> Result<(), Failure> {
-    let (plant, out) = a.common.setup("step", 1e-4)?;
+    let (plant, out, _lock) = a.common.setup("step", 1e-4)?;
     let lp = checked_loop(&plant, &a.valve, &a.pi, Some(&a.gains))?;
     let settings = StepOptions {
         from_rpm: a.from_rpm,
@@ -479,16 +485,16 @@ fn run_step(a: &StepArgs) -> Result<(), Failure> {
 
 fn print_step(r: &StepStudy) {
     let (s, m, tr) = (&r.settings, &r.metrics, &r.trace);
-    println!("{}", describe_loop(&r.lp));
+    say!("{}", describe_loop(&r.lp));
     if r.full_speed_rad_s < s.to_rad_s() {
-        println!(
+        say!(
             "note: --to-rpm {} is above the speed at full command ({:.0} rpm); the command \
             saturates",
             s.to_rpm(),
             rpm(r.full_speed_rad_s)
         );
     }
-    println!(
+    say!(
         "step {:.0} -> {:.0} rpm: rise time (10-90 %) {:.3} s, overshoot {:.1} %, settling (2 %) \
         {:.3} s, mean error over the last 10 % {:.2} rpm; command {:.2} .. {:.2} V",
         s.from_rpm(),
@@ -506,7 +512,7 @@ fn print_step(r: &StepStudy) {
 }
 
 fn run_disturbance(a: &DisturbanceArgs) -> Result<(), Failure> {
-    let (plant, out) = a.common.setup("disturbance", 1e-4)?;
+    let (plant, out, _lock) = a.common.setup("disturbance", 1e-4)?;
     let lp = checked_loop(&plant, &a.valve, &a.pi, Some(&a.gains))?;
     let settings = DisturbanceOptions {
         rpm: a.rpm,
@@ -528,8 +534,8 @@ fn run_disturbance(a: &DisturbanceArgs) -> Result<(), Failure> {
 
 fn print_disturbance(r: &DisturbanceStudy) {
     let (s, d) = (&r.settings, &r.metrics);
-    println!("{}", describe_loop(&r.lp));
-    println!(
+    say!("{}", describe_loop(&r.lp));
+    say!(
         "load step {} N*m at {:.0} rpm: largest drop {:.0} rpm, back within 1 % after {:.3} s, \
         mean error over the last 10 % {:.2} rpm; without control the speed settles {:.0} rpm \
         lower",
@@ -543,7 +549,7 @@ fn print_disturbance(r: &DisturbanceStudy) {
 }
 
 fn run_min_speed(a: &MinSpeedArgs) -> Result<(), Failure> {
-    let (plant, out) = a.common.setup("min-speed", 0.0)?;
+    let (plant, out, _lock) = a.common.setup("min-speed", 0.0)?;
     let lp = checked_loop(&plant, &a.valve, &a.pi, Some(&a.gains))?;
     let settings = MinSpeedOptions {
         p_max_mpa: a.p_max_mpa,
@@ -556,7 +562,7 @@ fn run_min_speed(a: &MinSpeedArgs) -> Result<(), Failure> {
     .map_err(ControlError::from)?;
     let r = min_speed::study(&plant, &lp, &settings)?;
     write_report(&out, &r, crate::report::control::min_speed::write)?;
-    println!("{}", describe_loop(&r.lp));
+    say!("{}", describe_loop(&r.lp));
     print_open_loop_start(&r);
     print_controlled_min(&r);
     Ok(())
@@ -567,7 +573,7 @@ fn print_open_loop_start(r: &MinSpeedStudy) {
     let open = &r.open;
     let p_max_mpa = r.settings.p_max_mpa();
     match open.jump {
-        Some(j) if j.from_rad_s == 0.0 => println!(
+        Some(j) if j.from_rad_s == 0.0 => say!(
             "without control (pressure ramp to {} MPa): the motor breaks away at {:.4} MPa and \
             jumps to {:.0} rpm: lowest speed without control {:.0} rpm",
             p_max_mpa,
@@ -576,7 +582,7 @@ fn print_open_loop_start(r: &MinSpeedStudy) {
             rpm(open.w_min_rad_s)
         ),
         other => {
-            println!(
+            say!(
                 "without control (pressure ramp to {} MPa): the motor breaks away at {:.4} MPa \
                 and creeps from standstill (lowest speed analysed {:.0} rpm); no start-up jump \
                 (the paper's comes from static friction above Coulomb: effect \
@@ -586,7 +592,7 @@ fn print_open_loop_start(r: &MinSpeedStudy) {
                 rpm(open.w_min_rad_s)
             );
             if let Some(j) = other {
-                println!(
+                say!(
                     "  later jump at {:.4} MPa from {:.0} to {:.0} rpm",
                     j.p_pa / 1e6,
                     rpm(j.from_rad_s),
@@ -618,13 +624,13 @@ fn print_controlled_min(r: &MinSpeedStudy) {
                     )
                 },
             );
-            println!(
+            say!(
                 "with control: lowest set-point held {:.0} rpm{end} (paper: 2900 rpm without, \
                 365 rpm with control)",
                 rpm(h.setpoint_rad_s),
             )
         }
-        (None, _) => println!(
+        (None, _) => say!(
             "with control: no set-point below the start speed {:.0} rpm was held",
             rpm(r.start_rad_s)
         ),
@@ -632,7 +638,7 @@ fn print_controlled_min(r: &MinSpeedStudy) {
 }
 
 fn run_design(a: &DesignArgs) -> Result<(), Failure> {
-    let (plant, out) = a.common.setup("design", 1e-4)?;
+    let (plant, out, _lock) = a.common.setup("design", 1e-4)?;
     let lp = checked_loop(&plant, &a.valve, &a.pi, None)?;
     let settings = DesignOptions {
         pm_deg: a.pm_deg,
@@ -652,7 +658,7 @@ fn run_design(a: &DesignArgs) -> Result<(), Failure> {
 }
 
 fn print_design(r: &DesignStudy) {
-    println!(
+    say!(
         "operating point {:.3} MPa, {}: {:.0} rpm; {}",
         r.settings.p_mean_pa() / 1e6,
         describe_load(&r.lp.load),
@@ -666,7 +672,7 @@ fn print_design(r: &DesignStudy) {
 /// One controller of the design: gains, margins and the simulated step.
 fn print_design_run(name: &str, run: &DesignRun, step_rpm: f64) {
     let (pi, m, st) = (&run.pi, &run.margins, &run.metrics);
-    println!(
+    say!(
         "{name}: kp {:.4} V/({} rpm), ki {:.4} V/({} rpm*s) [G(s) = ({:.4} s + {:.4})/s]; \
         crossover {:.3} rad/s ({:.3} Hz), phase margin {:.1} deg, gain margin {:.1} dB; \
         simulated +{:.0} rpm step: overshoot {:.1} %, rise {:.3} s, settling {:.3} s, mean \

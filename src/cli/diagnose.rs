@@ -3,6 +3,7 @@
 use crate::cli::Failure;
 use crate::diagnose::{summary, DiagnoseObserver, DiagnoseOptions, Progress};
 use crate::estimate::Engine;
+use crate::io::say;
 use crate::task::diagnose::diagnose_to;
 pub use crate::task::diagnose::DiagnoseArgs;
 
@@ -21,11 +22,13 @@ pub fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
     if args.starts == 0 {
         return Err(Failure("--starts must be at least 1".into()));
     }
+    // Checked and locked before the diagnosis, which takes tens of seconds.
+    let _lock = crate::io::out::prepare_dir(&args.out)?;
     let opts = DiagnoseOptions::full(args.starts, args.seed);
     let engine = Engine::with_threads(opts.threads)?;
     let d = diagnose_to(&engine, &args.dataset, &opts, &StderrProgress, &args.out)?;
-    println!("{}", summary(&d));
-    println!(
+    say!("{}", summary(&d));
+    say!(
         "wrote {} and {} ({:.1} s on {} thread(s))",
         args.out.join("diagnosis.json").display(),
         args.out.join("report.md").display(),

@@ -4,6 +4,7 @@ use crate::cli::Failure;
 use crate::data::dataset::Dataset;
 use crate::data::fitfile::FitFile;
 use crate::export::petab;
+use crate::io::say;
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -45,6 +46,9 @@ pub fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
     if args.out.is_file() {
         return Err(ExportCommandError::OutIsFile(args.out.display().to_string()).into());
     }
+    // Checked now without writing (nothing is written when an input is bad), created and
+    // locked once the tables are made.
+    crate::io::out::check_dir(&args.out)?;
     let fit = FitFile::read(&args.fit)?;
     let dir = match &args.dataset {
         Some(d) => d.clone(),
@@ -52,8 +56,9 @@ pub fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
     };
     let ds = Dataset::load(&dir)?;
     let (tables, summary) = petab::tables(&ds, &fit, &args.fit)?;
+    let _lock = crate::io::out::prepare_dir(&args.out)?;
     let files = petab::write(&args.out, &tables)?;
-    println!(
+    say!(
         "PEtab problem of {} on {}: {} measurements, {} observables, {} conditions",
         args.fit.display(),
         dir.display(),
@@ -61,13 +66,13 @@ pub fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
         summary.observables,
         summary.conditions
     );
-    println!(
+    say!(
         "chi2 at the fit: {:.6} (rows {:.6} + nuisance priors {:.6})",
         summary.chi2_rows + summary.chi2_priors,
         summary.chi2_rows,
         summary.chi2_priors
     );
-    println!("wrote {}", args.out.join("problem.yaml").display());
+    say!("wrote {}", args.out.join("problem.yaml").display());
     debug_assert_eq!(files.len(), petab::FILES.len());
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! `vanefit fit` (SPEC §6): progress and summary on the terminal; the options and the fit
 //! itself are `task::fit`, shared with `batch`.
 
+use crate::io::say;
 pub use crate::task::fit::{
     fit_run, side_path, space_from_args, write_fit, FitArgs, FitCommandError, FitRun, FitWritten,
     Uncertainty,
@@ -12,46 +13,181 @@ use crate::estimate::multistart::{RunObserver, StartResult};
 use crate::report::explain;
 use crate::report::fit as report;
 use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
-/// A progress bar over starts with the best cost so far; drawn only on a terminal.
-struct Progress(ProgressBar);
+/// Progress of a fit: on a terminal a bar over the starts, then one over the profiles;
+/// without one (a log file, a pipe, a Slurm job) periodic lines on stderr, so that a log
+/// shows a live run and what phase it is in.
+enum Progress {
+    /// The indicatif bar of the current phase.
+    Bar(Mutex<ProgressBar>),
+    /// Lines at most every [`LINE_EVERY`], and at each phase's start and end.
+    Lines(Lines),
+}
 
-impl RunObserver for Progress {
-    fn started(&self, total: usize, already_done: usize) {
-        self.0.set_length(total as u64);
-        self.0.set_position(already_done as u64);
+/// How often a log line is written at most while starts or profiles finish.
+const LINE_EVERY: Duration = Duration::from_secs(10);
+
+/// State of the log lines.
+struct Lines {
+    t0: Instant,
+    last: Mutex<Instant>,
+    total: AtomicUsize,
+    done: AtomicUsize,
+    phase: Mutex<(String, usize)>,
+}
+
+impl Lines {
+    fn line(&self, text: &str) {
+        eprintln!("[{:7.1} s] fit: {text}", self.t0.elapsed().as_secs_f64());
     }
-    fn start_finished(&self, _r: &StartResult, best: f64) {
-        self.0.inc(1);
-        self.0.set_message(format!("best cost J {best:.4}"));
-    }
-    fn finished(&self) {
-        self.0.finish_and_clear();
+    /// Whether a periodic line is due (always for the last step).
+    fn due(&self, last_step: bool) -> bool {
+        let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
+        if last_step || last.elapsed() >= LINE_EVERY {
+            *last = Instant::now();
+            return true;
+        }
+        false
     }
 }
 
+impl RunObserver for Progress {
+    fn started(&self, total: usize, already_done: usize) {
+        match self {
+            Progress::Bar(bar) => {
+                let bar = bar.lock().unwrap_or_else(|p| p.into_inner());
+                bar.set_length(total as u64);
+                bar.set_position(already_done as u64);
+            }
+            Progress::Lines(l) => {
+                l.total.store(total, Ordering::Relaxed);
+                l.done.store(already_done, Ordering::Relaxed);
+                l.line(&format!(
+                    "starts {already_done}/{total}{}",
+                    if already_done > 0 { " (resumed)" } else { "" }
+                ));
+            }
+        }
+    }
+    fn start_finished(&self, _r: &StartResult, best: f64) {
+        match self {
+            Progress::Bar(bar) => {
+                let bar = bar.lock().unwrap_or_else(|p| p.into_inner());
+                bar.inc(1);
+                bar.set_message(format!("best cost J {best:.4}"));
+            }
+            Progress::Lines(l) => {
+                let done = l.done.fetch_add(1, Ordering::Relaxed) + 1;
+                let total = l.total.load(Ordering::Relaxed);
+                if l.due(done >= total) {
+                    l.line(&format!("starts {done}/{total}, best cost J {best:.4}"));
+                }
+            }
+        }
+    }
+    fn finished(&self) {
+        if let Progress::Bar(bar) = self {
+            bar.lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .finish_and_clear();
+        }
+    }
+    fn phase(&self, name: &str, steps: usize) {
+        match self {
+            Progress::Bar(bar) => {
+                let mut bar = bar.lock().unwrap_or_else(|p| p.into_inner());
+                bar.finish_and_clear();
+                let what = if steps > 0 {
+                    format!("{{pos}}/{{len}} {name}")
+                } else {
+                    name.to_string()
+                };
+                *bar = new_bar(steps as u64, &what);
+            }
+            Progress::Lines(l) => {
+                *l.phase.lock().unwrap_or_else(|p| p.into_inner()) = (name.to_string(), steps);
+                let of = if steps > 0 {
+                    format!(" (0/{steps})")
+                } else {
+                    String::new()
+                };
+                l.line(&format!("{name}{of}"));
+            }
+        }
+    }
+    fn phase_step(&self, done: usize) {
+        match self {
+            Progress::Bar(bar) => {
+                let bar = bar.lock().unwrap_or_else(|p| p.into_inner());
+                bar.set_position(done as u64);
+                if bar.length() == Some(done as u64) {
+                    bar.finish_and_clear();
+                }
+            }
+            Progress::Lines(l) => {
+                let (name, steps) = l.phase.lock().unwrap_or_else(|p| p.into_inner()).clone();
+                if l.due(done >= steps) {
+                    l.line(&format!("{name} {done}/{steps}"));
+                }
+            }
+        }
+    }
+}
+
+impl Progress {
+    /// Takes a bar still drawn off the terminal before the summary is printed.
+    fn clear(&self) {
+        if let Progress::Bar(bar) = self {
+            bar.lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .finish_and_clear();
+        }
+    }
+}
+
+/// A bar of `len` steps labelled by `what` (an indicatif template fragment).
+fn new_bar(len: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    if let Ok(style) =
+        ProgressStyle::with_template(&format!("{{elapsed_precise}} [{{bar:30}}] {what}  {{msg}}"))
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}
+
+/// The progress of a fit for where stderr goes.
 fn progress() -> Progress {
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} starts  {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    Progress(bar)
+    if std::io::stderr().is_terminal() {
+        Progress::Bar(Mutex::new(new_bar(0, "{pos}/{len} starts")))
+    } else {
+        Progress::Lines(Lines {
+            t0: Instant::now(),
+            last: Mutex::new(Instant::now()),
+            total: AtomicUsize::new(0),
+            done: AtomicUsize::new(0),
+            phase: Mutex::new((String::new(), 0)),
+        })
+    }
 }
 
 /// Runs `vanefit fit`: fit, fit file, summary, plots.
 pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
-    let fitted = fit_run(
-        args,
-        Some(side_path(&args.out, "starts.jsonl")),
-        &progress(),
-    )?;
+    // Before the search: an unwritable or busy output fails now, not after the starts.
+    let _lock = crate::io::out::prepare_file(&args.out)?;
+    let progress = progress();
+    let fitted = fit_run(args, Some(side_path(&args.out, "starts.jsonl")), &progress);
+    progress.clear();
+    let fitted = fitted?;
     let written = write_fit(&fitted, &args.out, args.seed, !args.no_plots)?;
     print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
     if !written.plots.is_empty() {
-        println!(
+        say!(
             "plots: {}",
             written
                 .plots
@@ -61,13 +197,13 @@ pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
                 .join(", ")
         );
     }
-    println!("report: {}", written.report.display());
+    say!("report: {}", written.report.display());
     Ok(())
 }
 
 fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) {
     let run = &out.run;
-    println!(
+    say!(
         "fit of {}: {} starts ({} converged), {} evaluations, {:.1} s on {} thread(s)",
         ds.name,
         run.results.len(),
@@ -77,10 +213,10 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
         run.threads
     );
     if !setup.space.effects.is_empty() {
-        println!("effects: {}", setup.space.effects.ids().join(", "));
+        say!("effects: {}", setup.space.effects.ids().join(", "));
     }
     for ex in ds.experiments.iter().filter(|e| e.kind == Kind::Catalogue) {
-        println!(
+        say!(
             "{}: catalogue points weigh with their reading tolerance ({:.0} % of each curve's full scale) as σ, not a noise estimate, and carry no sensor offsets",
             ex.file,
             100.0 * ex.tolerance.unwrap_or(0.0)
@@ -88,11 +224,11 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
     }
     print_goodness(out);
     for line in report::terminal_table(&report::parameter_rows(ds, setup, out)) {
-        println!("{line}");
+        say!("{line}");
     }
-    println!("fixed (not estimated):");
+    say!("fixed (not estimated):");
     for (s, v) in report::fixed_parameters(setup, out) {
-        println!(
+        say!(
             "  {:<10} {:<42} {}",
             s.name,
             explain::value(s.name, v, 5),
@@ -105,13 +241,13 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
         .take(5)
         .map(|c| format!("{:.4} (x{})", c.cost, c.members.len()))
         .collect();
-    println!("local minima (cost J x starts): {}", minima.join(", "));
-    println!("wrote {}", path.display());
+    say!("local minima (cost J x starts): {}", minima.join(", "));
+    say!("wrote {}", path.display());
 }
 
 /// What the estimate is, how well it fits, and cost against χ².
 fn print_goodness(out: &FitOutcome) {
-    println!(
+    say!(
         "estimate: the maximum-likelihood point of the recorded rows (chi2 {:.1} over {} points; each channel's σ from the data's noise, a catalogue's from its reading tolerance; recorded sensors' offsets within calibration tolerance profiled out)",
         out.chi2, out.n_points
     );
@@ -121,7 +257,7 @@ fn print_goodness(out: &FitOutcome) {
             .iter()
             .map(|(k, v)| format!("{k} {v:+.3e}"))
             .collect();
-        println!(
+        say!(
             "systematic errors at the estimate (SI): {}",
             list.join(", ")
         );
@@ -140,17 +276,20 @@ fn print_goodness(out: &FitOutcome) {
                 g.interval_scale
             )
         };
-        println!(
+        say!(
             "goodness of fit: chi2/dof {:.3} (dof {}), noise ratio {:.3} (limit {:.3}): {verdict}",
-            g.chi2_per_dof, g.dof, g.noise_ratio, g.noise_ratio_limit
+            g.chi2_per_dof,
+            g.dof,
+            g.noise_ratio,
+            g.noise_ratio_limit
         );
     }
-    println!(
+    say!(
         "cost J {:.4} at the estimate; the best start reached {:.4} (J weighs each channel by its reference polynomial's scatter, chi2 by the data's noise, so their optima differ a little)",
         out.cost, out.best_start_cost
     );
-    println!("  what these are: {}.", explain::NOISE_RATIO);
-    println!("  {}; {}.", explain::CHI2_PER_DOF, explain::CHI2_OFFSETS);
-    println!("  {}.", explain::COST_J);
-    println!("  {}.", explain::CONDUCTANCE_UNITS);
+    say!("  what these are: {}.", explain::NOISE_RATIO);
+    say!("  {}; {}.", explain::CHI2_PER_DOF, explain::CHI2_OFFSETS);
+    say!("  {}.", explain::COST_J);
+    say!("  {}.", explain::CONDUCTANCE_UNITS);
 }

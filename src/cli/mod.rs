@@ -12,6 +12,7 @@ pub mod predict;
 use crate::data::dataset::{Dataset, Kind};
 use crate::data::fitfile::FitFile;
 use crate::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
+use crate::io::say;
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
@@ -63,7 +64,7 @@ pub enum Command {
         #[arg(long)]
         params: Option<PathBuf>,
         /// Effects to switch on (comma-separated ids), overriding the fit file's.
-        #[arg(long)]
+        #[arg(long, value_parser = crate::task::effects_arg)]
         effects: Option<String>,
         /// Sensor noise as a multiple of a typical rig's (0 for none).
         #[arg(long, default_value_t = 1.0)]
@@ -167,7 +168,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
-    println!(
+    say!(
         "dataset {} ({}): motor {}, p_atm {:.0} Pa, {} experiment(s)",
         ds.name,
         if ds.synthetic {
@@ -180,7 +181,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
         ds.experiments.len()
     );
     for (ex, refs) in ds.experiments.iter().zip(&references) {
-        println!(
+        say!(
             "  {} {} ({} rows)",
             ex.kind.id(),
             ex.file,
@@ -193,7 +194,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
                         (a.min(*v), b.max(*v))
                     });
             let to = |v: f64| c.unit.from_si(v, ds.p_atm_pa);
-            println!(
+            say!(
                 "    {:<20} {:>13} .. {:<13} [{}]",
                 c.name,
                 num(to(lo)),
@@ -236,7 +237,7 @@ fn print_reference(r: &crate::objective::reference::ChannelReference, p_atm_pa: 
     } else {
         format!("{} pieces", pieces.len())
     };
-    println!(
+    say!(
         "    reference {} vs {x_name}: {degree}, R² {:.5}, σ {sigma} {}{floor}, {} points, {}",
         r.column,
         fit.r_squared(),
@@ -246,7 +247,7 @@ fn print_reference(r: &crate::objective::reference::ChannelReference, p_atm_pa: 
     );
     if pieces.len() > 1 {
         for (k, p) in pieces.iter().enumerate() {
-            println!(
+            say!(
                 "      piece {}: degree {}, {} points, {}",
                 k + 1,
                 p.degree,
@@ -355,8 +356,7 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
     let ds = Dataset::load(dir)?;
     let fit = params.map(FitFile::read).transpose()?;
     let motor = motor_for(&ds, fit.as_ref())?;
-    std::fs::create_dir_all(out)
-        .map_err(|e| Failure(format!("{}: cannot create: {e}", out.display())))?;
+    let _lock = crate::io::out::prepare_dir(out)?;
     for table in simulated_tables(&ds, &motor)? {
         let header: Vec<&str> = table.columns.iter().map(|c| c.name.as_str()).collect();
         let cells: Vec<Vec<String>> = table
@@ -377,7 +377,7 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
         let path = out.join(&table.file);
         crate::io::write_atomic(&path, text.as_bytes())
             .map_err(|e| Failure(format!("{}: {e}", path.display())))?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(())
 }
@@ -398,6 +398,7 @@ fn synth_catalogue(
         )));
     }
     let (motor, truth) = synth_motor(out, params, effects)?;
+    let _lock = crate::io::out::prepare_dir(out)?;
     let plan = crate::data::synth_catalogue::CataloguePlan {
         pressures_bar_g: pressures.to_vec(),
         ..Default::default()
@@ -406,7 +407,7 @@ fn synth_catalogue(
     truth
         .write(&out.join("truth.json"))
         .map_err(|e| Failure(format!("{}: {e}", out.display())))?;
-    println!(
+    say!(
         "wrote catalogue {} ({} page(s), truth in truth.json)",
         out.display(),
         rows.len()
@@ -452,6 +453,7 @@ fn synth(
     }
     // Discovered terms of the fit file act in the synthetic motor as in `simulate`.
     let (motor, truth) = synth_motor(out, params, effects)?;
+    let _lock = crate::io::out::prepare_dir(out)?;
     let plan = SynthPlan::default();
     let experiments = synthesize(
         &motor,
@@ -472,7 +474,7 @@ fn synth(
     truth
         .write(&out.join("truth.json"))
         .map_err(|e| Failure(format!("{}: {e}", out.display())))?;
-    println!(
+    say!(
         "wrote dataset {} ({} experiments, truth in truth.json)",
         out.display(),
         experiments.len()

@@ -5,6 +5,7 @@
 //! Every bad input (fit file, pressure list, unit, nozzle) is refused with a message that
 //! names the file or option, exit status 1, before anything is written.
 
+use crate::io::say;
 pub use crate::task::predict::{predict_to, PredictArgs, PredictCommandError, Predicted};
 
 use crate::report::predict::{notes, tables_markdown};
@@ -13,19 +14,20 @@ use std::time::Instant;
 /// Runs `vanefit predict`.
 pub fn run(args: &PredictArgs) -> Result<(), PredictCommandError> {
     let t0 = Instant::now();
+    crate::io::out::check_dir(&args.out)?;
     let Predicted {
         prediction,
         display,
         source,
         written,
     } = predict_to(args)?;
-    println!("prediction from {source}\n");
-    println!("{}", tables_markdown(&prediction, &display));
+    say!("prediction from {source}\n");
+    say!("{}", tables_markdown(&prediction, &display));
     for n in notes(&prediction, &display) {
-        println!("- {n}");
+        say!("- {n}");
     }
     let written: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-    println!(
+    say!(
         "\nwrote {} ({:.2} s)",
         written.join(", "),
         t0.elapsed().as_secs_f64()

@@ -150,6 +150,31 @@ fn refuse_other_separators(path: &Path, text: &str) -> Result<(), DataError> {
     }
 }
 
+/// For a row with more fields than the header whose text has digits on both sides of a
+/// comma (`0,1003551`): what was found, since numbers with a decimal comma cannot be told
+/// from the columns of a comma-separated file. `None` for any other malformed row.
+fn decimal_commas(e: &csv::Error, text: &str, line: u64) -> Option<String> {
+    let csv::ErrorKind::UnequalLengths {
+        expected_len, len, ..
+    } = e.kind()
+    else {
+        return None;
+    };
+    let row = text
+        .lines()
+        .nth(usize::try_from(line).ok()?.checked_sub(1)?)?;
+    let b = row.as_bytes();
+    let digit_comma_digit = (1..b.len().saturating_sub(1))
+        .any(|i| b[i] == b',' && b[i - 1].is_ascii_digit() && b[i + 1].is_ascii_digit());
+    (*len > *expected_len && digit_comma_digit).then(|| {
+        format!(
+            "{len} fields where the header has {expected_len}: the numbers look written with a \
+             decimal comma, which a comma-separated file cannot hold; save the sheet with '.' \
+             as the decimal mark"
+        )
+    })
+}
+
 impl Recording {
     /// Reads and validates a CSV recording. `p_atm_pa` converts gauge pressures.
     pub fn read(path: &Path, p_atm_pa: f64) -> Result<Self, DataError> {
@@ -207,7 +232,8 @@ impl Recording {
             let record = record.map_err(|e| {
                 let next = lines.last().map_or(2, |l| l + 1);
                 let line = e.position().map_or(next, |p| p.line());
-                DataError::new(path, format!("malformed row: {e}")).at(line)
+                let what = decimal_commas(&e, text, line).unwrap_or_else(|| e.to_string());
+                DataError::new(path, format!("malformed row: {what}")).at(line)
             })?;
             let line = record.position().map(|p| p.line()).unwrap_or(0);
             if record.len() != columns.len() {
@@ -896,6 +922,16 @@ mod tests {
 
     fn parse(text: &str) -> Result<Recording, DataError> {
         Recording::parse(Path::new("x.csv"), text, 101_325.0)
+    }
+
+    #[test]
+    fn decimal_commas_with_comma_separators_are_named_at_their_line() {
+        let text = "t_s,p_port1_mpa\n0.0,0.1\n0,1,0,2\n";
+        let e = Recording::parse(Path::new("r.csv"), text, 101325.0).unwrap_err();
+        let m = e.to_string();
+        assert!(m.starts_with("r.csv:3"), "{m}");
+        assert!(m.contains("4 fields where the header has 2"), "{m}");
+        assert!(m.contains("decimal comma"), "{m}");
     }
 
     #[test]

@@ -234,6 +234,7 @@ pub fn fit(
         setup.resume,
     )?;
     let best = run.best().clone();
+    observer.phase("maximum likelihood", 0);
     let problem = Problem::new(&objective, &setup.space, false);
     let best_theta = finish(&problem, &best.theta, best.cost, &settings);
     let clusters = cluster(&run.results, &setup.space, 0.02);
@@ -279,7 +280,7 @@ pub fn fit(
         .map(|sim| target.nuisance_estimates(sim))
         .unwrap_or_default();
     let (intervals, covariance) = match &scored {
-        Some(g) => intervals(engine, &ml, &theta, chi2, g, &polished, setup),
+        Some(g) => intervals(engine, &ml, &theta, chi2, g, &polished, setup, observer),
         None => (Vec::new(), None),
     };
     let at = problem.evaluate(&theta);
@@ -345,6 +346,8 @@ fn finish(
 /// multi-start (`others`) fits as well with the parameter outside it; empty when not asked
 /// for. With them the curvature covariance of θ that sized the profiles' steps (kept for
 /// the fit file's joint uncertainty).
+// The observer is the eighth: it only watches, and bundling it would hide that.
+#[allow(clippy::too_many_arguments)]
 fn intervals(
     engine: &Engine,
     ml: &Problem<'_>,
@@ -353,6 +356,7 @@ fn intervals(
     goodness: &GoodnessOfFit,
     others: &[Polished],
     setup: &FitSetup,
+    observer: &dyn RunObserver,
 ) -> (Vec<Interval>, Option<DMatrix<f64>>) {
     if setup.uncertainty == UncertaintyMethod::None {
         return (Vec::new(), None);
@@ -361,15 +365,22 @@ fn intervals(
     let cov = uncertainty::curvature_covariance(ml, theta, 1e-3, goodness.interval_scale.powi(2));
     let mut out = match setup.uncertainty {
         UncertaintyMethod::Curvature => uncertainty::curvature_intervals(ml, theta, cov.as_ref()),
-        _ => uncertainty::profile_intervals(
-            engine,
-            ml,
-            theta,
-            chi2_min,
-            threshold,
-            cov.as_ref(),
-            300,
-        ),
+        _ => {
+            observer.phase("profiles", 2 * theta.len());
+            let sides = uncertainty::ProfileSides {
+                max_iters: 300,
+                on_side: &|done| observer.phase_step(done),
+            };
+            uncertainty::profile_intervals_observed(
+                engine,
+                ml,
+                theta,
+                chi2_min,
+                threshold,
+                cov.as_ref(),
+                &sides,
+            )
+        }
     };
     let rivals = competitors(others, chi2_min, threshold);
     mark_competitors(&mut out, &setup.space, &rivals);

@@ -67,6 +67,11 @@ pub trait RunObserver: Sync {
     fn start_finished(&self, _result: &StartResult, _best_cost: f64) {}
     /// The run is over.
     fn finished(&self) {}
+    /// A later phase of the fit begins after the starts (the profiles take as long as the
+    /// starts), with `steps` steps of work, so a watcher can tell a long run from a hung one.
+    fn phase(&self, _name: &str, _steps: usize) {}
+    /// `done` steps of the current phase are finished.
+    fn phase_step(&self, _done: usize) {}
 }
 
 /// Observes nothing.

@@ -321,6 +321,34 @@ pub fn profile_intervals(
     cov: Option<&DMatrix<f64>>,
     max_iters: u64,
 ) -> Vec<Interval> {
+    let sides = ProfileSides {
+        max_iters,
+        on_side: &|_| {},
+    };
+    profile_intervals_observed(engine, problem, theta_hat, chi2_min, threshold, cov, &sides)
+}
+
+/// How [`profile_intervals_observed`] runs: the iteration cap of each side and a callback
+/// told how many of the 2k sides are done (progress of a long fit).
+pub struct ProfileSides<'a> {
+    /// Iteration cap of each profile's inner fits.
+    pub max_iters: u64,
+    /// Called with the number of finished sides after each side.
+    pub on_side: &'a (dyn Fn(usize) + Sync),
+}
+
+/// [`profile_intervals`], reporting each finished side to `sides.on_side`.
+pub fn profile_intervals_observed(
+    engine: &Engine,
+    problem: &Problem<'_>,
+    theta_hat: &[f64],
+    chi2_min: f64,
+    threshold: f64,
+    cov: Option<&DMatrix<f64>>,
+    run: &ProfileSides<'_>,
+) -> Vec<Interval> {
+    let max_iters = run.max_iters;
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let k = theta_hat.len();
     // One task per side of each profile: sixteen tasks balance two threads better than
     // eight whole profiles, whose costs differ.
@@ -351,6 +379,7 @@ pub fn profile_intervals(
                 delta_chi2: delta,
             })
             .collect();
+        (run.on_side)(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
         (end.map(|t| d.value(t)), points)
     });
     (0..k)

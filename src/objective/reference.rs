@@ -25,9 +25,11 @@
 //!   infinite weight in the cost.
 //! * **Jumps.** A pressure ramp can hold the motor at standstill until it breaks away and
 //!   jumps to speed. One polynomial would smear that jump. With at least
-//!   [`MIN_POINTS_FOR_SPLIT`] points, a change-point search tries every split position
-//!   (on a grid of ≈100, then refined to single points) and fits both pieces with their own
-//!   CV-chosen degree. A split is accepted only when it is clearly better than one piece:
+//!   [`MIN_POINTS_FOR_SPLIT`] points, a change-point search tries split positions on a
+//!   grid of ≈100, then around the best a tenth of the grid step at a time down to single
+//!   points (so its time is linear in n), and fits both pieces with their own CV-chosen
+//!   degree; a segment longer than 4096 points is searched on every s-th point and the
+//!   split found is judged on all of them. A split is accepted only when it is clearly better than one piece:
 //!   PRESS must fall by at least the factor [`SPLIT_GAIN`] *and* by more than a BIC-like
 //!   penalty, n·ln(PRESS₁/PRESS₂) > (p₂ − p₁ + 1)·ln n. Splitting is repeated on the pieces
 //!   (binary segmentation) up to [`FitOptions::max_pieces`]. Points in the middle of the
@@ -537,6 +539,12 @@ fn pooled_sigma(pieces: &[Piece]) -> f64 {
     (rss / dof.max(1) as f64).sqrt()
 }
 
+/// Points at most in a split search: a longer segment is searched on every s-th point
+/// (its position found to within s points of the 1/`SEARCH_POINTS` of its length), then the
+/// split is judged on all points. Searching every point of a 100 MB recording took minutes;
+/// recordings of up to this many points (all shipped ones) are searched as before.
+const SEARCH_POINTS: usize = 4096;
+
 /// The best single split of a segment (index k: left [0, k), right [k, n)) and its gain
 /// PRESS₁/PRESS₂, if it passes the acceptance test of the module documentation.
 fn best_split(x: &[f64], y: &[f64], max_degree: usize, min_piece: usize) -> Option<(usize, f64)> {
@@ -545,37 +553,22 @@ fn best_split(x: &[f64], y: &[f64], max_degree: usize, min_piece: usize) -> Opti
         return None;
     }
     let whole = select(x, y, max_degree).ok()?;
-    let two = |k: usize| -> Option<(f64, usize)> {
-        let l = select(&x[..k], &y[..k], max_degree).ok()?;
-        let r = select(&x[k..], &y[k..], max_degree).ok()?;
-        Some((
-            l.best_press + r.best_press,
-            l.piece.degree + r.piece.degree + 2,
-        ))
+    let (k, press2, p2) = if n <= SEARCH_POINTS {
+        search_split(x, y, max_degree, min_piece)?
+    } else {
+        let stride = n.div_ceil(SEARCH_POINTS);
+        let tx: Vec<f64> = x.iter().step_by(stride).copied().collect();
+        let ty: Vec<f64> = y.iter().step_by(stride).copied().collect();
+        let (kt, _, _) = search_split(&tx, &ty, max_degree, min_piece.div_ceil(stride))?;
+        // Point kt of the thinned segment is point kt·stride of the whole; a split between
+        // equal abscissae moves to the next distinct one.
+        let mut k = kt * stride;
+        while k < n - min_piece && x[k] <= x[k - 1] {
+            k += 1;
+        }
+        let (press, p) = split_press(x, y, max_degree, k)?;
+        (k, press, p)
     };
-    let (lo, hi) = (min_piece, n - min_piece);
-    let step = ((hi - lo) / 100).max(1);
-    let mut best: Option<(usize, f64, usize)> = None;
-    let consider = |k: usize, best: &mut Option<(usize, f64, usize)>| {
-        // A split between equal abscissae would leave overlapping ranges.
-        if x[k] <= x[k - 1] {
-            return;
-        }
-        if let Some((press, p)) = two(k) {
-            if best.is_none_or(|(_, bp, _)| press < bp) {
-                *best = Some((k, press, p));
-            }
-        }
-    };
-    for k in (lo..=hi).step_by(step) {
-        consider(k, &mut best);
-    }
-    if let Some((k0, _, _)) = best {
-        for k in k0.saturating_sub(step - 1).max(lo)..=(k0 + step - 1).min(hi) {
-            consider(k, &mut best);
-        }
-    }
-    let (k, press2, p2) = best?;
     let press1 = whole.best_press;
     let p1 = whole.piece.degree + 1;
     if press2 <= 0.0 {
@@ -584,6 +577,62 @@ fn best_split(x: &[f64], y: &[f64], max_degree: usize, min_piece: usize) -> Opti
     let gain = press1 / press2;
     let penalty = (p2 as f64 - p1 as f64 + 1.0).max(1.0) * (n as f64).ln();
     (gain >= SPLIT_GAIN && n as f64 * gain.ln() > penalty).then_some((k, gain))
+}
+
+/// PRESS of the two pieces split at k, and their number of coefficients.
+fn split_press(x: &[f64], y: &[f64], max_degree: usize, k: usize) -> Option<(f64, usize)> {
+    let l = select(&x[..k], &y[..k], max_degree).ok()?;
+    let r = select(&x[k..], &y[k..], max_degree).ok()?;
+    Some((
+        l.best_press + r.best_press,
+        l.piece.degree + r.piece.degree + 2,
+    ))
+}
+
+/// The split of least PRESS with pieces of at least `min_piece` points: a scan of some
+/// hundred positions, then refined around the best a tenth of the step at a time: each
+/// level costs some twenty fits, so the search stays linear in n (refining at every index
+/// of a step cost n/50 fits of n points: quadratic). A step of 10 or less is refined at
+/// every index in one level, as before.
+fn search_split(
+    x: &[f64],
+    y: &[f64],
+    max_degree: usize,
+    min_piece: usize,
+) -> Option<(usize, f64, usize)> {
+    let n = x.len();
+    if n < 2 * min_piece || min_piece == 0 {
+        return None;
+    }
+    let (lo, hi) = (min_piece, n - min_piece);
+    let mut best: Option<(usize, f64, usize)> = None;
+    let consider = |k: usize, best: &mut Option<(usize, f64, usize)>| {
+        // A split between equal abscissae would leave overlapping ranges.
+        if x[k] <= x[k - 1] {
+            return;
+        }
+        if let Some((press, p)) = split_press(x, y, max_degree, k) {
+            if best.is_none_or(|(_, bp, _)| press < bp) {
+                *best = Some((k, press, p));
+            }
+        }
+    };
+    let mut step = ((hi - lo) / 100).max(1);
+    for k in (lo..=hi).step_by(step) {
+        consider(k, &mut best);
+    }
+    while step > 1 {
+        let Some((k0, _, _)) = best else { break };
+        let fine = (step / 10).max(1);
+        let (from, to) = (k0.saturating_sub(step - 1).max(lo), (k0 + step - 1).min(hi));
+        let mut k = k0 - (k0 - from) / fine * fine;
+        while k <= to {
+            consider(k, &mut best);
+            k += fine;
+        }
+        step = fine;
+    }
+    best
 }
 
 /// A half-open range [start, end) of indices into the sorted points.

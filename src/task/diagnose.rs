@@ -14,7 +14,7 @@ pub struct DiagnoseArgs {
     /// Dataset folder (rig.toml and recordings).
     pub dataset: PathBuf,
     /// Start points of the baseline fit: the rig's nominal motor plus Latin-hypercube starts.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = crate::task::at_least_one)]
     pub starts: usize,
     /// Seed of the start designs; a seed gives the same result whatever the thread count.
     #[arg(long, default_value_t = 1)]

@@ -12,6 +12,7 @@ use crate::estimate::fit::{
 use crate::estimate::multistart::RunObserver;
 use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
+use crate::io::say;
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::spec;
@@ -76,6 +77,9 @@ pub enum FitCommandError {
     /// A plot could not be drawn.
     #[error("{0}")]
     Plot(#[from] PlotError),
+    /// The output cannot be written or is in use by another run (checked before the fit).
+    #[error("--out {0}")]
+    Output(#[from] crate::io::out::OutputError),
 }
 
 /// Options of `vanefit fit`.
@@ -84,16 +88,16 @@ pub struct FitArgs {
     /// Dataset folder (rig.toml and recordings).
     pub dataset: PathBuf,
     /// Number of start points (Latin hypercube).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, value_parser = crate::task::at_least_one)]
     pub starts: usize,
     /// Seed of the start design; a seed gives the same result whatever the thread count.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Worker threads (default: one per core).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::task::at_least_one)]
     pub threads: Option<usize>,
     /// Effects to switch on (comma-separated ids of SPEC §5); their parameters are estimated too.
-    #[arg(long, default_value = "")]
+    #[arg(long, default_value = "", value_parser = crate::task::effects_arg)]
     pub effects: String,
     /// Parameters to estimate (comma-separated; default: six conductances, t_coulomb, visc).
     #[arg(long)]
@@ -245,7 +249,7 @@ fn catalogue_estimates(
     let Some(pinning) = crate::estimate::subset::pinned_subset(data, &motor, &names) else {
         return Err(FitCommandError::NothingPinned(names.join(", "), limit));
     };
-    println!("catalogue only: what it pins down at the nominal motor (relative 1σ; pinned: ≤ {limit:.0} %)");
+    say!("catalogue only: what it pins down at the nominal motor (relative 1σ; pinned: ≤ {limit:.0} %)");
     for p in &pinning {
         let sd = if p.relative_sd.is_finite() {
             format!("{:.1} %", 100.0 * p.relative_sd)
@@ -262,7 +266,7 @@ fn catalogue_estimates(
             };
             format!("fixed at {value:.4e} (default scaled to the displacement){hint}")
         };
-        println!("  {:<10} {:>9}  {verdict}", p.name, sd);
+        say!("  {:<10} {:>9}  {verdict}", p.name, sd);
     }
     let chosen: Vec<&str> = pinning
         .iter()

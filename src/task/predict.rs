@@ -56,6 +56,9 @@ pub struct PredictArgs {
 /// Why `vanefit predict` failed (exit status 1).
 #[derive(Debug, thiserror::Error)]
 pub enum PredictCommandError {
+    /// `--out` cannot be a folder (a file, or a parent that is a file).
+    #[error("--out {0}")]
+    Output(#[from] crate::io::out::OutputError),
     /// The fit file cannot be read.
     #[error(transparent)]
     FitFile(#[from] FitFileError),

@@ -1,0 +1,10 @@
+//! Batch manifests: read or refused, never a panic.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+#[path = "../entries.rs"]
+mod entries;
+
+fuzz_target!(|data: &[u8]| {
+    entries::manifest(data);
+});

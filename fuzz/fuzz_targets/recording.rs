@@ -1,0 +1,11 @@
+//! CSV recordings, dense (rig recordings) and sparse (catalogue pages): read or refused,
+//! never a panic.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+#[path = "../entries.rs"]
+mod entries;
+
+fuzz_target!(|data: &[u8]| {
+    entries::recording(data);
+});
