@@ -62,6 +62,28 @@ fn a_closed_stdout_ends_quietly_after_every_file_is_written() {
     assert!(bode.join("bode.svg").is_file());
     let o = with_closed_stdout(&["check", DATASET]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // A batch and its merge too (a manifest beside the shipped dataset's folder).
+    let manifest = dir.path().join("fleet.toml");
+    let ds = std::fs::canonicalize(DATASET).unwrap();
+    std::fs::write(
+        &manifest,
+        format!(
+            "[batch]\ndatasets = [{:?}]\ntasks = [\"fit\"]\n[fit]\nstarts = 2\nuncertainty = \"none\"\n",
+            ds.display().to_string()
+        ),
+    )
+    .unwrap();
+    let fleet = dir.path().join("fleet");
+    let o = with_closed_stdout(&[
+        "batch",
+        manifest.to_str().unwrap(),
+        "--out",
+        fleet.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = with_closed_stdout(&["merge", fleet.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(fleet.join("summary.csv").is_file());
     assert!(leftovers(dir.path()).is_empty());
 }
 

@@ -4,6 +4,7 @@
 use crate::batch::slurm::{submit, SlurmOptions};
 use crate::batch::{self, Manifest, RunOptions, Shard};
 use crate::cli::Failure;
+use crate::io::say;
 use std::path::PathBuf;
 
 /// `vanefit batch` options.
@@ -82,7 +83,7 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         retry_failed: args.retry_failed,
     };
     let o = batch::run(&manifest, &opts)?;
-    println!(
+    say!(
         "batch shard {}: {} unit(s): {} done now, {} finished before (skipped), {} failed",
         opts.shard,
         o.units,
@@ -91,7 +92,7 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         o.failed.len()
     );
     for (unit, why) in &o.failed {
-        println!("  failed {unit}: {why}");
+        say!("  failed {unit}: {why}");
     }
     if !o.failed.is_empty() && !args.allow_failed_units {
         return Err(Failure(format!(
@@ -122,15 +123,15 @@ fn slurm(manifest: &Manifest, args: &BatchArgs) -> Result<(), Failure> {
     let exe = std::env::current_exe().map_err(|e| Failure(format!("vanefit's own path: {e}")))?;
     let submitted = std::time::SystemTime::now();
     let s = submit(&exe, &manifest.path, &out, &opts, &|what, id| {
-        println!("submitted {what} job {id}");
+        say!("submitted {what} job {id}");
         if what == "merge" {
-            println!(
+            say!(
                 "watch: squeue -j {id}; sacct -j {id}; logs in {}",
                 out.join("slurm").display()
             );
         }
     })?;
-    println!(
+    say!(
         "array {} ({} task(s), {}), merge {} after it ({})",
         s.array_job,
         opts.shards,
@@ -138,9 +139,12 @@ fn slurm(manifest: &Manifest, args: &BatchArgs) -> Result<(), Failure> {
         s.merge_job,
         s.merge_script.display()
     );
-    println!(
+    say!(
         "watch: squeue -j {},{}   sacct -j {},{}",
-        s.array_job, s.merge_job, s.array_job, s.merge_job
+        s.array_job,
+        s.merge_job,
+        s.array_job,
+        s.merge_job
     );
     match s.merge_ok {
         Some(false) if merged_since(&out, submitted) => Err(Failure(format!(
@@ -156,7 +160,7 @@ fn slurm(manifest: &Manifest, args: &BatchArgs) -> Result<(), Failure> {
             out.join("slurm").display()
         ))),
         Some(true) => {
-            println!("merged: {}", out.join("summary.csv").display());
+            say!("merged: {}", out.join("summary.csv").display());
             Ok(())
         }
         None => Ok(()),
@@ -174,9 +178,9 @@ fn merged_since(out: &std::path::Path, since: std::time::SystemTime) -> bool {
 pub fn merge(args: &MergeArgs) -> Result<(), Failure> {
     let o = batch::merge(&args.dir)?;
     for p in &o.written {
-        println!("wrote {}", p.display());
+        say!("wrote {}", p.display());
     }
-    println!(
+    say!(
         "{} unit(s): {} done, {} failed, {} unfinished",
         o.units,
         o.done,
@@ -184,10 +188,10 @@ pub fn merge(args: &MergeArgs) -> Result<(), Failure> {
         o.unfinished.len()
     );
     for (unit, why) in &o.failed {
-        println!("  failed {unit}: {why}");
+        say!("  failed {unit}: {why}");
     }
     for unit in &o.unfinished {
-        println!("  unfinished {unit}");
+        say!("  unfinished {unit}");
     }
     let bad = o.failed.len() + o.unfinished.len();
     if bad > 0 {
