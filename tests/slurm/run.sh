@@ -218,8 +218,11 @@ check "the requeued task resumed m6/fit from its starts file" \
 check "the requeued task skipped m2, finished before" grep -q "m2/predict: done before, skipped" "$OUT/slurm/shard-2.log"
 state7=$(unit_state m7/fit)
 n7=$(count_starts "$OUT/m7/fit/fit.starts.jsonl")
+# Interrupted means not done: Slurm signals the step's processes after scancel returns, so
+# on a fast machine the fit may have finished its ten starts (and be in its profiles) when
+# the kill lands; how many starts it kept is the scheduler's timing, not vanefit's doing.
 check "the cancelled unit m7/fit is left interrupted (status '$state7', $n7 of 10 starts kept)" \
-  test "$state7" = running -a "$n7" -ge 1 -a "$n7" -lt 10
+  test "$state7" = running -a "$n7" -ge 1
 merge_state() { scontrol show job "$MERGE" 2>/dev/null | grep -o 'JobState=[A-Z_]*' | cut -d= -f2; }
 for _ in $(seq 100); do
   [ "$(merge_state)" = PENDING ] || break
