@@ -2,21 +2,10 @@
 //! `simulate --params` reads back, a resumed run reproduces it, and bad options exit 1 with
 //! the option named (bad usage: 2).
 
+mod common;
+use common::{stderr, vanefit, DATASET};
+
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn vanefit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vanefit"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-const DATASET: &str = "measurements/ar034-synthetic";
 
 #[test]
 fn short_fit_exports_a_fit_that_simulate_reads_back_and_resume_reproduces() {

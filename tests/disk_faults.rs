@@ -3,21 +3,11 @@
 //! or lock file left and earlier results intact. The file systems are small tmpfs mounts,
 //! which need root: without it the test says loudly that it did not run.
 
+mod common;
+use common::{stderr, vanefit, DATASET};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const DATASET: &str = "measurements/ar034-synthetic";
-
-fn vanefit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vanefit"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use std::process::Command;
 
 /// A tmpfs mounted for the test, unmounted when dropped.
 struct Mount(PathBuf);

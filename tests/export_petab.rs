@@ -7,42 +7,30 @@
 //! from the tables and the simulated rows, and bad input is refused with exit status 1.
 //! (The PEtab library's own linter and χ² are run on the same export by the Python tests.)
 
+mod common;
+use common::{stderr, vanefit, vanefit_in, DATASET};
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use std::process::Command;
 use vanefit::data::dataset::Dataset;
 use vanefit::data::fitfile::FitFile;
 use vanefit::estimate::fit_likelihood::FitLikelihood;
 
-const DATASET: &str = "measurements/ar034-synthetic";
-
-fn vanefit(args: &[&str], cwd: Option<&Path>) -> std::process::Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_vanefit"));
-    c.args(args);
-    if let Some(d) = cwd {
-        c.current_dir(d);
-    }
-    c.output().unwrap()
-}
-
 /// A fit of the shipped dataset by the CLI with profile intervals (few starts: seconds).
 fn profile_fit(dir: &Path) -> std::path::PathBuf {
     let out = dir.join("fit.json");
-    let o = vanefit(
-        &[
-            "fit",
-            DATASET,
-            "--starts",
-            "6",
-            "--seed",
-            "2",
-            "--no-plots",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = vanefit(&[
+        "fit",
+        DATASET,
+        "--starts",
+        "6",
+        "--seed",
+        "2",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
     out
 }
 
@@ -83,18 +71,15 @@ fn the_tables_hold_the_fits_likelihood() {
     let dir = tempfile::tempdir().unwrap();
     let fit_path = profile_fit(dir.path());
     let out = dir.path().join("petab");
-    let o = vanefit(
-        &[
-            "export-petab",
-            fit_path.to_str().unwrap(),
-            "--dataset",
-            DATASET,
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = vanefit(&[
+        "export-petab",
+        fit_path.to_str().unwrap(),
+        "--dataset",
+        DATASET,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
     for f in [
         "parameters.tsv",
         "observables.tsv",
@@ -231,9 +216,9 @@ fn export_refuses_bad_input_with_exit_status_1() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // A missing fit file: named.
-    let o = vanefit(&["export-petab", "nope.json", "--out", "x"], Some(d));
+    let o = vanefit_in(&["export-petab", "nope.json", "--out", "x"], d);
     assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("nope.json"));
+    assert!(stderr(&o).contains("nope.json"));
     // A fit file of plain parameters (no statistics): says it was not written by a fit.
     std::fs::write(
         d.join("plain.json"),
@@ -241,7 +226,7 @@ fn export_refuses_bad_input_with_exit_status_1() {
     )
     .unwrap();
     let ds = std::fs::canonicalize(DATASET).unwrap();
-    let o = vanefit(
+    let o = vanefit_in(
         &[
             "export-petab",
             "plain.json",
@@ -250,16 +235,16 @@ fn export_refuses_bad_input_with_exit_status_1() {
             "--out",
             "y",
         ],
-        Some(d),
+        d,
     );
     assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("vanefit fit"));
+    assert!(stderr(&o).contains("vanefit fit"));
     assert!(!d.join("y").exists(), "nothing written on failure");
     // --out naming a file.
     std::fs::write(d.join("afile"), "x").unwrap();
-    let o = vanefit(&["export-petab", "plain.json", "--out", "afile"], Some(d));
+    let o = vanefit_in(&["export-petab", "plain.json", "--out", "afile"], d);
     assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--out afile"));
+    assert!(stderr(&o).contains("--out afile"));
 }
 
 #[test]
@@ -299,22 +284,19 @@ fn fit_file_profiles_round_trip_and_bad_ones_are_located() {
 fn a_fit_draws_its_profiles_and_its_parameters_across_starts() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("f.json");
-    let o = vanefit(
-        &[
-            "fit",
-            DATASET,
-            "--starts",
-            "3",
-            "--seed",
-            "4",
-            "--estimate",
-            "c_in1,c_ext,t_coulomb",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = vanefit(&[
+        "fit",
+        DATASET,
+        "--starts",
+        "3",
+        "--seed",
+        "4",
+        "--estimate",
+        "c_in1,c_ext,t_coulomb",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let profiles = doc["profiles"].as_object().unwrap();

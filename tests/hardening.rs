@@ -1,22 +1,12 @@
 //! Issue 15, hardened: a closed stdout, progress in logs, two runs on one output, outputs
 //! checked before work, exit codes of bad usage, and `check` of a long recording.
 
+mod common;
+use common::{stderr, vanefit, DATASET};
+
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-const DATASET: &str = "measurements/ar034-synthetic";
-
-fn vanefit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vanefit"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// Runs vanefit with its stdout closed before it writes anything (a reader like `head -0`).
 fn with_closed_stdout(args: &[&str]) -> Output {
