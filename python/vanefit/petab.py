@@ -43,12 +43,16 @@ def simulation_table(
     ``dataset``/``fit``: where the dataset and fit file are, if not where
     ``vanefit_export.json`` says (paths there are as given on the command line, relative to
     the folder it was run in)."""
+    return _simulation_table(_problem(problem_yaml), problem_yaml, dataset, fit)
+
+
+def _simulation_table(problem, problem_yaml: PathLike, dataset, fit):
+    """:func:`simulation_table` of an already loaded problem."""
     import sympy
     from petab.v1.math import sympify_petab
 
     from . import Likelihood, load_dataset
 
-    problem = _problem(problem_yaml)
     summary = _summary(problem_yaml)
     ds = load_dataset(dataset if dataset is not None else summary["dataset"])
     lik = Likelihood(ds, fit if fit is not None else summary["fit"])
@@ -93,7 +97,11 @@ def prior_chi2(problem_yaml: PathLike) -> float:
     """Σ((nominal − mean)/sd)² over the parameters with a normal ``objectivePrior`` (the
     nuisances): the priors' part of χ² at the nominal values, which
     ``petab.calculate_chi2`` (measurements only) does not count."""
-    p = _problem(problem_yaml).parameter_df
+    return _prior_chi2(_problem(problem_yaml).parameter_df)
+
+
+def _prior_chi2(p) -> float:
+    """:func:`prior_chi2` of a loaded parameter table."""
     total = 0.0
     if "objectivePriorType" not in p:
         return total
@@ -116,11 +124,11 @@ def chi2(
     from petab import v1 as petab
 
     problem = _problem(problem_yaml)
-    sim = simulation_table(problem_yaml, dataset, fit)
+    sim = _simulation_table(problem, problem_yaml, dataset, fit)
     rows = float(
         petab.calculate_chi2(
             problem.measurement_df, sim, problem.observable_df, problem.parameter_df
         )
     )
-    priors = prior_chi2(problem_yaml)
+    priors = _prior_chi2(problem.parameter_df)
     return {"rows": rows, "priors": priors, "total": rows + priors}

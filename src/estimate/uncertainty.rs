@@ -401,8 +401,9 @@ pub fn profile_intervals_observed(
         .collect()
 }
 
-/// The two sides' points and the estimate (Δχ² = 0) in increasing value. The map from θ to
-/// the SI value is increasing, so each side only needs ordering, not sorting by search.
+/// The two sides' points and the estimate (Δχ² = 0) in increasing value. A side lists its
+/// points in the order they were evaluated (the doubling search, its refinements, then the
+/// path's extra points), so the whole is sorted once here.
 fn profile_path(value: f64, below: &[ProfilePoint], above: &[ProfilePoint]) -> Vec<ProfilePoint> {
     let mut path: Vec<ProfilePoint> = below.to_vec();
     path.push(ProfilePoint {

@@ -143,7 +143,7 @@ pub fn tables(
     let mut measurements = String::from(
         "observableId\tsimulationConditionId\tmeasurement\ttime\tobservableParameters\tdatasetId\n",
     );
-    let mut conditions: Vec<(String, String, Option<f64>, Option<f64>)> = Vec::new();
+    let mut conditions: Vec<Condition> = Vec::new();
     let mut outputs: Vec<String> = Vec::new();
     for c in &b.channels {
         let exp = experiment(ds, c)?;
@@ -312,6 +312,23 @@ fn observable(
     }
 }
 
+/// One condition of the condition table: a transient recording (inputs empty: the
+/// recording drives it) or one steady-state row with its speed and supply pressure.
+struct Condition {
+    id: String,
+    name: String,
+    omega_rad_s: Option<f64>,
+    p_supply_pa: Option<f64>,
+}
+
+/// Adds a condition unless one with its id is there already (several channels of a
+/// recording share its conditions).
+fn add_condition(conditions: &mut Vec<Condition>, c: Condition) {
+    if !conditions.iter().any(|k| k.id == c.id) {
+        conditions.push(c);
+    }
+}
+
 /// The measurement rows of a channel (appended to `out`) and the conditions they need.
 /// A recording with time is one condition measured at its times; a steady-state recording
 /// (datasheet, catalogue) is one condition per row, at steady state (`time` = inf), set by
@@ -321,7 +338,7 @@ fn rows(
     exp: &ExperimentData,
     obs: &Observable,
     out: &mut String,
-    conditions: &mut Vec<(String, String, Option<f64>, Option<f64>)>,
+    conditions: &mut Vec<Condition>,
 ) -> Result<(), PetabError> {
     let stem = stem_id(&exp.file);
     // A datasheet or catalogue row is a steady state, even where the rig logged a time.
@@ -329,18 +346,20 @@ fn rows(
     let time = exp.recording.column(Quantity::Time).filter(|_| !steady);
     let speed = exp.recording.column(Quantity::Speed);
     let p1 = exp.recording.column(Quantity::PPort1);
+    if time.is_some() {
+        add_condition(
+            conditions,
+            Condition {
+                id: stem.clone(),
+                name: format!("{} as recorded", exp.file),
+                omega_rad_s: None,
+                p_supply_pa: None,
+            },
+        );
+    }
     for (i, (&row, value)) in c.rows.iter().zip(&c.data).enumerate() {
         let (condition, t) = match time {
-            Some(tc) => {
-                add_condition(
-                    conditions,
-                    &stem,
-                    &format!("{} as recorded", exp.file),
-                    None,
-                    None,
-                );
-                (stem.clone(), tc.si[row])
-            }
+            Some(tc) => (stem.clone(), tc.si[row]),
             None => {
                 let omega = speed
                     .map(|s| s.si[row])
@@ -354,8 +373,15 @@ fn rows(
                     .filter(|p| p.is_finite())
                     .or(exp.p_supply_pa);
                 let id = format!("{stem}_r{row:04}");
-                let name = format!("{} row {}", exp.file, row + 1);
-                add_condition(conditions, &id, &name, Some(omega), p);
+                add_condition(
+                    conditions,
+                    Condition {
+                        id: id.clone(),
+                        name: format!("{} row {}", exp.file, row + 1),
+                        omega_rad_s: Some(omega),
+                        p_supply_pa: p,
+                    },
+                );
                 (id, f64::INFINITY)
             }
         };
@@ -374,26 +400,15 @@ fn rows(
     Ok(())
 }
 
-fn add_condition(
-    conditions: &mut Vec<(String, String, Option<f64>, Option<f64>)>,
-    id: &str,
-    name: &str,
-    omega: Option<f64>,
-    p: Option<f64>,
-) {
-    if !conditions.iter().any(|c| c.0 == id) {
-        conditions.push((id.to_string(), name.to_string(), omega, p));
-    }
-}
-
 fn cell(v: Option<f64>) -> String {
     v.map_or_else(String::new, |v| v.to_string())
 }
 
-fn condition_table(conditions: &[(String, String, Option<f64>, Option<f64>)]) -> String {
+fn condition_table(conditions: &[Condition]) -> String {
     let mut s = String::from("conditionId\tconditionName\tomega_rad_s\tp_supply_pa\n");
-    for (id, name, omega, p) in conditions {
-        let _ = writeln!(s, "{id}\t{name}\t{}\t{}", cell(*omega), cell(*p));
+    for c in conditions {
+        let (omega, p) = (cell(c.omega_rad_s), cell(c.p_supply_pa));
+        let _ = writeln!(s, "{}\t{}\t{omega}\t{p}", c.id, c.name);
     }
     s
 }

@@ -8,7 +8,7 @@ use crate::estimate::fit::{most_sensitive_experiment, FitOutcome, FitSetup};
 use crate::estimate::space::ParamSpace;
 use crate::estimate::uncertainty::Interval;
 use crate::model::motor::Motor;
-use crate::model::params::{conductance_dm3_s_bar, spec, ParamSpec, PARAMS};
+use crate::model::params::{conductance_dm3_s_bar, spec, MotorParams, ParamSpec, PARAMS};
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
@@ -349,7 +349,7 @@ fn profile_panel(iv: &Interval, threshold: Option<f64>) -> Chart {
 pub fn parameters_across_starts(
     results: &[StartResult],
     space: &ParamSpace,
-    estimate: &[f64],
+    estimate: &MotorParams,
     path: &Path,
 ) -> Result<(), PlotError> {
     let mut order: Vec<&StartResult> = results.iter().collect();
@@ -378,9 +378,9 @@ pub fn parameters_across_starts(
             )
             .with(Series::points("end of start", points))
             .legend(Legend::Below);
-            if let Some(v) = estimate.get(j) {
+            if let Some(v) = estimate.get(&d.name) {
                 let n = order.len().max(1) as f64;
-                chart = chart.with(Series::line("estimate", vec![(1.0, *v), (n, *v)]));
+                chart = chart.with(Series::line("estimate", vec![(1.0, v), (n, v)]));
             }
             if positive {
                 chart = chart.log_y();

@@ -388,17 +388,10 @@ pub fn write_fit(
         report::waterfall(&run.outcome.run.results, &waterfall)?;
         written.plots.push(waterfall);
         let across = side_path(out, "parameters.svg");
-        let estimate: Vec<f64> = run
-            .outcome
-            .theta
-            .iter()
-            .zip(&run.setup.space.dims)
-            .map(|(t, d)| d.value(*t))
-            .collect();
         report::parameters_across_starts(
             &run.outcome.run.results,
             &run.setup.space,
-            &estimate,
+            &run.outcome.params,
             &across,
         )?;
         written.plots.push(across);
