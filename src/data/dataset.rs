@@ -9,6 +9,7 @@ use crate::sim::experiment::InputCheck;
 pub use crate::sim::recording::{Column, ExperimentData, Figure, Kind, MissingColumn, Recording};
 
 pub mod catalogue;
+mod plausible;
 use crate::units::constants::P_ATM_PA;
 use crate::units::{parse_column, ColumnNameError, Quantity};
 use serde::Deserialize;
@@ -472,6 +473,7 @@ impl Dataset {
         for (k, ex) in rig.experiment.iter().enumerate() {
             let data = experiment_data(dir, (&rig_path, &text), k, ex, p_atm_pa)?;
             check_experiment(&data)?;
+            plausible::check_recording(&data.recording, p_atm_pa)?;
             experiments.push(data);
         }
         Ok(Dataset {

@@ -126,7 +126,9 @@ base_params! {
     c_12: "m3/(s*Pa)" = 7.616275e-10, NonNegative, (1e-12, 1e-8), "leak, inlet side → outlet side";
     b_crit: "1" = 0.5, Interval(0.05, 0.95), (0.2, 0.6), "critical pressure ratio of every nozzle";
     z: "1" = 5.0, Integer(2, 16), (5.0, 5.0), "number of vanes";
-    v_disp: "m3" = 3.8e-6, Positive, (1e-7, 1e-3), "nominal displacement z·V_fill";
+    // 0.01–10 000 cm³ per revolution: beyond either end no vane motor exists, and the
+    // steady-state search fails (1 m³ has no steady state), so the gate refuses it first.
+    v_disp: "m3" = 3.8e-6, Interval(1e-8, 1e-2), (1e-7, 1e-3), "nominal displacement z·V_fill";
     eps: "1" = 1.071, Interval(1.0, 2.0), (1.0, 1.5), "expansion ratio V_exp/V_fill";
     v_dead: "m3" = 0.10e-6, NonNegative, (0.0, 1e-6), "dead volume per compartment";
     n_poly: "1" = 1.3, Interval(1.0, 1.4), (1.0, 1.4), "polytropic index of expansion and compression";
@@ -361,6 +363,8 @@ impl ParamSet {
     }
 }
 
+use crate::units::format::short;
+
 fn check_domain(spec: &ParamSpec, v: f64) -> Result<(), ParamError> {
     let fail = |message: String| {
         Err(ParamError {
@@ -374,9 +378,13 @@ fn check_domain(spec: &ParamSpec, v: f64) -> Result<(), ParamError> {
     match spec.domain {
         Positive if v <= 0.0 => fail(format!("must be > 0 {}, got {v:e}", spec.unit)),
         NonNegative if v < 0.0 => fail(format!("must be >= 0 {}, got {v:e}", spec.unit)),
-        Interval(lo, hi) if !(lo..=hi).contains(&v) => {
-            fail(format!("must lie in [{lo}, {hi}] {}, got {v}", spec.unit))
-        }
+        Interval(lo, hi) if !(lo..=hi).contains(&v) => fail(format!(
+            "must lie in [{}, {}] {}, got {}",
+            short(lo),
+            short(hi),
+            spec.unit,
+            short(v)
+        )),
         Integer(lo, hi) if v.fract() != 0.0 || v < f64::from(lo) || v > f64::from(hi) => {
             fail(format!("must be a whole number in [{lo}, {hi}], got {v}"))
         }

@@ -127,7 +127,13 @@ impl<'a> Sweep<'a> {
             .min_by(|a, b| (a.0 - omega).abs().total_cmp(&(b.0 - omega).abs()))
             .map(|(_, x)| *x);
         let (motor, bc) = (self.motor, &self.bc);
-        let cold = || steady::at_speed(motor, bc, omega, &steady::initial_guess(bc));
+        // From the usual guess (inlet at supply), else from every chamber at atmosphere: a
+        // motor starved by an inlet nozzle (C ≲ 1e-12 m³/(s·Pa)) sits a few pascals above
+        // atmosphere, which continuation from supply pressure does not reach in its budget.
+        let cold = || {
+            steady::at_speed(motor, bc, omega, &steady::initial_guess(bc))
+                .or_else(|_| steady::at_speed(motor, bc, omega, &[bc.p_atm_pa; 4]))
+        };
         let x = match near {
             Some(g) => steady::at_speed_from_neighbour(motor, bc, omega, &g).or_else(|_| cold()),
             None => cold(),
@@ -442,6 +448,29 @@ mod tests {
         assert!(e.to_string().contains("does not start"));
         let e = catalogue_row(&m, &at_6_3_bar_g(), 0.0).unwrap_err();
         assert_eq!(e, OperatingPointError::BadGrid(0.0));
+    }
+
+    #[test]
+    fn a_motor_starved_by_its_inlet_nozzle_does_not_start_instead_of_failing() {
+        // Issue 15: `predict --inlet-nozzle 1e-13` ended in "no steady state". Starved, the
+        // chambers sit at atmosphere and the stall torque is the friction at rest, −T_c.
+        let m = Motor::new(MotorParams::default(), Default::default());
+        for c in [1e-12, 1e-13, 1e-15] {
+            let mut cond = at_6_3_bar_g();
+            cond.c_inlet_m3_s_pa = Some(c);
+            match catalogue_row(&m, &cond, RPM) {
+                Err(OperatingPointError::DoesNotStart {
+                    stall_torque_nm, ..
+                }) => {
+                    let t_c = MotorParams::default().get("t_coulomb").unwrap();
+                    assert!(
+                        (stall_torque_nm + t_c).abs() < 1e-3 * t_c,
+                        "{c}: {stall_torque_nm}"
+                    );
+                }
+                other => panic!("{c}: {other:?}"),
+            }
+        }
     }
 
     #[test]

@@ -50,11 +50,23 @@ pub fn diagnose_to(
     observer: &dyn DiagnoseObserver,
     out: &Path,
 ) -> Result<Diagnosis, DiagnoseTaskError> {
+    let ds = Dataset::load(dataset)?;
+    diagnose_dataset_to(engine, &ds, opts, observer, out)
+}
+
+/// Diagnoses a loaded dataset on `engine` and writes the results into `out` (for callers
+/// that load the dataset first, so that bad data is refused before `out` is created).
+pub fn diagnose_dataset_to(
+    engine: &Engine,
+    ds: &Dataset,
+    opts: &DiagnoseOptions,
+    observer: &dyn DiagnoseObserver,
+    out: &Path,
+) -> Result<Diagnosis, DiagnoseTaskError> {
     if opts.starts == 0 {
         return Err(DiagnoseTaskError::NoStarts);
     }
-    let ds = Dataset::load(dataset)?;
-    let d = diagnose_observed(&ds, opts, engine, observer)?;
+    let d = diagnose_observed(ds, opts, engine, observer)?;
     crate::report::diagnose::write_all(&d, out)?;
     Ok(d)
 }

@@ -3,6 +3,7 @@
 //! back on export. Nothing inside the crate sees any unit but SI.
 
 pub mod constants;
+pub mod format;
 
 use crate::units::constants::RHO0_KG_M3;
 use std::f64::consts::PI;
