@@ -15,10 +15,22 @@ pub type State = [f64; N_STATES];
 /// Right-hand side dx/dt = f(t, x).
 pub type Rhs<'a> = dyn Fn(f64, &State) -> State + 'a;
 
-/// f(t, x) together with its Jacobian ∂f/∂x, row-major (`j[i][k]` = ∂f_i/∂x_k), when the
-/// model has it in closed form (sharing the work of both); `None` makes the solver call
-/// the right-hand side and use finite differences.
-pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<(State, [State; N_STATES])> + 'a;
+/// f(t, x) together with its Jacobian ∂f/∂x, row-major (`j[i][k]` = ∂f_i/∂x_k), and
+/// ∂f/∂t where the model has them in closed form (sharing the work of both); `None` makes
+/// the solver call the right-hand side and use finite differences.
+pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<Slopes> + 'a;
+
+/// What a model can say in closed form about its right-hand side at one (t, x).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slopes {
+    /// f(t, x).
+    pub f: State,
+    /// ∂f/∂x, row-major: `jac[i][k]` = ∂f_i/∂x_k.
+    pub jac: [State; N_STATES],
+    /// ∂f/∂t (`None`: the solver takes a forward difference in time, one more evaluation
+    /// of f).
+    pub f_t: Option<State>,
+}
 
 /// Integration tolerances: |error_i| ≤ atol_i + rtol·|x_i|.
 #[derive(Debug, Clone, Copy, PartialEq)]
