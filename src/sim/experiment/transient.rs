@@ -112,8 +112,9 @@ impl Drive for Transient {
                 f_t: Some(f_t),
             })
         };
+        let kinks = |t: f64, x: &State| motor.laminar_margins(x, &self.boundary_at(setting, t));
         let states = solver
-            .solve_with_jacobian(&rhs, &jacobian, t0, x0, times)
+            .solve_with_kinks(&rhs, &jacobian, &kinks, t0, x0, times)
             .map_err(|e| setting.fail(e.to_string()))?;
         let n = times.len();
         let mut out: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
