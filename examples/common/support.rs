@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use vanefit::data::dataset::Dataset;
 use vanefit::model::motor::Motor;
-use vanefit::numerics::ode::{Jacobian, Rhs, SolveError, State, StiffSolver};
+use vanefit::numerics::ode::{Jacobian, Kinks, Rhs, SolveError, State, StiffSolver};
 use vanefit::objective::cost::{CostModel, CostOptions, CostValue};
 
 /// Right-hand-side evaluations since the last [`reset`].
@@ -57,6 +57,19 @@ impl StiffSolver for Counting<'_> {
     ) -> Result<Vec<State>, SolveError> {
         self.0
             .solve_with_jacobian(&counted(rhs), jacobian, t0, x0, t_out)
+    }
+
+    fn solve_with_kinks(
+        &self,
+        rhs: &Rhs<'_>,
+        jacobian: &Jacobian<'_>,
+        kinks: &Kinks<'_>,
+        t0: f64,
+        x0: State,
+        t_out: &[f64],
+    ) -> Result<Vec<State>, SolveError> {
+        self.0
+            .solve_with_kinks(&counted(rhs), jacobian, kinks, t0, x0, t_out)
     }
 }
 

@@ -1,5 +1,5 @@
-//! Parameter uncertainty: 95% intervals by profile likelihood, with a curvature (Hessian)
-//! estimate as the faster fallback, and a check of identifiability.
+//! Parameter uncertainty: 95% intervals by profile likelihood, with a curvature
+//! (Gauss–Newton) estimate as the faster fallback, and a check of identifiability.
 //!
 //! Both use χ² = Σ (simulation − reference)²/σ² over the data points, which is −2·log L up
 //! to a constant when the reference is the least-squares polynomial of the data (the data's
@@ -14,12 +14,12 @@
 //! other local optimum the multi-start found fits as well (within the threshold) with the
 //! parameter outside the interval: a profile explores one valley only.
 
-use super::derivatives::hessian;
+use super::derivatives::{central_column, hessian};
 use super::engine::Engine;
 use super::least_squares::{levenberg_marquardt, polish_residuals, LmSettings};
 use super::objective::{Problem, Profiled};
 use super::optimize::{Layout, NelderMeadSettings, Restart, RestartedNelderMead};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 /// χ²₁ quantile at 95%.
@@ -147,19 +147,48 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
     }
 }
 
-/// Covariance of θ from the curvature of χ²: Σ = 2·s²·H⁻¹, H by central differences, s² the
-/// threshold's scale (1, or χ²/dof when the model misses). `None` when H is not positive
-/// definite (a flat or ill-posed direction).
+/// Covariance of θ from the curvature of χ²: Σ = 2·s²·H⁻¹ with s² the threshold's scale (1,
+/// or χ²/dof when the model misses). H is the Gauss–Newton curvature 2·JᵀJ of χ² = Σ r²,
+/// J = ∂r/∂θ by central differences of the residual vector (step `h`), so Σ = s²·(JᵀJ)⁻¹.
+/// The full second differences of χ² (the fallback, for an objective without residuals or
+/// a residual vector that cannot be computed at a step) divide the solver's jitter by h²
+/// and, at the estimate, by the tiny rise of χ² over one step: on twin data their
+/// correlations moved from run to run with rounding-level changes of the ODE solver, and one
+/// fit's H came out indefinite (issue 10); first differences of the residuals divide the
+/// jitter by h only, and JᵀJ is positive semi-definite by construction. The term the
+/// Gauss–Newton form drops, Σ r·∇²r, averages out where the residuals are the data's noise.
+/// `None` when the curvature is not positive definite (a flat or ill-posed direction).
 pub fn curvature_covariance(
     problem: &Problem<'_>,
     theta: &[f64],
     h: f64,
     scale2: f64,
 ) -> Option<DMatrix<f64>> {
+    if let Some(jtj) = gauss_newton_curvature(problem, theta, h) {
+        return Some(jtj.cholesky()?.inverse() * scale2);
+    }
     let chi2 = |t: &[f64]| problem.evaluate(t).chi2;
     let hess = hessian(&chi2, theta, chi2(theta), h);
     let chol = hess.cholesky()?;
     Some(chol.inverse() * (2.0 * scale2))
+}
+
+/// JᵀJ of the residual vector at θ, J by central differences of step `h`; `None` when the
+/// objective has no residuals or one of them cannot be computed.
+fn gauss_newton_curvature(problem: &Problem<'_>, theta: &[f64], h: f64) -> Option<DMatrix<f64>> {
+    let n = problem.residuals(theta)?.len();
+    let k = theta.len();
+    let mut jac = DMatrix::<f64>::zeros(n, k);
+    for j in 0..k {
+        let at = |d: f64| {
+            let mut t = theta.to_vec();
+            t[j] += d;
+            problem.residuals(&t).filter(|r| r.len() == n)
+        };
+        let column = central_column(&at(h)?, &at(-h)?, 2.0 * h);
+        jac.set_column(j, &DVector::from_vec(column));
+    }
+    Some(jac.tr_mul(&jac))
 }
 
 /// Intervals from the curvature: θ̂ ± 1.96·σ_θ, mapped back through the transforms

@@ -23,7 +23,7 @@
 
 use crate::model::motor::{idx, Balance, Boundary, Load, Motor, State, N_STATES};
 use crate::model::nozzle::{series_flow, Nozzle};
-use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
+use crate::model::thermo::{displacement_flows, Cycle, DisplacementFlows};
 use crate::units::constants::{OMEGA_BLEND_RAD_S, RT0};
 use std::f64::consts::PI;
 
@@ -49,15 +49,42 @@ pub type SlopedFlow = (f64, f64, f64);
 /// Slopes, like the flow, are taken at the p_m the solver returns; a choked first nozzle
 /// (∂_m ṁ_1 = 0) makes the flow independent of p_b, as it should.
 pub fn series_flow_with_slopes(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> SlopedFlow {
+    let (m, d_a, d_b, _) = series_flow_sensitivities(first, second, p_a, p_b);
+    (m, d_a, d_b)
+}
+
+/// As [`series_flow_with_slopes`], and the slope ∂ṁ/∂ln C_2 of the flow in the logarithm
+/// of the second nozzle's conductance, kg/s (how an outlet throttle that moves in time
+/// moves the flow).
+///
+/// ṁ_2 = C_2·ρ0·p_m·ψ(p_b/p_m) is proportional to C_2, so ∂ṁ_2/∂ln C_2 = ṁ; at fixed
+/// p_a, p_b the balance g(p_m) = 0 gives dp_m/dln C_2 = −ṁ/D, and
+/// ∂ṁ/∂ln C_2 = ∂_m ṁ_1 · dp_m/dln C_2 = −∂_m ṁ_1 · ṁ / D (≥ 0: a wider throttle passes more).
+pub fn series_flow_sensitivities(
+    first: &Nozzle,
+    second: &Nozzle,
+    p_a: f64,
+    p_b: f64,
+) -> (f64, f64, f64, f64) {
     let (m, p_m) = series_flow(first, second, p_a, p_b);
     let (_, d1_a, d1_m) = first.flow_with_slopes(p_a, p_m);
     let (_, d2_m, d2_b) = second.flow_with_slopes(p_m, p_b);
     let den = d2_m - d1_m;
     if den.is_nan() || den <= 0.0 {
         // Only with non-positive pressures, where both nozzles pass nothing.
-        return (m, 0.0, 0.0);
+        return (m, 0.0, 0.0, 0.0);
     }
-    (m, d1_a * d2_m / den, -d1_m * d2_b / den)
+    (m, d1_a * d2_m / den, -d1_m * d2_b / den, -d1_m * m / den)
+}
+
+/// How fast the boundary of a transient moves: the time derivatives of the inputs that
+/// [`Motor::time_slope`] needs.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BoundaryRate {
+    /// dp_port1/dt, Pa/s (a supply-pressure ramp).
+    pub p_port1_pa_s: f64,
+    /// d ln(C_port2)/dt, 1/s (an outlet throttle that opens or closes; 0 without one).
+    pub ln_c_port2_per_s: f64,
 }
 
 impl Load {
@@ -127,7 +154,9 @@ fn displacement_with_slopes(cycle: &Cycle, x: &State) -> (DisplacementFlows, Sta
 /// ∂T/∂ω = w'(ω)·(T_fwd − T_rev) with w' = ½(1 − tanh²(ω/ω_b))/ω_b.
 fn ideal_torque_with_slopes(cycle: &Cycle, x: &State) -> (f64, State) {
     let [p1, p2, pe, omega] = *x;
-    let w = forward_weight(omega);
+    // w = forward_weight(ω), written out so that tanh is taken once for w and w'.
+    let th = (omega / OMEGA_BLEND_RAD_S).tanh();
+    let w = 0.5 * (1.0 + th);
     let t_fwd = cycle.torque_one_way(p1, p2, pe);
     let t_rev = -cycle.torque_one_way(p2, p1, pe);
     let torque = w * t_fwd + (1.0 - w) * t_rev;
@@ -136,7 +165,6 @@ fn ideal_torque_with_slopes(cycle: &Cycle, x: &State) -> (f64, State) {
         cycle.torque_one_way(0.0, 1.0, 0.0),
         cycle.torque_one_way(0.0, 0.0, 1.0),
     );
-    let th = (omega / OMEGA_BLEND_RAD_S).tanh();
     let dw = 0.5 * (1.0 - th * th) / OMEGA_BLEND_RAD_S;
     let grad = [
         w * a - (1.0 - w) * b,
@@ -164,10 +192,32 @@ impl Motor {
     /// Rows: ∂f_i/∂x = R·T0/V_i · ∂(Σṁ_i)/∂x for the three volumes and
     /// ∂f_ω/∂x = ∂(T − T_f − T_load)/∂x / J.
     pub fn derivatives_and_jacobian(&self, x: &State, bc: &Boundary) -> Option<(State, Jacobian)> {
+        self.linearise(x, bc).map(|(f, j, _)| (f, j))
+    }
+
+    /// dx/dt, ∂(dx/dt)/∂x (as [`Motor::derivatives_and_jacobian`]) and ∂(dx/dt)/∂t (as
+    /// [`Motor::time_slope`]) together, sharing the port flows' slopes: what a stiff
+    /// integrator asks for at every step of a transient.
+    pub fn derivatives_jacobian_and_time_slope(
+        &self,
+        x: &State,
+        bc: &Boundary,
+        rate: &BoundaryRate,
+    ) -> Option<(State, Jacobian, State)> {
+        let (f, j, inputs) = self.linearise(x, bc)?;
+        Some((f, j, self.time_slope_from(&inputs, rate)))
+    }
+
+    /// dx/dt, ∂(dx/dt)/∂x and the port flows' slopes in the boundary's moving inputs
+    /// (∂ṁ_port1/∂p_port1, kg/(s·Pa); ∂ṁ_port2/∂ln C_port2, kg/s).
+    ///
+    /// Rows: ∂f_i/∂x = R·T0/V_i · ∂(Σṁ_i)/∂x for the three volumes and
+    /// ∂f_ω/∂x = ∂(T − T_f − T_load)/∂x / J.
+    fn linearise(&self, x: &State, bc: &Boundary) -> Option<(State, Jacobian, [f64; 2])> {
         if !self.effects.is_empty() || !self.extra.is_empty() {
             return None;
         }
-        let (mut b, mut g) = self.flows_with_slopes(x, bc);
+        let (mut b, mut g, inputs) = self.flows_with_slopes(x, bc);
         self.torques_with_slopes(x, bc, &mut b, &mut g);
         let p = &self.params;
         let scale = [
@@ -179,7 +229,41 @@ impl Motor {
         for (row, s) in g.iter_mut().zip(scale) {
             row.iter_mut().for_each(|v| *v *= s);
         }
-        Some((self.derivatives_from(&b), g))
+        Some((self.derivatives_from(&b), g, inputs))
+    }
+
+    /// ∂(dx/dt)/∂t at state `x` under `bc` whose inputs move at `rate`: the model depends on
+    /// time only through its boundary, so
+    ///
+    /// ```text
+    /// ∂f_1/∂t = R·T0/V_1 · ∂ṁ_port1/∂p_port1 · dp_port1/dt
+    /// ∂f_2/∂t = −R·T0/V_2 · ∂ṁ_port2/∂ln C_port2 · d ln C_port2/dt
+    /// ∂f_e/∂t = ∂f_ω/∂t = 0
+    /// ```
+    ///
+    /// (units of dx/dt per second). A stiff integrator takes this instead of a forward
+    /// difference in time, which costs one more right-hand side per step (issue 10).
+    /// `None` under the same conditions as [`Motor::jacobian`] (effects or extra terms).
+    pub fn time_slope(&self, x: &State, bc: &Boundary, rate: &BoundaryRate) -> Option<State> {
+        if !self.effects.is_empty() || !self.extra.is_empty() {
+            return None;
+        }
+        let p = &self.params;
+        let (_, d_supply, _, _) =
+            self.port_flow_with_slopes(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, x[idx::P1]);
+        let (_, _, _, d_ln_c) =
+            self.port_flow_with_slopes(p.c_out2(), bc.c_port2_m3_s_pa, x[idx::P2], bc.p_port2_pa);
+        Some(self.time_slope_from(&[d_supply, d_ln_c], rate))
+    }
+
+    /// ∂(dx/dt)/∂t from the port flows' slopes in the moving inputs (see
+    /// [`Motor::time_slope`]).
+    fn time_slope_from(&self, [d_supply, d_ln_c]: &[f64; 2], rate: &BoundaryRate) -> State {
+        let p = &self.params;
+        let mut f_t = [0.0; N_STATES];
+        f_t[idx::P1] = RT0 / p.vol1() * d_supply * rate.p_port1_pa_s;
+        f_t[idx::P2] = -RT0 / p.vol2() * d_ln_c * rate.ln_c_port2_per_s;
+        f_t
     }
 
     /// A nozzle of conductance `c` with the motor's critical ratio (as the motor builds it).
@@ -188,25 +272,30 @@ impl Motor {
     }
 
     /// Flow through a duct with an optional throttle in series from `p_a` to `p_b`, with its
-    /// slopes; the same nozzles in the same order as the motor's port flow.
+    /// slopes (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b, ∂ṁ/∂ln C_throttle; the last 0 without a throttle); the
+    /// same nozzles in the same order as the motor's port flow.
     fn port_flow_with_slopes(
         &self,
         c_duct: f64,
         c_thr: Option<f64>,
         p_a: f64,
         p_b: f64,
-    ) -> SlopedFlow {
+    ) -> (f64, f64, f64, f64) {
         let duct = self.sloped_nozzle(c_duct);
         match c_thr {
-            None => duct.flow_with_slopes(p_a, p_b),
-            Some(c) => series_flow_with_slopes(&duct, &self.sloped_nozzle(c), p_a, p_b),
+            None => {
+                let (m, d_a, d_b) = duct.flow_with_slopes(p_a, p_b);
+                (m, d_a, d_b, 0.0)
+            }
+            Some(c) => series_flow_sensitivities(&duct, &self.sloped_nozzle(c), p_a, p_b),
         }
     }
 
     /// Every mass flow of [`Motor::balance`] (base model) and the gradients of the net mass
     /// flows dm_1, dm_2, dm_e (rows P1, P2, PE of the result; row OMEGA left zero), kg/s
-    /// per state unit.
-    fn flows_with_slopes(&self, x: &State, bc: &Boundary) -> (Balance, Jacobian) {
+    /// per state unit; and the port flows' slopes in the moving inputs
+    /// (∂ṁ_port1/∂p_port1, ∂ṁ_port2/∂ln C_port2).
+    fn flows_with_slopes(&self, x: &State, bc: &Boundary) -> (Balance, Jacobian, [f64; 2]) {
         use idx::{P1, P2, PE};
         let p = &self.params;
         let [p1, p2, pe, _] = *x;
@@ -253,7 +342,7 @@ impl Motor {
             dme_kg_s: leak_1e.0 + leak_2e.0 - exhaust.0 + displacement.into_e_kg_s,
             ..Balance::default()
         };
-        (b, g)
+        (b, g, [port1.1, port2.3])
     }
 
     /// Fills the torques of `b` (base model) and row OMEGA of `g` with the gradient of
@@ -261,13 +350,13 @@ impl Motor {
     /// dT_f/dω = T_c·(1 − tanh²(ω/ω_reg))/ω_reg + d.
     fn torques_with_slopes(&self, x: &State, bc: &Boundary, b: &mut Balance, g: &mut Jacobian) {
         let p = &self.params;
-        let [p1, p2, pe, omega] = *x;
+        let omega = x[idx::OMEGA];
         let (torque, mut grad) = ideal_torque_with_slopes(self.cycle(), x);
-        let p_in = if omega >= 0.0 { p1 } else { p2 };
         b.torque_ideal_nm = torque;
-        b.torque_friction_nm = self.friction_torque(omega, p_in, pe);
-        b.torque_load_nm = bc.load.torque(omega);
         let th = (omega / p.w_reg()).tanh();
+        // The base model's friction_torque(ω) = T_c·tanh(ω/ω_reg) + d·ω, with tanh taken once.
+        b.torque_friction_nm = p.t_coulomb() * th + p.visc() * omega;
+        b.torque_load_nm = bc.load.torque(omega);
         let d_friction = p.t_coulomb() * (1.0 - th * th) / p.w_reg() + p.visc();
         grad[idx::OMEGA] -= d_friction + bc.load.torque_slope(omega);
         g[idx::OMEGA] = grad;
@@ -457,6 +546,40 @@ mod tests {
                     (db - fd_b).abs() <= 1e-5 * scale,
                     "{c:e} {pa} {pb}: {db} vs {fd_b}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn time_slope_matches_central_differences_in_the_inputs() {
+        // f depends on t only through p_port1 and C_port2: move them at the given rates.
+        let rate = BoundaryRate {
+            p_port1_pa_s: 1.2e4,
+            ln_c_port2_per_s: -0.08,
+        };
+        let h = 1e-3;
+        for m in motors() {
+            for bc in boundaries() {
+                let at = |dt: f64| Boundary {
+                    p_port1_pa: bc.p_port1_pa + rate.p_port1_pa_s * dt,
+                    c_port2_m3_s_pa: bc
+                        .c_port2_m3_s_pa
+                        .map(|c| c * (rate.ln_c_port2_per_s * dt).exp()),
+                    ..bc
+                };
+                for x in STATES {
+                    let f_t = m.time_slope(&x, &bc, &rate).unwrap();
+                    let (up, down) = (m.derivatives(&x, &at(h)), m.derivatives(&x, &at(-h)));
+                    for i in 0..N_STATES {
+                        let fd = (up[i] - down[i]) / (2.0 * h);
+                        let scale = ROW_SCALE[i] * 1e-3;
+                        assert!(
+                            (f_t[i] - fd).abs() <= 1e-5 * fd.abs().max(scale),
+                            "x {x:?} bc {bc:?} row {i}: {} vs {fd}",
+                            f_t[i]
+                        );
+                    }
+                }
             }
         }
     }

@@ -16,9 +16,10 @@ use crate::model::extra::slot;
 pub use crate::model::extra::{
     BalanceId, Chamber, ExtraTerm, LeakPath, PressureFactor, SpeedFactor,
 };
-use crate::model::nozzle::{series_flow, Nozzle};
+use crate::model::nozzle::{series_flow, Nozzle, R_LAMINAR};
 use crate::model::params::MotorParams;
 use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
+use crate::numerics::ode::N_KINKS;
 use crate::units::constants::RT0;
 
 /// Number of ODE states, and the state vector [p_1 (Pa), p_2 (Pa), p_e (Pa), ω (rad/s)].
@@ -329,6 +330,33 @@ impl Motor {
             torque_friction_nm: self.friction_torque(omega, p_in, pe) + extra[slot::TORQUE],
             torque_load_nm: bc.load.torque(omega),
         }
+    }
+
+    /// Where the right-hand side has kinks (the solver's [`crate::numerics::ode::Kinks`]):
+    /// for each nozzle between two states or a state and a fixed pressure (port 1 and
+    /// port 2 without a throttle, exhaust, the three leakage paths), its pressure ratio less
+    /// [`R_LAMINAR`], which changes sign where the nozzle enters its laminar range. A port
+    /// with a throttle in series reports a constant 1 (its kink lies at the unknown pressure
+    /// between the two nozzles).
+    pub fn laminar_margins(&self, x: &State, bc: &Boundary) -> [f64; N_KINKS] {
+        let [p1, p2, pe, _] = *x;
+        let margin = |a: f64, b: f64| {
+            let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+            if hi > 0.0 {
+                lo / hi - R_LAMINAR
+            } else {
+                1.0
+            }
+        };
+        let port = |c: Option<f64>, a: f64, b: f64| if c.is_some() { 1.0 } else { margin(a, b) };
+        [
+            port(bc.c_port1_m3_s_pa, bc.p_port1_pa, p1),
+            port(bc.c_port2_m3_s_pa, p2, bc.p_port2_pa),
+            margin(pe, bc.p_atm_pa),
+            margin(p1, pe),
+            margin(p2, pe),
+            margin(p1, p2),
+        ]
     }
 
     /// The two measured flows alone, kg/s: into port 1 and out of port 2, as in

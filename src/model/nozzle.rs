@@ -69,13 +69,13 @@ impl Nozzle {
 /// with p_m; it is bracketed by [min, max] of p_a and p_b and found by Newton's method with
 /// the analytic slope, falling back to bisection whenever a step leaves the bracket.
 pub fn series_flow(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64, f64) {
-    let closed = if p_a > p_b {
-        series_closed_form(first, second, p_a, p_b)
+    let (closed, sign) = if p_a > p_b {
+        (series_closed_form(first, second, p_a, p_b), 1.0)
     } else {
-        series_closed_form(second, first, p_b, p_a)
+        (series_closed_form(second, first, p_b, p_a), -1.0)
     };
-    if let Some(p_m) = closed {
-        return (0.5 * (first.flow(p_a, p_m) + second.flow(p_m, p_b)), p_m);
+    if let Some((p_m, flow_squared)) = closed {
+        return (sign * flow_squared.max(0.0).sqrt(), p_m);
     }
     series_newton(first, second, p_a, p_b)
 }
@@ -88,8 +88,10 @@ pub fn series_flow(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64,
 /// g(p_m) = ṁ_up² − ṁ_down² falls strictly with p_m, so the sign of g at the two regime
 /// boundaries (p_m = b_up·p_u, where the first nozzle stops choking, and p_m = p_d/b_down,
 /// where the second starts) tells which pair holds the root; one quadratic is then solved.
-/// `None` when the root lies in a laminar range.
-fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<f64> {
+/// Returns p_m and ṁ² there from the upstream nozzle's polynomial (the flow itself without
+/// evaluating either nozzle again: issue 10, the outlet throttle's rows and right-hand
+/// sides spend most of their time here); `None` when the root lies in a laminar range.
+fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<(f64, f64)> {
     let (k1, k2) = (
         (up.c_m3_s_pa * RHO0_KG_M3).powi(2),
         (down.c_m3_s_pa * RHO0_KG_M3).powi(2),
@@ -139,10 +141,11 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
         };
         p > p_d && p < p_u && up_ok && down_ok
     };
-    quadratic_roots(a1 - a2, l1 - l2, c1 - c2)
+    let p_m = quadratic_roots(a1 - a2, l1 - l2, c1 - c2)
         .into_iter()
         .flatten()
-        .find(|p| in_regimes(*p))
+        .find(|p| in_regimes(*p))?;
+    Some((p_m, eval((a1, l1, c1), p_m)))
 }
 
 /// Real roots of a·x² + b·x + c = 0, computed without cancellation.
@@ -325,11 +328,17 @@ mod tests {
                 for p_u in [1.05e5, 1.5e5, 2.5e5, 4e5, 8e5, 1.2e6] {
                     let (up, down) = (Nozzle::new(c1, b1), Nozzle::new(c2, b2));
                     let p_d = 1.01325e5;
-                    let Some(p) = series_closed_form(&up, &down, p_u, p_d) else {
+                    let Some((p, m2)) = series_closed_form(&up, &down, p_u, p_d) else {
                         continue;
                     };
-                    let (_, p_newton) = series_newton(&up, &down, p_u, p_d);
+                    let (m_newton, p_newton) = series_newton(&up, &down, p_u, p_d);
                     assert!((p - p_newton).abs() < 1e-6 * p, "{p} vs {p_newton}");
+                    // The flow from the polynomial is each nozzle's flow at p_m.
+                    let m = m2.sqrt();
+                    for flow in [up.flow(p_u, p), down.flow(p, p_d)] {
+                        assert!((m - flow).abs() <= 1e-12 * m, "{m} vs {flow}");
+                    }
+                    assert!((m - m_newton).abs() < 1e-6 * m, "{m} vs {m_newton}");
                     seen[usize::from(p <= b1 * p_u)][usize::from(p_d <= b2 * p)] += 1;
                 }
             }

@@ -1,6 +1,7 @@
-//! Numerical methods that know nothing of motors: stiff integration, and roots and minima
-//! of functions of one variable.
+//! Numerical methods that know nothing of motors: stiff integration, the 4×4 LU behind it
+//! and the steady-state Newton, and roots and minima of functions of one variable.
 
+pub mod lu;
 pub mod ode;
 pub mod rodas;
 pub mod scalar;

@@ -15,10 +15,32 @@ pub type State = [f64; N_STATES];
 /// Right-hand side dx/dt = f(t, x).
 pub type Rhs<'a> = dyn Fn(f64, &State) -> State + 'a;
 
-/// f(t, x) together with its Jacobian ∂f/∂x, row-major (`j[i][k]` = ∂f_i/∂x_k), when the
-/// model has it in closed form (sharing the work of both); `None` makes the solver call
-/// the right-hand side and use finite differences.
-pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<(State, [State; N_STATES])> + 'a;
+/// f(t, x) together with its Jacobian ∂f/∂x, row-major (`j[i][k]` = ∂f_i/∂x_k), and
+/// ∂f/∂t where the model has them in closed form (sharing the work of both); `None` makes
+/// the solver call the right-hand side and use finite differences.
+pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<Slopes> + 'a;
+
+/// How many kink indicators a model reports ([`Kinks`]).
+pub const N_KINKS: usize = 6;
+
+/// Where the right-hand side has kinks: indicators g_i(t, x) whose sign changes where f
+/// is continuous but its slope is not (a nozzle entering its laminar range). A step that
+/// straddles such a point makes the error estimate of a higher-order method blow up; a
+/// solver that knows the indicators can land just past the kink instead of halving its way
+/// through it. Indicators that a model does not use stay at a constant positive value.
+pub type Kinks<'a> = dyn Fn(f64, &State) -> [f64; N_KINKS] + 'a;
+
+/// What a model can say in closed form about its right-hand side at one (t, x).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slopes {
+    /// f(t, x).
+    pub f: State,
+    /// ∂f/∂x, row-major: `jac[i][k]` = ∂f_i/∂x_k.
+    pub jac: [State; N_STATES],
+    /// ∂f/∂t (`None`: the solver takes a forward difference in time, one more evaluation
+    /// of f).
+    pub f_t: Option<State>,
+}
 
 /// Integration tolerances: |error_i| ≤ atol_i + rtol·|x_i|.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,6 +105,21 @@ pub trait StiffSolver: Send + Sync {
     ) -> Result<Vec<State>, SolveError> {
         let _ = jacobian;
         self.solve(rhs, t0, x0, t_out)
+    }
+
+    /// As [`StiffSolver::solve_with_jacobian`], told where the right-hand side has kinks.
+    /// Solvers that do not place steps against kinks ignore them.
+    fn solve_with_kinks(
+        &self,
+        rhs: &Rhs<'_>,
+        jacobian: &Jacobian<'_>,
+        kinks: &Kinks<'_>,
+        t0: f64,
+        x0: State,
+        t_out: &[f64],
+    ) -> Result<Vec<State>, SolveError> {
+        let _ = kinks;
+        self.solve_with_jacobian(rhs, jacobian, t0, x0, t_out)
     }
 }
 

@@ -18,8 +18,20 @@
 //! iteration), its 4×4 LU is a few hundred floating-point operations, and it allocates
 //! nothing. Coefficients: Hairer & Wanner's RODAS (γ = 1/4), as tabulated in the Fortran
 //! `rodas.f` and in OrdinaryDiffEq.jl's `Rodas4Tableau`; the tests below check the order.
+//!
+//! Kinks: where a nozzle enters its laminar range the right-hand side is continuous but its
+//! slope jumps, and a step across that point fails its error test by a factor 10–200; the
+//! controller then shrinks it four or five times and regrows it over as many steps (on the
+//! shipped ramp the leak between chamber 2 and the exhaust hovers at its threshold and
+//! crosses it a dozen times). Given the model's kink indicators
+//! ([`StiffSolver::solve_with_kinks`]), a rejected step whose indicators change sign is
+//! retried once to end just past the first crossing (estimated from the indicators' rate
+//! at the step's start), and the step after it returns towards the step before.
 
-use super::ode::{Jacobian, Rhs, SolveError, State, StiffSolver, Tolerances, N_STATES};
+use super::lu::Lu;
+use super::ode::{
+    Jacobian, Kinks, Rhs, Slopes, SolveError, State, StiffSolver, Tolerances, N_KINKS, N_STATES,
+};
 
 /// γ, the diagonal of the method.
 const GAMMA: f64 = 0.25;
@@ -110,20 +122,24 @@ pub struct Rodas4 {
 }
 
 impl Default for Rodas4 {
-    /// rtol 3e-7 with 3 mPa on pressures and 1e-3 rad/s on speed, chosen by measurement
+    /// rtol 3e-7 with 2 mPa on pressures and 1e-3 rad/s on speed, chosen by measurement
     /// (`cargo run --release --example solver_accuracy`, issue 10). The largest deviation
     /// of any simulated output of the shipped dataset's experiments from an rtol-1e-12
-    /// reference, in units of that channel's noise σ: 0.0017σ for the default motor and
-    /// 0.0015σ for one with 3× the cross leak and 2× the friction (diffsol's BDF at its
-    /// default rtol 3e-8: 0.0030σ and 0.0017σ), for 2.5–3× fewer instructions per
-    /// evaluation. The absolute tolerance on pressures is what matters near atmosphere,
-    /// where the laminar range of the nozzles turns millipascals into measurable flow; the
-    /// worst deviations sit at the start of the pressure ramp for every solver.
+    /// reference, in units of that channel's noise σ: 0.0015σ for the default motor and
+    /// 0.0015σ for one with 3× the cross leak and 2× the friction (`MOTOR=leaky`; diffsol's
+    /// BDF at its default rtol 3e-8: 0.0030σ and 0.0017σ), for about 3.5× fewer
+    /// instructions per evaluation. The absolute tolerance on pressures is what matters near
+    /// atmosphere, where the laminar range of the nozzles turns millipascals into
+    /// measurable flow; the worst deviations sit at the start of the pressure ramp, where
+    /// the nozzles cross their laminar thresholds one after another, and move with where
+    /// the steps fall against those kinks. Steps land just past the kinks the model reports
+    /// ([`StiffSolver::solve_with_kinks`]); with that, 3 mPa gave 0.0021σ and 0.0015σ,
+    /// 2.5 mPa with rtol 2.5e-7 0.0014σ, 2 mPa with rtol 2e-7 0.0014σ for 10 % more steps.
     fn default() -> Self {
         Self {
             tol: Tolerances {
                 rtol: 3e-7,
-                atol: [3e-3, 3e-3, 3e-3, 1e-3],
+                atol: [2e-3, 2e-3, 2e-3, 1e-3],
             },
         }
     }
@@ -150,9 +166,8 @@ impl Step {
     }
 }
 
-/// The local linearisation at (t, y): f, J = ∂f/∂y and ∂f/∂t. J is the model's own where it
-/// has one, else forward differences (4 evaluations of f); ∂f/∂t is a forward difference
-/// (1 evaluation).
+/// The local linearisation at (t, y): f, J = ∂f/∂y and ∂f/∂t. J and ∂f/∂t are the model's
+/// own where it has them, else forward differences (4 evaluations of f for J, 1 for ∂f/∂t).
 #[derive(Debug, Clone, Copy)]
 pub struct Linearisation {
     /// f(t, y).
@@ -173,8 +188,8 @@ impl Linearisation {
             let fh = rhs(t + dt, y);
             std::array::from_fn(|i| (fh[i] - f[i]) / dt)
         };
-        if let Some((f, jac)) = jacobian(t, y) {
-            let f_t = time_slope(&f);
+        if let Some(Slopes { f, jac, f_t }) = jacobian(t, y) {
+            let f_t = f_t.unwrap_or_else(|| time_slope(&f));
             return Self { f, jac, f_t };
         }
         let f = rhs(t, y);
@@ -201,28 +216,43 @@ pub fn step(rhs: &Rhs<'_>, t: f64, y: &State, lin: &Linearisation, h: f64) -> Op
         std::array::from_fn(|j| f64::from(u8::from(i == j)) / (GAMMA * h) - lin.jac[i][j])
     });
     let lu = Lu::new(w)?;
-    let solve = |b: State| Some(lu.solve(b));
     let inv_h = 1.0 / h;
     let mut k = [[0.0; N_STATES]; 6];
-    k[0] = solve(std::array::from_fn(|i| lin.f[i] + D[0] * h * lin.f_t[i]))?;
-    for s in 1..6 {
-        // Stage s+1 (1-based): its argument, then its right-hand side.
-        let arg: State = if s < 5 {
-            std::array::from_fn(|i| y[i] + (0..s).map(|j| A[s - 1][j] * k[j][i]).sum::<f64>())
-        } else {
-            std::array::from_fn(|i| y[i] + (0..4).map(|j| A[3][j] * k[j][i]).sum::<f64>() + k[4][i])
-        };
-        let (c, d) = if s < 4 { (C[s], D[s]) } else { (1.0, 0.0) };
-        let f = rhs(t + c * h, &arg);
-        let b: State = std::array::from_fn(|i| {
-            f[i] + d * h * lin.f_t[i] + inv_h * (0..s).map(|j| CC[s - 1][j] * k[j][i]).sum::<f64>()
-        });
-        k[s] = solve(b)?;
-    }
-    let y1: State = std::array::from_fn(|i| {
-        y[i] + (0..4).map(|j| A[3][j] * k[j][i]).sum::<f64>() + k[4][i] + k[5][i]
-    });
-    let dense = [0, 1].map(|r| std::array::from_fn(|i| (0..5).map(|j| H[r][j] * k[j][i]).sum()));
+    k[0] = lu.solve(std::array::from_fn(|i| lin.f[i] + D[0] * h * lin.f_t[i]));
+    // Stages 2–6 written out, each sum over a fixed number of earlier stages, so that every
+    // loop has constant bounds and unrolls (issue 10: the generic stage loop cost a sixth of
+    // an evaluation's instructions). The sums add in the same order as Σ_j from j = 1.
+    let stage = |arg: &State, c: f64, d: f64, couplings: State| -> State {
+        let f = rhs(t + c * h, arg);
+        lu.solve(std::array::from_fn(|i| {
+            f[i] + d * h * lin.f_t[i] + inv_h * couplings[i]
+        }))
+    };
+    let shifted = |sum: State| -> State { std::array::from_fn(|i| y[i] + sum[i]) };
+    k[1] = stage(
+        &shifted(combine::<1>(&A[0], &k)),
+        C[1],
+        D[1],
+        combine::<1>(&CC[0], &k),
+    );
+    k[2] = stage(
+        &shifted(combine::<2>(&A[1], &k)),
+        C[2],
+        D[2],
+        combine::<2>(&CC[1], &k),
+    );
+    k[3] = stage(
+        &shifted(combine::<3>(&A[2], &k)),
+        C[3],
+        D[3],
+        combine::<3>(&CC[2], &k),
+    );
+    let arg5 = shifted(combine::<4>(&A[3], &k));
+    k[4] = stage(&arg5, 1.0, 0.0, combine::<4>(&CC[3], &k));
+    let arg6: State = std::array::from_fn(|i| arg5[i] + k[4][i]);
+    k[5] = stage(&arg6, 1.0, 0.0, combine::<5>(&CC[4], &k));
+    let y1: State = std::array::from_fn(|i| arg6[i] + k[5][i]);
+    let dense = [combine::<5>(&H[0], &k), combine::<5>(&H[1], &k)];
     Some(Step {
         y1,
         err: k[5],
@@ -230,63 +260,46 @@ pub fn step(rhs: &Rhs<'_>, t: f64, y: &State, lin: &Linearisation, h: f64) -> Op
     })
 }
 
-/// LU factors of a 4×4 matrix with partial pivoting, on the stack: the step matrix is
-/// factored once per step and solved six times.
-#[derive(Debug, Clone, Copy)]
-struct Lu {
-    /// L below the diagonal (unit diagonal implied), U on and above it.
-    a: [State; N_STATES],
-    /// Row of the original matrix that ended up in each position.
-    perm: [usize; N_STATES],
-    /// 1/U_ii: six solves per factorisation multiply instead of divide.
-    inv_diag: State,
+/// Σ_{j < S} coef_j·k_j, summed from j = 0 up.
+fn combine<const S: usize>(coef: &[f64], k: &[State; 6]) -> State {
+    std::array::from_fn(|i| {
+        let mut sum = coef[0] * k[0][i];
+        for j in 1..S {
+            sum += coef[j] * k[j][i];
+        }
+        sum
+    })
 }
 
-impl Lu {
-    /// Factors `a`; `None` when a pivot is zero or not finite (a singular step matrix).
-    fn new(mut a: [State; N_STATES]) -> Option<Self> {
-        let mut perm = [0, 1, 2, 3];
-        for col in 0..N_STATES {
-            let mut pivot = col;
-            for r in col + 1..N_STATES {
-                if a[r][col].abs() > a[pivot][col].abs() {
-                    pivot = r;
-                }
-            }
-            if a[pivot][col] == 0.0 || !a[pivot][col].is_finite() {
-                return None;
-            }
-            a.swap(col, pivot);
-            perm.swap(col, pivot);
-            let pivot_row = a[col];
-            for row in a.iter_mut().skip(col + 1) {
-                let m = row[col] / pivot_row[col];
-                row[col] = m;
-                for (v, p) in row.iter_mut().zip(&pivot_row).skip(col + 1) {
-                    *v -= m * p;
-                }
-            }
-        }
-        let inv_diag = std::array::from_fn(|i| 1.0 / a[i][i]);
-        Some(Self { a, perm, inv_diag })
-    }
+/// How far past a kink's estimated position a landing step ends, as a fraction of the
+/// rejected step: enough that the estimate's error rarely leaves the kink ahead of the
+/// landing, small enough that the stretch beyond it adds little error.
+const KINK_OVERSHOOT: f64 = 0.01;
 
-    /// x with A·x = b.
-    fn solve(&self, b: State) -> State {
-        let mut x: State = std::array::from_fn(|i| b[self.perm[i]]);
-        for r in 1..N_STATES {
-            for c in 0..r {
-                x[r] -= self.a[r][c] * x[c];
+/// Where in a rejected step of size `h` the first kink lies, as a fraction of the step, for
+/// the indicators that change sign between its start (`g_start`, changing at `g_rate` per
+/// second along the solution there) and its end (`g_end`): from the start's tangent where
+/// that reaches zero inside the step (the end of a rejected step is the least reliable
+/// point near a kink), else by linear interpolation between the ends. `None` when no
+/// indicator changes sign.
+fn kink_fraction(
+    g_start: &[f64; N_KINKS],
+    g_rate: &[f64; N_KINKS],
+    g_end: &[f64; N_KINKS],
+    h: f64,
+) -> Option<f64> {
+    (0..N_KINKS)
+        .filter(|&i| (g_start[i] > 0.0) != (g_end[i] > 0.0))
+        .map(|i| {
+            let tangent = -g_start[i] / (g_rate[i] * h);
+            if tangent > 0.0 && tangent <= 1.0 {
+                tangent
+            } else {
+                g_start[i] / (g_start[i] - g_end[i])
             }
-        }
-        for r in (0..N_STATES).rev() {
-            for c in r + 1..N_STATES {
-                x[r] -= self.a[r][c] * x[c];
-            }
-            x[r] *= self.inv_diag[r];
-        }
-        x
-    }
+        })
+        .filter(|theta| theta.is_finite())
+        .min_by(f64::total_cmp)
 }
 
 /// Step-size control of Hairer & Wanner's RODAS: the classical h·err^(−1/4) rule combined
@@ -309,9 +322,9 @@ impl StepControl {
     /// The next step after an accepted step h with error norm err ≤ 1.
     fn accepted(&mut self, h: f64, err: f64) -> f64 {
         let err = err.max(1e-10);
-        let mut fac = (Self::SAFETY * err.powf(-0.25)).clamp(Self::MAX_SHRINK, Self::MAX_GROWTH);
+        let mut fac = (Self::SAFETY / fourth_root(err)).clamp(Self::MAX_SHRINK, Self::MAX_GROWTH);
         if let Some((h_prev, err_prev)) = self.previous {
-            let predicted = Self::SAFETY * (h / h_prev) * (err_prev / (err * err)).powf(0.25);
+            let predicted = Self::SAFETY * (h / h_prev) * fourth_root(err_prev / (err * err));
             fac = fac.min(predicted.clamp(Self::MAX_SHRINK, Self::MAX_GROWTH));
         }
         if self.after_reject {
@@ -326,12 +339,18 @@ impl StepControl {
     fn rejected(&mut self, h: f64, err: f64) -> f64 {
         self.after_reject = true;
         let fac = if err.is_finite() {
-            (Self::SAFETY * err.powf(-0.25)).clamp(Self::MAX_SHRINK, Self::SAFETY)
+            (Self::SAFETY / fourth_root(err)).clamp(Self::MAX_SHRINK, Self::SAFETY)
         } else {
             0.25
         };
         h * fac
     }
+}
+
+/// x^(1/4) as two square roots: the step control asks for it after every step, and `powf`
+/// cost ~2 % of an evaluation's instructions (issue 10).
+fn fourth_root(x: f64) -> f64 {
+    x.sqrt().sqrt()
 }
 
 impl Rodas4 {
@@ -393,6 +412,18 @@ impl StiffSolver for Rodas4 {
         x0: State,
         t_out: &[f64],
     ) -> Result<Vec<State>, SolveError> {
+        self.solve_with_kinks(rhs, jacobian, &|_, _| [1.0; N_KINKS], t0, x0, t_out)
+    }
+
+    fn solve_with_kinks(
+        &self,
+        rhs: &Rhs<'_>,
+        jacobian: &Jacobian<'_>,
+        kinks: &Kinks<'_>,
+        t0: f64,
+        x0: State,
+        t_out: &[f64],
+    ) -> Result<Vec<State>, SolveError> {
         let mut out = Vec::with_capacity(t_out.len());
         let Some(&t_end) = t_out.last() else {
             return Ok(out);
@@ -412,6 +443,10 @@ impl StiffSolver for Rodas4 {
         let mut lin = Linearisation::at(rhs, jacobian, t, &y);
         let mut h = self.initial_step(rhs, t, &y, &lin.f, t_end - t0);
         let mut control = StepControl::default();
+        // The kink indicators at the current point (computed when a step is rejected), and
+        // the step to resume with after landing just past a kink.
+        let mut g0: Option<([f64; N_KINKS], [f64; N_KINKS])> = None;
+        let mut resume: Option<f64> = None;
         for _ in 0..MAX_STEPS {
             // Land exactly on t_end; stretch a step that would leave a sliver before it.
             let remaining = t_end - t;
@@ -420,8 +455,27 @@ impl StiffSolver for Rodas4 {
             let step = step(rhs, t, &y, &lin, h_try);
             let err = step.map_or(f64::INFINITY, |s| self.error_norm(&y, &s));
             let (Some(s), true) = (step, err <= 1.0) else {
-                // Rejected: shrink and retry from the same point (J and ∂f/∂t still hold).
-                h = control.rejected(h_try, err);
+                // Rejected: if the trial crossed a kink, retry with a step that ends just past
+                // it (the part after the kink is then too short to matter, and the next step
+                // starts on the kink's far side); else shrink as the controller says. Either
+                // way from the same point (J and ∂f/∂t still hold).
+                let landing = step.and_then(|s| {
+                    let (g_start, g_rate) = *g0.get_or_insert_with(|| {
+                        let g = kinks(t, &y);
+                        // Each indicator's rate along the solution, per second.
+                        let d = 1e-6 * t.abs().max(1.0);
+                        let ahead = kinks(t + d, &std::array::from_fn(|i| y[i] + d * lin.f[i]));
+                        (g, std::array::from_fn(|i| (ahead[i] - g[i]) / d))
+                    });
+                    kink_fraction(&g_start, &g_rate, &kinks(t + h_try, &s.y1), h_try)
+                });
+                h = match landing {
+                    Some(theta) if resume.is_none() => {
+                        resume = Some(h_try);
+                        h_try * (theta + KINK_OVERSHOOT).min(1.0)
+                    }
+                    _ => control.rejected(h_try, err),
+                };
                 if h < 1e-14 * t.abs().max(1.0) {
                     return Err(SolveError(format!("step size underflow at t = {t} s")));
                 }
@@ -443,7 +497,15 @@ impl StiffSolver for Rodas4 {
             t = t_new;
             y = s.y1;
             lin = Linearisation::at(rhs, jacobian, t, &y);
+            g0 = None;
             h = control.accepted(h_try, err);
+            if let Some(h_before) = resume.take() {
+                // Past the kink the solution is smooth again at the scale it had before it:
+                // back to that step, but by no more than the controller's largest growth
+                // from the landing step (a full return let errors past the estimate through:
+                // 0.014σ on the shipped dataset instead of 0.0015σ).
+                h = h.max(h_before.min(StepControl::MAX_GROWTH * h_try));
+            }
         }
         Err(SolveError(format!(
             "more than {MAX_STEPS} steps before t = {t_end} s (stopped at t = {t} s)"
@@ -532,32 +594,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn lu_solves_like_nalgebra_and_rejects_singular_matrices() {
-        // Needs pivoting (zero leading entry); checked against nalgebra's LU.
-        let a = [
-            [0.0, 2.0, -1.0, 4.0],
-            [3.0, -1.0, 2.0, 0.5],
-            [1.0, 1.0, 1.0, 1.0],
-            [-2.0, 0.3, 5.0, 1.0],
-        ];
-        let b = [1.0, -2.0, 0.5, 3.0];
-        let x = Lu::new(a).unwrap().solve(b);
-        let m = nalgebra::Matrix4::from_fn(|i, j| a[i][j]);
-        let want = m.lu().solve(&nalgebra::Vector4::from(b)).unwrap();
-        for i in 0..4 {
-            assert!((x[i] - want[i]).abs() < 1e-12, "{x:?} vs {want:?}");
-        }
-        let mut singular = a;
-        singular[3] = [3.0, 1.0, 1.0, 4.5]; // row 0 + row 1
-        assert!(
-            Lu::new(singular).is_none() || {
-                let y = Lu::new(singular).unwrap().solve(b);
-                !y.iter().all(|v| v.is_finite() && v.abs() < 1e12)
-            }
-        );
     }
 
     #[test]

@@ -25,6 +25,10 @@ pub struct Schedule {
     /// as [c2, c3]. Computed once: the integrator asks for the input at every evaluation of
     /// the right-hand side, and Horner's form there is a handful of multiply-adds.
     cubic: Vec<[f64; 2]>,
+    /// Knots per second, (n − 1)/(t_last − t_first): bin means of evenly sampled rows are
+    /// nearly evenly spaced, so the segment of a time is found from this guess in a step
+    /// or two instead of a binary search (the integrator asks at every right-hand side).
+    knots_per_s: f64,
 }
 
 impl Schedule {
@@ -58,7 +62,19 @@ impl Schedule {
                 ]
             })
             .collect();
-        Self { t, v, slope, cubic }
+        let n = t.len();
+        let knots_per_s = if n > 1 {
+            (n - 1) as f64 / (t[n - 1] - t[0])
+        } else {
+            0.0
+        };
+        Self {
+            t,
+            v,
+            slope,
+            cubic,
+            knots_per_s,
+        }
     }
 
     /// A constant schedule.
@@ -78,10 +94,44 @@ impl Schedule {
         if time >= self.t[n - 1] {
             return self.v[n - 1] + self.slope[n - 1] * (time - self.t[n - 1]);
         }
-        let k = self.t.partition_point(|tk| *tk <= time) - 1;
+        let k = self.segment(time);
         let tau = time - self.t[k];
         let [c2, c3] = self.cubic[k];
         self.v[k] + tau * (self.slope[k] + tau * (c2 + tau * c3))
+    }
+
+    /// Time derivative at `time`, per second: the cubic's slope inside the knots, the end
+    /// slopes outside (as [`Schedule::at`] extends), 0 for a constant.
+    pub fn slope_at(&self, time: f64) -> f64 {
+        let n = self.t.len();
+        if n == 1 {
+            return 0.0;
+        }
+        if time <= self.t[0] {
+            return self.slope[0];
+        }
+        if time >= self.t[n - 1] {
+            return self.slope[n - 1];
+        }
+        let k = self.segment(time);
+        let tau = time - self.t[k];
+        let [c2, c3] = self.cubic[k];
+        self.slope[k] + tau * (2.0 * c2 + tau * 3.0 * c3)
+    }
+
+    /// The last knot k with t_k ≤ `time`, for t_0 < time < t_last: a guess from the mean
+    /// knot spacing, corrected by walking to the right segment.
+    fn segment(&self, time: f64) -> usize {
+        let last = self.t.len() - 2;
+        // `as` saturates: NaN and negative guesses become 0.
+        let mut k = (((time - self.t[0]) * self.knots_per_s) as usize).min(last);
+        while k > 0 && self.t[k] > time {
+            k -= 1;
+        }
+        while k < last && self.t[k + 1] <= time {
+            k += 1;
+        }
+        k
     }
 }
 
@@ -141,6 +191,37 @@ mod tests {
                     h00 * v[k] + h10 * h * s.slope[k] + h01 * v[k + 1] + h11 * h * s.slope[k + 1];
                 assert!((s.at(t[k] + x * h) - hermite).abs() < 1e-12);
             }
+        }
+    }
+
+    #[test]
+    fn slope_is_the_derivative_of_the_value() {
+        let t = vec![0.0, 1.0, 2.5, 4.0];
+        let v = vec![1.0, 3.0, 3.5, 7.0];
+        let s = Schedule::through(t, v);
+        for time in [-0.5, 0.3, 1.7, 2.5, 3.9, 4.5] {
+            let h = 1e-6;
+            let fd = (s.at(time + h) - s.at(time - h)) / (2.0 * h);
+            // At a knot (t = 2.5) the difference straddles two cubics: C¹, so it agrees to
+            // O(h·jump of the second derivative).
+            assert!((s.slope_at(time) - fd).abs() < 1e-5, "t = {time}");
+        }
+        assert_eq!(Schedule::constant(3.0).slope_at(1.0), 0.0);
+    }
+
+    #[test]
+    fn segment_guess_agrees_with_a_binary_search() {
+        // Uneven knots, so that the guess from the mean spacing is often wrong.
+        let t = vec![0.0, 0.1, 0.15, 2.0, 2.05, 7.0, 7.5, 9.0, 12.0];
+        let v: Vec<f64> = t.iter().map(|x| x * x).collect();
+        let s = Schedule::through(t.clone(), v);
+        for k in 1..12_000 {
+            let time = f64::from(k) * 1e-3;
+            let want = t.partition_point(|tk| *tk <= time) - 1;
+            assert_eq!(s.segment(time), want, "t = {time}");
+        }
+        for &time in &t[1..t.len() - 1] {
+            assert_eq!(s.segment(time), t.partition_point(|tk| *tk <= time) - 1);
         }
     }
 

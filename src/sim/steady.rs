@@ -4,7 +4,7 @@
 //! so that far from the solution it follows the physical transient and near it it is Newton.
 
 use crate::model::motor::{idx, Boundary, Motor, State, N_STATES};
-use nalgebra::{SMatrix, SVector};
+use crate::numerics::lu::Lu;
 
 /// What the steady solver could not do.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -65,8 +65,14 @@ fn solve(
 ) -> Result<State, SteadyError> {
     let n_free = if speed_fixed { 3 } else { 4 };
     let f = |x: &State| motor.derivatives(x, bc);
+    // f and, for the base model, its Jacobian in one pass: the Jacobian at each accepted
+    // point is the next iteration's (issue 10: a separate Jacobian evaluated f again).
+    let linearise = |x: &State| match motor.derivatives_and_jacobian(x, bc) {
+        Some((fx, jac)) => (fx, Some(jac)),
+        None => (f(x), None),
+    };
     let mut x = x0;
-    let mut fx = f(&x);
+    let (mut fx, mut jx) = linearise(&x);
     let mut res = residual_norm(&fx, n_free);
     let mut dt = dt0;
     for _ in 0..200 {
@@ -74,30 +80,19 @@ fn solve(
             return Ok(x);
         }
         // The model's own Jacobian where it has one (the base model), else differences.
-        let jac = motor.jacobian(&x, bc).map_or_else(
-            || jacobian(&f, &x, &fx, n_free),
-            |j| SMatrix::from_fn(|r, c| j[r][c]),
-        );
-        let mut a = SMatrix::<f64, 4, 4>::identity() / dt - jac;
-        let mut rhs = SVector::<f64, 4>::from(fx);
-        if speed_fixed {
-            a.fill_row(idx::OMEGA, 0.0);
-            a.fill_column(idx::OMEGA, 0.0);
-            a[(idx::OMEGA, idx::OMEGA)] = 1.0;
-            rhs[idx::OMEGA] = 0.0;
-        }
-        let Some(dx) = a.lu().solve(&rhs) else {
+        let jac = jx.unwrap_or_else(|| jacobian(&f, &x, &fx, n_free));
+        let Some(dx) = newton_step(&jac, &fx, dt, speed_fixed) else {
             dt *= 0.1;
             continue;
         };
         let mut step = 1.0;
-        let (x_new, f_new, res_new) = loop {
+        let (x_new, (f_new, j_new), res_new) = loop {
             let cand: State = std::array::from_fn(|i| x[i] + step * dx[i]);
             if cand[..3].iter().all(|p| *p > 0.0) {
-                let fc = f(&cand);
-                let rc = residual_norm(&fc, n_free);
+                let lc = linearise(&cand);
+                let rc = residual_norm(&lc.0, n_free);
                 if rc.is_finite() {
-                    break (cand, fc, rc);
+                    break (cand, lc, rc);
                 }
             }
             step *= 0.5;
@@ -114,6 +109,7 @@ fn solve(
         };
         x = x_new;
         fx = f_new;
+        jx = j_new;
         res = res_new;
         // Converged when Newton's steps vanish, or when the balances are closed to far below
         // anything measurable (1e-4 Pa/s on the pressures, 1e-7 rad/s² on the speed): at
@@ -126,6 +122,27 @@ fn solve(
     Err(SteadyError(format!(
         "not converged after 200 iterations (residual {res:.3e})"
     )))
+}
+
+/// The step Δx of (I/Δt − J)·Δx = f(x); with the speed fixed, the speed's row and column are
+/// replaced by the identity and its right-hand side by 0 (so Δω = 0). `None` when the
+/// matrix is singular.
+fn newton_step(jac: &[State; N_STATES], fx: &State, dt: f64, speed_fixed: bool) -> Option<State> {
+    let mut a: [State; N_STATES] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| f64::from(u8::from(i == j)) / dt - jac[i][j])
+    });
+    let mut rhs = *fx;
+    if speed_fixed {
+        for (i, row) in a.iter_mut().enumerate() {
+            row[idx::OMEGA] = 0.0;
+            if i == idx::OMEGA {
+                *row = [0.0; N_STATES];
+            }
+        }
+        a[idx::OMEGA][idx::OMEGA] = 1.0;
+        rhs[idx::OMEGA] = 0.0;
+    }
+    Some(Lu::new(a)?.solve(rhs))
 }
 
 /// Residual in state units per second, each scaled by its typical magnitude.
@@ -141,15 +158,15 @@ fn jacobian(
     x: &State,
     fx: &State,
     n_free: usize,
-) -> SMatrix<f64, 4, 4> {
-    let mut jac = SMatrix::<f64, 4, 4>::zeros();
+) -> [State; N_STATES] {
+    let mut jac = [[0.0; N_STATES]; N_STATES];
     for j in 0..n_free {
         let h = 1e-7 * x[j].abs().max(SCALE[j]);
         let mut xh = *x;
         xh[j] += h;
         let fh = f(&xh);
         for i in 0..N_STATES {
-            jac[(i, j)] = (fh[i] - fx[i]) / h;
+            jac[i][j] = (fh[i] - fx[i]) / h;
         }
     }
     jac

@@ -45,10 +45,6 @@ impl ExperimentKind for OutletThrottle {
         let c = rec.values(Quantity::CPort2).map_err(missing(data))?;
         let logc: Vec<f64> = c.iter().map(|v| v.log10()).collect();
         let log10_c_port2 = Some(Schedule::smoothed(&times, &logc));
-        Ok(Arc::new(Transient {
-            times,
-            p_supply,
-            log10_c_port2,
-        }))
+        Ok(Arc::new(Transient::new(times, p_supply, log10_c_port2)))
     }
 }

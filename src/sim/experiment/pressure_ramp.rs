@@ -39,10 +39,6 @@ impl ExperimentKind for PressureRamp {
         let rec = &data.recording;
         let times = rec.values(Quantity::Time).map_err(missing(data))?.to_vec();
         let p_supply = supply_schedule(data, &times, SupplyFrom::Recording)?;
-        Ok(Arc::new(Transient {
-            times,
-            p_supply,
-            log10_c_port2: None,
-        }))
+        Ok(Arc::new(Transient::new(times, p_supply, None)))
     }
 }

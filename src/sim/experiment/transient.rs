@@ -2,8 +2,9 @@
 //! schedules in time, integrated from a steady start.
 
 use super::{Drive, Setting, SimError, Simulated};
+use crate::model::jacobian::BoundaryRate;
 use crate::model::motor::{idx, Boundary, Motor, State};
-use crate::numerics::ode::StiffSolver;
+use crate::numerics::ode::{Slopes, StiffSolver};
 use crate::sim::recording::{Column, ExperimentData};
 use crate::sim::schedule::Schedule;
 use crate::sim::steady;
@@ -13,28 +14,73 @@ use crate::units::Quantity;
 #[derive(Debug, Clone)]
 pub(super) struct Transient {
     /// Time of each recorded row, s.
-    pub times: Vec<f64>,
+    times: Vec<f64>,
     /// Supply pressure at port 1, Pa.
-    pub p_supply: Schedule,
+    p_supply: Schedule,
     /// log10 of the port-2 conductance (m³/(s·Pa)), if a throttle is fitted; it is then
     /// the abscissa, otherwise the supply pressure is.
-    pub log10_c_port2: Option<Schedule>,
+    log10_c_port2: Option<Schedule>,
+    /// The inputs at each recorded row (supply pressure, Pa; port-2 conductance,
+    /// m³/(s·Pa)), evaluated once: they do not depend on the motor, and every evaluation
+    /// of the cost needs the port flows at every row (issue 10: the schedules and the
+    /// conductance's `exp` were ~5 % of an evaluation's instructions).
+    row_inputs: Vec<(f64, Option<f64>)>,
 }
 
 impl Transient {
+    /// The drive of these recorded times and input schedules.
+    pub fn new(times: Vec<f64>, p_supply: Schedule, log10_c_port2: Option<Schedule>) -> Self {
+        let row_inputs = times
+            .iter()
+            .map(|&t| inputs_at(&p_supply, log10_c_port2.as_ref(), t))
+            .collect();
+        Self {
+            times,
+            p_supply,
+            log10_c_port2,
+            row_inputs,
+        }
+    }
+
+    /// How fast the inputs move at time t, where the supply schedule is at `p_supply` (zero
+    /// supply slope where the supply is held at its floor, as [`boundary`] holds it).
+    fn rate_at(&self, setting: &Setting<'_>, t: f64, p_supply: f64) -> BoundaryRate {
+        let held = p_supply < setting.p_atm_pa * 0.5;
+        BoundaryRate {
+            p_port1_pa_s: if held { 0.0 } else { self.p_supply.slope_at(t) },
+            ln_c_port2_per_s: self
+                .log10_c_port2
+                .as_ref()
+                .map_or(0.0, |s| s.slope_at(t) * std::f64::consts::LN_10),
+        }
+    }
+
     /// Boundary conditions at time t.
     fn boundary_at(&self, setting: &Setting<'_>, t: f64) -> Boundary {
-        let mut bc = Boundary::supplied(
-            self.p_supply.at(t).max(setting.p_atm_pa * 0.5),
-            setting.p_atm_pa,
-            setting.load,
-        );
-        bc.c_port2_m3_s_pa = self
-            .log10_c_port2
-            .as_ref()
-            .map(|s| (s.at(t) * std::f64::consts::LN_10).exp());
-        bc
+        let inputs = inputs_at(&self.p_supply, self.log10_c_port2.as_ref(), t);
+        boundary(setting, inputs)
     }
+}
+
+/// The schedules' values at time t: supply pressure (Pa) and port-2 conductance
+/// (m³/(s·Pa), from its log10).
+fn inputs_at(p_supply: &Schedule, log10_c_port2: Option<&Schedule>, t: f64) -> (f64, Option<f64>) {
+    (
+        p_supply.at(t),
+        log10_c_port2.map(|s| (s.at(t) * std::f64::consts::LN_10).exp()),
+    )
+}
+
+/// The boundary conditions of given inputs (supply pressure, Pa; port-2 conductance,
+/// m³/(s·Pa)), the supply held at least at half the atmosphere.
+fn boundary(setting: &Setting<'_>, (p_supply, c_port2): (f64, Option<f64>)) -> Boundary {
+    let mut bc = Boundary::supplied(
+        p_supply.max(setting.p_atm_pa * 0.5),
+        setting.p_atm_pa,
+        setting.load,
+    );
+    bc.c_port2_m3_s_pa = c_port2;
+    bc
 }
 
 impl Drive for Transient {
@@ -55,15 +101,25 @@ impl Drive for Transient {
         let x0 = steady::free(motor, &bc0, &steady::initial_guess(&bc0))
             .map_err(|e| setting.fail(format!("initial state: {e}")))?;
         let rhs = |t: f64, x: &State| motor.derivatives(x, &self.boundary_at(setting, t));
-        let jacobian =
-            |t: f64, x: &State| motor.derivatives_and_jacobian(x, &self.boundary_at(setting, t));
+        let jacobian = |t: f64, x: &State| {
+            let inputs = inputs_at(&self.p_supply, self.log10_c_port2.as_ref(), t);
+            let bc = boundary(setting, inputs);
+            let rate = self.rate_at(setting, t, inputs.0);
+            let (f, jac, f_t) = motor.derivatives_jacobian_and_time_slope(x, &bc, &rate)?;
+            Some(Slopes {
+                f,
+                jac,
+                f_t: Some(f_t),
+            })
+        };
+        let kinks = |t: f64, x: &State| motor.laminar_margins(x, &self.boundary_at(setting, t));
         let states = solver
-            .solve_with_jacobian(&rhs, &jacobian, t0, x0, times)
+            .solve_with_kinks(&rhs, &jacobian, &kinks, t0, x0, times)
             .map_err(|e| setting.fail(e.to_string()))?;
         let n = times.len();
         let mut out: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
-        for (t, x) in times.iter().zip(&states) {
-            let bc = self.boundary_at(setting, *t);
+        for (inputs, x) in self.row_inputs.iter().zip(&states) {
+            let bc = boundary(setting, *inputs);
             let (flow1, flow2) = motor.port_flows(x, &bc);
             out[0].push(flow1);
             out[1].push(flow2);
