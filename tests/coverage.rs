@@ -240,7 +240,7 @@ fn table(cases: &[Case]) -> String {
         total - misses(cases),
         100.0 * (total - misses(cases)) as f64 / total.max(1) as f64
     );
-    s.push_str("| seed | rate Hz | brake torque | noise ratio | reaches noise | misses |\n|---|---|---|---|---|---|\n");
+    s.push_str("| seed | rate Hz | brake torque | noise ratio | reaches noise | misses | bands held |\n|---|---|---|---|---|---|---|\n");
     for c in cases {
         let missed: Vec<&str> = c
             .checks
@@ -250,13 +250,15 @@ fn table(cases: &[Case]) -> String {
             .collect();
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.3} | {} | {} |",
+            "| {} | {} | {} | {:.3} | {} | {} | {}/{} |",
             c.seed,
             c.rate_hz,
             c.brake_torque,
             c.noise_ratio,
             c.noise_reached,
-            missed.join(", ")
+            missed.join(", "),
+            c.bands.iter().filter(|(_, k)| *k).count(),
+            c.bands.len()
         );
     }
     s
@@ -277,8 +279,16 @@ fn intervals_cover_the_truth_on_twin_data() {
         .flat_map(|c| &c.bands)
         .filter(|(_, k)| *k)
         .count();
+    // The floor comes from the 50-dataset table (`coverage_table`, per-dataset "bands held"),
+    // not from this run: drawing 6 datasets from those 50 (bootstrap, 200 000 draws), the
+    // bands held sum to 62 or more in 99 % of draws (median 78). Bands are correlated within
+    // a dataset, so 84 bands are worth far fewer independent ones; seeds 1–6 hold 66, seed 2
+    // (5 of 14: the estimate in a curved valley of the leakage conductances that a linear,
+    // delta-method band does not follow) being the worst of all 50. The floor was 70 while
+    // the χ² Hessian's jitter made seed 2's covariance indefinite and its fallback bands 7×
+    // too wide, which held the truth by being useless.
     assert!(
-        held >= 70,
+        held >= 62,
         "{held} of 84 predicted bands hold the truth:\n{b}"
     );
     let reached = cases.iter().filter(|c| c.noise_reached).count();
@@ -311,6 +321,18 @@ fn coverage_table() {
     assert!(
         covered as f64 >= 0.9 * total as f64,
         "coverage {covered}/{total}:\n{t}"
+    );
+    // Nominal 95 % bands: 630 of 700 (90.0 %) hold the twin's figure today; below 85 % they
+    // would be clearly over-confident.
+    let bands: usize = cases.iter().map(|c| c.bands.len()).sum();
+    let held: usize = cases
+        .iter()
+        .flat_map(|c| &c.bands)
+        .filter(|(_, k)| *k)
+        .count();
+    assert!(
+        held as f64 >= 0.85 * bands as f64,
+        "bands {held}/{bands}:\n{t}"
     );
 }
 
