@@ -371,18 +371,19 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
     let _lock = crate::io::out::prepare_dir(out)?;
     for table in simulated_tables(&ds, &motor)? {
         let header: Vec<&str> = table.columns.iter().map(|c| c.name.as_str()).collect();
-        let cells: Vec<crate::data::dataset::Cells> = table
-            .columns
-            .iter()
-            .map(|c| match &c.raw {
-                Some(raw) => raw.clone(),
-                None => c.values.iter().map(|x| format!("{x:.6e}")).collect(),
-            })
-            .collect();
         let mut text = header.join(",") + "\n";
-        let rows = cells.first().map_or(0, |c| c.len());
+        // Inputs as recorded, outputs formatted row by row (not gathered first: a column of
+        // cells holds at most 4 GiB of text, and the outputs need not be held twice).
+        let rows = table.columns.first().map_or(0, |c| c.values.len());
         for r in 0..rows {
-            let row: Vec<&str> = cells.iter().map(|c| &c[r]).collect();
+            let row: Vec<String> = table
+                .columns
+                .iter()
+                .map(|c| match &c.raw {
+                    Some(raw) => raw[r].to_string(),
+                    None => format!("{:.6e}", c.values[r]),
+                })
+                .collect();
             text.push_str(&row.join(","));
             text.push('\n');
         }
