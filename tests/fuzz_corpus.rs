@@ -32,6 +32,7 @@ fn every_corpus_file_is_read_or_refused_without_a_panic() {
         ("fitfile", entries::fit_file),
         ("manifest", entries::manifest),
         ("catalogue_value", entries::catalogue_value),
+        ("batch_files", entries::batch_files),
     ] {
         assert!(replay(target, entry) > 0, "{target}: empty corpus");
     }

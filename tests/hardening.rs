@@ -224,6 +224,71 @@ fn a_failed_atomic_write_removes_its_temporary_file() {
     );
 }
 
+/// A starts file whose records are whole JSON but cannot be starts of the run (edited, or
+/// copied from another run): `--resume` refuses it at the line instead of panicking in the
+/// optimizer (a start of too few coordinates did: exit 101) or choosing a best start by a
+/// cost no run gives. Found by hand while fuzzing the files a user's run reads back.
+#[test]
+fn a_starts_file_with_records_of_another_shape_is_refused_at_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fit.json");
+    let fit = |resume: bool| {
+        let mut args = vec![
+            "fit",
+            DATASET,
+            "--starts",
+            "2",
+            "--max-iters",
+            "40",
+            "--estimate",
+            "c_in1,c_out2,t_coulomb",
+            "--uncertainty",
+            "none",
+            "--no-plots",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if resume {
+            args.push("--resume");
+        }
+        vanefit(&args)
+    };
+    assert!(fit(false).status.success());
+    let starts = dir.path().join("fit.starts.jsonl");
+    let text = std::fs::read_to_string(&starts).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let record: serde_json::Value = serde_json::from_str(lines[1]).unwrap();
+    let edited = |key: &str, value: serde_json::Value| {
+        let mut r = record.clone();
+        r[key] = value;
+        format!("{}\n{}\n", lines[0], r)
+    };
+    for (key, value, why) in [
+        (
+            "theta",
+            serde_json::json!([]),
+            "coordinates where the run has 3 parameters",
+        ),
+        (
+            "theta0",
+            serde_json::json!([0.1, 0.2]),
+            "coordinates where the run has 3 parameters",
+        ),
+        (
+            "theta",
+            serde_json::json!([1e308, 1e308, 1e308, 1e308]),
+            "where the run has 3",
+        ),
+    ] {
+        std::fs::write(&starts, edited(key, value)).unwrap();
+        let o = fit(true);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{key}: {e}");
+        assert!(e.contains(&format!("{}:2", starts.display())), "{e}");
+        assert!(e.contains(why) && e.contains("drop --resume"), "{e}");
+    }
+}
+
 #[test]
 fn bad_usage_exits_2_and_bad_input_exits_1() {
     let dir = tempfile::tempdir().unwrap();

@@ -128,7 +128,7 @@ fn converted_files() -> BTreeMap<String, String> {
                 .zip(&units)
                 .map(|(c, u)| {
                     if *u == c.unit {
-                        c.raw[r].clone()
+                        c.raw[r].to_string()
                     } else {
                         written_in(*u, c.si[r], ds.p_atm_pa)
                     }

@@ -178,8 +178,10 @@ impl Manifest {
     }
 
     /// Checks manifest text; `abs` is the file's absolute path (globs resolve against its
-    /// folder), `shown` the path messages name.
-    fn parse(abs: &Path, shown: &Path, text: &str) -> Result<Self, ManifestError> {
+    /// folder), `shown` the path messages name. [`Manifest::load`] without reading the file,
+    /// for callers that have its text (the fuzz target, which would otherwise write a file
+    /// per input).
+    pub fn parse(abs: &Path, shown: &Path, text: &str) -> Result<Self, ManifestError> {
         let src = Source { path: shown, text };
         let raw: RawManifest = toml::from_str(text)
             .map_err(|e| ManifestError(locate_span(shown, text, e.span(), e.message())))?;

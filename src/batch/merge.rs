@@ -39,21 +39,30 @@ struct Row {
     diagnosis: Option<serde_json::Value>,
 }
 
+/// Reads a file's text: the file system for `merge`, memory for the fuzz target.
+pub type ReadText<'a> = &'a dyn Fn(&Path) -> std::io::Result<String>;
+
 /// Reads a unit's status and, for a done fit or diagnosis, its result file; a result file
 /// that cannot be read makes the row failed with the reason.
-fn row(out: &Path, unit: &Unit) -> Row {
+fn row(out: &Path, unit: &Unit, read_text: ReadText<'_>) -> Row {
     let folder = unit.folder(out);
-    let (mut status, mut message) = match UnitStatus::read(&folder) {
+    let status = read_text(&folder.join("status.json"))
+        .ok()
+        .and_then(|t| UnitStatus::parse(&t));
+    let (mut status, mut message) = match status {
         Some(s) => (s.status, s.message),
         None => (State::Pending, String::new()),
     };
     let (mut fit, mut diagnosis) = (None, None);
     if status == State::Done {
         let read = match unit.task {
-            TaskKind::Fit => FitFile::read(&folder.join("fit.json"))
-                .map(|f| fit = Some(f))
-                .map_err(|e| e.to_string()),
-            TaskKind::Diagnose => std::fs::read_to_string(folder.join("diagnosis.json"))
+            TaskKind::Fit => {
+                let path = folder.join("fit.json");
+                FitFile::from_read(&path, read_text(&path))
+                    .map(|f| fit = Some(f))
+                    .map_err(|e| e.to_string())
+            }
+            TaskKind::Diagnose => read_text(&folder.join("diagnosis.json"))
                 .map_err(|e| format!("diagnosis.json: {e}"))
                 .and_then(|t| serde_json::from_str(&t).map_err(|e| format!("diagnosis.json: {e}")))
                 .map(|v| diagnosis = Some(v)),
@@ -275,10 +284,27 @@ fn fleet_plot(rows: &[Row], names: &[&str]) -> Option<Figure> {
     Some(Figure::new(panels, 2))
 }
 
-/// Merges the batch folder `out` into `summary.csv`, `summary.md` and `fleet.svg`.
-pub fn merge(out: &Path) -> Result<MergeOutcome, BatchError> {
-    let record = BatchRecord::read(out)?;
-    let rows: Vec<Row> = record.units.iter().map(|u| row(out, u)).collect();
+/// What `merge` writes, in memory.
+pub struct Summary {
+    /// The units' counts (nothing written yet).
+    pub outcome: MergeOutcome,
+    /// `summary.csv`.
+    pub csv: String,
+    /// `summary.md`.
+    pub md: String,
+    /// `fleet.svg`, when some fit estimated a parameter.
+    pub fleet: Option<Figure>,
+}
+
+/// The summary of the batch `record` in folder `out`, from its unit folders' files as
+/// `read_text` gives them: everything `merge` reads and computes, without writing, so that
+/// the fuzz target can serve the files a user may have edited from memory.
+pub fn summarize(out: &Path, record: &BatchRecord, read_text: ReadText<'_>) -> Summary {
+    let rows: Vec<Row> = record
+        .units
+        .iter()
+        .map(|u| row(out, u, read_text))
+        .collect();
     let names = parameter_names(&rows);
     let mut outcome = MergeOutcome {
         units: rows.len(),
@@ -291,19 +317,28 @@ pub fn merge(out: &Path) -> Result<MergeOutcome, BatchError> {
             _ => outcome.unfinished.push(r.unit.label()),
         }
     }
+    Summary {
+        outcome,
+        csv: summary_csv(&rows, &names),
+        md: summary_md(record, &rows, &names),
+        fleet: fleet_plot(&rows, &names),
+    }
+}
+
+/// Merges the batch folder `out` into `summary.csv`, `summary.md` and `fleet.svg`.
+pub fn merge(out: &Path) -> Result<MergeOutcome, BatchError> {
+    let record = BatchRecord::read(out)?;
+    let summary = summarize(out, &record, &|p: &Path| std::fs::read_to_string(p));
+    let mut outcome = summary.outcome;
     let write = |name: &str, text: &str| {
         let path = out.join(name);
         crate::io::write_atomic(&path, text.as_bytes())
             .map(|()| path.clone())
             .map_err(|source| BatchError::Io { path, source })
     };
-    outcome
-        .written
-        .push(write("summary.csv", &summary_csv(&rows, &names))?);
-    outcome
-        .written
-        .push(write("summary.md", &summary_md(&record, &rows, &names))?);
-    if let Some(fig) = fleet_plot(&rows, &names) {
+    outcome.written.push(write("summary.csv", &summary.csv)?);
+    outcome.written.push(write("summary.md", &summary.md)?);
+    if let Some(fig) = summary.fleet {
         let path = out.join("fleet.svg");
         fig.write_svg(&path)?;
         outcome.written.push(path);

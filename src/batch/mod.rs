@@ -103,7 +103,16 @@ impl BatchRecord {
             why,
         };
         let text = std::fs::read_to_string(&path).map_err(|e| not_a_batch(e.to_string()))?;
-        let record: Self = serde_json::from_str(&text).map_err(|e| not_a_batch(e.to_string()))?;
+        Self::parse(out, &text)
+    }
+
+    /// The record whose `batch.json` in `out` holds `text` (as [`BatchRecord::read`]).
+    pub fn parse(out: &Path, text: &str) -> Result<Self, BatchError> {
+        let not_a_batch = |why: String| BatchError::NotABatch {
+            path: out.to_path_buf(),
+            why,
+        };
+        let record: Self = serde_json::from_str(text).map_err(|e| not_a_batch(e.to_string()))?;
         if record.format != BATCH_FORMAT {
             return Err(not_a_batch(format!("format '{}'", record.format)));
         }

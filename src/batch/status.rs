@@ -74,7 +74,12 @@ impl UnitStatus {
     /// (a unit without a readable status is not finished: it runs).
     pub fn read(folder: &Path) -> Option<Self> {
         let text = std::fs::read_to_string(folder.join("status.json")).ok()?;
-        serde_json::from_str(&text).ok()
+        Self::parse(&text)
+    }
+
+    /// A status file's text read; `None` when it is not one (as [`UnitStatus::read`]).
+    pub fn parse(text: &str) -> Option<Self> {
+        serde_json::from_str(text).ok()
     }
 
     /// Writes the status file into `folder` atomically.

@@ -72,7 +72,7 @@ pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
         let cells: Vec<String> = cols
             .iter()
             .map(|c| match c.si[r].is_finite() {
-                true => format!("{:>9} → {:<11}", c.raw[r], num(c.si[r])),
+                true => format!("{:>9} → {:<11}", &c.raw[r], num(c.si[r])),
                 false => format!("{:>9}   {:<11}", "-", ""),
             })
             .collect();

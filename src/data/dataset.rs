@@ -6,7 +6,9 @@ pub use crate::data::motor::MotorSection;
 use crate::model::motor::Load;
 use crate::model::params::MotorParams;
 use crate::sim::experiment::InputCheck;
-pub use crate::sim::recording::{Column, ExperimentData, Figure, Kind, MissingColumn, Recording};
+pub use crate::sim::recording::{
+    Cells, Column, ExperimentData, Figure, Kind, MissingColumn, Recording,
+};
 
 pub mod catalogue;
 mod plausible;
@@ -120,7 +122,7 @@ fn header_columns(path: &Path, headers: &csv::StringRecord) -> Result<Vec<Column
             quantity,
             unit,
             si: Vec::new(),
-            raw: Vec::new(),
+            raw: Cells::new(),
         });
     }
     Ok(columns)
@@ -218,6 +220,15 @@ impl Recording {
             )
             .at(1));
         }
+        if text.len() > Cells::MAX_TEXT {
+            return Err(DataError::new(
+                path,
+                format!(
+                    "file of {} bytes is larger than the 4 GiB vanefit reads; split the recording",
+                    text.len()
+                ),
+            ));
+        }
         refuse_other_separators(path, text)?;
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(true)
@@ -228,7 +239,13 @@ impl Recording {
             .map_err(|e| DataError::new(path, format!("unreadable header: {e}")).at(1))?
             .clone();
         let mut columns = header_columns(path, &headers)?;
-        let mut lines: Vec<u64> = Vec::new();
+        // Room for every row at once (a line per row, give or take the header and blank
+        // lines): the buffers of a large recording then grow once instead of doubling.
+        let rows = text.bytes().filter(|b| *b == b'\n').count() + 1;
+        for c in &mut columns {
+            c.si.reserve_exact(rows);
+        }
+        let mut lines: Vec<u64> = Vec::with_capacity(rows);
         for record in reader.records() {
             let record = record.map_err(|e| {
                 let next = lines.last().map_or(2, |l| l + 1);
@@ -251,7 +268,7 @@ impl Recording {
             for (i, (field, col)) in record.iter().zip(columns.iter_mut()).enumerate() {
                 if sparse && field.is_empty() {
                     col.si.push(f64::NAN);
-                    col.raw.push(String::new());
+                    col.raw.push("");
                     continue;
                 }
                 let v: f64 = field.parse().map_err(|_| {
@@ -262,7 +279,7 @@ impl Recording {
                     .at(line)
                     .col(i, &col.name)
                 })?;
-                let si = col.unit.parse_si(field, p_atm_pa).unwrap_or(f64::NAN);
+                let si = col.unit.parsed_si(field, v, p_atm_pa).unwrap_or(f64::NAN);
                 if !(v.is_finite() && si.is_finite()) {
                     return Err(
                         DataError::new(path, format!("'{field}' is not a finite number"))
@@ -271,7 +288,7 @@ impl Recording {
                     );
                 }
                 col.si.push(si);
-                col.raw.push(field.to_string());
+                col.raw.push(field);
             }
             lines.push(line);
         }
@@ -302,8 +319,8 @@ impl Recording {
                     &self.file,
                     format!(
                         "time does not increase ({} after {})",
-                        col.raw[k],
-                        col.raw[k - 1]
+                        &col.raw[k],
+                        &col.raw[k - 1]
                     ),
                 )
                 .at(self.lines[k])
@@ -344,8 +361,8 @@ impl Recording {
                 format!(
                     "{} does not span a range: from line {first} to line {last} it stays between {} and {} (needs a spread of more than {}% of its magnitude)",
                     q.prefix(),
-                    col.raw[ilo],
-                    col.raw[ihi],
+                    &col.raw[ilo],
+                    &col.raw[ihi],
                     min_relative_span * 100.0
                 ),
             )
@@ -465,13 +482,22 @@ impl Dataset {
             return Err(DataError::new(dir, "dataset folder not found"));
         }
         let text = read_text(&rig_path)?;
+        Self::from_rig_text(dir, &text)
+    }
+
+    /// The dataset whose `rig.toml` holds `text` (messages name `<dir>/rig.toml`), with the
+    /// recordings it names read from `dir`: [`Dataset::load`] without reading rig.toml, for
+    /// callers that have its text already (the fuzz target, which would otherwise write a
+    /// file per input).
+    pub fn from_rig_text(dir: &Path, text: &str) -> Result<Self, DataError> {
+        let rig_path = dir.join("rig.toml");
         let rig: RigFile =
-            toml::from_str(&text).map_err(|e| locate_toml_error(&rig_path, &text, &e))?;
-        check_rig(&rig_path, &text, &rig)?;
+            toml::from_str(text).map_err(|e| locate_toml_error(&rig_path, text, &e))?;
+        check_rig(&rig_path, text, &rig)?;
         let p_atm_pa = rig.conditions.p_atm_pa;
         let mut experiments = Vec::with_capacity(rig.experiment.len());
         for (k, ex) in rig.experiment.iter().enumerate() {
-            let data = experiment_data(dir, (&rig_path, &text), k, ex, p_atm_pa)?;
+            let data = experiment_data(dir, (&rig_path, text), k, ex, p_atm_pa)?;
             check_experiment(&data)?;
             plausible::check_recording(&data.recording, p_atm_pa)?;
             experiments.push(data);
@@ -907,7 +933,7 @@ fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
                     &rec.file,
                     format!(
                         "'{}' is not a possible pressure (absolute pressure must be > 0)",
-                        col.raw[k]
+                        &col.raw[k]
                     ),
                 )
                 .at(rec.lines[k])
@@ -983,6 +1009,23 @@ mod tests {
             .unwrap_err()
             .message
             .contains("finite"));
+    }
+
+    #[test]
+    fn cells_are_kept_as_written() {
+        let text = "speed_rpm,torque_nm\n 1.50 ,\n2e3,0.25\n";
+        let r = Recording::parse_sparse(Path::new("x.csv"), text, 101_325.0).unwrap();
+        let speed = &r.columns[0].raw;
+        assert_eq!(
+            (speed.len(), &speed[0], speed.get(1)),
+            (2, "1.50", Some("2e3"))
+        );
+        assert_eq!(speed.get(2), None);
+        let torque: Vec<&str> = r.columns[1].raw.iter().collect();
+        assert_eq!(torque, ["", "0.25"]);
+        let cells: Cells = ["a", "", "bc"].into_iter().collect();
+        assert_eq!(cells.to_strings(), ["a", "", "bc"]);
+        assert_eq!(cells, ["a", "", "bc"].into_iter().collect::<Cells>());
     }
 
     #[test]

@@ -469,7 +469,13 @@ impl FitFile {
 
     /// Reads a fit file from disk.
     pub fn read(path: &Path) -> Result<Self, FitFileError> {
-        let text = std::fs::read_to_string(path).map_err(|e| FitFileError {
+        Self::from_read(path, std::fs::read_to_string(path))
+    }
+
+    /// The fit file at `path` from the result of reading its text: [`FitFile::read`] for
+    /// callers that read files their own way (`merge`'s summary, in memory when fuzzed).
+    pub fn from_read(path: &Path, text: std::io::Result<String>) -> Result<Self, FitFileError> {
+        let text = text.map_err(|e| FitFileError {
             file: path.to_path_buf(),
             line: None,
             message: format!("cannot read: {e}"),

@@ -281,7 +281,7 @@ pub fn recording_csv(rec: &Recording) -> String {
         .join(",");
     s.push('\n');
     for r in 0..rec.rows() {
-        let row: Vec<&str> = rec.columns.iter().map(|c| c.raw[r].as_str()).collect();
+        let row: Vec<&str> = rec.columns.iter().map(|c| &c.raw[r]).collect();
         s.push_str(&row.join(","));
         s.push('\n');
     }

@@ -21,6 +21,32 @@ struct Header {
 
 const RESULTS_FORMAT: &str = "vanefit.starts/1";
 
+/// Why a whole, readable record cannot be a finished start of a run with `n` parameters
+/// (an edited or foreign file): the optimizer would be handed points of the wrong dimension
+/// (a panic) and the best start chosen by a cost no run can give. `None` when it can be.
+fn not_of_this_run(r: &StartResult, n: usize) -> Option<String> {
+    let index = r.index;
+    for (key, point) in [("theta0", &r.theta0), ("theta", &r.theta)] {
+        if point.len() != n {
+            return Some(format!(
+                "start {index}: {key} has {} coordinates where the run has {n} parameters",
+                point.len()
+            ));
+        }
+    }
+    if !r.theta0.iter().chain(&r.theta).all(|v| v.is_finite()) {
+        return Some(format!(
+            "start {index} has a coordinate that is not a finite number"
+        ));
+    }
+    if !r.cost.is_finite() || !r.history.iter().all(|c| c.is_finite()) {
+        return Some(format!(
+            "start {index} has a cost that is not a finite number"
+        ));
+    }
+    None
+}
+
 /// Append-only file of finished starts (JSON lines).
 pub struct ResultsFile {
     path: PathBuf,
@@ -86,6 +112,12 @@ impl ResultsFile {
             let line = line.map_err(|e| self.bad_line(i + 2, e.to_string()))?;
             // A line cut short by an interruption is simply not finished.
             if let Ok(r) = serde_json::from_str::<StartResult>(&line) {
+                if let Some(why) = not_of_this_run(&r, space.len()) {
+                    return Err(self.bad_line(
+                        i + 2,
+                        format!("{why}: not a start of this run; remove the file or drop --resume"),
+                    ));
+                }
                 if r.index < cfg.starts() && !out.iter().any(|o: &StartResult| o.index == r.index) {
                     out.push(r);
                 }

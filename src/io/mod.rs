@@ -3,6 +3,7 @@
 
 pub mod lock;
 pub mod out;
+pub mod stale;
 
 use std::io::Write;
 use std::path::Path;
@@ -13,17 +14,20 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// The temporary file is removed again when any step fails (a full disk, a folder that
 /// vanished), so a failed write leaves nothing behind. A missing folder is created, but
 /// commands create and check their output folders before they compute (see [`out`]).
+/// A run killed between creating and renaming its temporary cannot remove it; the first
+/// atomic write of a later run into the folder does ([`stale`]).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir)?;
+    stale::remove_once(dir);
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    let tmp = dir.join(stale::temporary_name(&name));
     let written = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;

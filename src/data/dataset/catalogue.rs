@@ -355,7 +355,7 @@ pub(super) fn recording(
                 quantity: q,
                 unit,
                 si: vec![f64::NAN; n_before],
-                raw: vec![String::new(); n_before],
+                raw: std::iter::repeat_n("", n_before).collect(),
             });
         }
     }
@@ -373,7 +373,7 @@ pub(super) fn recording(
                 Some((v, _)) => (v, format!("{}", col.unit.from_si(v, src.p_atm_pa))),
             };
             col.si.push(si);
-            col.raw.push(raw);
+            col.raw.push(&raw);
         }
         rec.lines.push(line);
     }
@@ -408,7 +408,7 @@ fn check_curves(rec: &Recording, tolerance: f64) -> Result<(), DataError> {
                 return Err(locate(q, i, "every catalogue point needs its speed".into()));
             }
             if *v < 0.0 {
-                return Err(locate(q, i, format!("'{}' must be >= 0", col.raw[i])));
+                return Err(locate(q, i, format!("'{}' must be >= 0", &col.raw[i])));
             }
         }
     }
