@@ -5,15 +5,13 @@
 use crate::data::dataset::catalogue::FIGURES;
 use crate::data::dataset::{ExperimentData, Kind};
 use crate::io::say;
+use crate::units::format::trim_zeros;
 use crate::units::{Quantity, Unit};
 
 /// A number for people: 5 significant digits.
 fn num(v: f64) -> String {
     if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
-        format!("{:.5}", v)
-            .trim_end_matches('0')
-            .trim_end_matches('.')
-            .to_string()
+        trim_zeros(&format!("{v:.5}"))
     } else {
         format!("{v:.4e}")
     }

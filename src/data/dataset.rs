@@ -925,22 +925,6 @@ fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
         )
         .at(1));
     }
-    for q in [Quantity::PPort1, Quantity::PPort2] {
-        if let Some(i) = rec.columns.iter().position(|c| c.quantity == q) {
-            let col = &rec.columns[i];
-            if let Some(k) = col.si.iter().position(|v| *v <= 0.0) {
-                return Err(DataError::new(
-                    &rec.file,
-                    format!(
-                        "'{}' is not a possible pressure (absolute pressure must be > 0)",
-                        &col.raw[k]
-                    ),
-                )
-                .at(rec.lines[k])
-                .col(i, &col.name));
-            }
-        }
-    }
     Ok(())
 }
 

@@ -10,6 +10,7 @@
 use crate::model::params::{
     conductance_dm3_s_bar, spec, CATALOGUE_CONDUCTANCE_UNIT, CONDUCTANCE_UNIT,
 };
+use crate::units::format::trim_zeros;
 
 /// What the cost J is.
 pub const COST_J: &str = "cost J = sum over experiments and channels of \
@@ -45,26 +46,14 @@ pub fn number(v: f64, digits: usize) -> String {
         return format!("{v}");
     }
     if a != 0.0 && !(1e-3..1e5).contains(&a) {
-        let s = format!("{v:.*e}", digits.saturating_sub(1));
-        let (mantissa, exponent) = s.split_once('e').expect("scientific notation");
-        let mantissa = if mantissa.contains('.') {
-            mantissa.trim_end_matches('0').trim_end_matches('.')
-        } else {
-            mantissa
-        };
-        return format!("{mantissa}e{exponent}");
+        return trim_zeros(&format!("{v:.*e}", digits.saturating_sub(1)));
     }
     let decimals = if a == 0.0 {
         0
     } else {
         (digits as i32 - 1 - a.log10().floor() as i32).max(0) as usize
     };
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
+    trim_zeros(&format!("{v:.decimals$}"))
 }
 
 /// A conductance in both units: `6.7583e-9 m3/(s*Pa) (0.67583 dm3/(s*bar))`.

@@ -9,7 +9,14 @@ pub fn short(v: f64) -> String {
     } else {
         format!("{v:.3e}")
     };
-    let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, ""));
+    trim_zeros(&s)
+}
+
+/// `s`, a formatted number, without the trailing zeros of its mantissa (and without a
+/// trailing point): `0.730000` → `0.73`, `1.000e30` → `1e30`; a number without a point is
+/// left as it is.
+pub fn trim_zeros(s: &str) -> String {
+    let (mantissa, exponent) = s.split_once('e').unwrap_or((s, ""));
     let mantissa = if mantissa.contains('.') {
         mantissa.trim_end_matches('0').trim_end_matches('.')
     } else {

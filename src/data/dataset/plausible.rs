@@ -50,6 +50,23 @@ fn range(q: Quantity) -> (f64, f64, &'static str) {
 /// Refuses the first value of any column outside its quantity's range, naming its line,
 /// column, the value in the column's own unit and the range in that unit.
 pub(super) fn check_recording(rec: &Recording, p_atm_pa: f64) -> Result<(), DataError> {
+    // No pressure at all is said in the user's own text before any range is.
+    for q in [Quantity::PPort1, Quantity::PPort2] {
+        if let Some(i) = rec.columns.iter().position(|c| c.quantity == q) {
+            let col = &rec.columns[i];
+            if let Some(k) = col.si.iter().position(|v| *v <= 0.0) {
+                return Err(DataError::new(
+                    &rec.file,
+                    format!(
+                        "'{}' is not a possible pressure (absolute pressure must be > 0)",
+                        &col.raw[k]
+                    ),
+                )
+                .at(rec.lines[k])
+                .col(i, &col.name));
+            }
+        }
+    }
     for (i, col) in rec.columns.iter().enumerate() {
         let (lo, hi, what) = range(col.quantity);
         // NaN is an empty cell of a catalogue page (dense recordings refuse it earlier).
