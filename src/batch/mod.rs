@@ -11,6 +11,7 @@
 
 pub mod manifest;
 pub mod merge;
+mod options;
 pub mod plan;
 mod progress;
 pub mod run;
@@ -19,6 +20,7 @@ pub mod status;
 
 pub use manifest::{Manifest, ManifestError, TaskKind};
 pub use merge::{merge, MergeOutcome};
+pub use options::{BatchOptions, BatchSettings};
 pub use plan::{Shard, Unit};
 pub use run::{run, RunOptions, RunOutcome};
 
