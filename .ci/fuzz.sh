@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# A short coverage-guided fuzz run per target (issue 15): every target of fuzz/ for
+# A short coverage-guided fuzz run per target: every target of fuzz/ for
 # FUZZ_SECONDS (default 10) from its committed corpus (fuzz/corpus/<target>), failing on a
 # crash, a panic or a hang. The corpus itself is replayed by `cargo test` too
 # (tests/fuzz_corpus.rs); this adds mutations. The long campaigns (10 million executions
-# per target) are run by hand, see the README's hardening paragraph.
+# per target) are run by hand, see docs/validation.md, "Hardening".
 #
 # The cheapest real cargo-fuzz build: unoptimised and without debug information. Measured
 # on the 2-core machine with a fuzzer and other builds beside it: cold build 2 min 31 s,
