@@ -1,6 +1,6 @@
 //! Writes one twin-generator dataset (tests/twin: an independent implementation of the
 //! physics of docs/model.md) with chosen noise, offsets and missing physics, e.g. for the
-//! README's diagnosis cases:
+//! diagnosis cases of docs/validation.md:
 //!
 //! ```text
 //! cargo run --release --example twin_dataset -- OUT_DIR [--seed S] [--rate HZ]
