@@ -8,7 +8,7 @@
 //! `check` and made `fit` exit 0 with a cost of 6e75, and a port pressure of 1e30 MPa in
 //! one row was simulated into flows of 1e29 g/s.
 
-mod common;
+use crate::common;
 
 use common::{stderr, vanefit, DATASET};
 use std::path::Path;

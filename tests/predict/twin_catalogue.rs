@@ -3,7 +3,7 @@
 //! vanefit predicts them from a fit file, and as the independent twin (its own model,
 //! integrator, steady states and golden-section search) computes them.
 
-mod twin;
+use crate::twin;
 
 use std::path::Path;
 use std::process::Command;

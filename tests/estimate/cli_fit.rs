@@ -2,7 +2,7 @@
 //! `simulate --params` reads back, a resumed run reproduces it, and bad options exit 1 with
 //! the option named (bad usage: 2).
 
-mod common;
+use crate::common;
 use common::{stderr, vanefit, DATASET};
 
 use std::path::Path;

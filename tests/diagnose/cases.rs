@@ -33,9 +33,8 @@
 //! cargo test --release --test diagnose -- --ignored --nocapture full_results_table
 //! ```
 
-mod diagnose_support;
-#[allow(clippy::type_complexity)] // the twin generator is another engineer's code
-mod twin;
+use crate::support as diagnose_support;
+use crate::twin;
 
 use diagnose_support::{dataset, issue_noise, perturbed_base, synthesize, synthesize_with};
 use std::time::Instant;

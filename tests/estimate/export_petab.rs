@@ -7,7 +7,7 @@
 //! from the tables and the simulated rows, and bad input is refused with exit status 1.
 //! (The PEtab library's own linter and χ² are run on the same export by the Python tests.)
 
-mod common;
+use crate::common;
 use common::{stderr, vanefit, vanefit_in, DATASET};
 
 use std::collections::{BTreeMap, BTreeSet};

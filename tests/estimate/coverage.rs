@@ -16,11 +16,10 @@
 //! parameter) is `#[ignore]`d and writes `target/coverage-table.md`:
 //!
 //! ```sh
-//! cargo test --release --test coverage -- --ignored --nocapture coverage_table
+//! cargo test --release --test estimate -- --ignored --nocapture coverage_table
 //! ```
 
-#[allow(clippy::type_complexity)]
-mod twin;
+use crate::twin;
 
 use std::fmt::Write as _;
 use vanefit::data::dataset::Dataset;

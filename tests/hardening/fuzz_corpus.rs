@@ -3,7 +3,7 @@
 //! cheap CI half of issue 15's fuzzing; a crash the fuzzer finds is added to the corpus (or
 //! as a test here) and stays fixed.
 
-#[path = "../fuzz/entries.rs"]
+#[path = "../../fuzz/entries.rs"]
 mod entries;
 
 use std::path::Path;

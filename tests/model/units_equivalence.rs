@@ -4,7 +4,7 @@
 //! throttle in dm³/(s·bar), row for row. It is written by `regenerate_units_dataset` below:
 //!
 //! ```text
-//! cargo test --test units_equivalence -- --ignored regenerate_units_dataset
+//! cargo test --test model -- --ignored regenerate_units_dataset
 //! ```
 //!
 //! and `shipped_units_dataset_is_up_to_date` checks the shipped copy against it.

@@ -8,9 +8,9 @@
 //! not even around the breakaway jump of the stiction case (both models regularise friction
 //! with tanh(ω/ω_reg), so the jump is steep but continuous and both resolve it).
 //!
-//! Run with `cargo test --release --test twin_agreement -- --nocapture` to see the figures.
+//! Run with `cargo test --release --test model twin_agreement -- --nocapture` to see the figures.
 
-mod twin;
+use crate::twin;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! Issue 15, hardened: a closed stdout, progress in logs, two runs on one output, outputs
 //! checked before work, exit codes of bad usage, and `check` of a long recording.
 
-mod common;
+use crate::common;
 use common::{stderr, vanefit, DATASET};
 
 use std::path::Path;
