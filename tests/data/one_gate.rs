@@ -1,4 +1,4 @@
-//! One gate for values (issue 15): `check` refuses every value that `fit`, `simulate`,
+//! One gate for values: `check` refuses every value that `fit`, `simulate`,
 //! `diagnose` or `export-petab --dataset` would refuse, with the same located message, and
 //! exit status 1.
 //!

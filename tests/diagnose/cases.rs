@@ -1,4 +1,4 @@
-//! The missing-physics diagnosis proved on synthetic data with known truth (issue 5).
+//! The missing-physics diagnosis proved on synthetic data with known truth.
 //!
 //! Every dataset is the paper's three experiments simulated with typical sensor noise
 //! (on the outputs AND on the recorded inputs) from a motor whose base parameters are moved
@@ -33,7 +33,7 @@
 //! cargo test --release --test diagnose -- --ignored --nocapture full_results_table
 //! ```
 
-use crate::support::{dataset, issue_noise, perturbed_base, synthesize, synthesize_with};
+use crate::support::{dataset, perturbed_base, rig_noise, synthesize, synthesize_with};
 use std::time::Instant;
 use vanefit::diagnose::{
     diagnose, discover, noise_ratio_limit, summary, to_json, Candidate, DiagnoseOptions, Diagnosis,
@@ -52,9 +52,9 @@ pub(crate) enum Expect {
     /// A discovered term in this balance with this feature; relative tolerance of the
     /// coefficient.
     Uncatalogued(BalanceId, &'static str, f64),
-    /// Exactly these effects, each parameter within its relative tolerance (issue 11).
+    /// Exactly these effects, each parameter within its relative tolerance.
     Effects(Vec<Effect>, Vec<(&'static str, f64)>),
-    /// One discovered leak along this path with this flow law (issue 11); relative
+    /// One discovered leak along this path with this flow law; relative
     /// tolerance of the coefficient.
     Leak(LeakPath, PressureFactor, f64),
 }
@@ -64,25 +64,26 @@ pub(crate) struct Case {
     pub(crate) params: Vec<(&'static str, f64)>,
     pub(crate) extra: Vec<ExtraTerm>,
     pub(crate) expect: Expect,
-    /// Issue 11's recordings: 20 Hz, its noise levels ([`crate::support::issue_noise`]),
-    /// the effect visible (not concealed).
-    pub(crate) issue11: bool,
+    /// Recorded as a test rig would: 20 Hz, a rig's noise levels
+    /// ([`crate::support::rig_noise`]), the effect visible (not concealed).
+    pub(crate) rig: bool,
 }
 
-/// Issue 11's cases (20 Hz, its noise, effects clearly visible).
-pub(crate) fn issue_case(name: &str) -> Option<Case> {
-    let issue = |effects: EffectSet, params: Vec<(&'static str, f64)>, extra, expect| Case {
+/// The rig cases (20 Hz, a rig's noise, effects clearly visible): effects that are not
+/// concealed must be named exactly, with their parameters.
+pub(crate) fn rig_case(name: &str) -> Option<Case> {
+    let rig = |effects: EffectSet, params: Vec<(&'static str, f64)>, extra, expect| Case {
         effects,
         params,
         extra,
         expect,
-        issue11: true,
+        rig: true,
     };
     let t_c = perturbed_base().t_coulomb();
     Some(match name {
-        "clean (issue noise)" => issue(EffectSet::empty(), Vec::new(), Vec::new(), Expect::Nothing),
+        "clean (rig noise)" => rig(EffectSet::empty(), Vec::new(), Vec::new(), Expect::Nothing),
         // Static friction 3× Coulomb, Stribeck speed 8 rad/s: a late start in the ramp.
-        "stiction" => issue(
+        "stiction" => rig(
             EffectSet::empty().with(Effect::BreakawayFriction),
             vec![("t_static", 3.0 * t_c), ("w_stribeck", 8.0)],
             Vec::new(),
@@ -92,7 +93,7 @@ pub(crate) fn issue_case(name: &str) -> Option<Case> {
             ),
         ),
         // Worn vane tips: V1 -> Ve growing with (p1 - pe)², ≈ 0.15 g/s at full supply.
-        "dp2 leak v1-ve" => issue(
+        "dp2 leak v1-ve" => rig(
             EffectSet::empty(),
             Vec::new(),
             vec![ExtraTerm::leak(
@@ -107,7 +108,7 @@ pub(crate) fn issue_case(name: &str) -> Option<Case> {
                 0.2,
             ),
         ),
-        "leakage+vane pair" => issue(
+        "leakage+vane pair" => rig(
             EffectSet::empty()
                 .with(Effect::SpeedDependentLeakage)
                 .with(Effect::VaneFrictionSpeedSquared),
@@ -126,7 +127,7 @@ pub(crate) fn issue_case(name: &str) -> Option<Case> {
 }
 
 pub(crate) fn case(name: &str) -> Case {
-    if let Some(c) = issue_case(name) {
+    if let Some(c) = rig_case(name) {
         return c;
     }
     let effect = |e: Effect, params: Vec<(&'static str, f64)>, main: &'static str, tol: f64| Case {
@@ -134,7 +135,7 @@ pub(crate) fn case(name: &str) -> Case {
         params,
         extra: Vec::new(),
         expect: Expect::Effect(e, main, tol),
-        issue11: false,
+        rig: false,
     };
     match name {
         "clean" => Case {
@@ -142,7 +143,7 @@ pub(crate) fn case(name: &str) -> Case {
             params: Vec::new(),
             extra: Vec::new(),
             expect: Expect::Nothing,
-            issue11: false,
+            rig: false,
         },
         "breakaway_friction" => effect(
             Effect::BreakawayFriction,
@@ -196,7 +197,7 @@ pub(crate) fn case(name: &str) -> Case {
                 coefficient: 3e-11,
             }],
             expect: Expect::Uncatalogued(BalanceId::Torque, "p2*omega", 0.15),
-            issue11: false,
+            rig: false,
         },
         "uncatalogued leak" => Case {
             effects: EffectSet::empty(),
@@ -208,7 +209,7 @@ pub(crate) fn case(name: &str) -> Case {
                 coefficient: -2e-8,
             }],
             expect: Expect::Uncatalogued(BalanceId::Mass1, "omega", 0.15),
-            issue11: false,
+            rig: false,
         },
         _ => panic!("no case {name}"),
     }
@@ -240,7 +241,7 @@ pub(crate) fn check(c: &Case, motor: &Motor, d: &Diagnosis) -> Result<(), String
     let conc = d.concealment.as_ref().ok_or("no concealment test")?;
     // Concealed: every experiment fitted alone passes the noise-ratio test.
     for e in &conc.experiments {
-        if !c.issue11 && e.alone_ratio >= e.alone_limit {
+        if !c.rig && e.alone_ratio >= e.alone_limit {
             return Err(format!(
                 "not concealed: {} alone has noise ratio {:.3} (limit {:.3})",
                 e.file, e.alone_ratio, e.alone_limit
@@ -297,7 +298,7 @@ pub(crate) fn check(c: &Case, motor: &Motor, d: &Diagnosis) -> Result<(), String
         }
         Expect::Leak(path, law, tol) => check_leak(*path, *law, *tol, c.extra[0].coefficient, d)?,
     }
-    if c.issue11 && after > ISSUE_RATIO {
+    if c.rig && after > RIG_RATIO {
         return Err(format!("noise ratio {before:.3} -> {after:.3}"));
     }
     if !matches!(c.expect, Expect::Nothing) {
@@ -315,8 +316,8 @@ pub(crate) fn check(c: &Case, motor: &Motor, d: &Diagnosis) -> Result<(), String
     Ok(())
 }
 
-/// Noise ratio an issue-11 case must reach with the selected model.
-pub(crate) const ISSUE_RATIO: f64 = 1.1;
+/// Noise ratio a rig case must reach with the selected model.
+pub(crate) const RIG_RATIO: f64 = 1.1;
 
 /// The selected effects are exactly `effects`, each parameter near the truth.
 pub(crate) fn check_effects(
@@ -382,8 +383,8 @@ pub(crate) fn check_leak(
 pub(crate) fn run(name: &str, opts: &DiagnoseOptions) -> (Row, Diagnosis) {
     let c = case(name);
     let motor = truth(&c);
-    let experiments = if c.issue11 {
-        synthesize_with(&motor, 11, &issue_noise())
+    let experiments = if c.rig {
+        synthesize_with(&motor, 11, &rig_noise())
     } else {
         synthesize(&motor, 11)
     };
@@ -515,8 +516,8 @@ pub(crate) fn print_candidates(d: &Diagnosis) {
     }
 }
 
-/// An issue-11 case with quick options, its summary and JSON checked.
-pub(crate) fn assert_issue_case(name: &str) -> Diagnosis {
+/// A rig case with quick options, its summary and JSON checked.
+pub(crate) fn assert_rig_case(name: &str) -> Diagnosis {
     let d = assert_case(name);
     let v = to_json(&d);
     for (s, e) in v["selected"].as_array().unwrap().iter().zip(&d.selected) {

@@ -6,7 +6,8 @@ use vanefit::diagnose::{to_json, DiagnoseOptions};
 #[test]
 fn clean_dataset_has_no_mismatch_and_the_output_follows_spec() {
     let d = assert_case("clean");
-    // diagnosis.json exactly in SPEC §6 form, report and plots next to it.
+    // diagnosis.json exactly in the form of (docs/formats.md, "Diagnosis"), report and
+    // plots next to it.
     let dir = tempfile::tempdir().unwrap();
     vanefit::report::diagnose::write_all(&d, dir.path()).unwrap();
     let text = std::fs::read_to_string(dir.path().join("diagnosis.json")).unwrap();
@@ -45,7 +46,7 @@ fn clean_dataset_has_no_mismatch_and_the_output_follows_spec() {
     assert_eq!(to_json(&d), v);
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(report.contains("valve_dynamics"), "{report}");
-    // Issue 12: read without the source. Every parameter id with its meaning, conductances
+    // Read without the source. Every parameter id with its meaning, conductances
     // also in the catalogues' dm3/(s*bar), and what cost J and the noise ratio are.
     for needle in [
         "`c_1e` (leak, inlet side → exhaust)",
@@ -170,22 +171,22 @@ fn full_results_table() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-/// Issue 11: static friction 3× Coulomb with a Stribeck speed of 8 rad/s starts the motor
+/// Static friction 3× Coulomb with a Stribeck speed of 8 rad/s starts the motor
 /// late in the ramp; breakaway friction alone explains it, its Stribeck speed estimated.
 /// ω_s is weakly determined by the ramp: χ² at the truth is 7389 (7519 points), the fit
 /// ends at 7322 with ω_s 10.9, an earlier fit stalled at 7344 with ω_s 1.1; within 50%.
 #[test]
 fn stiction_is_breakaway_friction_with_its_stribeck_speed() {
-    let d = assert_issue_case("stiction");
+    let d = assert_rig_case("stiction");
     assert_eq!(d.selected[0].category.id(), "torque_loss");
 }
 
-/// Issue 11: a leak V1 -> Ve growing with (p1 - pe)² is found as that leak path, in words
+/// A leak V1 -> Ve growing with (p1 - pe)² is found as that leak path, in words
 /// (the normal run has the twin-data version of this case).
 #[test]
 #[ignore]
 fn quadratic_internal_leak_is_a_leak_path() {
-    let d = assert_issue_case("dp2 leak v1-ve");
+    let d = assert_rig_case("dp2 leak v1-ve");
     let v = to_json(&d);
     let s = &v["selected"][0];
     assert_eq!(s["effect"], "uncatalogued");
@@ -207,9 +208,9 @@ fn quadratic_internal_leak_is_a_leak_path() {
     assert_eq!(file.extra, d.extended.fitted.extra);
 }
 
-/// Issue 11: speed-dependent leakage with ω² vane friction is found as the pair (the pair is
+/// Speed-dependent leakage with ω² vane friction is found as the pair (the pair is
 /// tried because a discovered torque-loss term stands in for the ω² friction).
 #[test]
 fn leakage_and_vane_friction_are_found_as_a_pair() {
-    assert_issue_case("leakage+vane pair");
+    assert_rig_case("leakage+vane pair");
 }

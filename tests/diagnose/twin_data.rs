@@ -1,7 +1,7 @@
 //! The diagnosis on data NOT made by vanefit: the independent twin generator (tests/twin).
 
 use crate::cases::*;
-use crate::support::{dataset, issue_noise, perturbed_base, synthesize_with};
+use crate::support::{dataset, perturbed_base, rig_noise, synthesize_with};
 use crate::twin;
 use std::time::Instant;
 use vanefit::data::dataset::Dataset;
@@ -9,9 +9,9 @@ use vanefit::diagnose::{diagnose, summary, DiagnoseOptions, Diagnosis};
 use vanefit::model::effects::{Effect, EffectSet};
 use vanefit::model::motor::{Chamber, LeakPath, Motor, PressureFactor};
 
-/// Issue 11's recording: 20 Hz, flows 0.03 g/s, speed 15 rpm, torques 4 mN·m, recorded
+/// A test rig's recording: 20 Hz, flows 0.03 g/s, speed 15 rpm, torques 4 mN·m, recorded
 /// supply pressure 2 kPa, no calibration offsets.
-fn twin_issue_config() -> twin::RecordConfig {
+fn twin_rig_config() -> twin::RecordConfig {
     let mut cfg = twin::RecordConfig {
         noise: twin::NoiseSigmas {
             flow1_g_s: 0.03,
@@ -98,7 +98,7 @@ fn twin_case(name: &str) -> TwinCase {
 /// Diagnoses a twin case and checks it (selected physics, category, parameters, noise ratio).
 fn twin_run(name: &str, opts: &DiagnoseOptions) -> (Diagnosis, f64, Result<(), String>) {
     let c = twin_case(name);
-    let ds = twin_dataset(&c.motor, &twin_issue_config(), 11);
+    let ds = twin_dataset(&c.motor, &twin_rig_config(), 11);
     let t0 = Instant::now();
     let d = diagnose(&ds, opts).unwrap();
     let wall_s = t0.elapsed().as_secs_f64();
@@ -110,7 +110,7 @@ fn twin_run(name: &str, opts: &DiagnoseOptions) -> (Diagnosis, f64, Result<(), S
         _ => Ok(()),
     }
     .and_then(|()| {
-        (after <= ISSUE_RATIO)
+        (after <= RIG_RATIO)
             .then_some(())
             .ok_or(format!("noise ratio {after:.3}"))
     });
@@ -123,7 +123,7 @@ fn twin_run(name: &str, opts: &DiagnoseOptions) -> (Diagnosis, f64, Result<(), S
     (d, wall_s, ok)
 }
 
-/// Issue 11 on twin data: stiction is breakaway friction alone, reproduced to the noise
+/// Rig case on twin data: stiction is breakaway friction alone, reproduced to the noise
 /// (fixed by the Levenberg–Marquardt polish and the breakaway starts that lower T_c and
 /// unpin c_12 from the bound the base fit drove it to).
 #[test]
@@ -132,14 +132,14 @@ fn twin_stiction_is_breakaway_friction() {
     ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
 }
 
-/// Issue 11 on twin data: the Δp² leak V1 -> Ve is that leak path.
+/// Rig case on twin data: the Δp² leak V1 -> Ve is that leak path.
 #[test]
 fn twin_quadratic_leak_is_a_leak_path() {
     let (d, _, ok) = twin_run("dp2 leak v1-ve", &DiagnoseOptions::quick(1));
     ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
 }
 
-/// Issue 11 on twin data: the pair is found as the pair (full effort: `#[ignore]`d, it is
+/// Rig case on twin data: the pair is found as the pair (full effort: `#[ignore]`d, it is
 /// in the normal run on vanefit's own data).
 #[test]
 #[ignore]
@@ -240,13 +240,13 @@ fn stiction_likelihood_at_the_truth() {
     use vanefit::objective::{cost::CostModel, cost::CostOptions, likelihood::Target};
     let c = case("stiction");
     let synth = truth(&c);
-    let ds_synth = dataset("synth", synthesize_with(&synth, 11, &issue_noise()));
+    let ds_synth = dataset("synth", synthesize_with(&synth, 11, &rig_noise()));
     let tc = twin_case("stiction");
     let mut p = perturbed_base();
     for (n, v, _) in twin::files::parameters(&tc.motor) {
         p = p.with(n, v).unwrap();
     }
-    let ds_twin = twin_dataset(&tc.motor, &twin_issue_config(), 11);
+    let ds_twin = twin_dataset(&tc.motor, &twin_rig_config(), 11);
     let engine = vanefit::estimate::engine::Engine::with_threads(Some(1)).unwrap();
     let effects = EffectSet::empty().with(Effect::BreakawayFriction);
     let mut names: Vec<String> = vanefit::estimate::space::DEFAULT_ESTIMATED

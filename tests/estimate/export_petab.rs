@@ -1,4 +1,5 @@
-//! `vanefit export-petab` (SPEC §7) and the profile paths of the fit file.
+//! `vanefit export-petab` (docs/formats.md, "Contracts added later") and the profile paths
+//! of the fit file.
 //!
 //! The PEtab tables are read back here as plain TSV, independently of the exporter: every
 //! compared row is present once with its recorded value, every observable's formula names
