@@ -70,8 +70,11 @@ pub(crate) struct CommonArgs {
     /// Fit file (vanefit.fit/1); omitted: the default motor.
     #[arg(long)]
     params: Option<PathBuf>,
-    /// Effects to switch on (comma-separated ids), overriding the fit file's.
-    #[arg(long, value_parser = crate::cli::effects_arg)]
+    #[arg(
+        long,
+        value_parser = crate::cli::effects_arg,
+        help = crate::cli::effects_help("Effects to switch on, overriding the fit file's")
+    )]
     effects: Option<String>,
     /// Output folder (created); default `./control-<study>`.
     #[arg(long)]

@@ -31,8 +31,12 @@ pub(crate) struct FitArgs {
     pub(crate) starts: usize,
     #[command(flatten)]
     pub(crate) run: crate::cli::RunArgs,
-    /// Effects to switch on (comma-separated ids of SPEC §5); their parameters are estimated too.
-    #[arg(long, default_value = "", value_parser = crate::cli::effects_arg)]
+    #[arg(
+        long,
+        default_value = "",
+        value_parser = crate::cli::effects_arg,
+        help = crate::cli::effects_help("Effects to switch on (their parameters are estimated too)")
+    )]
     pub(crate) effects: String,
     /// Parameters to estimate (comma-separated; default: six conductances, t_coulomb, visc).
     #[arg(long)]

@@ -71,8 +71,11 @@ pub(crate) enum Command {
         /// Fit file with the true parameters; omitted: the default motor.
         #[arg(long)]
         params: Option<PathBuf>,
-        /// Effects to switch on (comma-separated ids), overriding the fit file's.
-        #[arg(long, value_parser = crate::cli::effects_arg)]
+        #[arg(
+            long,
+            value_parser = crate::cli::effects_arg,
+            help = effects_help("Effects to switch on, overriding the fit file's")
+        )]
         effects: Option<String>,
         /// Sensor noise as a multiple of a typical rig's (0 for none).
         #[arg(long, default_value_t = 1.0)]
@@ -175,6 +178,13 @@ pub(crate) fn flags(message: &str) -> String {
 /// a failed run.
 pub(crate) fn effects_arg(list: &str) -> Result<String, vanefit::model::effects::UnknownEffect> {
     EffectSet::parse_list(list).map(|_| list.to_string())
+}
+
+/// The help of an `--effects` option: `what`, then the ids of the effect catalog (so that
+/// `--help` lists every effect that can be switched on).
+pub(crate) fn effects_help(what: &str) -> String {
+    let ids: Vec<&str> = vanefit::Effect::ALL.iter().map(|e| e.id()).collect();
+    format!("{what}: comma-separated ids of {}", ids.join(", "))
 }
 
 /// A count option given as 0 or not as a whole number.
@@ -388,4 +398,31 @@ fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<()
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::CommandFactory;
+
+    /// The help of a subcommand, as `vanefit <path> --help` prints it.
+    fn help(path: &[&str]) -> String {
+        let mut cmd = Cli::command();
+        let mut sub = &mut cmd;
+        for name in path {
+            sub = sub.find_subcommand_mut(name).unwrap();
+        }
+        sub.render_long_help().to_string()
+    }
+
+    /// Every `--effects` help lists every effect of the catalog by id.
+    #[test]
+    fn effects_help_lists_every_effect_id() {
+        for path in [&["fit"][..], &["synth"], &["control", "step"]] {
+            let text = help(path);
+            for e in vanefit::Effect::ALL {
+                assert!(text.contains(e.id()), "{path:?} --help lacks {}", e.id());
+            }
+        }
+    }
 }
