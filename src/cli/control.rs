@@ -157,7 +157,11 @@ pub(crate) struct PiArgs {
     /// Anti-windup of the integrator when the command saturates: conditional (the integral
     /// is frozen while the error would drive the command further out), back-calculation
     /// (tracking time kp/ki) or none.
-    #[arg(long, default_value = "conditional")]
+    #[arg(
+        long,
+        default_value = "conditional",
+        value_parser = clap::builder::PossibleValuesParser::new(["conditional", "back-calculation", "none"])
+    )]
     anti_windup: String,
 }
 
@@ -717,10 +721,9 @@ mod tests {
     fn bad_options_are_refused_naming_the_option() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().to_str().unwrap();
-        let cases: [(&[&str], &str); 5] = [
+        let cases: [(&[&str], &str); 4] = [
             (&["bode", "--p-mean-mpa", "-0.2"], "--p-mean-mpa"),
             (&["bode", "--p-mean-mpa", "0.105"], "stalled"),
-            (&["step", "--anti-windup", "sometimes"], "--anti-windup"),
             (
                 &["step", "--from-rpm", "50000"],
                 "above the speed at full command",
@@ -739,5 +742,10 @@ mod tests {
         // Unknown studies and options are usage errors for clap (exit status 2).
         assert!(Cli::try_parse_from(["vanefit", "control", "warp-drive"]).is_err());
         assert!(Cli::try_parse_from(["vanefit", "control", "bode", "--kp", "1"]).is_err());
+        // So is an anti-windup that does not exist.
+        let e = Cli::try_parse_from(["vanefit", "control", "step", "--anti-windup", "sometimes"])
+            .unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::InvalidValue);
+        assert_eq!(e.exit_code(), 2);
     }
 }

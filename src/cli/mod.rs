@@ -403,7 +403,7 @@ fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<()
 #[cfg(test)]
 mod tests {
     use super::Cli;
-    use clap::CommandFactory;
+    use clap::{CommandFactory, Parser};
 
     /// The help of a subcommand, as `vanefit <path> --help` prints it.
     fn help(path: &[&str]) -> String {
@@ -413,6 +413,25 @@ mod tests {
             sub = sub.find_subcommand_mut(name).unwrap();
         }
         sub.render_long_help().to_string()
+    }
+
+    /// Every enumerated option refuses an unknown value as bad usage (exit status 2), before
+    /// anything runs: `--unit`, `--uncertainty`, `--anti-windup`, `--effects`, `--shard`.
+    #[test]
+    fn unknown_choices_are_usage_errors() {
+        let cases: [&[&str]; 5] = [
+            &["predict", "fit.json", "--unit", "bar"],
+            &["fit", "d", "--out", "f.json", "--uncertainty", "exact"],
+            &["control", "step", "--anti-windup", "sometimes"],
+            &["synth", "d", "--effects", "warp"],
+            &["batch", "m.toml", "--out", "b", "--shard", "3/2"],
+        ];
+        for args in cases {
+            let all: Vec<&str> = ["vanefit"].iter().chain(args).copied().collect();
+            let e = Cli::try_parse_from(all).unwrap_err();
+            assert_eq!(e.exit_code(), 2, "{args:?}: {e}");
+        }
+        assert!(help(&["predict"]).contains("bar_g"));
     }
 
     /// Every `--effects` help lists every effect of the catalog by id.

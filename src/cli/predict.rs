@@ -2,10 +2,12 @@
 //! supply pressures or with an extra nozzle, with 95 % bands; the work is
 //! `vanefit::task::predict` (shared with `batch`), this parses and prints the tables.
 //!
-//! Every bad input (fit file, pressure list, unit, nozzle) is refused with a message that
-//! names the file or option, exit status 1, before anything is written.
+//! Every bad input (fit file, pressure list, nozzle) is refused with a message that names
+//! the file or option, exit status 1, before anything is written; an unknown `--unit` is
+//! bad usage (exit status 2).
 
 use crate::cli::Failure;
+use clap::builder::PossibleValuesParser;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -26,8 +28,8 @@ pub(crate) struct PredictArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) pressures: Option<String>,
     /// Pressure unit of --pressures, --reference and the outputs: a unit suffix of
-    /// p_port1 columns (bar_g, bar_abs, mpa, kpa, pa, ...).
-    #[arg(long, default_value = "bar_g")]
+    /// p_port1 columns.
+    #[arg(long, default_value = "bar_g", value_parser = PossibleValuesParser::new(pressure_suffixes()))]
     pub(crate) unit: String,
     /// Reference pressure of the correction factors, in --unit (default 6.3 bar g).
     #[arg(long, allow_hyphen_values = true)]
@@ -53,6 +55,14 @@ pub(crate) struct PredictArgs {
     /// Output folder (created).
     #[arg(long, default_value = "predict")]
     pub(crate) out: PathBuf,
+}
+
+/// The column suffixes of the pressure units, the values `--unit` accepts.
+fn pressure_suffixes() -> Vec<&'static str> {
+    vanefit::task::predict::pressure_units()
+        .iter()
+        .map(|u| u.suffix())
+        .collect()
 }
 
 /// `--pressures`: a comma-separated list of numbers, at least one.
