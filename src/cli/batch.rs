@@ -1,4 +1,4 @@
-//! `vanefit batch` and `vanefit merge` (issue 14, SPEC §7): the options and what is printed;
+//! `vanefit batch` and `vanefit merge` (docs/cli.md, "batch" and "merge"): the options and what is printed;
 //! the work is `batch`.
 
 use crate::cli::Failure;

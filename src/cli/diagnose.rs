@@ -1,4 +1,4 @@
-//! `vanefit diagnose` (SPEC §6): the options and what is printed; the work is
+//! `vanefit diagnose` (docs/cli.md, "diagnose"): the options and what is printed; the work is
 //! `vanefit::task::diagnose`.
 
 use crate::cli::Failure;
@@ -8,7 +8,7 @@ use vanefit::diagnose::{summary, DiagnoseObserver, Progress};
 use vanefit::estimate::Engine;
 use vanefit::task::diagnose::{diagnose_dataset, write_diagnosis, DiagnoseOptions};
 
-/// `vanefit diagnose` options (SPEC §6).
+/// `vanefit diagnose` options.
 #[derive(clap::Args, Debug, Clone)]
 pub(crate) struct DiagnoseArgs {
     /// Dataset folder (rig.toml and recordings).

@@ -1,4 +1,4 @@
-//! `vanefit export-petab` (SPEC §7): a fit as a PEtab v1 problem.
+//! `vanefit export-petab` (docs/cli.md, "export-petab"): a fit as a PEtab v1 problem.
 
 use crate::cli::Failure;
 use clap::Args;

@@ -1,4 +1,4 @@
-//! `vanefit fit` (SPEC §6): the options, progress and summary on the terminal; the fit
+//! `vanefit fit` (docs/cli.md, "fit"): the options, progress and summary on the terminal; the fit
 //! itself is `vanefit::task::fit`, shared with `batch` and the Python package.
 
 use crate::cli::Failure;

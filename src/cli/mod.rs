@@ -1,4 +1,4 @@
-//! Command line (SPEC §6). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
+//! Command line (docs/cli.md). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
 //! (clap reports usage errors with status 2 itself).
 //!
 //! Part of the `vanefit` binary, not of the library: it parses the command line, converts
@@ -44,7 +44,7 @@ pub(crate) struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-/// The commands of SPEC §6.
+/// The commands (docs/cli.md, "Synopsis").
 pub(crate) enum Command {
     /// Validate a dataset and print a summary.
     Check {
@@ -91,21 +91,21 @@ pub(crate) enum Command {
         #[arg(long, value_delimiter = ',', default_value = "6.3")]
         pressures: Vec<f64>,
     },
-    /// Find the physics the model leaves out: locate, explain, model, refit (SPEC §5, §6).
+    /// Find the physics the model leaves out: locate, explain, model, refit.
     Diagnose(crate::cli::diagnose::DiagnoseArgs),
     /// Speed-control studies (paper section 5): throttling, frequency response, closed loop.
     Control(crate::cli::control::ControlArgs),
     /// Predict the fitted motor at other supply pressures or with an extra nozzle:
-    /// catalogue figures, correction factors and curves with 95% bands (SPEC section 7).
+    /// catalogue figures, correction factors and curves with 95% bands.
     #[command(allow_negative_numbers = true)]
     Predict(crate::cli::predict::PredictArgs),
     /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
     /// tables, an SBML document declaring the model's symbols, and the problem YAML.
     ExportPetab(crate::cli::export::ExportPetabArgs),
     /// Run a manifest's fleet of datasets (fit, diagnose, predict) in resumable shards,
-    /// here or on Slurm (SPEC section 7).
+    /// here or on Slurm.
     Batch(crate::cli::batch::BatchArgs),
-    /// Merge a batch folder into summary.csv, summary.md and fleet.svg (SPEC section 7).
+    /// Merge a batch folder into summary.csv, summary.md and fleet.svg.
     Merge(crate::cli::batch::MergeArgs),
 }
 
@@ -242,7 +242,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
     let mut ds = Dataset::load(dir)?;
     // From here `check` prints values, not cells as written (except a catalogue's few
     // points): a recording's text, as large again as its values, is freed before the
-    // references are fitted, when memory peaks (issue 15: a 100 MB recording in 500 MB).
+    // references are fitted, when memory peaks (a 100 MB recording is checked in 500 MB).
     for ex in ds
         .experiments
         .iter_mut()
@@ -432,6 +432,27 @@ mod tests {
             assert_eq!(e.exit_code(), 2, "{args:?}: {e}");
         }
         assert!(help(&["predict"]).contains("bar_g"));
+    }
+
+    /// No help text cites a document the user does not have (the specification, an issue):
+    /// it says the thing, and docs/ holds the references.
+    #[test]
+    fn help_cites_no_spec_or_issue() {
+        fn walk(cmd: &mut clap::Command, path: &str, bad: &mut Vec<String>) {
+            let text = cmd.render_long_help().to_string();
+            for needle in ["SPEC", "issue "] {
+                if text.contains(needle) {
+                    bad.push(format!("{path}: {needle}"));
+                }
+            }
+            for sub in cmd.get_subcommands_mut() {
+                let name = format!("{path} {}", sub.get_name());
+                walk(sub, &name, bad);
+            }
+        }
+        let mut bad = Vec::new();
+        walk(&mut Cli::command(), "vanefit", &mut bad);
+        assert!(bad.is_empty(), "{bad:?}");
     }
 
     /// Every `--effects` help lists every effect of the catalog by id.

@@ -1,4 +1,4 @@
-//! `vanefit predict <fit.json>` (issue 12, SPEC §7): what the fitted motor does at other
+//! `vanefit predict <fit.json>` (docs/cli.md, "predict"): what the fitted motor does at other
 //! supply pressures or with an extra nozzle, with 95 % bands; the work is
 //! `vanefit::task::predict` (shared with `batch`), this parses and prints the tables.
 //!
