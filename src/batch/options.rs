@@ -58,7 +58,7 @@ impl BatchSettings {
         self.0.shard
     }
 
-    /// Runs the settings' shard of `manifest` ([`super::run`]).
+    /// Runs the settings' shard of `manifest` ([`super::run()`]).
     pub fn run(&self, manifest: &Manifest) -> Result<RunOutcome, BatchError> {
         run(manifest, &self.0)
     }
