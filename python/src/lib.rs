@@ -4,6 +4,11 @@
 //! numpy arrays, dataclasses and documentation to `vanefit/__init__.py`. The GIL is
 //! released while a fit, a diagnosis or a batch of χ² evaluations runs.
 
+/// The command line's code (part of the `vanefit` binary, not of the library), for
+/// `run_command` until every command has a typed Python function.
+#[allow(dead_code)]
+#[path = "../../src/cli/mod.rs"]
+mod cli;
 mod errors;
 mod observe;
 
@@ -11,15 +16,16 @@ use errors::{data_err, param_err, DataError, ParameterError, VanefitError};
 use observe::{PyDiagnoseProgress, PyFitProgress};
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use vanefit::cli::fit::{fit_run, FitArgs, FitCommandError, Uncertainty};
 use vanefit::data::dataset::Dataset;
 use vanefit::data::fitfile::FitFile;
 use vanefit::estimate::fit::DataObjective;
+use vanefit::estimate::fit::UncertaintyMethod;
 use vanefit::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use vanefit::estimate::Objective;
 use vanefit::model::params::PARAMS;
 use vanefit::numerics::DefaultSolver;
 use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::task::fit::{FitError, FitOptions};
 
 /// A dataset read and checked by vanefit (rig.toml and its recordings).
 #[pyclass(module = "vanefit._core", frozen)]
@@ -156,10 +162,11 @@ fn simulate(
     let f = parameters(&ds.inner, fit, overrides)?;
     let tables = py
         .detach(|| {
-            let motor = vanefit::cli::motor_for(&ds.inner, Some(&f))?;
-            vanefit::cli::simulated_tables(&ds.inner, &motor)
+            let motor = vanefit::task::simulate::motor_for(&ds.inner, Some(&f))
+                .map_err(|e| e.to_string())?;
+            vanefit::task::simulate::simulated_tables(&ds.inner, &motor).map_err(|e| e.to_string())
         })
-        .map_err(|e| VanefitError::new_err(e.0))?;
+        .map_err(VanefitError::new_err)?;
     Ok(tables
         .into_iter()
         .map(|t| {
@@ -181,7 +188,8 @@ fn cost(
     let f = parameters(&ds.inner, fit, overrides)?;
     let model = CostModel::new(&ds.inner, CostOptions::default()).map_err(data_err)?;
     py.detach(|| {
-        let motor = vanefit::cli::motor_for(&ds.inner, Some(&f)).map_err(|e| e.0)?;
+        let motor =
+            vanefit::task::simulate::motor_for(&ds.inner, Some(&f)).map_err(|e| e.to_string())?;
         let objective = DataObjective {
             cost: &model,
             solver: Box::new(DefaultSolver::default()),
@@ -209,8 +217,8 @@ fn cost(
 }
 
 /// The error of a fit as the exception Python users catch.
-fn fit_err(e: FitCommandError) -> PyErr {
-    use FitCommandError as E;
+fn fit_err(e: FitError) -> PyErr {
+    use FitError as E;
     match e {
         E::Data(_) | E::Cost(_) => DataError::new_err(e.to_string()),
         E::Estimate(_) | E::Write { .. } | E::Plot(_) => VanefitError::new_err(e.to_string()),
@@ -237,37 +245,35 @@ fn fit(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
     let uncertainty = match uncertainty {
-        "profile" => Uncertainty::Profile,
-        "curvature" => Uncertainty::Curvature,
-        "none" => Uncertainty::None,
+        "profile" => UncertaintyMethod::Profile,
+        "curvature" => UncertaintyMethod::Curvature,
+        "none" => UncertaintyMethod::None,
         other => {
             return Err(ParameterError::new_err(format!(
                 "uncertainty '{other}': must be 'profile', 'curvature' or 'none'"
             )))
         }
     };
-    let args = FitArgs {
-        dataset,
+    let effects = vanefit::model::effects::EffectSet::parse_list(&effects)
+        .map_err(|e| ParameterError::new_err(e.to_string()))?;
+    let options = FitOptions {
         starts,
         seed,
         threads,
         effects,
-        estimate,
-        bounds: None,
-        start_range: None,
-        start_spread: 3.0,
+        estimate: estimate.map(|list| list.split(',').map(str::to_string).collect()),
         max_iters,
         uncertainty,
-        resume: false,
-        trace: false,
-        no_plots: true,
-        out: out.clone().unwrap_or_default(),
+        ..FitOptions::default()
     };
+    let settings = options
+        .check()
+        .map_err(|e| ParameterError::new_err(e.to_string()))?;
     let results = out
         .as_ref()
-        .map(|o| vanefit::cli::fit::side_path(o, "starts.jsonl"));
+        .map(|o| vanefit::task::fit::side_path(o, "starts.jsonl"));
     let observer = PyFitProgress::new(progress);
-    let run = py.detach(|| fit_run(&args, results, &observer));
+    let run = py.detach(|| vanefit::task::fit::fit(&dataset, &settings, results, &observer));
     observer.raise_callback_error(py)?;
     let run = run.map_err(fit_err)?;
     if let Some(o) = &out {
@@ -468,14 +474,13 @@ fn run_command(py: Python<'_>, args: Vec<String>, error: u8) -> PyResult<()> {
     use clap::Parser;
     let mut all = vec!["vanefit".to_string()];
     all.extend(args);
-    let cli = vanefit::cli::Cli::try_parse_from(&all)
+    let cli = cli::Cli::try_parse_from(&all)
         .map_err(|e| ParameterError::new_err(e.render().to_string().trim().to_string()))?;
-    py.detach(|| vanefit::cli::run(cli))
-        .map_err(|e| match error {
-            1 => DataError::new_err(e.0),
-            2 => ParameterError::new_err(e.0),
-            _ => VanefitError::new_err(e.0),
-        })
+    py.detach(|| cli::run(cli)).map_err(|e| match error {
+        1 => DataError::new_err(e.0),
+        2 => ParameterError::new_err(e.0),
+        _ => VanefitError::new_err(e.0),
+    })
 }
 
 /// The module.

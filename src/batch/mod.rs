@@ -11,6 +11,7 @@
 
 pub mod manifest;
 pub mod merge;
+mod options;
 pub mod plan;
 mod progress;
 pub mod run;
@@ -19,6 +20,7 @@ pub mod status;
 
 pub use manifest::{Manifest, ManifestError, TaskKind};
 pub use merge::{merge, MergeOutcome};
+pub use options::{BatchOptions, BatchSettings};
 pub use plan::{Shard, Unit};
 pub use run::{run, RunOptions, RunOutcome};
 
@@ -27,6 +29,7 @@ use std::path::{Path, PathBuf};
 
 /// Why a batch or a merge could not run (a unit's own failure is no error: it is recorded).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BatchError {
     /// The manifest is unusable.
     #[error(transparent)]

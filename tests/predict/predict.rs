@@ -215,7 +215,6 @@ fn bad_input_is_refused_with_the_option_named_and_status_1() {
             vec![fit, "--pressures", "0", "--unit", "mpa"],
             "--pressures",
         ),
-        (vec![fit, "--unit", "psi_x"], "--unit"),
         (vec![fit, "--reference", "-5"], "--reference"),
         (
             vec![fit, "--inlet-nozzle", "5e-9", "--outlet-nozzle", "5e-9"],
@@ -236,6 +235,14 @@ fn bad_input_is_refused_with_the_option_named_and_status_1() {
         assert!(stderr.contains(names), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
     }
+    // An unknown unit is bad usage, refused by the parser with the known units.
+    let run = vanefit(&["predict", fit, "--unit", "psi_x", "--out", out]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--unit") && stderr.contains("bar_g"),
+        "{stderr}"
+    );
     assert!(!Path::new(out).exists(), "nothing is written on bad input");
 }
 
