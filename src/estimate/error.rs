@@ -7,6 +7,9 @@ use std::path::PathBuf;
 /// An error of an estimation run.
 #[derive(Debug, thiserror::Error)]
 pub enum EstimateError {
+    /// The observer asked the run to stop ([`super::multistart::RunObserver::keep_going`]).
+    #[error("interrupted: the starts finished so far are in the results file; resume to continue")]
+    Interrupted,
     /// No start point asked for.
     #[error("--starts must be at least 1")]
     NoStarts,

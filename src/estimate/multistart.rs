@@ -72,6 +72,12 @@ pub trait RunObserver: Sync {
     fn phase(&self, _name: &str, _steps: usize) {}
     /// `done` steps of the current phase are finished.
     fn phase_step(&self, _done: usize) {}
+    /// Asked before every round of starts: `false` stops the run with
+    /// [`EstimateError::Interrupted`] (the starts finished so far are in the results file,
+    /// so a run with `resume` continues from them). Default: go on.
+    fn keep_going(&self) -> bool {
+        true
+    }
 }
 
 /// Observes nothing.
@@ -288,6 +294,9 @@ impl Rounds<'_> {
         let mut finished = done.to_vec();
         let mut round = 0usize;
         while !live.is_empty() {
+            if !self.observer.keep_going() {
+                return Err(EstimateError::Interrupted);
+            }
             self.engine
                 .for_each_mut(&mut live, |r| r.advance(objective, space, cfg));
             round += 1;
