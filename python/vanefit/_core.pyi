@@ -1,6 +1,8 @@
-"""Type stubs of the compiled extension ``vanefit._core`` (pyo3). Users call the wrappers in
+"""Type stubs of the compiled extension ``vanefit._core`` (pyo3), checked against the built
+module by mypy's stubtest (python/tests/test_stubs.py). Users call the wrappers in
 :mod:`vanefit`; these are the raw functions they use. Paths are ``str`` or ``os.PathLike``;
-values are SI unless a column name says otherwise; JSON documents are returned as ``str``."""
+a fit held in memory goes as ``fit_text`` (its path then only names it in messages); values
+are SI unless a column name says otherwise; JSON documents are returned as ``str``."""
 
 import os
 from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
@@ -33,7 +35,7 @@ class PyDataset:
 class PyLikelihood:
     """A fit's likelihood rebuilt from its fit file, over the estimated parameters (SI)."""
 
-    def __init__(self, ds: PyDataset, fit: _Path) -> None: ...
+    def __init__(self, ds: PyDataset, fit: _Path, fit_text: Optional[str] = None) -> None: ...
     @property
     def names(self) -> List[str]: ...
     @property
@@ -53,15 +55,17 @@ class PyLikelihood:
 
 def load_dataset(path: _Path) -> PyDataset: ...
 def nominal_parameters(ds: PyDataset) -> List[Tuple[str, float]]: ...
-def read_fit(path: _Path) -> str: ...
+def read_fit(path: _Path, text: Optional[str] = None) -> str: ...
 def simulate(
     ds: PyDataset,
     fit: Optional[_Path] = None,
+    fit_text: Optional[str] = None,
     overrides: Sequence[Tuple[str, float]] = ...,
 ) -> List[Tuple[str, _Columns]]: ...
 def cost(
     ds: PyDataset,
     fit: Optional[_Path] = None,
+    fit_text: Optional[str] = None,
     overrides: Sequence[Tuple[str, float]] = ...,
 ) -> str: ...
 def fit(
@@ -74,8 +78,9 @@ def fit(
     uncertainty: str,
     max_iters: int,
     out: Optional[_Path],
+    resume: bool,
     progress: Optional[Callable[[int, int, float], Any]],
-) -> str: ...
+) -> Tuple[str, str]: ...
 def diagnose(
     ds: PyDataset,
     starts: int,
@@ -83,5 +88,33 @@ def diagnose(
     threads: Optional[int],
     out: Optional[_Path],
     progress: Optional[Callable[[float, str], Any]],
+) -> Tuple[str, str, str]: ...
+def predict(
+    fit: _Path,
+    fit_text: Optional[str],
+    pressures: Optional[Sequence[float]],
+    unit: str,
+    reference: Optional[float],
+    inlet_nozzle: Optional[float],
+    outlet_nozzle: Optional[float],
+    speed_grid_rpm: float,
+    curve_points: int,
+    fixed_spread: Optional[float],
+    out: Optional[_Path],
 ) -> str: ...
-def run_command(args: Sequence[str], error: int) -> None: ...
+def export_petab(fit: _Path, fit_text: Optional[str], dataset: _Path, out: _Path) -> str: ...
+def synth(
+    out: _Path,
+    fit: Optional[_Path],
+    fit_text: Optional[str],
+    effects: Optional[str],
+    noise: float,
+    seed: int,
+) -> None: ...
+def control(
+    study: str,
+    fit: Optional[_Path],
+    fit_text: Optional[str],
+    options: str,
+    out: Optional[_Path],
+) -> Tuple[List[Tuple[str, _Columns]], List[Tuple[str, str]]]: ...
