@@ -5,6 +5,7 @@
 //! DataFrames, result objects and documentation to `vanefit/__init__.py`. The GIL is
 //! released while a fit, a diagnosis, a prediction or a batch of χ² evaluations runs.
 
+mod control;
 mod errors;
 mod fitting;
 mod observe;
@@ -354,6 +355,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tasks::predict, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::export_petab, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::synth, m)?)?;
+    m.add_function(wrap_pyfunction!(control::control, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -463,8 +463,16 @@ def control(
     if isinstance(given["effects"], (list, tuple)):
         given["effects"] = ",".join(given["effects"])
     path, text = (None, None) if params is None else _fit_source(params)
+    if text is not None:
+        if isinstance(params, Fit) and params.path is not None:
+            path = params.path
+        else:
+            raise ParameterError(
+                "control: the study reads its motor from a fit file; write the fit first "
+                "(fit.write(path)) and pass it or its path"
+            )
     tables, summaries = _core.control(
-        study, path, text, json.dumps(given), None if out is None else os.fspath(out)
+        study, path, json.dumps(given), None if out is None else os.fspath(out)
     )
     return StudyResult(
         study,

@@ -114,7 +114,6 @@ def synth(
 def control(
     study: str,
     fit: Optional[_Path],
-    fit_text: Optional[str],
     options: str,
     out: Optional[_Path],
 ) -> Tuple[List[Tuple[str, _Columns]], List[Tuple[str, str]]]: ...
