@@ -383,3 +383,23 @@ def test_control_options_are_the_commands(study):
             assert ours[name] == default, name
         else:
             assert ours[name] == pytest.approx(float(default), rel=1e-12), name
+
+
+def test_control_files_and_tables_are_the_commands(tmp_path):
+    """A study run from Python writes the command's files byte for byte, and its tables in
+    memory are those files' numbers."""
+    r = vanefit.control("bode", out=tmp_path / "py", points=40, p_mean_mpa=0.4)
+    run_cli("control", "bode", "--points", 40, "--p-mean-mpa", 0.4, "--out", tmp_path / "cli")
+    py_files = sorted(p.name for p in (tmp_path / "py").iterdir() if not p.name.startswith("."))
+    cli_files = sorted(p.name for p in (tmp_path / "cli").iterdir() if not p.name.startswith("."))
+    assert py_files == cli_files and any(n.endswith(".svg") for n in py_files)
+    for name in cli_files:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    table = pd.read_csv(tmp_path / "cli" / "bode.csv")
+    assert list(r.tables["bode"].columns) == list(table.columns)
+    np.testing.assert_array_equal(r.tables["bode"].to_numpy(), table.to_numpy())
+    assert r["bode_fit"] == json.loads((tmp_path / "cli" / "bode_fit.json").read_text())
+    with pytest.raises(vanefit.ParameterError, match="pm_deg"):
+        vanefit.control("step", pm_deg=50)
+    with pytest.raises(vanefit.ParameterError, match="study"):
+        vanefit.control("nope")
