@@ -5,12 +5,31 @@ a fit held in memory goes as ``fit_text`` (its path then only names it in messag
 are SI unless a column name says otherwise; JSON documents are returned as ``str``."""
 
 import os
-from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, List, Optional, Sequence, Tuple, Union, final
 
 _Path = Union[str, "os.PathLike[str]"]
 _Columns = List[Tuple[str, List[float]]]
 
 __version__: str
+__all__ = [
+    "VanefitError",
+    "DataError",
+    "ParameterError",
+    "PyDataset",
+    "PyLikelihood",
+    "load_dataset",
+    "nominal_parameters",
+    "read_fit",
+    "simulate",
+    "cost",
+    "fit",
+    "diagnose",
+    "predict",
+    "export_petab",
+    "synth",
+    "control",
+    "__version__",
+]
 
 class VanefitError(Exception):
     """Anything vanefit refuses or fails at."""
@@ -22,6 +41,7 @@ class DataError(VanefitError):
 class ParameterError(VanefitError):
     """A bad option, parameter name or parameter value; the message names it."""
 
+@final
 class PyDataset:
     """A dataset read and checked (rig.toml and its recordings)."""
 
@@ -32,10 +52,11 @@ class PyDataset:
     def experiments_json(self) -> str: ...
     def recording(self, file: str) -> _Columns: ...
 
+@final
 class PyLikelihood:
     """A fit's likelihood rebuilt from its fit file, over the estimated parameters (SI)."""
 
-    def __init__(self, ds: PyDataset, fit: _Path, fit_text: Optional[str] = None) -> None: ...
+    def __new__(cls, ds: PyDataset, fit: _Path, fit_text: Optional[str] = None) -> "PyLikelihood": ...
     @property
     def names(self) -> List[str]: ...
     @property
