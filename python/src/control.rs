@@ -7,110 +7,28 @@ use crate::errors::{param_err, DataError, ParameterError, VanefitError};
 use pyo3::prelude::*;
 use serde_json::{Map, Value};
 use std::path::PathBuf;
-use vanefit::control::study::bode::{self, BodeOptions};
-use vanefit::control::study::design::{self, DesignOptions};
-use vanefit::control::study::disturbance::{self, DisturbanceOptions};
-use vanefit::control::study::min_speed::{self, MinSpeedOptions};
-use vanefit::control::study::step::{self, StepOptions};
-use vanefit::control::study::throttle::{self, ThrottleOptions};
-use vanefit::control::study::{
-    GainOptions, LoopOptions, MotorOptions, PiOptions, Plant, ValveOptions,
-};
+use vanefit::control::study::bode::BodeOptions;
+use vanefit::control::study::design::DesignOptions;
+use vanefit::control::study::disturbance::DisturbanceOptions;
+use vanefit::control::study::min_speed::MinSpeedOptions;
+use vanefit::control::study::step::StepOptions;
+use vanefit::control::study::throttle::ThrottleOptions;
+use vanefit::control::study::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
 use vanefit::control::throttle::Port;
 use vanefit::control::ControlError;
-use vanefit::report::control::{self as rc, ControlReportError, Writer};
+use vanefit::report::control::{self as rc, ControlReportError};
+use vanefit::task::control::{ControlStudy, Study, StudyResult};
 
-/// A study's CSV tables and JSON summaries as (file name, text), or the files written.
-type Texts = Vec<(String, String)>;
-
-/// Which study, with its options (unchecked).
-enum Study {
-    Throttle(ThrottleOptions),
-    Bode(BodeOptions),
-    Step(LoopOptions, StepOptions),
-    Disturbance(LoopOptions, DisturbanceOptions),
-    MinSpeed(LoopOptions, MinSpeedOptions),
-    Design(LoopOptions, DesignOptions),
-}
-
-/// A study's result with its report writer: its texts in memory, and its files in `out`.
-fn report<R>(
-    r: &R,
-    write: fn(&mut Writer, &R) -> Result<(), ControlReportError>,
-    out: Option<&std::path::Path>,
-) -> Result<Texts, ControlReportError> {
-    if let Some(dir) = out {
-        write(&mut Writer::new(dir, &mut |_| {}), r)?;
-    }
-    rc::texts(r, write)
-}
-
-/// Why a study failed: a bad option or file (refused before any work) or the study itself.
-enum Failed {
-    Control(ControlError),
-    Report(ControlReportError),
-}
-
-impl From<ControlError> for Failed {
-    fn from(e: ControlError) -> Self {
-        Self::Control(e)
-    }
-}
-
-impl From<vanefit::control::SettingsError> for Failed {
-    fn from(e: vanefit::control::SettingsError) -> Self {
-        Self::Control(e.into())
-    }
-}
-
-impl From<ControlReportError> for Failed {
-    fn from(e: ControlReportError) -> Self {
-        Self::Report(e)
-    }
-}
-
-impl Study {
-    /// The brake when none is given, N·m·s/rad (none for `min-speed`, as the paper).
-    fn default_brake(&self) -> f64 {
-        match self {
-            Study::MinSpeed(..) => 0.0,
-            _ => 1e-4,
-        }
-    }
-
-    /// Checks the options on the plant, runs the study, keeps (and writes) its results.
-    fn run(&self, plant: &Plant, out: Option<&std::path::Path>) -> Result<Texts, Failed> {
-        Ok(match self {
-            Study::Throttle(o) => report(
-                &throttle::study(plant, &o.check()?)?,
-                rc::throttle::write,
-                out,
-            )?,
-            Study::Bode(o) => report(
-                &bode::study(plant, &o.check(plant.motor())?)?,
-                rc::bode::write,
-                out,
-            )?,
-            Study::Step(l, o) => {
-                let r = step::study(plant, &l.check(plant)?, &o.check()?)?;
-                report(&r, rc::closed_loop::write_step, out)?
-            }
-            Study::Disturbance(l, o) => {
-                let r = disturbance::study(plant, &l.check(plant)?, &o.check()?)?;
-                report(&r, rc::closed_loop::write_disturbance, out)?
-            }
-            Study::MinSpeed(l, o) => {
-                let r = min_speed::study(plant, &l.check(plant)?, &o.check(plant.motor())?)?;
-                report(&r, rc::min_speed::write, out)?
-            }
-            Study::Design(l, o) => {
-                let r = design::study(plant, &l.check(plant)?, &o.check()?)?;
-                let texts = report(&r, rc::design::write, out)?;
-                // As the command: the results are there to look at, then the failed check.
-                r.check_settled()?;
-                texts
-            }
-        })
+/// A study's CSV tables and JSON summaries as (file name, text), the text its files get.
+fn texts(r: &StudyResult) -> Result<Vec<(String, String)>, ControlReportError> {
+    match r {
+        StudyResult::Throttle(r) => rc::texts(r, rc::throttle::write),
+        StudyResult::Bode(r) => rc::texts(r, rc::bode::write),
+        StudyResult::Step(r) => rc::texts(r, rc::closed_loop::write_step),
+        StudyResult::Disturbance(r) => rc::texts(r, rc::closed_loop::write_disturbance),
+        StudyResult::MinSpeed(r) => rc::texts(r, rc::min_speed::write),
+        StudyResult::Design(r) => rc::texts(r, rc::design::write),
+        _ => Ok(Vec::new()),
     }
 }
 
@@ -282,29 +200,35 @@ pub fn control(
 ) -> PyResult<(Tables, Vec<(String, String)>)> {
     let map: Map<String, Value> = serde_json::from_str(options).map_err(param_err)?;
     let o = Options(map);
-    let study = o.study(study)?;
-    let motor = MotorOptions {
-        params: fit,
-        effects: o
-            .0
-            .get("effects")
-            .and_then(Value::as_str)
-            .map(str::to_string),
-        brake_nm_s_rad: o.opt_f64("brake_nm_s_rad")?,
+    let study = ControlStudy {
+        motor: MotorOptions {
+            params: fit,
+            effects: o
+                .0
+                .get("effects")
+                .and_then(Value::as_str)
+                .map(str::to_string),
+            brake_nm_s_rad: o.opt_f64("brake_nm_s_rad")?,
+        },
+        study: o.study(study)?,
     };
-    let plant = motor.check(study.default_brake()).map_err(control_err)?;
+    let checked = study.check().map_err(control_err)?;
     let _lock = match &out {
         Some(dir) => {
             Some(vanefit::io::out::prepare_dir(dir).map_err(|e| param_err(format!("out {e}")))?)
         }
         None => None,
     };
-    let texts = py
-        .detach(|| study.run(&plant, out.as_deref()))
-        .map_err(|e| match e {
-            Failed::Control(e) => control_err(e),
-            Failed::Report(e) => VanefitError::new_err(e.to_string()),
-        })?;
+    let result = py.detach(|| checked.run()).map_err(control_err)?;
+    let report_err = |e: ControlReportError| VanefitError::new_err(e.to_string());
+    if let Some(dir) = &out {
+        vanefit::task::control::write_study(&result, dir, &mut |_| {}).map_err(report_err)?;
+    }
+    let texts = texts(&result).map_err(report_err)?;
+    if let StudyResult::Design(r) = &result {
+        // As the command: the results are there to look at, then the failed check.
+        r.check_settled().map_err(control_err)?;
+    }
     let mut tables = Vec::new();
     let mut summaries = Vec::new();
     for (name, text) in texts {

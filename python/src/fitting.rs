@@ -8,32 +8,44 @@ use crate::observe::{PyDiagnoseProgress, PyFitProgress};
 use pyo3::exceptions::PyKeyboardInterrupt;
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use vanefit::cli::fit::{fit_run, FitArgs, FitCommandError, Uncertainty};
 use vanefit::data::dataset::Dataset;
 use vanefit::data::fitfile::FitFile;
+use vanefit::estimate::fit::UncertaintyMethod;
 use vanefit::estimate::EstimateError;
+use vanefit::model::effects::EffectSet;
+use vanefit::task::fit::{FitError, FitOptions};
+use vanefit::task::OptionError;
 
 /// The text of a fit file as `vanefit fit` writes it (`FitFile::write`).
 pub fn fit_text(file: &FitFile) -> String {
     serde_json::to_string_pretty(&file.to_json()).expect("plain data") + "\n"
 }
 
-/// The error of a fit as the exception Python users catch.
-fn fit_err(e: FitCommandError) -> PyErr {
-    use FitCommandError as E;
+/// A bad option as ParameterError, named as the Python keyword (the field's name:
+/// `FitOptions.starts` → `starts`).
+pub fn option_err(e: &OptionError) -> PyErr {
+    let field = e.field();
+    let name = field.rsplit('.').next().unwrap_or(field);
+    ParameterError::new_err(e.message_as(name))
+}
+
+/// The error of a fit as the exception Python users catch (Ctrl-C: KeyboardInterrupt).
+fn fit_err(e: FitError) -> PyErr {
+    use FitError as E;
     match e {
         E::Estimate(EstimateError::Interrupted) => PyKeyboardInterrupt::new_err(e.to_string()),
+        E::Option(o) => option_err(&o),
         E::Data(_) | E::Cost(_) => DataError::new_err(e.to_string()),
         E::Estimate(_) | E::Write { .. } | E::Plot(_) => VanefitError::new_err(e.to_string()),
         _ => ParameterError::new_err(e.to_string()),
     }
 }
 
-fn uncertainty_of(name: &str) -> PyResult<Uncertainty> {
+fn uncertainty_of(name: &str) -> PyResult<UncertaintyMethod> {
     match name {
-        "profile" => Ok(Uncertainty::Profile),
-        "curvature" => Ok(Uncertainty::Curvature),
-        "none" => Ok(Uncertainty::None),
+        "profile" => Ok(UncertaintyMethod::Profile),
+        "curvature" => Ok(UncertaintyMethod::Curvature),
+        "none" => Ok(UncertaintyMethod::None),
         other => Err(ParameterError::new_err(format!(
             "uncertainty '{other}': must be 'profile', 'curvature' or 'none'"
         ))),
@@ -55,8 +67,8 @@ pub fn fit(
     starts: usize,
     seed: u64,
     threads: Option<usize>,
-    effects: String,
-    estimate: Option<String>,
+    effects: Vec<String>,
+    estimate: Option<Vec<String>>,
     uncertainty: &str,
     max_iters: u64,
     out: Option<PathBuf>,
@@ -68,28 +80,26 @@ pub fn fit(
             "resume: give out=, the fit file whose starts file to resume",
         ));
     }
-    let args = FitArgs {
-        dataset,
+    let effects = EffectSet::parse_list(&effects.join(","))
+        .map_err(|e| ParameterError::new_err(format!("effects: {e}")))?;
+    let settings = FitOptions {
         starts,
         seed,
         threads,
         effects,
         estimate,
-        bounds: None,
-        start_range: None,
-        start_spread: 3.0,
         max_iters,
         uncertainty: uncertainty_of(uncertainty)?,
         resume,
-        trace: false,
-        no_plots: true,
-        out: out.clone().unwrap_or_default(),
-    };
+        ..FitOptions::default()
+    }
+    .check()
+    .map_err(|e| option_err(&e))?;
     let results = out
         .as_ref()
-        .map(|o| vanefit::cli::fit::side_path(o, "starts.jsonl"));
+        .map(|o| vanefit::task::fit::side_path(o, "starts.jsonl"));
     let observer = PyFitProgress::new(progress);
-    let run = py.detach(|| fit_run(&args, results, &observer));
+    let run = py.detach(|| vanefit::task::fit::fit(&dataset, &settings, results, &observer));
     // The callback's exception (or the KeyboardInterrupt) first: it is why a run stopped.
     observer.raise_callback_error()?;
     let run = run.map_err(fit_err)?;
@@ -139,23 +149,24 @@ pub fn diagnose(
     out: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(String, String, String)> {
-    use vanefit::diagnose::{diagnose_observed, DiagnoseOptions};
-    if starts == 0 {
-        return Err(ParameterError::new_err("starts: must be at least 1"));
+    use vanefit::task::diagnose::{diagnose_dataset, write_diagnosis, DiagnoseOptions};
+    let settings = DiagnoseOptions {
+        starts,
+        seed,
+        threads,
+        ..DiagnoseOptions::default()
     }
-    if threads == Some(0) {
-        return Err(ParameterError::new_err("threads: must be at least 1"));
-    }
-    let mut opts = DiagnoseOptions::full(starts, seed);
-    opts.threads = threads;
+    .check()
+    .map_err(|e| option_err(&e))?;
     let observer = PyDiagnoseProgress::new(progress);
     let inner: &Dataset = &ds.inner;
     let d = py.detach(|| {
-        let engine =
-            vanefit::estimate::Engine::with_threads(opts.threads).map_err(|e| e.to_string())?;
-        let d = diagnose_observed(inner, &opts, &engine, &observer).map_err(|e| e.to_string())?;
+        let engine = vanefit::estimate::Engine::with_threads(settings.threads())
+            .map_err(|e| e.to_string())?;
+        let d =
+            diagnose_dataset(&engine, inner, &settings, &observer).map_err(|e| e.to_string())?;
         if let Some(o) = &out {
-            vanefit::report::diagnose::write_all(&d, o).map_err(|e| e.to_string())?;
+            write_diagnosis(&d, o).map_err(|e| e.to_string())?;
         }
         Ok::<_, String>(d)
     });

@@ -165,12 +165,10 @@ fn simulate(
     overrides: Vec<(String, f64)>,
 ) -> PyResult<Vec<(String, Columns)>> {
     let f = parameters(&ds.inner, fit, fit_text, overrides)?;
+    let motor = vanefit::task::simulate::motor_for(&ds.inner, Some(&f)).map_err(data_err)?;
     let tables = py
-        .detach(|| {
-            let motor = vanefit::cli::motor_for(&ds.inner, Some(&f))?;
-            vanefit::cli::simulated_tables(&ds.inner, &motor)
-        })
-        .map_err(|e| VanefitError::new_err(e.0))?;
+        .detach(|| vanefit::task::simulate::simulated_tables(&ds.inner, &motor))
+        .map_err(|e| VanefitError::new_err(e.to_string()))?;
     Ok(tables
         .into_iter()
         .map(|t| {
@@ -180,7 +178,8 @@ fn simulate(
         .collect())
 }
 
-/// The cost J that `fit` minimises and its χ² (SPEC §2), with each channel's term, as JSON.
+/// The cost J that `fit` minimises and its χ² (docs/model.md), with each channel's term, as
+/// JSON.
 #[pyfunction]
 #[pyo3(signature = (ds, fit=None, fit_text=None, overrides=Vec::new()))]
 fn cost(
@@ -193,7 +192,8 @@ fn cost(
     let f = parameters(&ds.inner, fit, fit_text, overrides)?;
     let model = CostModel::new(&ds.inner, CostOptions::default()).map_err(data_err)?;
     py.detach(|| {
-        let motor = vanefit::cli::motor_for(&ds.inner, Some(&f)).map_err(|e| e.0)?;
+        let motor =
+            vanefit::task::simulate::motor_for(&ds.inner, Some(&f)).map_err(|e| e.to_string())?;
         let objective = DataObjective {
             cost: &model,
             solver: Box::new(DefaultSolver::default()),

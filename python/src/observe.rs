@@ -96,6 +96,8 @@ impl PyFitProgress {
     }
 }
 
+impl vanefit::task::fit::FitObserver for PyFitProgress {}
+
 impl RunObserver for PyFitProgress {
     fn started(&self, total: usize, already_done: usize) {
         self.total.store(total, Ordering::SeqCst);

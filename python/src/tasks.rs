@@ -4,6 +4,7 @@
 //! files only when the caller gives a folder.
 
 use crate::errors::{data_err, param_err, DataError, ParameterError, VanefitError};
+use crate::fitting::option_err;
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
 use vanefit::data::dataset::Dataset;
@@ -40,58 +41,40 @@ pub fn predict(
     out: Option<PathBuf>,
 ) -> PyResult<String> {
     use vanefit::report::predict as report;
-    use vanefit::task::predict::{options, PredictArgs};
+    use vanefit::task::predict::{self as task, PredictOptions};
     let file = load_fit(&fit, fit_text.as_deref())?;
-    let args = PredictArgs {
-        fit: fit.clone(),
-        pressures: pressures.map(|p| {
-            p.iter()
-                .map(|v| format!("{v:?}"))
-                .collect::<Vec<_>>()
-                .join(",")
-        }),
-        unit,
+    let settings = PredictOptions {
+        unit: task::pressure_unit("PredictOptions.unit", &unit).map_err(|e| option_err(&e))?,
+        pressures,
         reference,
-        inlet_nozzle,
-        outlet_nozzle,
+        inlet_nozzle_m3_s_pa: inlet_nozzle,
+        outlet_nozzle_m3_s_pa: outlet_nozzle,
         speed_grid_rpm,
         curve_points,
         fixed_spread,
-        out: out.clone().unwrap_or_default(),
-    };
-    let (opts, unit) = options(&args, &file).map_err(param_err)?;
-    let display = report::PressureDisplay {
-        unit,
-        p_atm_pa: opts.p_atm_pa,
-    };
+    }
+    .check(task::fit_atmosphere_pa(&file))
+    .map_err(|e| option_err(&e))?;
     let pr = py
-        .detach(|| vanefit::predict::predict(&file, &opts))
+        .detach(|| task::predict(&file, &settings))
         .map_err(|e| VanefitError::new_err(e.to_string()))?;
-    let source = if file.dataset.is_empty() {
-        fit.display().to_string()
-    } else {
-        format!("{} (fit of dataset {})", fit.display(), file.dataset)
-    };
+    let source = task::source_name(&fit, &file);
     let mut written = Vec::new();
     if let Some(dir) = &out {
         vanefit::io::out::check_dir(dir).map_err(|e| param_err(format!("out {e}")))?;
-        std::fs::create_dir_all(dir)
-            .map_err(|e| VanefitError::new_err(format!("{}: cannot create: {e}", dir.display())))?;
-        py.detach(|| {
-            report::write(&pr, &display, &source, dir, &mut |p: &Path| {
-                written.push(p.display().to_string())
-            })
-        })
-        .map_err(|e| VanefitError::new_err(e.to_string()))?;
+        written = py
+            .detach(|| task::write_prediction(&pr, &settings, &source, dir))
+            .map_err(|e| VanefitError::new_err(e.to_string()))?;
     }
+    let display = settings.display();
     Ok(serde_json::json!({
-        "catalogue": report::catalogue_csv(&pr, &display),
-        "factors": report::factors_csv(&pr, &display),
-        "curves": report::curves_csv(&pr, &display),
-        "notes": report::notes(&pr, &display),
-        "report": report::markdown(&pr, &display, &source),
+        "catalogue": report::catalogue_csv(&pr, display),
+        "factors": report::factors_csv(&pr, display),
+        "curves": report::curves_csv(&pr, display),
+        "notes": report::notes(&pr, display),
+        "report": report::markdown(&pr, display, &source),
         "unit": display.unit.suffix(),
-        "written": written,
+        "written": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     })
     .to_string())
 }
@@ -132,68 +115,45 @@ pub fn export_petab(
 
 /// Writes a synthetic dataset into `out` as `vanefit synth`: the three reference
 /// experiments of the motor of `fit` (none: the default motor) with `effects` switched on
-/// (none: the fit's), sensor noise `noise` times a typical rig's, and `truth.json`.
+/// (none: the fit's), sensor noise `noise` times a typical rig's, and `truth.json`; or, with
+/// `catalogue`, catalogue pages at `pressures_bar_g`.
 #[pyfunction]
-#[pyo3(signature = (out, fit, fit_text, effects, noise, seed))]
+#[pyo3(signature = (out, fit, fit_text, effects, noise, seed, catalogue, pressures_bar_g))]
+#[allow(clippy::too_many_arguments)]
 pub fn synth(
     py: Python<'_>,
     out: PathBuf,
     fit: Option<PathBuf>,
     fit_text: Option<String>,
-    effects: Option<String>,
+    effects: Option<Vec<String>>,
     noise: f64,
     seed: u64,
+    catalogue: bool,
+    pressures_bar_g: Vec<f64>,
 ) -> PyResult<()> {
-    use vanefit::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
     use vanefit::model::effects::EffectSet;
-    use vanefit::model::motor::Motor;
-    use vanefit::model::params::MotorParams;
-    if !(noise.is_finite() && noise >= 0.0) {
-        return Err(ParameterError::new_err(format!(
-            "noise {noise}: must be a number >= 0"
-        )));
+    use vanefit::task::synth::{synth_motor, write_synthetic, SynthOptions};
+    let effects = effects
+        .map(|list| EffectSet::parse_list(&list.join(",")))
+        .transpose()
+        .map_err(|e| param_err(format!("effects: {e}")))?;
+    let settings = SynthOptions {
+        effects,
+        noise,
+        seed,
+        catalogue,
+        pressures_bar_g,
     }
+    .check()
+    .map_err(|e| option_err(&e))?;
     let file = fit
         .as_deref()
         .map(|p| load_fit(p, fit_text.as_deref()))
         .transpose()?;
-    let (params, mut fx) = match &file {
-        Some(f) => (f.params.clone(), f.effects.clone()),
-        None => (MotorParams::default(), EffectSet::empty()),
-    };
-    if let Some(list) = &effects {
-        fx = EffectSet::parse_list(list).map_err(|m| param_err(format!("effects: {m}")))?;
-    }
-    let extra = file.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
-    let motor = Motor::new(params, fx.clone()).with_extra(&extra);
     let name = out.file_name().unwrap_or_default().to_string_lossy();
-    let mut truth = FitFile::from_params(&name, motor.params.clone(), fx);
-    truth.extra = extra;
+    let (motor, truth) = synth_motor(&name, file.as_ref(), &settings);
     let _lock = vanefit::io::out::prepare_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
-    let plan = SynthPlan::default();
-    let experiments = py
-        .detach(|| {
-            synthesize(
-                &motor,
-                &vanefit::numerics::DefaultSolver::default(),
-                &plan,
-                &SensorNoise::typical().scaled(noise),
-                seed,
-            )
-        })
-        .map_err(|e| VanefitError::new_err(e.to_string()))?;
-    let description = format!("seed {seed}, noise x{noise}.");
-    write_dataset(
-        &out,
-        &experiments,
-        &plan,
-        &motor,
-        &motor.effects,
-        &description,
-    )
-    .map_err(|e| DataError::new_err(e.to_string()))?;
-    truth
-        .write(&out.join("truth.json"))
-        .map_err(|e| VanefitError::new_err(format!("{}: {e}", out.display())))?;
+    py.detach(|| write_synthetic(&out, &motor, &truth, &settings))
+        .map_err(|e| DataError::new_err(e.to_string()))?;
     Ok(())
 }

@@ -215,8 +215,8 @@ def fit(
             int(starts),
             int(seed),
             None if threads is None else int(threads),
-            ",".join(effects or []),
-            None if estimate is None else ",".join(estimate),
+            [str(e) for e in effects or []],
+            None if estimate is None else [str(n) for n in estimate],
             uncertainty,
             int(max_iters),
             None if out is None else os.fspath(out),
@@ -488,16 +488,19 @@ def synth(
     effects: Optional[Sequence[str]] = None,
     noise: float = 1.0,
     seed: int = 1,
+    catalogue: bool = False,
+    pressures_bar_g: Sequence[float] = (6.3,),
 ) -> Dataset:
     """Writes a synthetic dataset into ``out`` (the three reference experiments with typical
     sensor noise times ``noise``, and ``truth.json``) from the motor of a fit (default: the
-    AR034 motor) with the catalogued ``effects`` switched on, as ``vanefit synth``, and
-    loads it."""
+    AR034 motor) with the catalogued ``effects`` switched on (default: the fit's), as
+    ``vanefit synth``, and loads it. ``catalogue=True`` writes catalogue pages at
+    ``pressures_bar_g`` instead of rig recordings."""
     path, text = (None, None) if params is None else _fit_source(params)
     _core.synth(
         os.fspath(out), path, text,
-        None if effects is None else ",".join(effects),
-        float(noise), int(seed),
+        None if effects is None else [str(e) for e in effects],
+        float(noise), int(seed), bool(catalogue), [float(p) for p in pressures_bar_g],
     )
     return load_dataset(out)
 

@@ -94,8 +94,8 @@ def fit(
     starts: int,
     seed: int,
     threads: Optional[int],
-    effects: str,
-    estimate: Optional[str],
+    effects: Sequence[str],
+    estimate: Optional[Sequence[str]],
     uncertainty: str,
     max_iters: int,
     out: Optional[_Path],
@@ -128,9 +128,11 @@ def synth(
     out: _Path,
     fit: Optional[_Path],
     fit_text: Optional[str],
-    effects: Optional[str],
+    effects: Optional[Sequence[str]],
     noise: float,
     seed: int,
+    catalogue: bool,
+    pressures_bar_g: Sequence[float],
 ) -> None: ...
 def control(
     study: str,

@@ -1,6 +1,6 @@
-//! The batch manifest (`manifest.toml`, SPEC §7): which datasets, which tasks, and the shared
-//! options of each task. Every problem is refused at its place in the file (line and
-//! column, from the TOML parser's spans), before any unit runs.
+//! The batch manifest (`manifest.toml`; docs/formats.md, "Manifest"): which datasets, which
+//! tasks, and the shared options of each task. Every problem is refused at its place in the
+//! file (line and column, from the TOML parser's spans), before any unit runs.
 //!
 //! ```toml
 //! [batch]
@@ -19,12 +19,11 @@
 //! ```
 
 use crate::data::dataset::{locate_span, DataError};
-use crate::data::fitfile::FitFile;
+use crate::estimate::fit::UncertaintyMethod;
 use crate::model::effects::EffectSet;
-use crate::task::diagnose::DiagnoseArgs;
-use crate::task::fit::{parse_bounds, FitArgs, Uncertainty};
-use crate::task::predict::{options as predict_options, PredictArgs};
-use clap::ValueEnum;
+use crate::task::diagnose::{DiagnoseOptions, Effort};
+use crate::task::fit::{FitOptions, ParamRange};
+use crate::task::predict::{pressure_unit, PredictOptions};
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -71,14 +70,14 @@ pub struct Manifest {
     pub datasets: Vec<DatasetEntry>,
     /// The tasks, in the order fit, diagnose, predict (predict reads the fit's file).
     pub tasks: Vec<TaskKind>,
-    /// Options of every fit (`dataset` and `out` are set per unit).
-    pub fit: FitArgs,
-    /// Options of every diagnosis (`dataset` and `out` set per unit); `quick` effort or not.
-    pub diagnose: DiagnoseArgs,
-    /// Reduced diagnosis effort (`DiagnoseOptions::quick`).
-    pub diagnose_quick: bool,
-    /// Options of every prediction (`fit` and `out` set per unit).
-    pub predict: PredictArgs,
+    /// Options of every fit.
+    pub fit: FitOptions,
+    /// Whether a fit draws its plots.
+    pub fit_plots: bool,
+    /// Options of every diagnosis.
+    pub diagnose: DiagnoseOptions,
+    /// Options of every prediction.
+    pub predict: PredictOptions,
     /// The task tables as written, so that a batch folder knows what made it.
     pub settings: serde_json::Value,
 }
@@ -140,15 +139,6 @@ struct RawPredict {
     fixed_spread: Option<f64>,
 }
 
-/// Parses the options of a command exactly as its command line would, so that a task's
-/// defaults are the command's defaults (one place), not copies.
-fn command_defaults<T: clap::Args>(argv: &[&str]) -> T {
-    let matches = T::augment_args(clap::Command::new("vanefit"))
-        .try_get_matches_from(argv)
-        .expect("the command's own defaults parse");
-    T::from_arg_matches(&matches).expect("the command's own defaults parse")
-}
-
 /// Where the manifest's text is, for located messages.
 struct Source<'a> {
     path: &'a Path,
@@ -191,9 +181,9 @@ impl Manifest {
         let fit_raw = raw
             .fit
             .unwrap_or_else(|| Spanned::new(0..0, RawFit::default()));
-        let fit = fit_args(&src, fit_raw.get_ref())?;
+        let (fit, fit_plots) = fit_args(&src, fit_raw.get_ref())?;
         let diag_raw = raw.diagnose.unwrap_or_default();
-        let (diagnose, diagnose_quick) = diagnose_args(&src, &diag_raw)?;
+        let diagnose = diagnose_args(&src, &diag_raw)?;
         let pred_raw = raw
             .predict
             .unwrap_or_else(|| Spanned::new(0..0, RawPredict::default()));
@@ -208,8 +198,8 @@ impl Manifest {
             datasets,
             tasks,
             fit,
+            fit_plots,
             diagnose,
-            diagnose_quick,
             predict,
             settings,
         })
@@ -302,9 +292,10 @@ fn tasks(
     Ok(tasks)
 }
 
-/// `[fit]` as the options of `vanefit fit`, the command's defaults for what it leaves out.
-fn fit_args(src: &Source<'_>, raw: &RawFit) -> Result<FitArgs, ManifestError> {
-    let mut a: FitArgs = command_defaults(&["fit", ".", "--out", "fit.json"]);
+/// `[fit]` as the options of a fit (the library's defaults for what it leaves out), and
+/// whether it draws plots.
+fn fit_args(src: &Source<'_>, raw: &RawFit) -> Result<(FitOptions, bool), ManifestError> {
+    let mut a = FitOptions::default();
     if let Some(s) = &raw.starts {
         if *s.get_ref() == 0 {
             return Err(src.at(s.span(), "starts must be at least 1"));
@@ -314,26 +305,33 @@ fn fit_args(src: &Source<'_>, raw: &RawFit) -> Result<FitArgs, ManifestError> {
     a.seed = raw.seed.unwrap_or(a.seed);
     a.max_iters = raw.max_iters.unwrap_or(a.max_iters);
     if let Some(u) = &raw.uncertainty {
-        a.uncertainty = Uncertainty::from_str(u.get_ref(), false).map_err(|_| {
-            src.at(
-                u.span(),
-                "uncertainty must be \"profile\", \"curvature\" or \"none\"",
-            )
-        })?;
+        a.uncertainty = match u.get_ref().as_str() {
+            "profile" => UncertaintyMethod::Profile,
+            "curvature" => UncertaintyMethod::Curvature,
+            "none" => UncertaintyMethod::None,
+            _ => {
+                return Err(src.at(
+                    u.span(),
+                    "uncertainty must be \"profile\", \"curvature\" or \"none\"",
+                ))
+            }
+        };
     }
     if let Some(e) = &raw.effects {
-        a.effects = e.get_ref().join(",");
-        EffectSet::parse_list(&a.effects).map_err(|m| src.at(e.span(), m.to_string()))?;
+        a.effects = EffectSet::parse_list(&e.get_ref().join(","))
+            .map_err(|m| src.at(e.span(), m.to_string()))?;
     }
-    a.estimate = raw.estimate.as_ref().map(|v| v.join(","));
+    a.estimate = raw
+        .estimate
+        .as_ref()
+        .map(|v| v.join(",").split(',').map(str::to_string).collect());
     for (value, field, option) in [
         (&raw.bounds, &mut a.bounds, "bounds"),
-        (&raw.start_range, &mut a.start_range, "start_range"),
+        (&raw.start_range, &mut a.start_ranges, "start_range"),
     ] {
         if let Some(v) = value {
-            parse_bounds(v.get_ref(), "")
+            *field = ParamRange::parse_list(v.get_ref())
                 .map_err(|_| src.at(v.span(), format!("{option}: give name=lo:hi,...")))?;
-            *field = Some(v.get_ref().clone());
         }
     }
     if let Some(s) = &raw.start_spread {
@@ -342,16 +340,12 @@ fn fit_args(src: &Source<'_>, raw: &RawFit) -> Result<FitArgs, ManifestError> {
         }
         a.start_spread = *s.get_ref();
     }
-    a.no_plots = !raw.plots.unwrap_or(true);
-    Ok(a)
+    Ok((a, raw.plots.unwrap_or(true)))
 }
 
-/// `[diagnose]` as the options of `vanefit diagnose` plus its effort.
-fn diagnose_args(
-    src: &Source<'_>,
-    raw: &RawDiagnose,
-) -> Result<(DiagnoseArgs, bool), ManifestError> {
-    let mut a: DiagnoseArgs = command_defaults(&["diagnose", ".", "--out", "."]);
+/// `[diagnose]` as the options of a diagnosis, its effort included.
+fn diagnose_args(src: &Source<'_>, raw: &RawDiagnose) -> Result<DiagnoseOptions, ManifestError> {
+    let mut a = DiagnoseOptions::default();
     if let Some(s) = &raw.starts {
         if *s.get_ref() == 0 {
             return Err(src.at(s.span(), "starts must be at least 1"));
@@ -359,41 +353,58 @@ fn diagnose_args(
         a.starts = *s.get_ref();
     }
     a.seed = raw.seed.unwrap_or(a.seed);
-    let quick = match raw
+    a.effort = match raw
         .effort
         .as_ref()
         .map(|e| (e.get_ref().as_str(), e.span()))
     {
-        None | Some(("full", _)) => false,
-        Some(("quick", _)) => true,
+        None | Some(("full", _)) => Effort::Full,
+        Some(("quick", _)) => Effort::Quick,
         Some((_, span)) => return Err(src.at(span, "effort must be \"full\" or \"quick\"")),
     };
-    Ok((a, quick))
+    Ok(a)
 }
 
-/// `[predict]` as the options of `vanefit predict`, checked as the command checks them
-/// (at the standard atmosphere; the fit's own is used when the unit runs).
-fn predict_args(src: &Source<'_>, raw: &Spanned<RawPredict>) -> Result<PredictArgs, ManifestError> {
-    let mut a: PredictArgs = command_defaults(&["predict", "fit.json"]);
+/// `[predict]` as the options of a prediction, checked as the command checks them (at the
+/// standard atmosphere; the fit's own is used when the unit runs).
+fn predict_args(
+    src: &Source<'_>,
+    raw: &Spanned<RawPredict>,
+) -> Result<PredictOptions, ManifestError> {
+    let mut a = PredictOptions::default();
     let r = raw.get_ref();
-    a.pressures = r.pressures.as_ref().map(|v| {
-        v.iter()
-            .map(|p| p.to_string())
-            .collect::<Vec<_>>()
-            .join(",")
-    });
+    let fail =
+        |e: crate::task::OptionError| src.at(raw.span(), format!("[predict]: {}", predict_key(&e)));
     if let Some(u) = &r.unit {
-        a.unit = u.clone();
+        a.unit = pressure_unit("PredictOptions.unit", u).map_err(fail)?;
     }
+    a.pressures = r.pressures.clone();
     a.reference = r.reference.or(a.reference);
-    a.inlet_nozzle = r.inlet_nozzle;
-    a.outlet_nozzle = r.outlet_nozzle;
+    a.inlet_nozzle_m3_s_pa = r.inlet_nozzle;
+    a.outlet_nozzle_m3_s_pa = r.outlet_nozzle;
     a.speed_grid_rpm = r.speed_grid_rpm.unwrap_or(a.speed_grid_rpm);
     a.curve_points = r.curve_points.unwrap_or(a.curve_points);
     a.fixed_spread = r.fixed_spread;
-    let probe = FitFile::from_params("", Default::default(), EffectSet::empty());
-    predict_options(&a, &probe).map_err(|e| src.at(raw.span(), format!("[predict]: {e}")))?;
+    a.check(crate::units::constants::P_ATM_PA).map_err(fail)?;
     Ok(a)
+}
+
+/// A bad `[predict]` value's message, named as the command line names it (the manifest's
+/// keys are the command's options).
+fn predict_key(e: &crate::task::OptionError) -> String {
+    let flag = match e.field() {
+        "PredictOptions.unit" => "--unit",
+        "PredictOptions.pressures" => "--pressures",
+        "PredictOptions.reference" => "--reference",
+        "PredictOptions.inlet_nozzle_m3_s_pa" => "--inlet-nozzle",
+        "PredictOptions.outlet_nozzle_m3_s_pa" => "--outlet-nozzle",
+        "PredictOptions.speed_grid_rpm" => "--speed-grid-rpm",
+        "PredictOptions.curve_points" => "--curve-points",
+        "PredictOptions.fixed_spread" => "--fixed-spread",
+        other => other,
+    };
+    e.message_as(flag)
+        .replace("PredictOptions.outlet_nozzle_m3_s_pa", "--outlet-nozzle")
 }
 
 #[cfg(test)]

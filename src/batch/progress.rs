@@ -67,6 +67,15 @@ pub struct UnitProgress<'a> {
     count: AtomicUsize,
 }
 
+/// A batch prints a catalogue's pinning on stdout, as `vanefit fit` does.
+impl crate::task::fit::FitObserver for UnitProgress<'_> {
+    fn pinning(&self, limit_pct: f64, rows: &[crate::task::fit::Pinning]) {
+        for line in crate::task::fit::pinning_lines(limit_pct, rows) {
+            crate::io::say_line(format_args!("{line}"));
+        }
+    }
+}
+
 impl RunObserver for UnitProgress<'_> {
     fn started(&self, total: usize, already_done: usize) {
         self.total.store(total, Ordering::Relaxed);

@@ -7,11 +7,10 @@ use super::plan::{self, Shard, Unit};
 use super::progress::BatchProgress;
 use super::status::{State, UnitStatus};
 use super::{BatchError, BatchRecord};
-use crate::diagnose::DiagnoseOptions;
 use crate::estimate::Engine;
 use crate::task::diagnose::{diagnose_to, DiagnoseTaskError};
-use crate::task::fit::{fit_run_on, side_path, write_fit, FitCommandError};
-use crate::task::predict::{predict_to, PredictCommandError};
+use crate::task::fit::{fit_dataset, side_path, write_fit, FitError};
+use crate::task::predict::{predict_to, PredictTaskError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -46,13 +45,13 @@ pub struct RunOutcome {
 pub enum UnitError {
     /// The fit failed.
     #[error(transparent)]
-    Fit(#[from] FitCommandError),
+    Fit(#[from] FitError),
     /// The diagnosis failed.
     #[error(transparent)]
     Diagnose(#[from] DiagnoseTaskError),
     /// The prediction failed.
     #[error(transparent)]
-    Predict(#[from] PredictCommandError),
+    Predict(#[from] PredictTaskError),
     /// A prediction without a finished fit of its dataset.
     #[error("no fit to predict from: the fit of this dataset is {0}")]
     NoFit(String),
@@ -217,14 +216,15 @@ fn execute(
     let observer = progress.unit(&unit.label());
     match unit.task {
         TaskKind::Fit => {
-            let mut args = manifest.fit.clone();
-            args.dataset = unit.path.clone();
-            args.out = folder.join("fit.json");
+            let mut options = manifest.fit.clone();
             // A fit interrupted before resumes from the starts it finished.
-            args.resume = true;
-            let starts = side_path(&args.out, "starts.jsonl");
-            let fitted = fit_run_on(engine, &args, Some(starts), &observer)?;
-            write_fit(&fitted, &args.out, args.seed, !args.no_plots)?;
+            options.resume = true;
+            let settings = options.check().map_err(FitError::from)?;
+            let out = folder.join("fit.json");
+            let starts = side_path(&out, "starts.jsonl");
+            let ds = crate::data::dataset::Dataset::load(&unit.path).map_err(FitError::from)?;
+            let fitted = fit_dataset(engine, ds, &settings, Some(starts), &observer)?;
+            write_fit(&fitted, &out, manifest.fit_plots)?;
             Ok(match &fitted.outcome.goodness {
                 Some(g) => format!(
                     "cost J {:.4}, noise ratio {:.3} (limit {:.3})",
@@ -234,16 +234,8 @@ fn execute(
             })
         }
         TaskKind::Diagnose => {
-            let a = &manifest.diagnose;
-            let opts = if manifest.diagnose_quick {
-                DiagnoseOptions {
-                    starts: a.starts,
-                    ..DiagnoseOptions::quick(a.seed)
-                }
-            } else {
-                DiagnoseOptions::full(a.starts, a.seed)
-            };
-            let d = diagnose_to(engine, &unit.path, &opts, &observer, &folder)?;
+            let settings = manifest.diagnose.check().map_err(DiagnoseTaskError::from)?;
+            let d = diagnose_to(engine, &unit.path, &settings, &observer, &folder)?;
             let (before, after) = d.noise_ratios();
             Ok(if d.selected.is_empty() && !d.mismatch {
                 format!("no mismatch (noise ratio {before:.3})")
@@ -269,10 +261,7 @@ fn execute(
                     ))
                 }
             }
-            let mut args = manifest.predict.clone();
-            args.fit = fit_folder.join("fit.json");
-            args.out = folder;
-            let p = predict_to(&args)?;
+            let p = predict_to(&fit_folder.join("fit.json"), &manifest.predict, &folder)?;
             Ok(format!(
                 "{} pressure(s), {} file(s)",
                 p.prediction.pressures.len(),

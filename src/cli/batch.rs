@@ -1,67 +1,66 @@
 //! `vanefit batch` and `vanefit merge` (issue 14, SPEC §7): the options and what is printed;
 //! the work is `batch`.
 
-use crate::batch::slurm::{submit, SlurmOptions};
-use crate::batch::{self, Manifest, RunOptions, Shard};
 use crate::cli::Failure;
-use crate::io::say;
 use std::path::PathBuf;
+use vanefit::batch::slurm::{submit, SlurmOptions};
+use vanefit::batch::{self, BatchOptions, Manifest, Shard};
 
 /// `vanefit batch` options.
 #[derive(clap::Args, Debug, Clone)]
-pub struct BatchArgs {
+pub(crate) struct BatchArgs {
     /// The manifest (TOML): `[batch] datasets = [globs] tasks = [...]` and a table per task.
-    pub manifest: PathBuf,
+    pub(crate) manifest: PathBuf,
     /// The batch folder: one folder per unit (`<dataset>/<task>/`), `batch.json`, the summary.
     #[arg(long)]
-    pub out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Run only shard i of N (1-based), e.g. `--shard 2/8`; the union of the N shards is the
     /// whole batch, and each unit's result is the same whatever N.
     #[arg(long, conflicts_with = "slurm")]
-    pub shard: Option<Shard>,
+    pub(crate) shard: Option<Shard>,
     /// Worker threads (default: one per core); results do not depend on it.
     #[arg(long)]
-    pub threads: Option<usize>,
+    pub(crate) threads: Option<usize>,
     /// Run units that failed in an earlier run again (by default they count as finished).
     #[arg(long)]
-    pub retry_failed: bool,
+    pub(crate) retry_failed: bool,
     /// Exit 0 when units failed (their failures are recorded); a Slurm array task uses it
     /// so that the merge job (afterok) still runs and reports them.
     #[arg(long)]
-    pub allow_failed_units: bool,
+    pub(crate) allow_failed_units: bool,
     /// Submit the shards to Slurm as a job array, and a merge job after them.
     #[arg(long)]
-    pub slurm: bool,
+    pub(crate) slurm: bool,
     /// Slurm partition.
     #[arg(long, requires = "slurm")]
-    pub partition: Option<String>,
+    pub(crate) partition: Option<String>,
     /// Time limit of each array task (e.g. `2:00:00`); a task stopped by it and requeued
     /// continues where it stopped.
     #[arg(long, requires = "slurm")]
-    pub time: Option<String>,
+    pub(crate) time: Option<String>,
     /// CPUs (threads) of each array task.
     #[arg(long, requires = "slurm")]
-    pub cpus_per_task: Option<usize>,
+    pub(crate) cpus_per_task: Option<usize>,
     /// At most this many array tasks at once.
     #[arg(long, requires = "slurm")]
-    pub array_limit: Option<usize>,
+    pub(crate) array_limit: Option<usize>,
     /// Number of array tasks (default: as many as the batch can use).
     #[arg(long, requires = "slurm")]
-    pub shards: Option<usize>,
+    pub(crate) shards: Option<usize>,
     /// Wait until the merge job has ended; exit 1 unless it ended well.
     #[arg(long, requires = "slurm")]
-    pub wait: bool,
+    pub(crate) wait: bool,
 }
 
 /// `vanefit merge` options.
 #[derive(clap::Args, Debug, Clone)]
-pub struct MergeArgs {
+pub(crate) struct MergeArgs {
     /// The batch folder (`--out` of `vanefit batch`).
-    pub dir: PathBuf,
+    pub(crate) dir: PathBuf,
 }
 
 /// `vanefit batch`: the shard here, or the whole batch submitted to Slurm.
-pub fn run(args: &BatchArgs) -> Result<(), Failure> {
+pub(crate) fn run(args: &BatchArgs) -> Result<(), Failure> {
     for (option, v) in [
         ("--threads", args.threads),
         ("--cpus-per-task", args.cpus_per_task),
@@ -76,16 +75,17 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     if args.slurm {
         return slurm(&manifest, args);
     }
-    let opts = RunOptions {
+    let settings = BatchOptions {
         out: args.out.clone(),
         shard: args.shard.unwrap_or(Shard::ALL),
         threads: args.threads,
         retry_failed: args.retry_failed,
-    };
-    let o = batch::run(&manifest, &opts)?;
+    }
+    .check()?;
+    let o = settings.run(&manifest)?;
     say!(
         "batch shard {}: {} unit(s): {} done now, {} finished before (skipped), {} failed",
-        opts.shard,
+        settings.shard(),
         o.units,
         o.done,
         o.skipped,
@@ -175,7 +175,7 @@ fn merged_since(out: &std::path::Path, since: std::time::SystemTime) -> bool {
 }
 
 /// `vanefit merge`: the summary files; exit 1 when units failed or are unfinished.
-pub fn merge(args: &MergeArgs) -> Result<(), Failure> {
+pub(crate) fn merge(args: &MergeArgs) -> Result<(), Failure> {
     let o = batch::merge(&args.dir)?;
     for p in &o.written {
         say!("wrote {}", p.display());

@@ -2,11 +2,10 @@
 //! figures and every point, as printed and in SI, with the reference conditions of the
 //! air-consumption unit (free air, ANR, normal or standard air).
 
-use crate::data::dataset::catalogue::FIGURES;
-use crate::data::dataset::{ExperimentData, Kind};
-use crate::io::say;
-use crate::units::format::trim_zeros;
-use crate::units::{Quantity, Unit};
+use vanefit::data::dataset::catalogue::FIGURES;
+use vanefit::data::dataset::{ExperimentData, Kind};
+use vanefit::units::format::trim_zeros;
+use vanefit::units::{Quantity, Unit};
 
 /// A number for people: 5 significant digits.
 fn num(v: f64) -> String {
@@ -18,7 +17,7 @@ fn num(v: f64) -> String {
 }
 
 /// The catalogue part of `check` (nothing for other kinds).
-pub fn print(ex: &ExperimentData, p_atm_pa: f64) {
+pub(crate) fn print(ex: &ExperimentData, p_atm_pa: f64) {
     if ex.kind != Kind::Catalogue {
         return;
     }

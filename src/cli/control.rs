@@ -5,44 +5,40 @@
 //! `step` (Fig. 19), `disturbance` (Fig. 20), `min-speed` (§5.2's 2900 vs 365 rpm) and
 //! `design` (PI gains for a phase margin or crossover, checked by simulation).
 //!
-//! This module holds only the command line: the clap arguments, the dispatch and the printed
-//! summaries. Each study runs as options → `check()` → `control::study::<study>::study` →
-//! `report::control::<study>::write` → summary; the output folder is created after the
-//! motor options are checked and before the others, as before the split.
+//! This module holds only the command line: the clap arguments, their conversion to the
+//! library's `ControlStudy` and the printed summaries. The study runs as
+//! `vanefit::task::control`: the motor checked, the output folder created, the rest
+//! checked, the study run and written, then the summary printed.
 
 use crate::cli::Failure;
-use crate::control::closed_loop::Loop;
-use crate::control::study::bode::{BodeOptions, BodeStudy};
-use crate::control::study::design::{DesignOptions, DesignRun, DesignStudy};
-use crate::control::study::disturbance::{DisturbanceOptions, DisturbanceStudy};
-use crate::control::study::min_speed::{MinSpeedOptions, MinSpeedStudy};
-use crate::control::study::step::{StepOptions, StepStudy};
-use crate::control::study::throttle::{ThrottleOptions, ThrottleStudy};
-use crate::control::study::{
-    bode, design, disturbance, min_speed, step, throttle, GainOptions, LoopOptions, MotorOptions,
-    PiOptions, Plant, ValveOptions,
-};
-use crate::control::throttle::Port;
-use crate::control::{rpm, ControlError};
-use crate::io::lock::OutputLock;
-use crate::io::out::prepare_dir;
-use crate::io::say;
-use crate::report::control::bode::RPM_PER_BAR;
-use crate::report::control::{describe_load, describe_pi, describe_valve, Writer};
-use crate::report::explain;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
+use vanefit::control::closed_loop::Loop;
+use vanefit::control::rpm;
+use vanefit::control::study::bode::{BodeOptions, BodeStudy};
+use vanefit::control::study::design::{DesignOptions, DesignRun, DesignStudy};
+use vanefit::control::study::disturbance::{DisturbanceOptions, DisturbanceStudy};
+use vanefit::control::study::min_speed::{MinSpeedOptions, MinSpeedStudy};
+use vanefit::control::study::step::{StepOptions, StepStudy};
+use vanefit::control::study::throttle::{ThrottleOptions, ThrottleStudy};
+use vanefit::control::study::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
+use vanefit::control::throttle::Port;
+use vanefit::io::out::prepare_dir;
+use vanefit::report::control::bode::RPM_PER_BAR;
+use vanefit::report::control::{describe_load, describe_pi, describe_valve};
+use vanefit::report::explain;
+use vanefit::task::control::{self as task, write_study, ControlStudy, StudyResult};
 
 /// `vanefit control` arguments.
 #[derive(Args, Debug)]
-pub struct ControlArgs {
+pub(crate) struct ControlArgs {
     #[command(subcommand)]
     study: Study,
 }
 
 /// The studies.
 #[derive(Subcommand, Debug)]
-pub enum Study {
+pub(crate) enum Study {
     /// Steady speed against the conductance of an inlet throttle, and torque-speed curves
     /// for several inlet throttles (paper Figs. 14, 15).
     #[command(allow_negative_numbers = true)]
@@ -70,12 +66,12 @@ pub enum Study {
 
 /// Options every study takes.
 #[derive(Args, Debug)]
-pub struct CommonArgs {
+pub(crate) struct CommonArgs {
     /// Fit file (vanefit.fit/1); omitted: the default motor.
     #[arg(long)]
     params: Option<PathBuf>,
     /// Effects to switch on (comma-separated ids), overriding the fit file's.
-    #[arg(long, value_parser = crate::task::effects_arg)]
+    #[arg(long, value_parser = crate::cli::effects_arg)]
     effects: Option<String>,
     /// Output folder (created); default `./control-<study>`.
     #[arg(long)]
@@ -88,7 +84,7 @@ pub struct CommonArgs {
 
 /// `throttle-inlet` / `throttle-outlet` arguments.
 #[derive(Args, Debug)]
-pub struct ThrottleArgs {
+pub(crate) struct ThrottleArgs {
     #[command(flatten)]
     common: CommonArgs,
     /// Constant supply pressure, MPa absolute.
@@ -111,7 +107,7 @@ pub struct ThrottleArgs {
 
 /// `bode` arguments.
 #[derive(Args, Debug)]
-pub struct BodeArgs {
+pub(crate) struct BodeArgs {
     #[command(flatten)]
     common: CommonArgs,
     #[command(flatten)]
@@ -130,7 +126,7 @@ pub struct BodeArgs {
 
 /// The pressure control valve.
 #[derive(Args, Debug)]
-pub struct ValveArgs {
+pub(crate) struct ValveArgs {
     /// Valve time constant, s (default: the parameter set's valve_tau, 0.05 s). The valve is
     /// first order unless the valve_dynamics effect is on (then second order with
     /// valve_zeta).
@@ -146,7 +142,7 @@ pub struct ValveArgs {
 
 /// Controller settings other than the gains.
 #[derive(Args, Debug)]
-pub struct PiArgs {
+pub(crate) struct PiArgs {
     /// Sample time, ms.
     #[arg(long, default_value_t = 1.0)]
     ts_ms: f64,
@@ -160,7 +156,7 @@ pub struct PiArgs {
 
 /// PI gains (paper: G(s) = (0.85 s + 4)/s).
 #[derive(Args, Debug)]
-pub struct GainArgs {
+pub(crate) struct GainArgs {
     /// Proportional gain, V per speed unit.
     #[arg(long, default_value_t = 0.85)]
     kp: f64,
@@ -171,7 +167,7 @@ pub struct GainArgs {
 
 /// `step` arguments.
 #[derive(Args, Debug)]
-pub struct StepArgs {
+pub(crate) struct StepArgs {
     #[command(flatten)]
     common: CommonArgs,
     #[command(flatten)]
@@ -194,7 +190,7 @@ pub struct StepArgs {
 
 /// `disturbance` arguments.
 #[derive(Args, Debug)]
-pub struct DisturbanceArgs {
+pub(crate) struct DisturbanceArgs {
     #[command(flatten)]
     common: CommonArgs,
     #[command(flatten)]
@@ -217,7 +213,7 @@ pub struct DisturbanceArgs {
 
 /// `min-speed` arguments.
 #[derive(Args, Debug)]
-pub struct MinSpeedArgs {
+pub(crate) struct MinSpeedArgs {
     #[command(flatten)]
     common: CommonArgs,
     #[command(flatten)]
@@ -247,7 +243,7 @@ pub struct MinSpeedArgs {
 
 /// `design` arguments.
 #[derive(Args, Debug)]
-pub struct DesignArgs {
+pub(crate) struct DesignArgs {
     #[command(flatten)]
     common: CommonArgs,
     #[command(flatten)]
@@ -272,44 +268,126 @@ pub struct DesignArgs {
 }
 
 /// Runs `vanefit control <study>`.
-pub fn run(args: ControlArgs) -> Result<(), Failure> {
-    match &args.study {
-        Study::ThrottleInlet(a) => run_throttle(a, Port::Inlet),
-        Study::ThrottleOutlet(a) => run_throttle(a, Port::Outlet),
-        Study::Bode(a) => run_bode(a),
-        Study::Step(a) => run_step(a),
-        Study::Disturbance(a) => run_disturbance(a),
-        Study::MinSpeed(a) => run_min_speed(a),
-        Study::Design(a) => run_design(a),
+pub(crate) fn run(args: ControlArgs) -> Result<(), Failure> {
+    let (common, study) = study(&args.study);
+    // The motor is checked first, then the output folder is created (default
+    // `./control-<study>`) and locked for this run, then the loop and the study's options.
+    let plant = study.check_plant()?;
+    let out = common
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("control-{}", study.name())));
+    let _lock = prepare_dir(&out).map_err(|e| Failure(format!("--out {e}")))?;
+    let result = study.check_on(plant)?.run()?;
+    let mut print = |p: &Path| say!("wrote {}", p.display());
+    write_study(&result, &out, &mut print)?;
+    match &result {
+        StudyResult::Throttle(r) => print_throttle(r),
+        StudyResult::Bode(r) => print_bode(r),
+        StudyResult::Step(r) => print_step(r),
+        StudyResult::Disturbance(r) => print_disturbance(r),
+        StudyResult::MinSpeed(r) => {
+            say!("{}", describe_loop(&r.lp));
+            print_open_loop_start(r);
+            print_controlled_min(r);
+        }
+        StudyResult::Design(r) => {
+            print_design(r);
+            // The files and the summary are there to look at even when the check fails.
+            r.check_settled()?;
+        }
+        _ => {}
     }
+    Ok(())
 }
 
 // ---------------------------------------------------------------------------------------
-// From the arguments to the options of the control layer
+// From the arguments to the library's control study
 
-impl CommonArgs {
-    fn options(&self) -> MotorOptions {
-        MotorOptions {
-            params: self.params.clone(),
-            effects: self.effects.clone(),
-            brake_nm_s_rad: self.brake_nm_s_rad,
-        }
-    }
+/// The study of the command line: its common options and the library's study.
+fn study(s: &Study) -> (&CommonArgs, ControlStudy) {
+    let (common, study) = match s {
+        Study::ThrottleInlet(a) => (&a.common, a.study(Port::Inlet)),
+        Study::ThrottleOutlet(a) => (&a.common, a.study(Port::Outlet)),
+        Study::Bode(a) => (
+            &a.common,
+            task::Study::Bode(BodeOptions {
+                p_mean_mpa: a.p_mean_mpa,
+                f_min_hz: a.f_min_hz,
+                f_max_hz: a.f_max_hz,
+                points: a.points,
+                valve: a.valve.options(),
+            }),
+        ),
+        Study::Step(a) => (
+            &a.common,
+            task::Study::Step(
+                loop_options(&a.valve, &a.pi, Some(&a.gains)),
+                StepOptions {
+                    from_rpm: a.from_rpm,
+                    to_rpm: a.to_rpm,
+                    t_step_s: a.t_step_s,
+                    duration_s: a.duration_s,
+                },
+            ),
+        ),
+        Study::Disturbance(a) => (
+            &a.common,
+            task::Study::Disturbance(
+                loop_options(&a.valve, &a.pi, Some(&a.gains)),
+                DisturbanceOptions {
+                    rpm: a.rpm,
+                    load_step_nm: a.load_step_nm,
+                    t_step_s: a.t_step_s,
+                    duration_s: a.duration_s,
+                },
+            ),
+        ),
+        Study::MinSpeed(a) => (
+            &a.common,
+            task::Study::MinSpeed(
+                loop_options(&a.valve, &a.pi, Some(&a.gains)),
+                MinSpeedOptions {
+                    p_max_mpa: a.p_max_mpa,
+                    ramp_s: a.ramp_s,
+                    factor: a.factor,
+                    floor_rpm: a.floor_rpm,
+                    stage_s: a.stage_s,
+                },
+            ),
+        ),
+        Study::Design(a) => (
+            &a.common,
+            task::Study::Design(
+                loop_options(&a.valve, &a.pi, None),
+                DesignOptions {
+                    pm_deg: a.pm_deg,
+                    crossover_hz: a.crossover_hz,
+                    p_mean_mpa: a.p_mean_mpa,
+                    step_rpm: a.step_rpm,
+                    duration_s: a.duration_s,
+                },
+            ),
+        ),
+    };
+    let motor = MotorOptions {
+        params: common.params.clone(),
+        effects: common.effects.clone(),
+        brake_nm_s_rad: common.brake_nm_s_rad,
+    };
+    (common, ControlStudy { motor, study })
+}
 
-    /// The checked motor and load, and the output folder (created; default
-    /// `./control-<study>`), checked writable and locked for this run before any work.
-    fn setup(
-        &self,
-        study: &str,
-        default_brake: f64,
-    ) -> Result<(Plant, PathBuf, OutputLock), Failure> {
-        let plant = self.options().check(default_brake)?;
-        let out = self
-            .out
-            .clone()
-            .unwrap_or_else(|| PathBuf::from(format!("control-{study}")));
-        let lock = prepare_dir(&out).map_err(|e| Failure(format!("--out {e}")))?;
-        Ok((plant, out, lock))
+impl ThrottleArgs {
+    fn study(&self, port: Port) -> task::Study {
+        task::Study::Throttle(ThrottleOptions {
+            port,
+            p_supply_mpa: self.p_supply_mpa,
+            c_min_m3_s_pa: self.c_min_m3_s_pa,
+            c_max_m3_s_pa: self.c_max_m3_s_pa,
+            points: self.points,
+            curves_m3_s_pa: self.curves_m3_s_pa.clone(),
+        })
     }
 }
 
@@ -323,40 +401,17 @@ impl ValveArgs {
     }
 }
 
-impl PiArgs {
-    fn options(&self) -> PiOptions {
-        PiOptions {
-            ts_ms: self.ts_ms,
-            speed_unit_rpm: self.speed_unit_rpm,
-            anti_windup: self.anti_windup.clone(),
-        }
-    }
-}
-
-/// The checked loop of a closed-loop study.
-fn checked_loop(
-    plant: &Plant,
-    valve: &ValveArgs,
-    pi: &PiArgs,
-    gains: Option<&GainArgs>,
-) -> Result<Loop, ControlError> {
-    let options = LoopOptions {
+/// The loop of a closed-loop study (unchecked).
+fn loop_options(valve: &ValveArgs, pi: &PiArgs, gains: Option<&GainArgs>) -> LoopOptions {
+    LoopOptions {
         valve: valve.options(),
-        pi: pi.options(),
+        pi: PiOptions {
+            ts_ms: pi.ts_ms,
+            speed_unit_rpm: pi.speed_unit_rpm,
+            anti_windup: pi.anti_windup.clone(),
+        },
         gains: gains.map(|g| GainOptions { kp: g.kp, ki: g.ki }),
-    };
-    Ok(options.check(plant)?)
-}
-
-/// Writes a study's files into `out` with `write`, printing `wrote <path>` for each.
-fn write_report<R>(
-    out: &Path,
-    r: &R,
-    write: fn(&mut Writer, &R) -> Result<(), crate::report::control::ControlReportError>,
-) -> Result<(), Failure> {
-    let mut print = |p: &Path| say!("wrote {}", p.display());
-    write(&mut Writer::new(out, &mut print), r)?;
-    Ok(())
+    }
 }
 
 /// The loop in one line: controller, valve, load.
@@ -370,25 +425,7 @@ fn describe_loop(lp: &Loop) -> String {
 }
 
 // ---------------------------------------------------------------------------------------
-// The studies: check, compute, write, print
-
-fn run_throttle(a: &ThrottleArgs, port: Port) -> Result<(), Failure> {
-    let (plant, out, _lock) = a.common.setup(&format!("throttle-{}", port.name()), 1e-4)?;
-    let settings = ThrottleOptions {
-        port,
-        p_supply_mpa: a.p_supply_mpa,
-        c_min_m3_s_pa: a.c_min_m3_s_pa,
-        c_max_m3_s_pa: a.c_max_m3_s_pa,
-        points: a.points,
-        curves_m3_s_pa: a.curves_m3_s_pa.clone(),
-    }
-    .check()
-    .map_err(ControlError::from)?;
-    let r = throttle::study(&plant, &settings)?;
-    write_report(&out, &r, crate::report::control::throttle::write)?;
-    print_throttle(&r);
-    Ok(())
-}
+// The summaries
 
 fn print_throttle(r: &ThrottleStudy) {
     let (Some(lo), Some(hi)) = (r.speed.first(), r.speed.last()) else {
@@ -414,23 +451,6 @@ fn print_throttle(r: &ThrottleStudy) {
             explain::conductance((w[0].c_m3_s_pa * w[1].c_m3_s_pa).sqrt(), 3)
         );
     }
-}
-
-fn run_bode(a: &BodeArgs) -> Result<(), Failure> {
-    let (plant, out, _lock) = a.common.setup("bode", 1e-4)?;
-    let settings = BodeOptions {
-        p_mean_mpa: a.p_mean_mpa,
-        f_min_hz: a.f_min_hz,
-        f_max_hz: a.f_max_hz,
-        points: a.points,
-        valve: a.valve.options(),
-    }
-    .check(plant.motor())
-    .map_err(ControlError::from)?;
-    let r = bode::study(&plant, &settings)?;
-    write_report(&out, &r, crate::report::control::bode::write)?;
-    print_bode(&r);
-    Ok(())
 }
 
 fn print_bode(r: &BodeStudy) {
@@ -466,23 +486,6 @@ fn print_bode(r: &BodeStudy) {
     say!("{}", describe_valve(r.settings.valve()));
 }
 
-fn run_step(a: &StepArgs) -> Result<(), Failure> {
-    let (plant, out, _lock) = a.common.setup("step", 1e-4)?;
-    let lp = checked_loop(&plant, &a.valve, &a.pi, Some(&a.gains))?;
-    let settings = StepOptions {
-        from_rpm: a.from_rpm,
-        to_rpm: a.to_rpm,
-        t_step_s: a.t_step_s,
-        duration_s: a.duration_s,
-    }
-    .check()
-    .map_err(ControlError::from)?;
-    let r = step::study(&plant, &lp, &settings)?;
-    write_report(&out, &r, crate::report::control::closed_loop::write_step)?;
-    print_step(&r);
-    Ok(())
-}
-
 fn print_step(r: &StepStudy) {
     let (s, m, tr) = (&r.settings, &r.metrics, &r.trace);
     say!("{}", describe_loop(&r.lp));
@@ -511,27 +514,6 @@ fn print_step(r: &StepStudy) {
     );
 }
 
-fn run_disturbance(a: &DisturbanceArgs) -> Result<(), Failure> {
-    let (plant, out, _lock) = a.common.setup("disturbance", 1e-4)?;
-    let lp = checked_loop(&plant, &a.valve, &a.pi, Some(&a.gains))?;
-    let settings = DisturbanceOptions {
-        rpm: a.rpm,
-        load_step_nm: a.load_step_nm,
-        t_step_s: a.t_step_s,
-        duration_s: a.duration_s,
-    }
-    .check()
-    .map_err(ControlError::from)?;
-    let r = disturbance::study(&plant, &lp, &settings)?;
-    write_report(
-        &out,
-        &r,
-        crate::report::control::closed_loop::write_disturbance,
-    )?;
-    print_disturbance(&r);
-    Ok(())
-}
-
 fn print_disturbance(r: &DisturbanceStudy) {
     let (s, d) = (&r.settings, &r.metrics);
     say!("{}", describe_loop(&r.lp));
@@ -546,26 +528,6 @@ fn print_disturbance(r: &DisturbanceStudy) {
         rpm(d.final_error_rad_s),
         rpm(r.open_error_rad_s),
     );
-}
-
-fn run_min_speed(a: &MinSpeedArgs) -> Result<(), Failure> {
-    let (plant, out, _lock) = a.common.setup("min-speed", 0.0)?;
-    let lp = checked_loop(&plant, &a.valve, &a.pi, Some(&a.gains))?;
-    let settings = MinSpeedOptions {
-        p_max_mpa: a.p_max_mpa,
-        ramp_s: a.ramp_s,
-        factor: a.factor,
-        floor_rpm: a.floor_rpm,
-        stage_s: a.stage_s,
-    }
-    .check(plant.motor())
-    .map_err(ControlError::from)?;
-    let r = min_speed::study(&plant, &lp, &settings)?;
-    write_report(&out, &r, crate::report::control::min_speed::write)?;
-    say!("{}", describe_loop(&r.lp));
-    print_open_loop_start(&r);
-    print_controlled_min(&r);
-    Ok(())
 }
 
 /// The lowest speed without control: the start-up on the pressure ramp.
@@ -635,26 +597,6 @@ fn print_controlled_min(r: &MinSpeedStudy) {
             rpm(r.start_rad_s)
         ),
     }
-}
-
-fn run_design(a: &DesignArgs) -> Result<(), Failure> {
-    let (plant, out, _lock) = a.common.setup("design", 1e-4)?;
-    let lp = checked_loop(&plant, &a.valve, &a.pi, None)?;
-    let settings = DesignOptions {
-        pm_deg: a.pm_deg,
-        crossover_hz: a.crossover_hz,
-        p_mean_mpa: a.p_mean_mpa,
-        step_rpm: a.step_rpm,
-        duration_s: a.duration_s,
-    }
-    .check()
-    .map_err(ControlError::from)?;
-    let r = design::study(&plant, &lp, &settings)?;
-    write_report(&out, &r, crate::report::control::design::write)?;
-    print_design(&r);
-    // The files and the summary are there to look at even when the check fails.
-    r.check_settled()?;
-    Ok(())
 }
 
 fn print_design(r: &DesignStudy) {

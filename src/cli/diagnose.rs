@@ -1,12 +1,28 @@
-//! `vanefit diagnose` (SPEC §6).
+//! `vanefit diagnose` (SPEC §6): the options and what is printed; the work is
+//! `vanefit::task::diagnose`.
 
 use crate::cli::Failure;
-use crate::data::dataset::Dataset;
-use crate::diagnose::{summary, DiagnoseObserver, DiagnoseOptions, Progress};
-use crate::estimate::Engine;
-use crate::io::say;
-use crate::task::diagnose::diagnose_dataset_to;
-pub use crate::task::diagnose::DiagnoseArgs;
+use std::path::PathBuf;
+use vanefit::data::dataset::Dataset;
+use vanefit::diagnose::{summary, DiagnoseObserver, Progress};
+use vanefit::estimate::Engine;
+use vanefit::task::diagnose::{diagnose_dataset, write_diagnosis, DiagnoseOptions};
+
+/// `vanefit diagnose` options (SPEC §6).
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct DiagnoseArgs {
+    /// Dataset folder (rig.toml and recordings).
+    pub(crate) dataset: PathBuf,
+    /// Start points of the baseline fit: the rig's nominal motor plus Latin-hypercube starts.
+    #[arg(long, default_value_t = 4, value_parser = crate::cli::at_least_one)]
+    pub(crate) starts: usize,
+    /// Seed of the start designs; a seed gives the same result whatever the thread count.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// Output folder: diagnosis.json, report.md and its SVG plots.
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+}
 
 /// Prints a diagnosis's progress on stderr, one line per event with the time since the
 /// start: `[  21.5 s] concealment: ...`.
@@ -19,18 +35,21 @@ impl DiagnoseObserver for StderrProgress {
 }
 
 /// `vanefit diagnose`.
-pub fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
-    if args.starts == 0 {
-        return Err(Failure("--starts must be at least 1".into()));
+pub(crate) fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
+    let settings = DiagnoseOptions {
+        starts: args.starts,
+        seed: args.seed,
+        ..DiagnoseOptions::default()
     }
+    .check()?;
     // The output is checked, then the data (so bad data leaves no folder behind), then the
     // output is created and locked: all before the diagnosis, which takes tens of seconds.
-    crate::io::out::check_dir(&args.out)?;
+    vanefit::io::out::check_dir(&args.out)?;
     let ds = Dataset::load(&args.dataset)?;
-    let _lock = crate::io::out::prepare_dir(&args.out)?;
-    let opts = DiagnoseOptions::full(args.starts, args.seed);
-    let engine = Engine::with_threads(opts.threads)?;
-    let d = diagnose_dataset_to(&engine, &ds, &opts, &StderrProgress, &args.out)?;
+    let _lock = vanefit::io::out::prepare_dir(&args.out)?;
+    let engine = Engine::with_threads(settings.threads())?;
+    let d = diagnose_dataset(&engine, &ds, &settings, &StderrProgress)?;
+    write_diagnosis(&d, &args.out)?;
     say!("{}", summary(&d));
     say!(
         "wrote {} and {} ({:.1} s on {} thread(s))",

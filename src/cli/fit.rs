@@ -1,23 +1,118 @@
-//! `vanefit fit` (SPEC §6): progress and summary on the terminal; the options and the fit
-//! itself are `task::fit`, shared with `batch`.
+//! `vanefit fit` (SPEC §6): the options, progress and summary on the terminal; the fit
+//! itself is `vanefit::task::fit`, shared with `batch` and the Python package.
 
-use crate::io::say;
-pub use crate::task::fit::{
-    fit_run, side_path, space_from_args, write_fit, FitArgs, FitCommandError, FitRun, FitWritten,
-    Uncertainty,
+use crate::cli::Failure;
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use vanefit::data::dataset::{Dataset, Kind};
+use vanefit::estimate::fit::{FitOutcome, FitSetup, UncertaintyMethod};
+use vanefit::estimate::multistart::{RunObserver, StartResult};
+use vanefit::model::effects::EffectSet;
+use vanefit::report::explain;
+use vanefit::report::fit as report;
+use vanefit::task::fit::{
+    fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions, ParamRange, Pinning,
 };
 
-use crate::data::dataset::{Dataset, Kind};
-use crate::estimate::fit::{FitOutcome, FitSetup};
-use crate::estimate::multistart::{RunObserver, StartResult};
-use crate::report::explain;
-use crate::report::fit as report;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
+
+/// Options of `vanefit fit`.
+#[derive(Args, Debug, Clone)]
+pub(crate) struct FitArgs {
+    /// Dataset folder (rig.toml and recordings).
+    pub(crate) dataset: PathBuf,
+    /// Number of start points (Latin hypercube).
+    #[arg(long, default_value_t = 32, value_parser = crate::cli::at_least_one)]
+    pub(crate) starts: usize,
+    /// Seed of the start design; a seed gives the same result whatever the thread count.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_parser = crate::cli::at_least_one)]
+    pub(crate) threads: Option<usize>,
+    /// Effects to switch on (comma-separated ids of SPEC §5); their parameters are estimated too.
+    #[arg(long, default_value = "", value_parser = crate::cli::effects_arg)]
+    pub(crate) effects: String,
+    /// Parameters to estimate (comma-separated; default: six conductances, t_coulomb, visc).
+    #[arg(long)]
+    pub(crate) estimate: Option<String>,
+    /// Search bounds, e.g. `c_in1=1e-9:2e-8,visc=1e-6:1e-3` (SI).
+    #[arg(long)]
+    pub(crate) bounds: Option<String>,
+    /// Where start points are drawn, e.g. `c_12=1e-10:1e-9` (SI); default: a factor
+    /// `--start-spread` either side of the default (AR034-11 values scaled with the rig's
+    /// displacement for conductances), within the bounds.
+    #[arg(long)]
+    pub(crate) start_range: Option<String>,
+    /// Default start range: this factor either side of the default value.
+    #[arg(long, default_value_t = 3.0)]
+    pub(crate) start_spread: f64,
+    /// Iteration budget of each start.
+    #[arg(long, default_value_t = 3000)]
+    pub(crate) max_iters: u64,
+    /// How to compute 95% intervals.
+    #[arg(long, value_enum, default_value_t = Uncertainty::Profile)]
+    pub(crate) uncertainty: Uncertainty,
+    /// Continue an interrupted run from its results file (`<out>.starts.jsonl`).
+    #[arg(long)]
+    pub(crate) resume: bool,
+    /// Keep every start's cost trace in the results file.
+    #[arg(long)]
+    pub(crate) trace: bool,
+    /// Skip the plots.
+    #[arg(long)]
+    pub(crate) no_plots: bool,
+    /// Fit file to write (vanefit.fit/1); results and plots go next to it.
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+}
+
+/// `--uncertainty`: how 95% intervals are computed.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Uncertainty {
+    /// Profile likelihood.
+    Profile,
+    /// Curvature of χ² only.
+    Curvature,
+    /// No intervals.
+    None,
+}
+
+impl FitArgs {
+    /// The library's options: the range lists parsed (a bad item names its flag).
+    pub(crate) fn options(&self) -> Result<FitOptions, Failure> {
+        let ranges = |text: &Option<String>, flag: &str| {
+            ParamRange::parse_list(text.as_deref().unwrap_or(""))
+                .map_err(|e| Failure(format!("{flag}: {e}")))
+        };
+        Ok(FitOptions {
+            starts: self.starts,
+            seed: self.seed,
+            threads: self.threads,
+            effects: EffectSet::parse_list(&self.effects)?,
+            estimate: self
+                .estimate
+                .as_ref()
+                .map(|list| list.split(',').map(str::to_string).collect()),
+            bounds: ranges(&self.bounds, "--bounds")?,
+            start_ranges: ranges(&self.start_range, "--start-range")?,
+            start_spread: self.start_spread,
+            max_iters: self.max_iters,
+            uncertainty: match self.uncertainty {
+                Uncertainty::Profile => UncertaintyMethod::Profile,
+                Uncertainty::Curvature => UncertaintyMethod::Curvature,
+                Uncertainty::None => UncertaintyMethod::None,
+            },
+            resume: self.resume,
+            trace: self.trace,
+        })
+    }
+}
 
 /// Progress of a fit: on a terminal a bar over the starts, then one over the profiles;
 /// without one (a log file, a pipe, a Slurm job) periodic lines on stderr, so that a log
@@ -139,6 +234,14 @@ impl RunObserver for Progress {
     }
 }
 
+impl FitObserver for Progress {
+    fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
+        for line in pinning_lines(limit_pct, rows) {
+            say!("{line}");
+        }
+    }
+}
+
 impl Progress {
     /// Takes a bar still drawn off the terminal before the summary is printed.
     fn clear(&self) {
@@ -177,14 +280,21 @@ fn progress() -> Progress {
 }
 
 /// Runs `vanefit fit`: fit, fit file, summary, plots.
-pub fn run(args: &FitArgs) -> Result<(), FitCommandError> {
+pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     // Before the search: an unwritable or busy output fails now, not after the starts.
-    let _lock = crate::io::out::prepare_file(&args.out)?;
+    let _lock =
+        vanefit::io::out::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
+    let settings = args.options()?.check()?;
     let progress = progress();
-    let fitted = fit_run(args, Some(side_path(&args.out, "starts.jsonl")), &progress);
+    let fitted = fit(
+        &args.dataset,
+        &settings,
+        Some(side_path(&args.out, "starts.jsonl")),
+        &progress,
+    );
     progress.clear();
     let fitted = fitted?;
-    let written = write_fit(&fitted, &args.out, args.seed, !args.no_plots)?;
+    let written = write_fit(&fitted, &args.out, !args.no_plots)?;
     print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
     if !written.plots.is_empty() {
         say!(

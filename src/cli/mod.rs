@@ -1,26 +1,34 @@
 //! Command line (SPEC §6). Exit status: 0 success, 1 bad input or failed work, 2 bad usage
 //! (clap reports usage errors with status 2 itself).
+//!
+//! Part of the `vanefit` binary, not of the library: it parses the command line, converts
+//! it to the library's typed options, calls the task and prints what it did.
 
-pub mod batch;
-pub mod catalogue;
-pub mod control;
-pub mod diagnose;
-pub mod export;
-pub mod fit;
-pub mod predict;
+/// `println!` that survives a closed stdout (`vanefit::io::say_line`).
+macro_rules! say {
+    () => {
+        vanefit::io::say_line(format_args!(""))
+    };
+    ($($arg:tt)*) => {
+        vanefit::io::say_line(format_args!($($arg)*))
+    };
+}
 
-use crate::data::dataset::{Dataset, Kind};
-use crate::data::fitfile::FitFile;
-use crate::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
-use crate::io::say;
-use crate::model::effects::EffectSet;
-use crate::model::motor::Motor;
-use crate::model::params::MotorParams;
-use crate::numerics::DefaultSolver;
-use crate::sim::experiment::Experiment;
-use crate::units::Quantity;
+pub(crate) mod batch;
+pub(crate) mod catalogue;
+pub(crate) mod control;
+pub(crate) mod diagnose;
+pub(crate) mod export;
+pub(crate) mod fit;
+pub(crate) mod predict;
+
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
+use vanefit::data::dataset::{Dataset, Kind};
+use vanefit::data::fitfile::FitFile;
+use vanefit::model::effects::EffectSet;
+use vanefit::task::simulate::{motor_for, simulated_tables, write_table};
+use vanefit::task::synth::{synth_motor, write_synthetic, SynthOptions};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -29,15 +37,15 @@ use std::path::{Path, PathBuf};
     about = "Estimate pneumatic vane motor parameters and find missing physics"
 )]
 /// The parsed command line.
-pub struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     /// The command to run.
-    pub command: Command,
+    pub(crate) command: Command,
 }
 
 #[derive(Subcommand, Debug)]
 /// The commands of SPEC §6.
-pub enum Command {
+pub(crate) enum Command {
     /// Validate a dataset and print a summary.
     Check {
         /// Dataset folder (rig.toml and recordings).
@@ -64,7 +72,7 @@ pub enum Command {
         #[arg(long)]
         params: Option<PathBuf>,
         /// Effects to switch on (comma-separated ids), overriding the fit file's.
-        #[arg(long, value_parser = crate::task::effects_arg)]
+        #[arg(long, value_parser = crate::cli::effects_arg)]
         effects: Option<String>,
         /// Sensor noise as a multiple of a typical rig's (0 for none).
         #[arg(long, default_value_t = 1.0)]
@@ -100,19 +108,81 @@ pub enum Command {
 
 /// A failure to report: message for stderr, exit status 1.
 #[derive(Debug)]
-pub struct Failure(pub String);
+pub(crate) struct Failure(pub String);
 
 impl<E: std::error::Error> From<E> for Failure {
+    /// The error's message, with the library's field names (`FitOptions.bounds`) shown as
+    /// the flags that set them (`--bounds`).
     fn from(e: E) -> Self {
-        Failure(e.to_string())
+        Failure(flags(&e.to_string()))
+    }
+}
+
+/// The library's option fields and the flags that set them, longest field first (so that
+/// a field is not replaced by the flag of a field that it starts with).
+const FLAGS: &[(&str, &str)] = &[
+    (
+        "FitOptions.estimate/bounds/start_ranges",
+        "--estimate/--bounds/--start-range",
+    ),
+    ("PredictOptions.outlet_nozzle_m3_s_pa", "--outlet-nozzle"),
+    ("PredictOptions.inlet_nozzle_m3_s_pa", "--inlet-nozzle"),
+    ("SynthOptions.pressures_bar_g", "--pressures"),
+    ("PredictOptions.speed_grid_rpm", "--speed-grid-rpm"),
+    ("PredictOptions.curve_points", "--curve-points"),
+    ("PredictOptions.fixed_spread", "--fixed-spread"),
+    ("PredictOptions.pressures", "--pressures"),
+    ("PredictOptions.reference", "--reference"),
+    ("FitOptions.start_spread", "--start-spread"),
+    ("DiagnoseOptions.threads", "--threads"),
+    ("BatchOptions.threads", "--threads"),
+    ("DiagnoseOptions.starts", "--starts"),
+    ("PredictOptions.unit", "--unit"),
+    ("FitOptions.estimate", "--estimate"),
+    ("FitOptions.threads", "--threads"),
+    ("SynthOptions.noise", "--noise"),
+    ("FitOptions.starts", "--starts"),
+    ("FitOptions.bounds", "--bounds"),
+    ("`dataset`", "--dataset"),
+];
+
+/// A message with every library field name replaced by its flag.
+pub(crate) fn flags(message: &str) -> String {
+    let mut m = message.to_string();
+    for (field, flag) in FLAGS {
+        if m.contains(field) {
+            m = m.replace(field, flag);
+        }
+    }
+    m
+}
+
+/// Clap value parser of `--effects`: the list as given once every id in it is known, so an
+/// unknown id is bad usage (exit status 2, reported by clap with the known ids) rather than
+/// a failed run.
+pub(crate) fn effects_arg(list: &str) -> Result<String, vanefit::model::effects::UnknownEffect> {
+    EffectSet::parse_list(list).map(|_| list.to_string())
+}
+
+/// A count option given as 0 or not as a whole number.
+#[derive(Debug, thiserror::Error)]
+#[error("'{0}' is not a whole number of at least 1")]
+pub(crate) struct CountError(String);
+
+/// Clap value parser of a count that must be at least 1 (`--starts`, `--threads`): 0 is bad
+/// usage, exit status 2.
+pub(crate) fn at_least_one(given: &str) -> Result<usize, CountError> {
+    match given.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(CountError(given.to_string())),
     }
 }
 
 /// Runs a parsed command.
-pub fn run(cli: Cli) -> Result<(), Failure> {
+pub(crate) fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Command::Check { dataset } => check(&dataset),
-        Command::Fit(args) => Ok(crate::cli::fit::run(&args)?),
+        Command::Fit(args) => crate::cli::fit::run(&args),
         Command::Simulate {
             dataset,
             params,
@@ -122,32 +192,23 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
             out_dataset,
             params,
             effects,
-            catalogue: true,
+            noise,
+            seed,
+            catalogue,
             pressures,
-            ..
-        } => synth_catalogue(
-            &out_dataset,
-            params.as_deref(),
-            effects.as_deref(),
-            &pressures,
-        ),
-        Command::Synth {
-            out_dataset,
-            params,
-            effects,
-            noise,
-            seed,
-            ..
-        } => synth(
-            &out_dataset,
-            params.as_deref(),
-            effects.as_deref(),
-            noise,
-            seed,
-        ),
+        } => {
+            let options = SynthOptions {
+                effects: effects.as_deref().map(EffectSet::parse_list).transpose()?,
+                noise,
+                seed,
+                catalogue,
+                pressures_bar_g: pressures,
+            };
+            synth(&out_dataset, params.as_deref(), &options)
+        }
         Command::Control(args) => crate::cli::control::run(args),
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
-        Command::Predict(args) => Ok(crate::cli::predict::run(&args)?),
+        Command::Predict(args) => crate::cli::predict::run(&args),
         Command::ExportPetab(args) => crate::cli::export::run(&args),
         Command::Batch(args) => crate::cli::batch::run(&args),
         Command::Merge(args) => crate::cli::batch::merge(&args),
@@ -165,7 +226,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
         .filter(|ex| ex.kind != Kind::Catalogue)
     {
         for c in &mut ex.recording.columns {
-            c.raw = crate::data::dataset::Cells::new();
+            c.raw = vanefit::data::dataset::Cells::new();
         }
     }
     // Every reference is fitted before anything is printed: a channel that cannot give one
@@ -174,9 +235,9 @@ fn check(dir: &Path) -> Result<(), Failure> {
         .experiments
         .iter()
         .map(|ex| {
-            crate::objective::reference::experiment_references(
+            vanefit::objective::reference::experiment_references(
                 ex,
-                &crate::objective::reference::FitOptions::default(),
+                &vanefit::objective::reference::FitOptions::default(),
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -224,7 +285,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
 
 /// One reference response for `check`: channel, degree, R², σ in the column's unit, valid
 /// range in the abscissa column's unit, and its pieces when the data jump.
-fn print_reference(r: &crate::objective::reference::ChannelReference, p_atm_pa: f64) {
+fn print_reference(r: &vanefit::objective::reference::ChannelReference, p_atm_pa: f64) {
     let a = &r.abscissa;
     let fit = &r.reference;
     let x_name = if a.log10 {
@@ -279,218 +340,39 @@ fn num(v: f64) -> String {
     }
 }
 
-/// Parameters for a dataset: the fit file's, or else the rig's nominal motor.
-pub fn params_for(
-    ds: &Dataset,
-    fit: Option<&FitFile>,
-) -> Result<(MotorParams, EffectSet), Failure> {
-    if let Some(f) = fit {
-        return Ok((f.params.clone(), f.effects.clone()));
-    }
-    Ok((ds.nominal_params()?, EffectSet::empty()))
-}
-
-/// One column of a simulated recording: the recording's column name (with its unit) and
-/// the values in that unit; `raw` holds an input column's cells exactly as recorded.
-#[derive(Debug, Clone)]
-pub struct SimulatedColumn {
-    /// The recording's column name, unit included.
-    pub name: String,
-    /// Values in the column's unit (an input's as recorded, NaN for an empty cell).
-    pub values: Vec<f64>,
-    /// An input column's cells as recorded (`None` for a simulated output).
-    pub raw: Option<crate::data::dataset::Cells>,
-}
-
-/// A recording simulated as `vanefit simulate` writes it: the inputs as recorded, then
-/// every simulated output that the recording has, in the recording's units, same rows.
-#[derive(Debug, Clone)]
-pub struct SimulatedTable {
-    /// The recording's file name.
-    pub file: String,
-    /// Inputs first, then outputs.
-    pub columns: Vec<SimulatedColumn>,
-}
-
-/// The motor of a dataset under an optional fit file (its parameters, effects and
-/// discovered terms; without one the rig's nominal motor).
-pub fn motor_for(ds: &Dataset, fit: Option<&FitFile>) -> Result<Motor, Failure> {
-    let (p, effects) = params_for(ds, fit)?;
-    let extra = fit.map(|f| f.extra.clone()).unwrap_or_default();
-    Ok(Motor::new(p, effects).with_extra(&extra))
-}
-
-/// Every experiment of `ds` simulated with `motor` (the tables `vanefit simulate` writes).
-pub fn simulated_tables(ds: &Dataset, motor: &Motor) -> Result<Vec<SimulatedTable>, Failure> {
-    let solver = DefaultSolver::default();
-    let mut out = Vec::new();
-    for data in &ds.experiments {
-        let sim = Experiment::new(data, ds.p_atm_pa)?.simulate(motor, &solver)?;
-        let rec = &data.recording;
-        let inputs: &[Quantity] = match data.kind {
-            Kind::Datasheet | Kind::Catalogue => {
-                &[Quantity::Time, Quantity::Speed, Quantity::PPort1]
-            }
-            _ => &[Quantity::Time, Quantity::PPort1, Quantity::CPort2],
-        };
-        let mut columns: Vec<SimulatedColumn> = rec
-            .columns
-            .iter()
-            .filter(|c| inputs.contains(&c.quantity))
-            .map(|c| SimulatedColumn {
-                name: c.name.clone(),
-                values: c
-                    .raw
-                    .iter()
-                    .map(|v| v.trim().parse().unwrap_or(f64::NAN))
-                    .collect(),
-                raw: Some(c.raw.clone()),
-            })
-            .collect();
-        for c in rec.columns.iter().filter(|c| !inputs.contains(&c.quantity)) {
-            if let Some(v) = sim.channel(c.quantity) {
-                columns.push(SimulatedColumn {
-                    name: c.name.clone(),
-                    values: v.iter().map(|x| c.unit.from_si(*x, ds.p_atm_pa)).collect(),
-                    raw: None,
-                });
-            }
-        }
-        out.push(SimulatedTable {
-            file: data.file.clone(),
-            columns,
-        });
-    }
-    Ok(out)
-}
-
 fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure> {
     let ds = Dataset::load(dir)?;
     let fit = params.map(FitFile::read).transpose()?;
     let motor = motor_for(&ds, fit.as_ref())?;
-    let _lock = crate::io::out::prepare_dir(out)?;
+    let _lock = vanefit::io::out::prepare_dir(out)?;
     for table in simulated_tables(&ds, &motor)? {
-        let header: Vec<&str> = table.columns.iter().map(|c| c.name.as_str()).collect();
-        let mut text = header.join(",") + "\n";
-        // Inputs as recorded, outputs formatted row by row (not gathered first: a column of
-        // cells holds at most 4 GiB of text, and the outputs need not be held twice).
-        let rows = table.columns.first().map_or(0, |c| c.values.len());
-        for r in 0..rows {
-            let row: Vec<String> = table
-                .columns
-                .iter()
-                .map(|c| match &c.raw {
-                    Some(raw) => raw[r].to_string(),
-                    None => format!("{:.6e}", c.values[r]),
-                })
-                .collect();
-            text.push_str(&row.join(","));
-            text.push('\n');
-        }
-        let path = out.join(&table.file);
-        crate::io::write_atomic(&path, text.as_bytes())
-            .map_err(|e| Failure(format!("{}: {e}", path.display())))?;
+        let path = write_table(&table, out)?;
         say!("wrote {}", path.display());
     }
     Ok(())
 }
 
-/// `vanefit synth --catalogue`: catalogue pages of the motor at `pressures` (bar(g)).
-fn synth_catalogue(
-    out: &Path,
-    params: Option<&Path>,
-    effects: Option<&str>,
-    pressures: &[f64],
-) -> Result<(), Failure> {
-    if let Some(p) = pressures
-        .iter()
-        .find(|p| !(p.is_finite() && **p > 0.0 && **p < 40.0))
-    {
-        return Err(Failure(format!(
-            "--pressures: {p} is not a supply pressure in bar(g) (0 to 40)"
-        )));
-    }
-    let (motor, truth) = synth_motor(out, params, effects)?;
-    let _lock = crate::io::out::prepare_dir(out)?;
-    let plan = crate::data::synth_catalogue::CataloguePlan {
-        pressures_bar_g: pressures.to_vec(),
-        ..Default::default()
-    };
-    let rows = crate::data::synth_catalogue::write_catalogue(out, &motor, &plan, "no noise")?;
-    truth
-        .write(&out.join("truth.json"))
-        .map_err(|e| Failure(format!("{}: {e}", out.display())))?;
-    say!(
-        "wrote catalogue {} ({} page(s), truth in truth.json)",
-        out.display(),
-        rows.len()
-    );
-    Ok(())
-}
-
-/// The motor of `synth` (from a fit file or the default, effects overridden) and its truth
-/// file.
-fn synth_motor(
-    out: &Path,
-    params: Option<&Path>,
-    effects: Option<&str>,
-) -> Result<(Motor, FitFile), Failure> {
+/// `vanefit synth`: a synthetic dataset (rig recordings, or with `--catalogue` catalogue
+/// pages at `--pressures`, bar(g)) and its truth file.
+fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<(), Failure> {
+    let settings = options.check()?;
     let fit = params.map(FitFile::read).transpose()?;
-    let (p, mut fx) = match &fit {
-        Some(f) => (f.params.clone(), f.effects.clone()),
-        None => (MotorParams::default(), EffectSet::empty()),
-    };
-    if let Some(list) = effects {
-        fx = EffectSet::parse_list(list).map_err(|m| Failure(format!("--effects: {m}")))?;
+    let name = out.file_name().unwrap_or_default().to_string_lossy();
+    let (motor, truth) = synth_motor(&name, fit.as_ref(), &settings);
+    let _lock = vanefit::io::out::prepare_dir(out)?;
+    let written = write_synthetic(out, &motor, &truth, &settings)?;
+    if written.catalogue {
+        say!(
+            "wrote catalogue {} ({} page(s), truth in truth.json)",
+            out.display(),
+            written.count
+        );
+    } else {
+        say!(
+            "wrote dataset {} ({} experiments, truth in truth.json)",
+            out.display(),
+            written.count
+        );
     }
-    let extra = fit.as_ref().map(|f| f.extra.clone()).unwrap_or_default();
-    let motor = Motor::new(p, fx.clone()).with_extra(&extra);
-    let mut truth = FitFile::from_params(
-        &out.file_name().unwrap_or_default().to_string_lossy(),
-        motor.params.clone(),
-        fx,
-    );
-    truth.extra = extra;
-    Ok((motor, truth))
-}
-
-fn synth(
-    out: &Path,
-    params: Option<&Path>,
-    effects: Option<&str>,
-    noise: f64,
-    seed: u64,
-) -> Result<(), Failure> {
-    if !(noise.is_finite() && noise >= 0.0) {
-        return Err(Failure(format!("--noise {noise}: must be a number >= 0")));
-    }
-    // Discovered terms of the fit file act in the synthetic motor as in `simulate`.
-    let (motor, truth) = synth_motor(out, params, effects)?;
-    let _lock = crate::io::out::prepare_dir(out)?;
-    let plan = SynthPlan::default();
-    let experiments = synthesize(
-        &motor,
-        &DefaultSolver::default(),
-        &plan,
-        &SensorNoise::typical().scaled(noise),
-        seed,
-    )?;
-    let description = format!("seed {seed}, noise x{noise}.");
-    write_dataset(
-        out,
-        &experiments,
-        &plan,
-        &motor,
-        &motor.effects,
-        &description,
-    )?;
-    truth
-        .write(&out.join("truth.json"))
-        .map_err(|e| Failure(format!("{}: {e}", out.display())))?;
-    say!(
-        "wrote dataset {} ({} experiments, truth in truth.json)",
-        out.display(),
-        experiments.len()
-    );
     Ok(())
 }

@@ -49,7 +49,7 @@ static STDOUT_FAILED: AtomicBool = AtomicBool::new(false);
 /// Writes one line to stdout, as `println!` does, but without panicking when stdout is
 /// closed: a reader that stops early (`| head -1`) must not stop the command before it has
 /// written its files. A broken pipe silences stdout for the rest of the run; any other
-/// error is reported once on stderr and the command carries on. Called through the crate's `say!` macro.
+/// error is reported once on stderr and the command carries on. Called through the command line's `say!` macro.
 pub fn say_line(args: std::fmt::Arguments<'_>) {
     if STDOUT_CLOSED.load(Ordering::Relaxed) {
         return;
@@ -63,14 +63,3 @@ pub fn say_line(args: std::fmt::Arguments<'_>) {
         }
     }
 }
-
-/// `println!` that survives a closed stdout (see [`say_line`]).
-macro_rules! say {
-    () => {
-        $crate::io::say_line(format_args!(""))
-    };
-    ($($arg:tt)*) => {
-        $crate::io::say_line(format_args!($($arg)*))
-    };
-}
-pub(crate) use say;

@@ -1,36 +1,119 @@
-//! `diagnose` as a task: load a dataset, diagnose it and write `diagnosis.json`,
-//! `extended.json`, `report.md` and the plots, for the command line and `batch` alike.
+//! `diagnose` as a task: [`DiagnoseOptions`] → [`DiagnoseOptions::check`] →
+//! [`DiagnoseSettings`]; load a dataset, diagnose it ([`diagnose`], [`diagnose_dataset`])
+//! and write `diagnosis.json`, `extended.json`, `report.md` and the plots
+//! ([`write_diagnosis`]), for the command line and `batch` alike.
 
+use super::OptionError;
 use crate::data::dataset::{DataError, Dataset};
 use crate::diagnose::Diagnosis;
-use crate::diagnose::{diagnose_observed, DiagnoseError, DiagnoseObserver, DiagnoseOptions};
-use crate::estimate::Engine;
+use crate::diagnose::{diagnose_observed, DiagnoseError, DiagnoseObserver};
+use crate::estimate::{Engine, EstimateError};
 use crate::report::diagnose::ReportError;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// `vanefit diagnose` options (SPEC §6).
-#[derive(clap::Args, Debug, Clone)]
-pub struct DiagnoseArgs {
-    /// Dataset folder (rig.toml and recordings).
-    pub dataset: PathBuf,
-    /// Start points of the baseline fit: the rig's nominal motor plus Latin-hypercube starts.
-    #[arg(long, default_value_t = 4, value_parser = crate::task::at_least_one)]
+/// How much work a diagnosis does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Effort {
+    /// The command line's: pairs always tried, held-out prediction of the three best
+    /// candidates.
+    #[default]
+    Full,
+    /// Reduced (tests, quick fleet scans): a smaller refit budget, pairs only when needed,
+    /// held-out prediction of the selected model only.
+    Quick,
+}
+
+/// Options of a diagnosis as given (unchecked); [`DiagnoseOptions::check`] makes them
+/// [`DiagnoseSettings`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Start points of the baseline fit (≥ 1): the rig's nominal motor plus Latin-hypercube
+    /// starts.
     pub starts: usize,
     /// Seed of the start designs; a seed gives the same result whatever the thread count.
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output folder: diagnosis.json, report.md and its SVG plots.
-    #[arg(long)]
-    pub out: PathBuf,
+    /// Worker threads (`None`: one per core), ≥ 1. Results do not depend on it.
+    pub threads: Option<usize>,
+    /// How much work.
+    pub effort: Effort,
+}
+
+impl Default for DiagnoseOptions {
+    /// The command line's defaults: 4 starts, seed 1, full effort.
+    fn default() -> Self {
+        Self {
+            starts: 4,
+            seed: 1,
+            threads: None,
+            effort: Effort::Full,
+        }
+    }
+}
+
+impl DiagnoseOptions {
+    /// Checks `starts` and `threads` (≥ 1).
+    pub fn check(&self) -> Result<DiagnoseSettings, OptionError> {
+        if self.starts == 0 {
+            return Err(OptionError::new(
+                "DiagnoseOptions.starts",
+                " must be at least 1",
+            ));
+        }
+        if self.threads == Some(0) {
+            return Err(OptionError::new(
+                "DiagnoseOptions.threads",
+                " must be at least 1",
+            ));
+        }
+        let mut engine = match self.effort {
+            Effort::Full => crate::diagnose::DiagnoseOptions::full(self.starts, self.seed),
+            Effort::Quick => crate::diagnose::DiagnoseOptions {
+                starts: self.starts,
+                ..crate::diagnose::DiagnoseOptions::quick(self.seed)
+            },
+        };
+        engine.threads = self.threads;
+        Ok(DiagnoseSettings {
+            options: self.clone(),
+            engine,
+        })
+    }
+}
+
+/// Checked [`DiagnoseOptions`]: private fields, read through the getters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseSettings {
+    options: DiagnoseOptions,
+    engine: crate::diagnose::DiagnoseOptions,
+}
+
+impl DiagnoseSettings {
+    /// The options these settings were checked from.
+    pub fn options(&self) -> &DiagnoseOptions {
+        &self.options
+    }
+    /// Worker threads (`None`: one per core).
+    pub fn threads(&self) -> Option<usize> {
+        self.options.threads
+    }
+    /// The diagnosis layer's own settings (budgets of every stage) for this effort.
+    pub fn engine_options(&self) -> &crate::diagnose::DiagnoseOptions {
+        &self.engine
+    }
 }
 
 /// Why a diagnosis task failed (each message is the wrapped error's own, located where the
 /// data layer knows the place).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum DiagnoseTaskError {
-    /// `starts` is 0.
-    #[error("--starts must be at least 1")]
-    NoStarts,
+    /// An option is bad (named by its field).
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    /// The thread pool cannot be built.
+    #[error(transparent)]
+    Engine(#[from] EstimateError),
     /// The dataset cannot be read.
     #[error(transparent)]
     Data(#[from] DataError),
@@ -42,31 +125,50 @@ pub enum DiagnoseTaskError {
     Report(#[from] ReportError),
 }
 
-/// Diagnoses the dataset at `dataset` on `engine` and writes the results into `out`.
+/// Loads the dataset at `dataset` and diagnoses it on a thread pool of its own.
+pub fn diagnose(
+    dataset: &Path,
+    settings: &DiagnoseSettings,
+    observer: &dyn DiagnoseObserver,
+) -> Result<Diagnosis, DiagnoseTaskError> {
+    let engine = Engine::with_threads(settings.threads())?;
+    let ds = Dataset::load(dataset)?;
+    diagnose_dataset(&engine, &ds, settings, observer)
+}
+
+/// Diagnoses a loaded dataset on a thread pool the caller owns.
+pub fn diagnose_dataset(
+    engine: &Engine,
+    ds: &Dataset,
+    settings: &DiagnoseSettings,
+    observer: &dyn DiagnoseObserver,
+) -> Result<Diagnosis, DiagnoseTaskError> {
+    Ok(diagnose_observed(
+        ds,
+        settings.engine_options(),
+        engine,
+        observer,
+    )?)
+}
+
+/// Writes a diagnosis into the folder `out`: `diagnosis.json`, `extended.json`,
+/// `report.md` and the plots.
+pub fn write_diagnosis(d: &Diagnosis, out: &Path) -> Result<(), DiagnoseTaskError> {
+    crate::report::diagnose::write_all(d, out)?;
+    Ok(())
+}
+
+/// Diagnoses the dataset at `dataset` on `engine` and writes the results into `out` (a
+/// unit of a batch).
 pub fn diagnose_to(
     engine: &Engine,
     dataset: &Path,
-    opts: &DiagnoseOptions,
+    settings: &DiagnoseSettings,
     observer: &dyn DiagnoseObserver,
     out: &Path,
 ) -> Result<Diagnosis, DiagnoseTaskError> {
     let ds = Dataset::load(dataset)?;
-    diagnose_dataset_to(engine, &ds, opts, observer, out)
-}
-
-/// Diagnoses a loaded dataset on `engine` and writes the results into `out` (for callers
-/// that load the dataset first, so that bad data is refused before `out` is created).
-pub fn diagnose_dataset_to(
-    engine: &Engine,
-    ds: &Dataset,
-    opts: &DiagnoseOptions,
-    observer: &dyn DiagnoseObserver,
-    out: &Path,
-) -> Result<Diagnosis, DiagnoseTaskError> {
-    if opts.starts == 0 {
-        return Err(DiagnoseTaskError::NoStarts);
-    }
-    let d = diagnose_observed(ds, opts, engine, observer)?;
-    crate::report::diagnose::write_all(&d, out)?;
+    let d = diagnose_dataset(engine, &ds, settings, observer)?;
+    write_diagnosis(&d, out)?;
     Ok(d)
 }

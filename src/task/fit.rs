@@ -1,59 +1,173 @@
-//! `fit` as a task: the options of `vanefit fit`, the fit itself (`fit_run`) and the files a
-//! fit leaves (fit file, plots, report), called by the command line for one dataset and by
-//! `batch` for a fleet, so both give the same fit for a seed.
+//! `fit` as a task: [`FitOptions`] → [`FitOptions::check`] → [`FitSettings`], the fit itself
+//! ([`fit`], [`fit_dataset`]) giving a [`Fit`], and the files a fit leaves ([`write_fit`]:
+//! fit file, plots, report), called by the command line for one dataset and by `batch` for
+//! a fleet, so both give the same fit for a seed.
 
+use super::OptionError;
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::fit::{
-    fit, fit_file, most_sensitive_experiment, FitData, FitOutcome, FitSetup, UncertaintyMethod,
+    fit as estimate_fit, fit_file, most_sensitive_experiment, FitData, FitOutcome, FitSetup,
+    UncertaintyMethod,
 };
 use crate::estimate::multistart::RunObserver;
 use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
-use crate::io::say;
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::spec;
 use crate::objective::cost::{CostError, CostOptions};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
-use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 
-/// Why `vanefit fit` failed (the messages users and tests see).
+/// A search or start range of one parameter, SI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamRange {
+    /// The parameter.
+    pub name: String,
+    /// Lower end, SI.
+    pub lo: f64,
+    /// Upper end, SI.
+    pub hi: f64,
+}
+
+/// An item of a range list that is not `name=lo:hi`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{0}' is not name=lo:hi")]
+pub struct RangeSyntax(pub String);
+
+impl ParamRange {
+    /// Parses `name=lo:hi,...` (empty items skipped), e.g. `c_in1=1e-9:2e-8,visc=1e-6:1e-3`.
+    pub fn parse_list(text: &str) -> Result<Vec<ParamRange>, RangeSyntax> {
+        text.split(',')
+            .filter(|s| !s.trim().is_empty())
+            .map(|item| {
+                let bad = || RangeSyntax(item.to_string());
+                let (name, range) = item.split_once('=').ok_or_else(bad)?;
+                let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
+                let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
+                let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+                Ok(ParamRange {
+                    name: name.trim().to_string(),
+                    lo,
+                    hi,
+                })
+            })
+            .collect()
+    }
+}
+
+/// Options of a fit as given (unchecked); [`FitOptions::check`] makes them [`FitSettings`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitOptions {
+    /// Number of start points (Latin hypercube), ≥ 1.
+    pub starts: usize,
+    /// Seed of the start design; a seed gives the same result whatever the thread count.
+    pub seed: u64,
+    /// Worker threads (`None`: one per core), ≥ 1.
+    pub threads: Option<usize>,
+    /// Effects switched on; their parameters are estimated too.
+    pub effects: EffectSet,
+    /// Parameters to estimate (`None`: six conductances, t_coulomb, visc; for a dataset of
+    /// catalogue pages only, those of them the catalogue pins down).
+    pub estimate: Option<Vec<String>>,
+    /// Search bounds overriding the parameters' own, SI.
+    pub bounds: Vec<ParamRange>,
+    /// Where start points are drawn, SI; default: a factor `start_spread` either side of
+    /// the rig's nominal value, within the bounds.
+    pub start_ranges: Vec<ParamRange>,
+    /// Default start range: this factor (> 1) either side of the nominal value.
+    pub start_spread: f64,
+    /// Iteration budget of each start.
+    pub max_iters: u64,
+    /// How 95 % intervals are computed.
+    pub uncertainty: UncertaintyMethod,
+    /// Continue an interrupted run from its results file.
+    pub resume: bool,
+    /// Keep every start's cost trace in the results file.
+    pub trace: bool,
+}
+
+impl Default for FitOptions {
+    /// The command line's defaults: 32 starts, seed 1, profile intervals.
+    fn default() -> Self {
+        Self {
+            starts: 32,
+            seed: 1,
+            threads: None,
+            effects: EffectSet::empty(),
+            estimate: None,
+            bounds: Vec::new(),
+            start_ranges: Vec::new(),
+            start_spread: 3.0,
+            max_iters: 3000,
+            uncertainty: UncertaintyMethod::Profile,
+            resume: false,
+            trace: false,
+        }
+    }
+}
+
+impl FitOptions {
+    /// Checks the values that need no dataset: `starts` and `threads` ≥ 1, `start_spread`
+    /// > 1. Parameter names and ranges are checked against the dataset by the fit.
+    pub fn check(&self) -> Result<FitSettings, OptionError> {
+        if self.starts == 0 {
+            return Err(OptionError::new("FitOptions.starts", " must be at least 1"));
+        }
+        if self.threads == Some(0) {
+            return Err(OptionError::new(
+                "FitOptions.threads",
+                " must be at least 1",
+            ));
+        }
+        if !(self.start_spread.is_finite() && self.start_spread > 1.0) {
+            return Err(OptionError::new(
+                "FitOptions.start_spread",
+                format!(" {}: must be a number > 1", self.start_spread),
+            ));
+        }
+        Ok(FitSettings(self.clone()))
+    }
+}
+
+/// Checked [`FitOptions`]: private fields, read through the getters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitSettings(FitOptions);
+
+impl FitSettings {
+    /// The options these settings were checked from.
+    pub fn options(&self) -> &FitOptions {
+        &self.0
+    }
+    /// Number of starts (≥ 1).
+    pub fn starts(&self) -> usize {
+        self.0.starts
+    }
+    /// Seed of the start design.
+    pub fn seed(&self) -> u64 {
+        self.0.seed
+    }
+    /// Worker threads (`None`: one per core).
+    pub fn threads(&self) -> Option<usize> {
+        self.0.threads
+    }
+    /// How 95 % intervals are computed.
+    pub fn uncertainty(&self) -> UncertaintyMethod {
+        self.0.uncertainty
+    }
+}
+
+/// Why a fit failed (the messages users and tests see).
 #[derive(Debug, thiserror::Error)]
-pub enum FitCommandError {
-    /// `--starts 0`.
-    #[error("--starts must be at least 1")]
-    NoStarts,
-    /// `--threads 0`.
-    #[error("--threads must be at least 1")]
-    NoThreads,
-    /// An item of `--bounds` or `--start-range` is not `name=lo:hi`.
-    #[error("{option}: '{item}' is not name=lo:hi")]
-    Range {
-        /// The option.
-        option: &'static str,
-        /// The bad item.
-        item: String,
-    },
-    /// `--bounds` names a parameter that is not estimated.
-    #[error("--bounds: '{0}' is not estimated")]
-    NotEstimated(String),
-    /// A catalogue pins none of the parameters.
-    #[error("the catalogue pins none of {0} to within {1:.0} % (1σ): add curves, key figures or a rig experiment, or name parameters with --estimate")]
-    NothingPinned(String, f64),
-    /// `--start-spread` must exceed 1.
-    #[error("--start-spread {0}: must be a number > 1")]
-    StartSpread(f64),
-    /// `--effects` names an unknown effect.
-    #[error("--effects: {0}")]
-    Effects(crate::model::effects::UnknownEffect),
-    /// A dimension of the search space is bad.
-    #[error("--estimate/--bounds/--start-range: {0}")]
-    Dimension(SpaceError),
+#[non_exhaustive]
+pub enum FitError {
+    /// An option is bad (named by its field).
+    #[error(transparent)]
+    Option(#[from] OptionError),
     /// The search space is bad.
     #[error("{0}")]
     Space(#[from] SpaceError),
@@ -66,10 +180,10 @@ pub enum FitCommandError {
     /// The estimation failed.
     #[error("{0}")]
     Estimate(#[from] EstimateError),
-    /// The fit file could not be written.
+    /// The fit file or the report could not be written.
     #[error("{}: {source}", path.display())]
     Write {
-        /// The fit file.
+        /// The file.
         path: PathBuf,
         /// What went wrong.
         source: std::io::Error,
@@ -77,131 +191,41 @@ pub enum FitCommandError {
     /// A plot could not be drawn.
     #[error("{0}")]
     Plot(#[from] PlotError),
-    /// The output cannot be written or is in use by another run (checked before the fit).
-    #[error("--out {0}")]
-    Output(#[from] crate::io::out::OutputError),
 }
 
-/// Options of `vanefit fit`.
-#[derive(Args, Debug, Clone)]
-pub struct FitArgs {
-    /// Dataset folder (rig.toml and recordings).
-    pub dataset: PathBuf,
-    /// Number of start points (Latin hypercube).
-    #[arg(long, default_value_t = 32, value_parser = crate::task::at_least_one)]
-    pub starts: usize,
-    /// Seed of the start design; a seed gives the same result whatever the thread count.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Worker threads (default: one per core).
-    #[arg(long, value_parser = crate::task::at_least_one)]
-    pub threads: Option<usize>,
-    /// Effects to switch on (comma-separated ids of SPEC §5); their parameters are estimated too.
-    #[arg(long, default_value = "", value_parser = crate::task::effects_arg)]
-    pub effects: String,
-    /// Parameters to estimate (comma-separated; default: six conductances, t_coulomb, visc).
-    #[arg(long)]
-    pub estimate: Option<String>,
-    /// Search bounds, e.g. `c_in1=1e-9:2e-8,visc=1e-6:1e-3` (SI).
-    #[arg(long)]
-    pub bounds: Option<String>,
-    /// Where start points are drawn, e.g. `c_12=1e-10:1e-9` (SI); default: a factor
-    /// `--start-spread` either side of the default (AR034-11 values scaled with the rig's
-    /// displacement for conductances), within the bounds.
-    #[arg(long)]
-    pub start_range: Option<String>,
-    /// Default start range: this factor either side of the default value.
-    #[arg(long, default_value_t = 3.0)]
-    pub start_spread: f64,
-    /// Iteration budget of each start.
-    #[arg(long, default_value_t = 3000)]
-    pub max_iters: u64,
-    /// How to compute 95% intervals.
-    #[arg(long, value_enum, default_value_t = Uncertainty::Profile)]
-    pub uncertainty: Uncertainty,
-    /// Continue an interrupted run from its results file (`<out>.starts.jsonl`).
-    #[arg(long)]
-    pub resume: bool,
-    /// Keep every start's cost trace in the results file.
-    #[arg(long)]
-    pub trace: bool,
-    /// Skip the plots.
-    #[arg(long)]
-    pub no_plots: bool,
-    /// Fit file to write (vanefit.fit/1); results and plots go next to it.
-    #[arg(long)]
-    pub out: PathBuf,
-}
-
-/// `--uncertainty`: how 95% intervals are computed.
-#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Uncertainty {
-    /// Profile likelihood.
-    Profile,
-    /// Curvature of χ² only.
-    Curvature,
-    /// No intervals.
-    None,
-}
-
-/// Parses `name=lo:hi,...` (the value of `option`) into dimensions.
-pub fn parse_bounds(
-    text: &str,
-    option: &'static str,
-) -> Result<Vec<(String, f64, f64)>, FitCommandError> {
-    text.split(',')
-        .filter(|s| !s.trim().is_empty())
-        .map(|item| {
-            let bad = || FitCommandError::Range {
-                option,
-                item: item.to_string(),
-            };
-            let (name, range) = item.split_once('=').ok_or_else(bad)?;
-            let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
-            let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
-            let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
-            Ok((name.trim().to_string(), lo, hi))
-        })
-        .collect()
-}
-
-/// The search space of a fit from the options: estimated names (default set plus every
-/// parameter of the effects switched on), bounds overrides.
-pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, FitCommandError> {
-    let effects = EffectSet::parse_list(&args.effects).map_err(FitCommandError::Effects)?;
+/// The search space of a fit: estimated names (default set plus every parameter of the
+/// effects switched on), bounds and start ranges, around the dataset's nominal motor.
+pub fn search_space(ds: &Dataset, o: &FitOptions) -> Result<ParamSpace, FitError> {
     let fixed = ds.nominal_params()?;
-    let mut names: Vec<String> = match &args.estimate {
+    let mut names: Vec<String> = match &o.estimate {
         Some(list) => list
-            .split(',')
+            .iter()
             .map(|s| s.trim().to_string())
             .filter(|s| !s.is_empty())
             .collect(),
         None => DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect(),
     };
-    for e in effects.iter() {
+    for e in o.effects.iter() {
         for p in e.parameters() {
             if !names.iter().any(|n| n == p) {
                 names.push(p.to_string());
             }
         }
     }
-    let overrides = parse_bounds(args.bounds.as_deref().unwrap_or(""), "--bounds")?;
-    if let Some((n, _, _)) = overrides.iter().find(|(n, _, _)| !names.contains(n)) {
-        return Err(FitCommandError::NotEstimated(n.clone()));
+    if let Some(b) = o.bounds.iter().find(|b| !names.contains(&b.name)) {
+        let after = format!(": '{}' is not estimated", b.name);
+        return Err(OptionError::new("FitOptions.bounds", after).into());
     }
-    let starts = parse_bounds(args.start_range.as_deref().unwrap_or(""), "--start-range")?;
-    if !(args.start_spread.is_finite() && args.start_spread > 1.0) {
-        return Err(FitCommandError::StartSpread(args.start_spread));
-    }
+    let find = |list: &[ParamRange], n: &str| list.iter().find(|r| r.name == n).cloned();
     let dims = names
         .iter()
         .map(|n| {
-            let d = match overrides.iter().find(|(m, _, _)| m == n) {
-                Some((_, lo, hi)) => Dimension::with_bounds(n, *lo, *hi)?,
+            let d = match find(&o.bounds, n) {
+                Some(r) => Dimension::with_bounds(n, r.lo, r.hi)?,
                 None => Dimension::for_param(n)?,
             };
-            match starts.iter().find(|(m, _, _)| m == n) {
-                Some((_, lo, hi)) => d.with_start_range(*lo, *hi),
+            match find(&o.start_ranges, n) {
+                Some(r) => d.with_start_range(r.lo, r.hi),
                 None => {
                     // The rig's nominal value: defaults scaled with the displacement.
                     let centre = fixed
@@ -209,10 +233,7 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, FitCo
                         .unwrap_or_else(|| spec(n).map_or(0.0, |s| s.default));
                     if d.log_scale && centre > 0.0 {
                         d.clone()
-                            .with_start_range(
-                                centre / args.start_spread,
-                                centre * args.start_spread,
-                            )
+                            .with_start_range(centre / o.start_spread, centre * o.start_spread)
                             .or(Ok(d))
                     } else {
                         Ok(d)
@@ -221,8 +242,10 @@ pub fn space_from_args(ds: &Dataset, args: &FitArgs) -> Result<ParamSpace, FitCo
             }
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(FitCommandError::Dimension)?;
-    Ok(ParamSpace::from_dims(dims, fixed, effects)?)
+        .map_err(|e| {
+            OptionError::new("FitOptions.estimate/bounds/start_ranges", format!(": {e}"))
+        })?;
+    Ok(ParamSpace::from_dims(dims, fixed, o.effects.clone())?)
 }
 
 /// Where the run's side files go: `<out without .json>.<suffix>`.
@@ -231,26 +254,29 @@ pub fn side_path(out: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(format!("{}.{suffix}", stem.display()))
 }
 
-/// For a dataset of catalogue pages only and no `--estimate`: the parameters the catalogue
-/// pins down (`estimate::subset`), printed with what would pin the rest; otherwise `args`
-/// as they are.
-fn catalogue_estimates(
-    ds: &Dataset,
-    data: &FitData,
-    args: &FitArgs,
-) -> Result<FitArgs, FitCommandError> {
-    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
-    if args.estimate.is_some() || !catalogue_only {
-        return Ok(args.clone());
-    }
-    let motor = Motor::new(ds.nominal_params()?, EffectSet::empty());
-    let names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
-    let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
-    let Some(pinning) = crate::estimate::subset::pinned_subset(data, &motor, &names) else {
-        return Err(FitCommandError::NothingPinned(names.join(", "), limit));
-    };
-    say!("catalogue only: what it pins down at the nominal motor (relative 1σ; pinned: ≤ {limit:.0} %)");
-    for p in &pinning {
+/// One parameter of a catalogue's pinning: how well the catalogue pins it, and whether it
+/// is estimated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pinning {
+    /// The parameter.
+    pub name: String,
+    /// Relative 1σ at the nominal motor (infinite: unseen).
+    pub relative_sd: f64,
+    /// Estimated (pinned to within the limit).
+    pub pinned: bool,
+    /// The value it stays fixed at when not pinned, SI.
+    pub value: f64,
+    /// The kind of experiment that would pin it (when not pinned).
+    pub pinned_by: Option<Kind>,
+}
+
+/// The pinning as the command line prints it: a heading, then one line per parameter
+/// (relative 1σ, and estimated or the value it stays fixed at and what would pin it).
+pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
+    let mut lines = vec![format!(
+        "catalogue only: what it pins down at the nominal motor (relative 1σ; pinned: ≤ {limit_pct:.0} %)"
+    )];
+    for p in rows {
         let sd = if p.relative_sd.is_finite() {
             format!("{:.1} %", 100.0 * p.relative_sd)
         } else {
@@ -259,32 +285,102 @@ fn catalogue_estimates(
         let verdict = if p.pinned {
             "estimated".to_string()
         } else {
-            let value = motor.params.get(&p.name).unwrap_or(f64::NAN);
-            let hint = match most_sensitive_experiment(&motor, &p.name) {
+            let hint = match p.pinned_by {
                 Some(k) => format!("; the {} experiment would pin it", k.id()),
                 None => String::new(),
             };
-            format!("fixed at {value:.4e} (default scaled to the displacement){hint}")
+            format!(
+                "fixed at {:.4e} (default scaled to the displacement){hint}",
+                p.value
+            )
         };
-        say!("  {:<10} {:>9}  {verdict}", p.name, sd);
+        lines.push(format!("  {:<10} {:>9}  {verdict}", p.name, sd));
     }
-    let chosen: Vec<&str> = pinning
+    lines
+}
+
+/// For a dataset of catalogue pages only and no `estimate`: the parameters the catalogue
+/// pins down (`estimate::subset`), reported to `report` with what would pin the rest;
+/// otherwise `o` as it is.
+fn catalogue_estimates(
+    ds: &Dataset,
+    data: &FitData,
+    o: &FitOptions,
+    observer: &dyn FitObserver,
+) -> Result<FitOptions, FitError> {
+    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
+    if o.estimate.is_some() || !catalogue_only {
+        return Ok(o.clone());
+    }
+    let motor = Motor::new(ds.nominal_params()?, EffectSet::empty());
+    let names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
+    let nothing = || {
+        let before = format!(
+            "the catalogue pins none of {} to within {limit:.0} % (1σ): add curves, key figures or a rig experiment, or name parameters with ",
+            names.join(", ")
+        );
+        FitError::Option(OptionError::within("FitOptions.estimate", before, ""))
+    };
+    let Some(pinning) = crate::estimate::subset::pinned_subset(data, &motor, &names) else {
+        return Err(nothing());
+    };
+    let rows: Vec<Pinning> = pinning
+        .iter()
+        .map(|p| Pinning {
+            name: p.name.clone(),
+            relative_sd: p.relative_sd,
+            pinned: p.pinned,
+            value: motor.params.get(&p.name).unwrap_or(f64::NAN),
+            pinned_by: most_sensitive_experiment(&motor, &p.name),
+        })
+        .collect();
+    observer.pinning(limit, &rows);
+    let chosen: Vec<String> = rows
         .iter()
         .filter(|p| p.pinned)
-        .map(|p| p.name.as_str())
+        .map(|p| p.name.clone())
         .collect();
     if chosen.is_empty() {
-        return Err(FitCommandError::NothingPinned(names.join(", "), limit));
+        return Err(nothing());
     }
-    Ok(FitArgs {
-        estimate: Some(chosen.join(",")),
-        ..args.clone()
+    Ok(FitOptions {
+        estimate: Some(chosen),
+        ..o.clone()
     })
 }
 
-/// A finished fit as `vanefit fit` makes it: the dataset, its fit data, what was estimated,
-/// the outcome and the fit file (not yet written).
-pub struct FitRun {
+/// What a fit reports while it runs: the multi-start's events ([`RunObserver`], which
+/// can also stop the run) and, for a dataset of catalogue pages only, what the catalogue
+/// pins down before the starts begin. Every method has a default that does nothing.
+pub trait FitObserver: RunObserver {
+    /// The catalogue's pinning at the nominal motor (`limit_pct`: the relative 1σ, %, below
+    /// which a parameter counts as pinned and is estimated).
+    fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
+        let _ = (limit_pct, rows);
+    }
+}
+
+impl FitObserver for crate::estimate::multistart::Silent {}
+
+/// The caller's observer, with the pinning kept for the [`Fit`].
+struct Noted<'a> {
+    inner: &'a dyn FitObserver,
+    pinning: &'a std::sync::Mutex<Vec<Pinning>>,
+}
+
+impl FitObserver for Noted<'_> {
+    fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
+        *self.pinning.lock().unwrap_or_else(|p| p.into_inner()) = rows.to_vec();
+        self.inner.pinning(limit_pct, rows);
+    }
+}
+
+impl RunObserver for Noted<'_> {}
+
+/// A finished fit: the dataset, its fit data, what was estimated, the outcome and the fit
+/// file (not yet written).
+pub struct Fit {
     /// The dataset fitted.
     pub dataset: Dataset,
     /// Its cost and likelihood.
@@ -295,65 +391,72 @@ pub struct FitRun {
     pub outcome: FitOutcome,
     /// The fit file of the outcome.
     pub file: FitFile,
+    /// The seed of the start design.
+    pub seed: u64,
+    /// For a dataset of catalogue pages only: what the catalogue pins down (empty
+    /// otherwise).
+    pub pinning: Vec<Pinning>,
 }
 
-/// Loads the dataset and fits it as `vanefit fit` does (the catalogue's subset, the search
-/// space, the multi-start, the intervals), reporting starts to `observer` and recording them
-/// in `results_file` (`None`: kept in memory only). The command line and the Python package
-/// both fit through here, so a seed gives the same fit in both.
-pub fn fit_run(
-    args: &FitArgs,
+/// Loads the dataset at `dataset` and fits it on a thread pool of its own (the catalogue's
+/// subset, the search space, the multi-start, the intervals), reporting starts to
+/// `observer` and recording them in `results_file` (`None`: kept in memory only). The
+/// command line and the Python package both fit through here, so a seed gives the same
+/// fit in both. The observer can stop the run between rounds of starts
+/// ([`RunObserver::keep_going`]); the starts finished by then stay in `results_file`, and a
+/// run with `resume` continues from them.
+pub fn fit<O: FitObserver>(
+    dataset: &Path,
+    settings: &FitSettings,
     results_file: Option<PathBuf>,
-    observer: &dyn RunObserver,
-) -> Result<FitRun, FitCommandError> {
-    if args.threads == Some(0) {
-        return Err(FitCommandError::NoThreads);
-    }
+    observer: &O,
+) -> Result<Fit, FitError> {
     // The one thread pool of the run.
-    let engine = Engine::with_threads(args.threads)?;
-    fit_run_on(&engine, args, results_file, observer)
+    let engine = Engine::with_threads(settings.threads())?;
+    let ds = Dataset::load(dataset)?;
+    fit_dataset(&engine, ds, settings, results_file, observer)
 }
 
-/// [`fit_run`] on a thread pool the caller owns (`args.threads` is not looked at): a batch
-/// builds one pool and fits every unit on it.
-pub fn fit_run_on(
+/// [`fit`] of a loaded dataset on a thread pool the caller owns (`threads` is not looked
+/// at): a batch builds one pool and fits every unit on it.
+pub fn fit_dataset<O: FitObserver>(
     engine: &Engine,
-    args: &FitArgs,
+    ds: Dataset,
+    settings: &FitSettings,
     results_file: Option<PathBuf>,
-    observer: &dyn RunObserver,
-) -> Result<FitRun, FitCommandError> {
-    if args.starts == 0 {
-        return Err(FitCommandError::NoStarts);
-    }
-    let ds = Dataset::load(&args.dataset)?;
+    observer: &O,
+) -> Result<Fit, FitError> {
     let data = FitData::new(&ds, CostOptions::default())?;
-    let args = &catalogue_estimates(&ds, &data, args)?;
-    let space = space_from_args(&ds, args)?;
+    let pinning = std::sync::Mutex::new(Vec::new());
+    let noted = Noted {
+        inner: observer,
+        pinning: &pinning,
+    };
+    let o = &catalogue_estimates(&ds, &data, settings.options(), &noted)?;
+    let space = search_space(&ds, o)?;
     let setup = FitSetup {
         space,
         multistart: MultiStartConfig {
-            starts: args.starts,
-            seed: args.seed,
-            max_iters: args.max_iters,
-            keep_traces: args.trace,
+            starts: o.starts,
+            seed: o.seed,
+            max_iters: o.max_iters,
+            keep_traces: o.trace,
             ..MultiStartConfig::default()
         },
-        uncertainty: match args.uncertainty {
-            Uncertainty::Profile => UncertaintyMethod::Profile,
-            Uncertainty::Curvature => UncertaintyMethod::Curvature,
-            Uncertainty::None => UncertaintyMethod::None,
-        },
+        uncertainty: o.uncertainty,
         results_file,
-        resume: args.resume,
+        resume: o.resume,
     };
-    let outcome = fit(engine, &data, &setup, observer)?;
-    let file = fit_file(&ds.name, &setup, &outcome, args.seed);
-    Ok(FitRun {
+    let outcome = estimate_fit(engine, &data, &setup, observer)?;
+    let file = fit_file(&ds.name, &setup, &outcome, o.seed);
+    Ok(Fit {
         dataset: ds,
         data,
         setup,
         outcome,
         file,
+        seed: o.seed,
+        pinning: pinning.into_inner().unwrap_or_else(|p| p.into_inner()),
     })
 }
 
@@ -361,7 +464,7 @@ pub fn fit_run_on(
 #[derive(Debug, Clone, Default)]
 pub struct FitWritten {
     /// The SVG plots (waterfall, parameters across starts, profiles, one overlay per
-    /// experiment); empty with `--no-plots`.
+    /// experiment); empty without plots.
     pub plots: Vec<PathBuf>,
     /// The report for people (`<out>.report.md`).
     pub report: PathBuf,
@@ -370,15 +473,10 @@ pub struct FitWritten {
 /// Writes what `vanefit fit` leaves of a finished fit: the fit file at `out`, the plots
 /// (unless `plots` is false) and the report next to it. Split from the fit so that a batch
 /// unit writes exactly what the command writes.
-pub fn write_fit(
-    run: &FitRun,
-    out: &Path,
-    seed: u64,
-    plots: bool,
-) -> Result<FitWritten, FitCommandError> {
+pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitError> {
     let write_error = |path: &Path| {
         let path = path.to_path_buf();
-        move |source| FitCommandError::Write { path, source }
+        move |source| FitError::Write { path, source }
     };
     run.file.write(out).map_err(write_error(out))?;
     let mut written = FitWritten::default();
@@ -408,7 +506,13 @@ pub fn write_fit(
         )?);
     }
     let md = side_path(out, "report.md");
-    let text = report::markdown(&run.dataset, &run.setup, &run.outcome, seed, &written.plots);
+    let text = report::markdown(
+        &run.dataset,
+        &run.setup,
+        &run.outcome,
+        run.seed,
+        &written.plots,
+    );
     crate::io::write_atomic(&md, text.as_bytes()).map_err(write_error(&md))?;
     written.report = md;
     Ok(written)

@@ -1,29 +1,65 @@
-//! The work of one command as a library function (options in, files out): `fit`,
-//! `diagnose` and `predict` of a single dataset. The command line calls these for one
-//! dataset and `batch` for every unit of a fleet, so a unit of a batch leaves exactly the
-//! files, and the numbers, the command would.
+//! The work of each command as a library function: typed options in, typed results out.
+//!
+//! Every task follows one pattern (linfa's `ParamGuard`, as `estimate::settings` does it):
+//! an options struct with public fields and defaults (`FitOptions`, `DiagnoseOptions`,
+//! `PredictOptions`, `SynthOptions`, `BatchOptions`, a `ControlStudy`), turned by `check()`
+//! into settings with private fields (`FitSettings`, ...), so that a task never sees a bad
+//! value. A bad value is an [`OptionError`] that names the field (`FitOptions.bounds`);
+//! the command line shows it under its flag's name instead. Results are types (`Fit`,
+//! `Diagnosis`, `Prediction`, `StudyResult`) that the report and file writers consume.
+//!
+//! The command line calls these for one dataset and `batch` for every unit of a fleet, so
+//! a unit of a batch leaves exactly the files, and the numbers, the command would.
 
+pub mod control;
 pub mod diagnose;
+pub mod export;
 pub mod fit;
 pub mod predict;
+pub mod simulate;
+pub mod synth;
 
-/// Clap value parser of `--effects`: the list as given once every id in it is known, so an
-/// unknown id is bad usage (exit status 2, reported by clap with the known ids) rather than
-/// a failed run.
-pub fn effects_arg(list: &str) -> Result<String, crate::model::effects::UnknownEffect> {
-    crate::model::effects::EffectSet::parse_list(list).map(|_| list.to_string())
+/// A bad value of an option, named by its field (`FitOptions.starts`). Its message is
+/// `before`, the field's name, `after` (e.g. `FitOptions.starts must be at least 1`);
+/// [`OptionError::message_as`] gives the same message under another name (a flag).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{before}{field}{after}")]
+pub struct OptionError {
+    field: &'static str,
+    before: String,
+    after: String,
 }
 
-/// A count option given as 0 or not as a whole number.
-#[derive(Debug, thiserror::Error)]
-#[error("'{0}' is not a whole number of at least 1")]
-pub struct CountError(String);
+impl OptionError {
+    /// The message `field` + `after`, e.g. `("FitOptions.starts", " must be at least 1")`.
+    pub fn new(field: &'static str, after: impl Into<String>) -> Self {
+        Self {
+            field,
+            before: String::new(),
+            after: after.into(),
+        }
+    }
 
-/// Clap value parser of a count that must be at least 1 (`--starts`, `--threads`): 0 is bad
-/// usage, exit status 2.
-pub fn at_least_one(given: &str) -> Result<usize, CountError> {
-    match given.trim().parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(CountError(given.to_string())),
+    /// The message `before` + `field` + `after` (the field named within the sentence).
+    pub fn within(
+        field: &'static str,
+        before: impl Into<String>,
+        after: impl Into<String>,
+    ) -> Self {
+        Self {
+            field,
+            before: before.into(),
+            after: after.into(),
+        }
+    }
+
+    /// The field, `Type.field` (e.g. `FitOptions.bounds`).
+    pub fn field(&self) -> &'static str {
+        self.field
+    }
+
+    /// The message with the field called `name` (e.g. the command line's `--bounds`).
+    pub fn message_as(&self, name: &str) -> String {
+        format!("{}{name}{}", self.before, self.after)
     }
 }

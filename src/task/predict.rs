@@ -1,106 +1,236 @@
-//! `predict` as a task (issue 12, SPEC §7): the options of `vanefit predict`, checked, and
-//! the prediction with the files it leaves (`catalogue.csv`, `factors.csv`, `curves.csv`,
-//! `predict.md`, SVG figures), called by the command line and by `batch` alike.
+//! `predict` as a task: [`PredictOptions`] → [`PredictOptions::check`] (at the fit's
+//! atmosphere) → [`PredictSettings`]; the prediction of a fit ([`predict`]) and the files it
+//! leaves ([`write_prediction`]: `catalogue.csv`, `factors.csv`, `curves.csv`, `predict.md`,
+//! SVG figures), called by the command line and by `batch` alike.
 //!
 //! Every bad input (fit file, pressure list, unit, nozzle) is refused with a message that
-//! names the file or option, exit status 1, before anything is written.
+//! names the file or field, before anything is written.
 
+use super::OptionError;
 use crate::data::fitfile::{FitFile, FitFileError};
 use crate::predict::Prediction;
-use crate::predict::{predict, Nozzle, NozzlePort, PredictError, PredictOptions};
+use crate::predict::{Nozzle, NozzlePort, PredictError};
 use crate::report::predict::{write, PredictReportError, PressureDisplay};
 use crate::units::constants::P_ATM_PA;
 use crate::units::{Quantity, Unit};
-use clap::Args;
 use std::path::{Path, PathBuf};
 
-/// `vanefit predict` arguments. Values may start with a minus sign (`-1e-9`), so that a
-/// negative number is refused with its option named (status 1), not as a usage error.
-#[derive(Args, Debug, Clone)]
-pub struct PredictArgs {
-    /// Fit file (vanefit.fit/1).
-    pub fit: PathBuf,
-    /// Supply pressures, comma-separated, in --unit (default 3,4,5,6,7 bar g).
-    #[arg(long, allow_hyphen_values = true)]
-    pub pressures: Option<String>,
-    /// Pressure unit of --pressures, --reference and the outputs: a unit suffix of
-    /// p_port1 columns (bar_g, bar_abs, mpa, kpa, pa, ...).
-    #[arg(long, default_value = "bar_g")]
-    pub unit: String,
-    /// Reference pressure of the correction factors, in --unit (default 6.3 bar g).
-    #[arg(long, allow_hyphen_values = true)]
+/// Options of a prediction as given (unchecked), pressures in `unit`;
+/// [`PredictOptions::check`] makes them [`PredictSettings`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct PredictOptions {
+    /// Unit of `pressures`, `reference` and the outputs: a unit of `p_port1` columns
+    /// ([`pressure_units`]).
+    pub unit: Unit,
+    /// Supply pressures in `unit` (`None`: 3, 4, 5, 6, 7 bar g).
+    pub pressures: Option<Vec<f64>>,
+    /// Reference pressure of the correction factors in `unit` (`None`: 6.3 bar g).
     pub reference: Option<f64>,
-    /// Extra nozzle in series in front of port 1: its sonic conductance C, m3/(s*Pa) (a
-    /// sharp-edged 2 mm orifice is about 5e-9).
-    #[arg(long, allow_hyphen_values = true)]
-    pub inlet_nozzle: Option<f64>,
+    /// Extra nozzle in series in front of port 1: its sonic conductance C, m3/(s*Pa).
+    pub inlet_nozzle_m3_s_pa: Option<f64>,
     /// Extra nozzle in series behind port 2: its sonic conductance C, m3/(s*Pa).
-    #[arg(long, allow_hyphen_values = true)]
-    pub outlet_nozzle: Option<f64>,
-    /// Speed grid on which the maximum power is exact, rpm.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    pub outlet_nozzle_m3_s_pa: Option<f64>,
+    /// Speed grid on which the maximum power is exact, rpm (> 0).
     pub speed_grid_rpm: f64,
-    /// Points of each curve from standstill to the free speed.
-    #[arg(long, default_value_t = crate::predict::options::DEFAULT_CURVE_POINTS)]
+    /// Points of each curve from standstill to the free speed (≥ 2).
     pub curve_points: usize,
-    /// Take the parameters a fit could estimate but held fixed or could not identify as
-    /// uncertain within this factor (95 %), so that the bands include them (e.g. 1.5 for a
-    /// catalogue fit's defaults).
-    #[arg(long)]
+    /// Parameters a fit could estimate but held fixed or could not identify are taken as
+    /// uncertain within this factor (> 1, 95 %), so that the bands include them.
     pub fixed_spread: Option<f64>,
-    /// Output folder (created).
-    #[arg(long, default_value = "predict")]
-    pub out: PathBuf,
 }
 
-/// Why `vanefit predict` failed (exit status 1).
+impl Default for PredictOptions {
+    /// The command line's defaults: bar g, 3 to 7 bar g, reference 6.3 bar g, no nozzle,
+    /// a 1 rpm grid, 41 curve points.
+    fn default() -> Self {
+        Self {
+            unit: Unit::BarG,
+            pressures: None,
+            reference: None,
+            inlet_nozzle_m3_s_pa: None,
+            outlet_nozzle_m3_s_pa: None,
+            speed_grid_rpm: 1.0,
+            curve_points: crate::predict::options::DEFAULT_CURVE_POINTS,
+            fixed_spread: None,
+        }
+    }
+}
+
+/// The pressure units (those of `p_port1` columns), by column suffix.
+pub fn pressure_units() -> &'static [Unit] {
+    Quantity::PPort1.units()
+}
+
+/// The pressure unit with column suffix `suffix` (`bar_g`, `mpa`, ...); a bad one is an
+/// error naming `field` and the known suffixes.
+pub fn pressure_unit(field: &'static str, suffix: &str) -> Result<Unit, OptionError> {
+    let units = pressure_units();
+    units
+        .iter()
+        .find(|u| u.suffix() == suffix.trim())
+        .copied()
+        .ok_or_else(|| {
+            let known: Vec<&str> = units.iter().map(|u| u.suffix()).collect();
+            OptionError::new(
+                field,
+                format!(
+                    " '{suffix}': not a pressure unit; use one of {}",
+                    known.join(", ")
+                ),
+            )
+        })
+}
+
+/// A pressure in `unit` as an absolute pressure, Pa, that must be positive.
+fn absolute(
+    field: &'static str,
+    given: &str,
+    v: f64,
+    unit: Unit,
+    p_atm_pa: f64,
+) -> Result<f64, OptionError> {
+    let p = unit.to_si(v, p_atm_pa);
+    if p.is_finite() && p > 0.0 {
+        return Ok(p);
+    }
+    Err(OptionError::new(
+        field,
+        format!(
+            " '{given}': {} {} is not a positive absolute pressure ({p} Pa)",
+            v,
+            unit.suffix()
+        ),
+    ))
+}
+
+/// A list of numbers as written in messages: comma-separated.
+pub fn list_text(values: &[f64]) -> String {
+    values
+        .iter()
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+impl PredictOptions {
+    /// Checks every value at the atmosphere `p_atm_pa` (the fit's): the unit is a pressure
+    /// unit, every pressure a positive absolute pressure, at most one nozzle with a
+    /// positive conductance, a positive grid, at least 2 curve points, a spread > 1.
+    pub fn check(&self, p_atm_pa: f64) -> Result<PredictSettings, OptionError> {
+        let unit = pressure_unit("PredictOptions.unit", self.unit.suffix())?;
+        let mut o = crate::predict::PredictOptions::new(p_atm_pa);
+        if let Some(list) = &self.pressures {
+            let given = list_text(list);
+            if list.is_empty() {
+                return Err(OptionError::new(
+                    "PredictOptions.pressures",
+                    " '': give at least one pressure, e.g. 3,4,5",
+                ));
+            }
+            o.pressures_pa = list
+                .iter()
+                .map(|v| absolute("PredictOptions.pressures", &given, *v, unit, p_atm_pa))
+                .collect::<Result<_, _>>()?;
+        }
+        if let Some(r) = self.reference {
+            o.reference_pa = absolute(
+                "PredictOptions.reference",
+                &r.to_string(),
+                r,
+                unit,
+                p_atm_pa,
+            )?;
+        }
+        o.nozzle = self.nozzle()?;
+        let grid = self.speed_grid_rpm;
+        if !(grid.is_finite() && grid > 0.0) {
+            return Err(OptionError::new(
+                "PredictOptions.speed_grid_rpm",
+                format!(" {grid}: must be a positive number of rpm"),
+            ));
+        }
+        o.speed_grid_rad_s = Unit::Rpm.to_si(grid, p_atm_pa);
+        if self.curve_points < 2 {
+            return Err(OptionError::new(
+                "PredictOptions.curve_points",
+                format!(" {}: a curve needs at least 2 points", self.curve_points),
+            ));
+        }
+        o.curve_points = self.curve_points;
+        if let Some(f) = self.fixed_spread {
+            if !(f.is_finite() && f > 1.0) {
+                return Err(OptionError::new(
+                    "PredictOptions.fixed_spread",
+                    format!(" {f}: must be a factor > 1"),
+                ));
+            }
+        }
+        o.fixed_spread = self.fixed_spread;
+        Ok(PredictSettings {
+            options: o,
+            display: PressureDisplay { unit, p_atm_pa },
+        })
+    }
+
+    /// The extra nozzle: at most one, with a positive conductance.
+    fn nozzle(&self) -> Result<Option<Nozzle>, OptionError> {
+        let nozzle = |field: &'static str, port: NozzlePort, c: Option<f64>| match c {
+            Some(v) if !(v.is_finite() && v > 0.0) => Err(OptionError::new(
+                field,
+                format!(" {v}: the conductance must be a positive number of m3/(s*Pa)"),
+            )),
+            Some(v) => Ok(Some(Nozzle { port, c_m3_s_pa: v })),
+            None => Ok(None),
+        };
+        let inlet = nozzle(
+            "PredictOptions.inlet_nozzle_m3_s_pa",
+            NozzlePort::Inlet,
+            self.inlet_nozzle_m3_s_pa,
+        )?;
+        let outlet = nozzle(
+            "PredictOptions.outlet_nozzle_m3_s_pa",
+            NozzlePort::Outlet,
+            self.outlet_nozzle_m3_s_pa,
+        )?;
+        if inlet.is_some() && outlet.is_some() {
+            return Err(OptionError::new(
+                "PredictOptions.inlet_nozzle_m3_s_pa",
+                " and PredictOptions.outlet_nozzle_m3_s_pa: give one extra nozzle, not both",
+            ));
+        }
+        Ok(inlet.or(outlet))
+    }
+}
+
+/// Checked [`PredictOptions`]: the prediction layer's options in SI and the unit of the
+/// tables (private fields, read through the getters).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PredictSettings {
+    options: crate::predict::PredictOptions,
+    display: PressureDisplay,
+}
+
+impl PredictSettings {
+    /// The prediction layer's options (pressures in Pa absolute).
+    pub fn engine_options(&self) -> &crate::predict::PredictOptions {
+        &self.options
+    }
+    /// The pressure unit of the tables and the atmosphere.
+    pub fn display(&self) -> &PressureDisplay {
+        &self.display
+    }
+}
+
+/// Why a prediction failed.
 #[derive(Debug, thiserror::Error)]
-pub enum PredictCommandError {
-    /// `--out` cannot be a folder (a file, or a parent that is a file).
-    #[error("--out {0}")]
-    Output(#[from] crate::io::out::OutputError),
+#[non_exhaustive]
+pub enum PredictTaskError {
+    /// An option is bad (named by its field).
+    #[error(transparent)]
+    Option(#[from] OptionError),
     /// The fit file cannot be read.
     #[error(transparent)]
     FitFile(#[from] FitFileError),
-    /// `--unit` names no pressure unit.
-    #[error("--unit '{given}': not a pressure unit; use one of {known}")]
-    Unit {
-        /// What was given.
-        given: String,
-        /// The accepted suffixes.
-        known: String,
-    },
-    /// `--pressures` or `--reference` is not a list of positive absolute pressures.
-    #[error("{option} '{given}': {why}")]
-    Pressure {
-        /// `--pressures` or `--reference`.
-        option: &'static str,
-        /// What was given.
-        given: String,
-        /// What is wrong.
-        why: String,
-    },
-    /// Both nozzles were given.
-    #[error("--inlet-nozzle and --outlet-nozzle: give one extra nozzle, not both")]
-    BothNozzles,
-    /// A nozzle's conductance is not positive.
-    #[error("--{option} {value}: the conductance must be a positive number of m3/(s*Pa)")]
-    Nozzle {
-        /// `inlet-nozzle` or `outlet-nozzle`.
-        option: &'static str,
-        /// What was given.
-        value: f64,
-    },
-    /// `--speed-grid-rpm` or `--curve-points` out of range.
-    #[error("--{option} {value}: {why}")]
-    Setting {
-        /// The option.
-        option: &'static str,
-        /// What was given.
-        value: String,
-        /// What is needed.
-        why: &'static str,
-    },
     /// The prediction failed.
     #[error("{0}")]
     Predict(String),
@@ -117,129 +247,22 @@ pub enum PredictCommandError {
     Report(#[from] PredictReportError),
 }
 
-/// The pressure unit named by its column suffix among those of `p_port1` columns.
-fn pressure_unit(suffix: &str) -> Result<Unit, PredictCommandError> {
-    let units = Quantity::PPort1.units();
-    units
-        .iter()
-        .find(|u| u.suffix() == suffix.trim())
-        .copied()
-        .ok_or_else(|| PredictCommandError::Unit {
-            given: suffix.to_string(),
-            known: units
-                .iter()
-                .map(|u| u.suffix())
-                .collect::<Vec<_>>()
-                .join(", "),
-        })
+/// The atmosphere of a fit (its recordings'), Pa; the standard one when it has none.
+pub fn fit_atmosphere_pa(fit: &FitFile) -> f64 {
+    fit.conditions.map_or(P_ATM_PA, |c| c.p_atm_pa)
 }
 
-/// A pressure in `unit` as an absolute pressure, Pa, that must be positive.
-fn absolute(
-    option: &'static str,
-    text: &str,
-    v: f64,
-    unit: Unit,
-    p_atm_pa: f64,
-) -> Result<f64, PredictCommandError> {
-    let p = unit.to_si(v, p_atm_pa);
-    if p.is_finite() && p > 0.0 {
-        return Ok(p);
-    }
-    Err(PredictCommandError::Pressure {
-        option,
-        given: text.to_string(),
-        why: format!(
-            "{} {} is not a positive absolute pressure ({p} Pa)",
-            v,
-            unit.suffix()
-        ),
-    })
+/// The prediction of the fitted motor `fit` under `settings` (a failure at a pressure is
+/// reported in the table's unit, naming the reference when it is the one that failed).
+pub fn predict(fit: &FitFile, settings: &PredictSettings) -> Result<Prediction, PredictTaskError> {
+    let o = &settings.options;
+    crate::predict::predict(fit, o).map_err(|e| failed(e, &settings.display, o.reference_pa))
 }
 
-/// `--pressures`: a comma-separated list of numbers in `unit`, at least one.
-fn pressures(list: &str, unit: Unit, p_atm_pa: f64) -> Result<Vec<f64>, PredictCommandError> {
-    let fail = |why: String| PredictCommandError::Pressure {
-        option: "--pressures",
-        given: list.to_string(),
-        why,
-    };
-    let items: Vec<&str> = list.split(',').map(str::trim).collect();
-    if items.iter().all(|s| s.is_empty()) {
-        return Err(fail("give at least one pressure, e.g. 3,4,5".into()));
-    }
-    items
-        .iter()
-        .map(|s| {
-            let v: f64 = s
-                .parse()
-                .map_err(|_| fail(format!("'{s}' is not a number")))?;
-            absolute("--pressures", list, v, unit, p_atm_pa)
-        })
-        .collect()
-}
-
-/// The prediction's options from the arguments (the fit file gives the atmosphere).
-pub fn options(
-    args: &PredictArgs,
-    fit: &FitFile,
-) -> Result<(PredictOptions, Unit), PredictCommandError> {
-    let p_atm_pa = fit.conditions.map_or(P_ATM_PA, |c| c.p_atm_pa);
-    let unit = pressure_unit(&args.unit)?;
-    let mut o = PredictOptions::new(p_atm_pa);
-    if let Some(list) = &args.pressures {
-        o.pressures_pa = pressures(list, unit, p_atm_pa)?;
-    }
-    if let Some(r) = args.reference {
-        o.reference_pa = absolute("--reference", &r.to_string(), r, unit, p_atm_pa)?;
-    }
-    let nozzle = |option: &'static str, port: NozzlePort, c: Option<f64>| match c {
-        Some(v) if !(v.is_finite() && v > 0.0) => {
-            Err(PredictCommandError::Nozzle { option, value: v })
-        }
-        Some(v) => Ok(Some(Nozzle { port, c_m3_s_pa: v })),
-        None => Ok(None),
-    };
-    let inlet = nozzle("inlet-nozzle", NozzlePort::Inlet, args.inlet_nozzle)?;
-    let outlet = nozzle("outlet-nozzle", NozzlePort::Outlet, args.outlet_nozzle)?;
-    if inlet.is_some() && outlet.is_some() {
-        return Err(PredictCommandError::BothNozzles);
-    }
-    o.nozzle = inlet.or(outlet);
-    let grid = args.speed_grid_rpm;
-    if !(grid.is_finite() && grid > 0.0) {
-        return Err(PredictCommandError::Setting {
-            option: "speed-grid-rpm",
-            value: grid.to_string(),
-            why: "must be a positive number of rpm",
-        });
-    }
-    o.speed_grid_rad_s = Unit::Rpm.to_si(grid, p_atm_pa);
-    if args.curve_points < 2 {
-        return Err(PredictCommandError::Setting {
-            option: "curve-points",
-            value: args.curve_points.to_string(),
-            why: "a curve needs at least 2 points",
-        });
-    }
-    o.curve_points = args.curve_points;
-    if let Some(f) = args.fixed_spread {
-        if !(f.is_finite() && f > 1.0) {
-            return Err(PredictCommandError::Setting {
-                option: "fixed-spread",
-                value: f.to_string(),
-                why: "must be a factor > 1",
-            });
-        }
-    }
-    o.fixed_spread = args.fixed_spread;
-    Ok((o, unit))
-}
-
-/// A prediction's failure in the asked unit (naming --reference when the reference
+/// A prediction's failure in the asked unit (naming the reference when the reference
 /// pressure is the one that failed, since every factor needs it).
-fn failed(e: PredictError, display: &PressureDisplay, reference_pa: f64) -> PredictCommandError {
-    PredictCommandError::Predict(match e {
+fn failed(e: PredictError, display: &PressureDisplay, reference_pa: f64) -> PredictTaskError {
+    PredictTaskError::Predict(match e {
         PredictError::AtPressure {
             p_supply_pa,
             source,
@@ -248,13 +271,36 @@ fn failed(e: PredictError, display: &PressureDisplay, reference_pa: f64) -> Pred
             display.text(p_supply_pa),
             display.label(),
             if p_supply_pa == reference_pa {
-                ", the --reference pressure of the factors"
+                ", the PredictOptions.reference pressure of the factors"
             } else {
                 ""
             }
         ),
         other => other.to_string(),
     })
+}
+
+/// Writes a prediction into the folder `out` (created): tables, report and figures, titled
+/// with `source` (the fit file and its dataset). Returns the files written.
+pub fn write_prediction(
+    prediction: &Prediction,
+    settings: &PredictSettings,
+    source: &str,
+    out: &Path,
+) -> Result<Vec<PathBuf>, PredictTaskError> {
+    std::fs::create_dir_all(out).map_err(|source| PredictTaskError::CreateDir {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let mut written = Vec::new();
+    write(
+        prediction,
+        &settings.display,
+        source,
+        out,
+        &mut |p: &Path| written.push(p.to_path_buf()),
+    )?;
+    Ok(written)
 }
 
 /// A finished prediction and what it wrote.
@@ -269,40 +315,28 @@ pub struct Predicted {
     pub written: Vec<PathBuf>,
 }
 
-/// Reads the fit file, checks the options, predicts and writes the results into
-/// `args.out`; nothing is written when an input is bad.
-pub fn predict_to(args: &PredictArgs) -> Result<Predicted, PredictCommandError> {
-    let fit = FitFile::read(&args.fit)?;
-    let (options, unit) = options(args, &fit)?;
-    let display = PressureDisplay {
-        unit,
-        p_atm_pa: options.p_atm_pa,
-    };
-    let prediction =
-        predict(&fit, &options).map_err(|e| failed(e, &display, options.reference_pa))?;
-    std::fs::create_dir_all(&args.out).map_err(|source| PredictCommandError::CreateDir {
-        path: args.out.clone(),
-        source,
-    })?;
-    let source = source_name(&args.fit, &fit);
-    let mut written = Vec::new();
-    write(
-        &prediction,
-        &display,
-        &source,
-        &args.out,
-        &mut |p: &Path| written.push(p.to_path_buf()),
-    )?;
+/// Reads the fit file at `fit_path`, checks the options at its atmosphere, predicts and
+/// writes the results into `out`; nothing is written when an input is bad.
+pub fn predict_to(
+    fit_path: &Path,
+    options: &PredictOptions,
+    out: &Path,
+) -> Result<Predicted, PredictTaskError> {
+    let fit = FitFile::read(fit_path)?;
+    let settings = options.check(fit_atmosphere_pa(&fit))?;
+    let prediction = predict(&fit, &settings)?;
+    let source = source_name(fit_path, &fit);
+    let written = write_prediction(&prediction, &settings, &source, out)?;
     Ok(Predicted {
         prediction,
-        display,
+        display: settings.display,
         source,
         written,
     })
 }
 
 /// The fit file and its dataset, for titles.
-fn source_name(path: &Path, fit: &FitFile) -> String {
+pub fn source_name(path: &Path, fit: &FitFile) -> String {
     if fit.dataset.is_empty() {
         path.display().to_string()
     } else {
