@@ -22,6 +22,9 @@ const LAYERS: &[&[&str]] = &[
     &["report"],
     &["task"],
     &["batch"],
+    // The prelude re-exports the front door: above every folder of the library.
+    &["prelude"],
+    // The command line: part of the `vanefit` binary (src/main.rs), not of the library.
     &["cli"],
 ];
 

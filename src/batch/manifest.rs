@@ -32,6 +32,7 @@ use toml::Spanned;
 /// The work a unit does to its dataset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum TaskKind {
     /// `vanefit fit`: the estimate, its intervals, the fit file.
     Fit,

@@ -29,6 +29,7 @@ use std::path::{Path, PathBuf};
 
 /// Why a batch or a merge could not run (a unit's own failure is no error: it is recorded).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BatchError {
     /// The manifest is unusable.
     #[error(transparent)]

@@ -42,6 +42,7 @@ pub struct RunOutcome {
 
 /// Why a unit failed (recorded in its status file; the batch goes on).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum UnitError {
     /// The fit failed.
     #[error(transparent)]

@@ -115,8 +115,10 @@ pub(crate) struct BodeArgs {
     /// Mean supply pressure of the operating point, MPa absolute.
     #[arg(long, default_value_t = 0.35)]
     p_mean_mpa: f64,
+    /// Lowest frequency of the response, Hz.
     #[arg(long, default_value_t = 0.01)]
     f_min_hz: f64,
+    /// Highest frequency of the response, Hz.
     #[arg(long, default_value_t = 100.0)]
     f_max_hz: f64,
     /// Number of frequencies (log-spaced); the two-lag fit uses all of them.
@@ -149,7 +151,9 @@ pub(crate) struct PiArgs {
     /// Speed unit of the controller's error, rpm (1000: error in krpm, command in V).
     #[arg(long, default_value_t = 1000.0)]
     speed_unit_rpm: f64,
-    /// conditional, back-calculation or none.
+    /// Anti-windup of the integrator when the command saturates: conditional (the integral
+    /// is frozen while the error would drive the command further out), back-calculation
+    /// (tracking time kp/ki) or none.
     #[arg(long, default_value = "conditional")]
     anti_windup: String,
 }
@@ -182,8 +186,12 @@ pub(crate) struct StepArgs {
     /// Set-point after the step, rpm.
     #[arg(long, default_value_t = 4500.0)]
     to_rpm: f64,
+    /// Time of the set-point step after the start of the simulation, s (before
+    /// --duration-s).
     #[arg(long, default_value_t = 0.5)]
     t_step_s: f64,
+    /// Simulated time, s: the response is judged over it (settling, the mean error over
+    /// its last 10 %).
     #[arg(long, default_value_t = 8.0)]
     duration_s: f64,
 }
@@ -205,8 +213,11 @@ pub(crate) struct DisturbanceArgs {
     /// Extra load torque switched on at --t-step-s, N*m.
     #[arg(long, default_value_t = 0.03)]
     load_step_nm: f64,
+    /// Time of the load step after the start of the simulation, s (before --duration-s).
     #[arg(long, default_value_t = 0.5)]
     t_step_s: f64,
+    /// Simulated time, s: the recovery is judged over it (the drop, the time back within
+    /// 1 %, the mean error over its last 10 %).
     #[arg(long, default_value_t = 8.0)]
     duration_s: f64,
 }
@@ -263,6 +274,7 @@ pub(crate) struct DesignArgs {
     /// Set-point step of the check simulation, rpm (from the operating point's speed).
     #[arg(long, default_value_t = 300.0)]
     step_rpm: f64,
+    /// Simulated time of the check simulation, s.
     #[arg(long, default_value_t = 5.0)]
     duration_s: f64,
 }

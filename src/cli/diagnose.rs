@@ -16,9 +16,8 @@ pub(crate) struct DiagnoseArgs {
     /// Start points of the baseline fit: the rig's nominal motor plus Latin-hypercube starts.
     #[arg(long, default_value_t = 4, value_parser = crate::cli::at_least_one)]
     pub(crate) starts: usize,
-    /// Seed of the start designs; a seed gives the same result whatever the thread count.
-    #[arg(long, default_value_t = 1)]
-    pub(crate) seed: u64,
+    #[command(flatten)]
+    pub(crate) run: crate::cli::RunArgs,
     /// Output folder: diagnosis.json, report.md and its SVG plots.
     #[arg(long)]
     pub(crate) out: PathBuf,
@@ -38,7 +37,8 @@ impl DiagnoseObserver for StderrProgress {
 pub(crate) fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
     let settings = DiagnoseOptions {
         starts: args.starts,
-        seed: args.seed,
+        seed: args.run.seed,
+        threads: args.run.threads,
         ..DiagnoseOptions::default()
     }
     .check()?;

@@ -29,12 +29,8 @@ pub(crate) struct FitArgs {
     /// Number of start points (Latin hypercube).
     #[arg(long, default_value_t = 32, value_parser = crate::cli::at_least_one)]
     pub(crate) starts: usize,
-    /// Seed of the start design; a seed gives the same result whatever the thread count.
-    #[arg(long, default_value_t = 1)]
-    pub(crate) seed: u64,
-    /// Worker threads (default: one per core).
-    #[arg(long, value_parser = crate::cli::at_least_one)]
-    pub(crate) threads: Option<usize>,
+    #[command(flatten)]
+    pub(crate) run: crate::cli::RunArgs,
     /// Effects to switch on (comma-separated ids of SPEC §5); their parameters are estimated too.
     #[arg(long, default_value = "", value_parser = crate::cli::effects_arg)]
     pub(crate) effects: String,
@@ -92,8 +88,8 @@ impl FitArgs {
         };
         Ok(FitOptions {
             starts: self.starts,
-            seed: self.seed,
-            threads: self.threads,
+            seed: self.run.seed,
+            threads: self.run.threads,
             effects: EffectSet::parse_list(&self.effects)?,
             estimate: self
                 .estimate

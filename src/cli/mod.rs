@@ -106,6 +106,19 @@ pub(crate) enum Command {
     Merge(crate::cli::batch::MergeArgs),
 }
 
+/// Options every computing command that starts from random points takes (`fit`,
+/// `diagnose`): the seed of the start designs and the worker threads. Results depend on the
+/// seed, never on the thread count.
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct RunArgs {
+    /// Seed of the start designs; a seed gives the same result whatever the thread count.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// Worker threads (default: one per core).
+    #[arg(long, value_parser = crate::cli::at_least_one)]
+    pub(crate) threads: Option<usize>,
+}
+
 /// A failure to report: message for stderr, exit status 1.
 #[derive(Debug)]
 pub(crate) struct Failure(pub String);

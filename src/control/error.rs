@@ -8,6 +8,7 @@ use crate::sim::steady::SteadyError;
 
 /// A bad option value of a control study (`vanefit control <study> --…`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SettingsError {
     /// A quantity that must be a finite number > 0.
     #[error("{option} {value}: must be a number > 0")]
@@ -98,6 +99,7 @@ pub struct UnknownAntiWindup(pub String);
 
 /// Why a control study failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ControlError {
     /// A bad option value.
     #[error(transparent)]

@@ -11,6 +11,7 @@ use crate::sim::recording::MissingColumn;
 /// Why a diagnosis could not be made. Every message is the wrapped error's own (the data
 /// layer's are located "file:line:column" messages).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum DiagnoseError {
     /// A recording or the rig description is unusable (e.g. no nominal motor).
     #[error(transparent)]

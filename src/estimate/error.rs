@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 /// An error of an estimation run.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum EstimateError {
     /// The observer asked the run to stop ([`super::multistart::RunObserver::keep_going`]).
     #[error("interrupted: the starts finished so far are in the results file; resume to continue")]

@@ -34,6 +34,7 @@ use crate::objective::likelihood::Target;
 
 /// Why a fit's likelihood cannot be rebuilt or evaluated.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FitLikelihoodError {
     /// The fit file has no statistics (not written by `vanefit fit`).
     #[error("the fit file of '{0}' holds no fit statistics: it was not written by `vanefit fit`")]

@@ -42,6 +42,7 @@ use std::path::{Path, PathBuf};
 
 /// Why a fit cannot be exported.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PetabError {
     /// The fit's likelihood cannot be rebuilt or evaluated on the dataset.
     #[error("{0}")]

@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 
 /// Why an output cannot be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum OutputError {
     /// A file output names an existing folder.
     #[error("{}: is a folder, not a file", .0.display())]

@@ -59,6 +59,7 @@ impl Default for CostOptions {
 
 /// Why a cost model could not be built (the objective layer's error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum CostError {
     /// A recording cannot give a reference response.
     #[error(transparent)]

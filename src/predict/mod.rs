@@ -47,6 +47,7 @@ pub const FACTORS: [&str; 4] = ["power", "speed", "torque", "air"];
 
 /// Why a prediction failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum PredictError {
     /// No supply pressure was asked for.
     #[error("no supply pressure to predict at")]

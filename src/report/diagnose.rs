@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 
 /// Why the report of a diagnosis could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReportError {
     /// A plot could not be drawn or written.
     #[error(transparent)]

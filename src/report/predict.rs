@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 /// Why the results could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PredictReportError {
     /// A file could not be written.
     #[error("{}: {source}", path.display())]

@@ -19,6 +19,7 @@ use std::str::FromStr;
 /// Where in the model an effect acts (the categories of docs/model.md, "Missing-physics
 /// catalog").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
 pub enum Category {
     /// A torque lost to friction or drag.
     TorqueLoss,

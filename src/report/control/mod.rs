@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 
 /// Why a study's results could not be written.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ControlReportError {
     /// A file could not be written.
     #[error("{}: {source}", path.display())]

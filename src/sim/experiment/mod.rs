@@ -131,6 +131,7 @@ macro_rules! registry {
         /// "…"`).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, PartialOrd, Ord)]
         #[serde(rename_all = "snake_case")]
+        #[non_exhaustive]
         pub enum Kind {
             $(
                 #[doc = concat!("See [`", stringify!($file), "`].")]

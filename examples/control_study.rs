@@ -1,0 +1,52 @@
+//! A speed-control study: the closed-loop response of the shipped fit to a set-point step.
+//!
+//! `cargo run --release --example control_study [out-folder]` (with a folder, the CSV
+//! tables and SVG figures of `vanefit control step` are written there).
+
+use std::path::{Path, PathBuf};
+use vanefit::control::study::step::StepOptions;
+use vanefit::control::study::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
+use vanefit::prelude::*;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let params = Path::new(env!("CARGO_MANIFEST_DIR")).join("fits/ar034-synthetic.json");
+    let study = ControlStudy {
+        motor: MotorOptions {
+            params: Some(params),
+            ..MotorOptions::default()
+        },
+        study: Study::Step(
+            LoopOptions {
+                valve: ValveOptions {
+                    tau_s: None,
+                    u_max_v: 10.0,
+                    p_max_bar_g: 6.0,
+                },
+                pi: PiOptions {
+                    ts_ms: 1.0,
+                    speed_unit_rpm: 1000.0,
+                    anti_windup: "conditional".into(),
+                },
+                gains: Some(GainOptions { kp: 0.85, ki: 4.0 }),
+            },
+            StepOptions {
+                from_rpm: 3000.0,
+                to_rpm: 4500.0,
+                t_step_s: 0.5,
+                duration_s: 8.0,
+            },
+        ),
+    };
+    let result = vanefit::run_study(&study)?;
+    if let StudyResult::Step(r) = &result {
+        let m = &r.metrics;
+        println!(
+            "step 3000 -> 4500 rpm: rise {:.3} s, overshoot {:.1} %, settling {:.3} s",
+            m.rise_time_s, m.overshoot_pct, m.settling_time_s
+        );
+    }
+    if let Some(out) = std::env::args().nth(1).map(PathBuf::from) {
+        vanefit::write_study(&result, &out, &mut |p| println!("wrote {}", p.display()))?;
+    }
+    Ok(())
+}
