@@ -1,35 +1,32 @@
 //! `vanefit._core`: the Rust side of the Python package. Thin on purpose: every function
-//! calls the library code the command line calls (so a seed gives the same fit, and an
-//! error the same located message), returns plain Python values or JSON text, and leaves
-//! numpy arrays, dataclasses and documentation to `vanefit/__init__.py`. The GIL is
-//! released while a fit, a diagnosis or a batch of χ² evaluations runs.
+//! calls the library's typed functions the command line calls (so a seed gives the same
+//! fit, and an error the same located message) — never the command line itself — returns
+//! plain Python values, JSON or the text of the files the command writes, and leaves
+//! DataFrames, result objects and documentation to `vanefit/__init__.py`. The GIL is
+//! released while a fit, a diagnosis, a prediction or a batch of χ² evaluations runs.
 
-/// The command line's code (part of the `vanefit` binary, not of the library), for
-/// `run_command` until every command has a typed Python function.
-#[allow(dead_code)]
-#[path = "../../src/cli/mod.rs"]
-mod cli;
+mod control;
 mod errors;
+mod fitting;
 mod observe;
+mod tasks;
 
 use errors::{data_err, param_err, DataError, ParameterError, VanefitError};
-use observe::{PyDiagnoseProgress, PyFitProgress};
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use tasks::load_fit;
 use vanefit::data::dataset::Dataset;
 use vanefit::data::fitfile::FitFile;
 use vanefit::estimate::fit::DataObjective;
-use vanefit::estimate::fit::UncertaintyMethod;
 use vanefit::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use vanefit::estimate::Objective;
 use vanefit::model::params::PARAMS;
 use vanefit::numerics::DefaultSolver;
 use vanefit::objective::cost::{CostModel, CostOptions};
-use vanefit::task::fit::{FitError, FitOptions};
 
 /// A dataset read and checked by vanefit (rig.toml and its recordings).
 #[pyclass(module = "vanefit._core", frozen)]
-struct PyDataset {
+pub struct PyDataset {
     inner: Dataset,
     path: PathBuf,
 }
@@ -119,22 +116,29 @@ fn nominal_parameters(ds: &PyDataset) -> PyResult<Vec<(String, f64)>> {
         .collect())
 }
 
-/// Reads and checks a fit file; returns it as JSON text (as vanefit would write it).
+/// Reads and checks a fit file (or, given `text`, fit-file text that `path` names in
+/// messages); returns its text as read, which the Python `Fit` keeps byte for byte.
 #[pyfunction]
-fn read_fit(path: PathBuf) -> PyResult<String> {
-    let f = FitFile::read(&path).map_err(data_err)?;
-    Ok(f.to_json().to_string())
+#[pyo3(signature = (path, text=None))]
+fn read_fit(path: PathBuf, text: Option<String>) -> PyResult<String> {
+    load_fit(&path, text.as_deref())?;
+    match text {
+        Some(t) => Ok(t),
+        None => std::fs::read_to_string(&path)
+            .map_err(|e| DataError::new_err(format!("{}: cannot read: {e}", path.display()))),
+    }
 }
 
-/// The fit file at `path`, or the nominal motor of `ds` with `overrides` (SI) applied, as
-/// a fit file held in memory.
+/// The fit file at `fit` (its text `fit_text` when held in memory), or the nominal motor
+/// of `ds` with `overrides` (SI) applied, as a fit file held in memory.
 fn parameters(
     ds: &Dataset,
     fit: Option<PathBuf>,
+    fit_text: Option<String>,
     overrides: Vec<(String, f64)>,
 ) -> PyResult<FitFile> {
     let mut f = match fit {
-        Some(p) => FitFile::read(&p).map_err(data_err)?,
+        Some(p) => load_fit(&p, fit_text.as_deref())?,
         None => FitFile::from_params(
             &ds.name,
             ds.nominal_params().map_err(data_err)?,
@@ -152,21 +156,19 @@ type Columns = Vec<(String, Vec<f64>)>;
 
 /// Every experiment simulated: (file, [(column, values in the column's unit)]).
 #[pyfunction]
-#[pyo3(signature = (ds, fit=None, overrides=Vec::new()))]
+#[pyo3(signature = (ds, fit=None, fit_text=None, overrides=Vec::new()))]
 fn simulate(
     py: Python<'_>,
     ds: &PyDataset,
     fit: Option<PathBuf>,
+    fit_text: Option<String>,
     overrides: Vec<(String, f64)>,
 ) -> PyResult<Vec<(String, Columns)>> {
-    let f = parameters(&ds.inner, fit, overrides)?;
+    let f = parameters(&ds.inner, fit, fit_text, overrides)?;
+    let motor = vanefit::task::simulate::motor_for(&ds.inner, Some(&f)).map_err(data_err)?;
     let tables = py
-        .detach(|| {
-            let motor = vanefit::task::simulate::motor_for(&ds.inner, Some(&f))
-                .map_err(|e| e.to_string())?;
-            vanefit::task::simulate::simulated_tables(&ds.inner, &motor).map_err(|e| e.to_string())
-        })
-        .map_err(VanefitError::new_err)?;
+        .detach(|| vanefit::task::simulate::simulated_tables(&ds.inner, &motor))
+        .map_err(|e| VanefitError::new_err(e.to_string()))?;
     Ok(tables
         .into_iter()
         .map(|t| {
@@ -176,16 +178,18 @@ fn simulate(
         .collect())
 }
 
-/// The cost J that `fit` minimises and its χ² (SPEC §2), with each channel's term, as JSON.
+/// The cost J that `fit` minimises and its χ² (docs/model.md), with each channel's term, as
+/// JSON.
 #[pyfunction]
-#[pyo3(signature = (ds, fit=None, overrides=Vec::new()))]
+#[pyo3(signature = (ds, fit=None, fit_text=None, overrides=Vec::new()))]
 fn cost(
     py: Python<'_>,
     ds: &PyDataset,
     fit: Option<PathBuf>,
+    fit_text: Option<String>,
     overrides: Vec<(String, f64)>,
 ) -> PyResult<String> {
-    let f = parameters(&ds.inner, fit, overrides)?;
+    let f = parameters(&ds.inner, fit, fit_text, overrides)?;
     let model = CostModel::new(&ds.inner, CostOptions::default()).map_err(data_err)?;
     py.detach(|| {
         let motor =
@@ -216,98 +220,6 @@ fn cost(
     .map_err(|e: String| VanefitError::new_err(e))
 }
 
-/// The error of a fit as the exception Python users catch.
-fn fit_err(e: FitError) -> PyErr {
-    use FitError as E;
-    match e {
-        E::Data(_) | E::Cost(_) => DataError::new_err(e.to_string()),
-        E::Estimate(_) | E::Write { .. } | E::Plot(_) => VanefitError::new_err(e.to_string()),
-        _ => ParameterError::new_err(e.to_string()),
-    }
-}
-
-/// Fits a dataset exactly as `vanefit fit` does; returns the fit file and every start as
-/// JSON, after writing the fit file (and its starts file) to `out` when given.
-#[pyfunction]
-#[pyo3(signature = (dataset, starts, seed, threads, effects, estimate, uncertainty, max_iters, out, progress))]
-#[allow(clippy::too_many_arguments)]
-fn fit(
-    py: Python<'_>,
-    dataset: PathBuf,
-    starts: usize,
-    seed: u64,
-    threads: Option<usize>,
-    effects: String,
-    estimate: Option<String>,
-    uncertainty: &str,
-    max_iters: u64,
-    out: Option<PathBuf>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<String> {
-    let uncertainty = match uncertainty {
-        "profile" => UncertaintyMethod::Profile,
-        "curvature" => UncertaintyMethod::Curvature,
-        "none" => UncertaintyMethod::None,
-        other => {
-            return Err(ParameterError::new_err(format!(
-                "uncertainty '{other}': must be 'profile', 'curvature' or 'none'"
-            )))
-        }
-    };
-    let effects = vanefit::model::effects::EffectSet::parse_list(&effects)
-        .map_err(|e| ParameterError::new_err(e.to_string()))?;
-    let options = FitOptions {
-        starts,
-        seed,
-        threads,
-        effects,
-        estimate: estimate.map(|list| list.split(',').map(str::to_string).collect()),
-        max_iters,
-        uncertainty,
-        ..FitOptions::default()
-    };
-    let settings = options
-        .check()
-        .map_err(|e| ParameterError::new_err(e.to_string()))?;
-    let results = out
-        .as_ref()
-        .map(|o| vanefit::task::fit::side_path(o, "starts.jsonl"));
-    let observer = PyFitProgress::new(progress);
-    let run = py.detach(|| vanefit::task::fit::fit(&dataset, &settings, results, &observer));
-    observer.raise_callback_error(py)?;
-    let run = run.map_err(fit_err)?;
-    if let Some(o) = &out {
-        run.file
-            .write(o)
-            .map_err(|e| VanefitError::new_err(format!("{}: {e}", o.display())))?;
-    }
-    let starts: Vec<serde_json::Value> = run
-        .outcome
-        .run
-        .results
-        .iter()
-        .map(|r| {
-            let params: serde_json::Map<String, serde_json::Value> = run
-                .setup
-                .space
-                .dims
-                .iter()
-                .zip(&r.theta)
-                .map(|(d, t)| (d.name.clone(), d.value(*t).into()))
-                .collect();
-            serde_json::json!({
-                "index": r.index, "cost": r.cost, "ending": serde_json::to_value(r.ending).unwrap_or_default(),
-                "iterations": r.iterations, "evaluations": r.evaluations, "parameters": params,
-            })
-        })
-        .collect();
-    let mut doc = run.file.to_json();
-    if let Some(obj) = doc.as_object_mut() {
-        obj.insert("start_results".into(), serde_json::Value::Array(starts));
-    }
-    Ok(doc.to_string())
-}
-
 /// The likelihood a fit's estimate and intervals were measured on, rebuilt from its fit
 /// file: χ² as a function of the estimated parameters (SI values).
 #[pyclass(module = "vanefit._core", frozen)]
@@ -327,10 +239,17 @@ fn likelihood_err(e: FitLikelihoodError) -> PyErr {
 
 #[pymethods]
 impl PyLikelihood {
-    /// Rebuilds the likelihood of the fit file at `fit` on dataset `ds`.
+    /// Rebuilds the likelihood of the fit file at `fit` (its text `fit_text` when held in
+    /// memory) on dataset `ds`.
     #[new]
-    fn new(py: Python<'_>, ds: &PyDataset, fit: PathBuf) -> PyResult<Self> {
-        let f = FitFile::read(&fit).map_err(data_err)?;
+    #[pyo3(signature = (ds, fit, fit_text=None))]
+    fn new(
+        py: Python<'_>,
+        ds: &PyDataset,
+        fit: PathBuf,
+        fit_text: Option<String>,
+    ) -> PyResult<Self> {
+        let f = load_fit(&fit, fit_text.as_deref())?;
         let inner = py
             .detach(|| FitLikelihood::from_fit(&ds.inner, &f))
             .map_err(likelihood_err)?;
@@ -420,69 +339,6 @@ impl PyLikelihood {
     }
 }
 
-/// Diagnoses a dataset as `vanefit diagnose` does; returns the diagnosis as JSON and writes
-/// its files to `out` when given.
-#[pyfunction]
-#[pyo3(signature = (ds, starts, seed, threads, out, progress))]
-fn diagnose(
-    py: Python<'_>,
-    ds: &PyDataset,
-    starts: usize,
-    seed: u64,
-    threads: Option<usize>,
-    out: Option<PathBuf>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<String> {
-    use vanefit::diagnose::{diagnose_observed, DiagnoseOptions};
-    if starts == 0 {
-        return Err(ParameterError::new_err("starts must be at least 1"));
-    }
-    if threads == Some(0) {
-        return Err(ParameterError::new_err("threads must be at least 1"));
-    }
-    let mut opts = DiagnoseOptions::full(starts, seed);
-    opts.threads = threads;
-    let observer = PyDiagnoseProgress::new(progress);
-    let d = py.detach(|| {
-        let engine =
-            vanefit::estimate::Engine::with_threads(opts.threads).map_err(|e| e.to_string())?;
-        let d =
-            diagnose_observed(&ds.inner, &opts, &engine, &observer).map_err(|e| e.to_string())?;
-        if let Some(o) = &out {
-            vanefit::report::diagnose::write_all(&d, o).map_err(|e| e.to_string())?;
-        }
-        Ok::<_, String>(d)
-    });
-    observer.raise_callback_error(py)?;
-    let d = d.map_err(VanefitError::new_err)?;
-    let mut doc = vanefit::diagnose::to_json(&d);
-    if let Some(obj) = doc.as_object_mut() {
-        obj.insert("summary".into(), vanefit::diagnose::summary(&d).into());
-        obj.insert(
-            "extended_fit".into(),
-            vanefit::diagnose::extended_fit_file(&d),
-        );
-    }
-    Ok(doc.to_string())
-}
-
-/// Runs a `vanefit` command line in this process (`args` without the program name): the
-/// same code and messages as the command. Bad usage raises ParameterError with clap's
-/// text; a failure raises `error` (0: VanefitError, 1: DataError, 2: ParameterError).
-#[pyfunction]
-fn run_command(py: Python<'_>, args: Vec<String>, error: u8) -> PyResult<()> {
-    use clap::Parser;
-    let mut all = vec!["vanefit".to_string()];
-    all.extend(args);
-    let cli = cli::Cli::try_parse_from(&all)
-        .map_err(|e| ParameterError::new_err(e.render().to_string().trim().to_string()))?;
-    py.detach(|| cli::run(cli)).map_err(|e| match error {
-        1 => DataError::new_err(e.0),
-        2 => ParameterError::new_err(e.0),
-        _ => VanefitError::new_err(e.0),
-    })
-}
-
 /// The module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -494,9 +350,12 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_fit, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(cost, m)?)?;
-    m.add_function(wrap_pyfunction!(fit, m)?)?;
-    m.add_function(wrap_pyfunction!(diagnose, m)?)?;
-    m.add_function(wrap_pyfunction!(run_command, m)?)?;
+    m.add_function(wrap_pyfunction!(fitting::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(fitting::diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(tasks::predict, m)?)?;
+    m.add_function(wrap_pyfunction!(tasks::export_petab, m)?)?;
+    m.add_function(wrap_pyfunction!(tasks::synth, m)?)?;
+    m.add_function(wrap_pyfunction!(control::control, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

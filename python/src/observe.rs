@@ -1,7 +1,9 @@
-//! Progress from Rust to a Python callable. The fit and the diagnosis run with the GIL
-//! released on rayon's threads; each event takes the GIL just long enough to call back. An
-//! exception raised by the callback cannot stop the work (the library has no cancel), so
-//! the first one is kept, later calls are skipped, and it is raised when the work returns.
+//! Progress from Rust to a Python callable, and Ctrl-C. The fit and the diagnosis run with
+//! the GIL released on rayon's threads; each event takes the GIL just long enough to call
+//! back. The first exception the callback raises is kept, later calls are skipped, and it is
+//! raised when the work returns. A fit also stops at its next round when the callback
+//! raised or Python has a pending signal (`Python::check_signals`: Ctrl-C becomes
+//! `KeyboardInterrupt`); its finished starts are then in the starts file, ready to resume.
 
 use pyo3::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -9,7 +11,7 @@ use std::sync::Mutex;
 use vanefit::diagnose::{DiagnoseObserver, Progress};
 use vanefit::estimate::{RunObserver, StartResult};
 
-/// A callable and the first error it raised.
+/// A callable and the first error it (or a signal handler) raised.
 struct Callback {
     callable: Option<Py<PyAny>>,
     error: Mutex<Option<PyErr>>,
@@ -23,16 +25,20 @@ impl Callback {
         }
     }
 
+    fn slot(&self) -> std::sync::MutexGuard<'_, Option<PyErr>> {
+        match self.error.lock() {
+            Ok(g) => g,
+            Err(p) => p.into_inner(),
+        }
+    }
+
     /// Calls back with `args` unless an earlier call failed.
     fn call<A>(&self, args: impl FnOnce(Python<'_>) -> A)
     where
         A: for<'py> pyo3::call::PyCallArgs<'py>,
     {
         let Some(f) = &self.callable else { return };
-        let mut slot = match self.error.lock() {
-            Ok(g) => g,
-            Err(p) => p.into_inner(),
-        };
+        let mut slot = self.slot();
         if slot.is_some() {
             return;
         }
@@ -43,19 +49,31 @@ impl Callback {
         });
     }
 
+    /// Whether the work should stop: the callback failed, or a signal handler raised
+    /// (checked on Python's main thread only; elsewhere signals wait for the main thread).
+    fn failed_or_signalled(&self) -> bool {
+        let mut slot = self.slot();
+        if slot.is_some() {
+            return true;
+        }
+        Python::attach(|py| {
+            if let Err(e) = py.check_signals() {
+                *slot = Some(e);
+            }
+        });
+        slot.is_some()
+    }
+
     fn raise(&self) -> PyResult<()> {
-        let mut slot = match self.error.lock() {
-            Ok(g) => g,
-            Err(p) => p.into_inner(),
-        };
-        match slot.take() {
+        match self.slot().take() {
             Some(e) => Err(e),
             None => Ok(()),
         }
     }
 }
 
-/// Calls `progress(done, total, best_cost)` after every start of a fit.
+/// Calls `progress(done, total, best_cost)` after every start of a fit, and stops the fit
+/// on Ctrl-C or when the callback raised.
 pub struct PyFitProgress {
     callback: Callback,
     total: AtomicUsize,
@@ -63,7 +81,7 @@ pub struct PyFitProgress {
 }
 
 impl PyFitProgress {
-    /// An observer calling `progress` (none: silent).
+    /// An observer calling `progress` (none: silent, but still stopped by Ctrl-C).
     pub fn new(progress: Option<Py<PyAny>>) -> Self {
         Self {
             callback: Callback::new(progress),
@@ -72,8 +90,8 @@ impl PyFitProgress {
         }
     }
 
-    /// Raises the callback's first exception, if any.
-    pub fn raise_callback_error(&self, _py: Python<'_>) -> PyResult<()> {
+    /// Raises the callback's first exception (or the `KeyboardInterrupt`), if any.
+    pub fn raise_callback_error(&self) -> PyResult<()> {
         self.callback.raise()
     }
 }
@@ -84,12 +102,17 @@ impl RunObserver for PyFitProgress {
     fn started(&self, total: usize, already_done: usize) {
         self.total.store(total, Ordering::SeqCst);
         self.done.store(already_done, Ordering::SeqCst);
+        self.callback.call(|_| (already_done, total, f64::INFINITY));
     }
 
     fn start_finished(&self, _result: &StartResult, best_cost: f64) {
         let done = self.done.fetch_add(1, Ordering::SeqCst) + 1;
         let total = self.total.load(Ordering::SeqCst);
         self.callback.call(|_| (done, total, best_cost));
+    }
+
+    fn keep_going(&self) -> bool {
+        !self.callback.failed_or_signalled()
     }
 }
 
@@ -107,7 +130,7 @@ impl PyDiagnoseProgress {
     }
 
     /// Raises the callback's first exception, if any.
-    pub fn raise_callback_error(&self, _py: Python<'_>) -> PyResult<()> {
+    pub fn raise_callback_error(&self) -> PyResult<()> {
         self.callback.raise()
     }
 }

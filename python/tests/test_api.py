@@ -3,6 +3,7 @@ same simulation, the documented exceptions with the CLI's located messages."""
 
 import json
 import math
+import os
 
 import numpy as np
 import pandas as pd
@@ -53,22 +54,72 @@ def test_fit_from_python_equals_the_cli_fit(ds, cli_fit, tmp_path):
     out = tmp_path / "py.json"
     py = vanefit.fit(ds, starts=3, seed=5, max_iters=150, uncertainty="curvature",
                      out=out, progress=lambda done, total, best: calls.append((done, total, best)))
+    assert isinstance(py, vanefit.Fit) and py.path == str(out)
     cli = json.loads(cli_fit.read_text())
+    doc = py.document
     for k in ("parameters", "cost", "statistics", "covariance", "starts", "seed", "conditions"):
-        assert py[k] == cli[k], k
-    assert json.loads(out.read_text())["parameters"] == cli["parameters"]
-    assert [c[0] for c in calls] == [1, 2, 3] and all(c[1] == 3 for c in calls)
-    bests = [c[2] for c in calls]
+        assert doc[k] == cli[k], k
+    # What Python wrote is the fit's own text, and it reads back as the same fit.
+    assert out.read_text() == py.to_json()
+    assert vanefit.Fit.read(out).document == doc
+    # The run begins (0 done, no best yet), then every start once.
+    assert [c[0] for c in calls] == [0, 1, 2, 3] and all(c[1] == 3 for c in calls)
+    assert calls[0][2] == math.inf
+    bests = [c[2] for c in calls[1:]]
     assert bests == sorted(bests, reverse=True)
-    starts = pd.DataFrame(py["start_results"])
+    starts = py.starts
     assert len(starts) == 3 and set(starts["ending"]) <= {"converged", "budget", "stopped_early", "joined"}
-    assert min(starts["cost"]) == pytest.approx(py["statistics"]["best_start_cost"], rel=1e-12)
+    assert set(py.estimated) <= set(starts.columns)
+    assert starts["cost"].min() == pytest.approx(py.statistics.best_start_cost, rel=1e-12)
+
+
+def test_fit_file_reads_and_writes_byte_for_byte(cli_fit, tmp_path):
+    """A fit file the command line wrote: read, shown as tables, written back unchanged."""
+    f = vanefit.Fit.read(cli_fit)
+    assert f.to_json() == cli_fit.read_text()
+    f.write(tmp_path / "copy.json")
+    assert (tmp_path / "copy.json").read_bytes() == cli_fit.read_bytes()
+    doc = json.loads(cli_fit.read_text())
+    p = f.parameters
+    assert list(p.index) == list(doc["parameters"])
+    assert list(p.columns) == ["value", "lower", "upper", "unit", "estimated", "identifiable", "meaning"]
+    for name, entry in doc["parameters"].items():
+        assert p.loc[name, "value"] == entry["value"] and p.loc[name, "unit"] == entry["unit"]
+        if entry.get("ci95"):
+            assert [p.loc[name, "lower"], p.loc[name, "upper"]] == entry["ci95"]
+        else:
+            assert np.isnan(p.loc[name, "lower"])
+    assert p.loc["c_in1", "meaning"] == "inlet port"
+    s = f.statistics
+    assert s.chi2 == doc["statistics"]["chi2"] and s.dof == doc["statistics"]["dof"]
+    assert s.cost == doc["cost"] and s.noise_ratio == doc["statistics"]["noise_ratio"]
+    assert f"chi2 {s.chi2:.1f}" in str(s)
+    assert f.starts.empty and not f.has_starts
+    # A file that is no fit file is refused with its name and line.
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "vanefit.fit/1", "parameters": 3}')
+    with pytest.raises(vanefit.DataError, match="bad.json"):
+        vanefit.Fit.read(bad)
+    with pytest.raises(vanefit.DataError):
+        vanefit.Fit.from_json('{"format": "vanefit.fit/2"}')
+
+
+def test_profiles_are_dataframes(profile_fit):
+    f = vanefit.Fit.read(profile_fit)
+    doc = json.loads(profile_fit.read_text())
+    assert set(f.profiles) == set(doc["profiles"]) == set(f.estimated)
+    for name, table in f.profiles.items():
+        assert list(table.columns) == ["value", "delta_chi2"]
+        np.testing.assert_array_equal(table["value"], doc["profiles"][name]["value"])
+        assert table["delta_chi2"].min() == 0.0
+    cov = f.covariance
+    assert cov is None or list(cov.index) == doc["covariance"]["parameters"]
 
 
 def test_thread_count_does_not_change_the_fit(ds):
     one = vanefit.fit(ds, starts=2, seed=9, max_iters=80, uncertainty="none", threads=1)
     two = vanefit.fit(ds, starts=2, seed=9, max_iters=80, uncertainty="none", threads=2)
-    assert one["parameters"] == two["parameters"] and one["cost"] == two["cost"]
+    assert one.document["parameters"] == two.document["parameters"] and one.cost == two.cost
 
 
 def test_simulate_equals_the_cli_simulation(ds, cli_fit, tmp_path):
@@ -87,6 +138,8 @@ def test_simulate_equals_the_cli_simulation(ds, cli_fit, tmp_path):
 def test_likelihood_is_the_fits_own(ds, cli_fit):
     doc = json.loads(cli_fit.read_text())
     lik = vanefit.likelihood(ds, cli_fit)
+    # The same from the Fit object in memory.
+    assert vanefit.likelihood(ds, vanefit.Fit.read(cli_fit)).chi2_min == lik.chi2_min
     est = [n for n, p in doc["parameters"].items() if p["estimated"]]
     assert lik.names == est
     x = lik.x_hat
@@ -155,7 +208,7 @@ def test_bad_parameters_raise_parameter_error(ds, tmp_path):
         vanefit.read_fit(tmp_path / "broken.json")
 
 
-def test_a_failing_progress_callback_is_raised_after_the_fit(ds):
+def test_a_failing_progress_callback_stops_the_fit_and_is_raised(ds):
     calls = []
 
     def progress(done, total, best):
@@ -164,44 +217,189 @@ def test_a_failing_progress_callback_is_raised_after_the_fit(ds):
 
     with pytest.raises(RuntimeError, match="callback failed"):
         vanefit.fit(ds, starts=2, seed=3, max_iters=40, uncertainty="none", progress=progress)
-    assert calls == [1]
+    assert calls == [0]  # called once, when the run began; never again
+    with pytest.raises(vanefit.ParameterError, match="progress"):
+        vanefit.fit(ds, starts=1, progress="yes")
 
 
-def test_predict_control_and_synth_tables(cli_fit, tmp_path):
-    p = vanefit.predict(cli_fit, pressures=[4, 6.3], out=tmp_path / "pred")
-    cat = pd.DataFrame(p["catalogue"])
-    assert len(cat) == 2 and cat["free_speed_rpm"].iloc[1] > cat["free_speed_rpm"].iloc[0]
-    assert {"factors", "curves"} <= set(p)
-    with pytest.raises(vanefit.ParameterError, match="unit"):
-        vanefit.predict(cli_fit, unit="furlongs")
-    d = vanefit.control("design", params=cli_fit, pm_deg=55)
-    assert abs(d["design"]["designed"]["phase_margin_deg"] - 55) < 0.5
-    assert len(d["design_step"]["speed_rpm"]) > 100
-    with pytest.raises(vanefit.ParameterError, match="--kp"):
-        vanefit.control("bode", kp=1.0)
-    new = vanefit.synth(tmp_path / "synth", params=cli_fit, noise=0.0, seed=4)
-    assert [e["kind"] for e in new.experiments] == ["datasheet", "pressure_ramp", "outlet_throttle"]
-    # Noise-free data of the fitted motor: the fit's parameters simulate what was written.
-    sim, rec = vanefit.simulate(new, cli_fit)["ramp.csv"], new.recording("ramp.csv")
-    for c in ("speed_rpm", "flow1_g_s"):
-        np.testing.assert_allclose(sim[c], rec[c], rtol=1e-4, atol=1e-3 * np.abs(rec[c]).max())
+def test_progress_true_draws_a_tqdm_bar(ds, capsys):
+    vanefit.fit(ds, starts=2, seed=3, max_iters=40, uncertainty="none", progress=True)
+    err = capsys.readouterr().err
+    assert "fit" in err and "2/2" in err, err
 
 
-def test_fit_documents_in_memory_are_parameters(ds, cli_fit, tmp_path):
-    """A fit read into memory (or returned without a file) simulates and costs like its file,
-    and the temporary file it goes through is removed."""
-    import glob
+def _starts_recorded(out):
+    """Finished starts in a fit's starts file (its first line is the run's header)."""
+    side = out.with_suffix(".starts.jsonl")
+    return len(side.read_text().splitlines()) - 1
+
+
+def test_keyboard_interrupt_stops_the_fit_and_it_resumes(ds, tmp_path):
+    """Ctrl-C (here: KeyboardInterrupt raised by the callback once a start has finished)
+    stops the fit at its next round; the finished starts are in the starts file and the
+    fit resumes from them to the fit an uninterrupted run makes."""
+    out = tmp_path / "fit.json"
+    opts = dict(starts=6, seed=11, max_iters=600, uncertainty="none", threads=1)
+
+    def interrupt(done, total, best):
+        if done >= 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        vanefit.fit(ds, out=out, progress=interrupt, **opts)
+    assert not out.exists()
+    done = _starts_recorded(out)
+    assert 1 <= done < 6
+    seen = []
+    resumed = vanefit.fit(ds, out=out, resume=True, progress=lambda d, t, b: seen.append(d), **opts)
+    assert seen[0] == done and seen[-1] == 6
+    whole = vanefit.fit(ds, **opts)
+    assert resumed.document["parameters"] == whole.document["parameters"]
+    with pytest.raises(vanefit.ParameterError, match="resume"):
+        vanefit.fit(ds, resume=True, **opts)
+
+
+SIGINT_CHILD = """
+import sys, vanefit
+ds = vanefit.load_dataset(sys.argv[1])
+def progress(done, total, best):
+    if done >= 1:
+        open(sys.argv[3], "w").close()
+try:
+    vanefit.fit(ds, starts=6, seed=2, max_iters=3000, uncertainty="none", threads=1,
+                out=sys.argv[2], progress=progress)
+except KeyboardInterrupt:
+    print("interrupted")
+    sys.exit(0)
+print("finished")
+"""
+
+
+def test_ctrl_c_interrupts_a_running_fit(tmp_path):
+    """A real SIGINT to a process in the middle of a fit (the GIL released, the work on
+    vanefit's threads) raises KeyboardInterrupt within a round and leaves the finished
+    starts on disk."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out, marker = tmp_path / "fit.json", tmp_path / "one-start-done"
+    child = subprocess.Popen([sys.executable, "-c", SIGINT_CHILD, str(DATASET), str(out), str(marker)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.time()
+    while not marker.exists() and child.poll() is None and time.time() - t0 < 120:
+        time.sleep(0.05)
+    assert marker.exists(), child.communicate()
+    child.send_signal(signal.SIGINT)
+    t_sent = time.time()
+    stdout, stderr = child.communicate(timeout=120)
+    assert child.returncode == 0 and stdout.strip() == "interrupted", (stdout, stderr)
+    assert time.time() - t_sent < 30
+    assert not out.exists() and _starts_recorded(out) >= 1
+
+
+def _tempdir_entries():
     import tempfile
 
-    doc = vanefit.read_fit(cli_fit)
-    before = set(glob.glob(f"{tempfile.gettempdir()}/vanefit-fit-*"))
-    assert vanefit.cost(ds, doc)["cost"] == vanefit.cost(ds, cli_fit)["cost"]
-    a, b = vanefit.simulate(ds, doc), vanefit.simulate(ds, cli_fit)
+    return set(os.listdir(tempfile.gettempdir()))
+
+
+def test_predict_control_and_synth_tables(cli_fit, tmp_path, capfd):
+    before = _tempdir_entries()
+    fit = vanefit.Fit.read(cli_fit)
+    p = vanefit.predict(fit, pressures=[4, 6.3])
+    assert isinstance(p, vanefit.Prediction)
+    cat = p.catalogue
+    assert len(cat) == 2 and cat["free_speed_rpm"].iloc[1] > cat["free_speed_rpm"].iloc[0]
+    assert len(p.factors) == 2 and len(p.curves) > 2 and p.notes and p.unit == "bar_g"
+    # With out=, the command's files, and the tables are the files' own.
+    q = vanefit.predict(cli_fit, pressures=[4, 6.3], out=tmp_path / "pred")
+    for name in ("catalogue", "factors", "curves"):
+        assert (tmp_path / "pred" / f"{name}.csv").read_text() == q.csv(name) == p.csv(name)
+    assert (tmp_path / "pred" / "predict.md").is_file()
+    with pytest.raises(vanefit.ParameterError, match="unit"):
+        vanefit.predict(fit, unit="furlongs")
+    d = vanefit.control("design", params=fit, pm_deg=55)
+    assert isinstance(d, vanefit.StudyResult)
+    assert abs(d["design"]["designed"]["phase_margin_deg"] - 55) < 0.5
+    assert len(d["design_step"]["speed_rpm"]) > 100
+    assert len(d.tables["design_step"]) == len(d["design_step"]["speed_rpm"])
+    with pytest.raises(vanefit.ParameterError, match="kp"):
+        vanefit.control("bode", kp=1.0)
+    new = vanefit.synth(tmp_path / "synth", params=fit, noise=0.0, seed=4)
+    assert [e["kind"] for e in new.experiments] == ["datasheet", "pressure_ramp", "outlet_throttle"]
+    # Noise-free data of the fitted motor: the fit's parameters simulate what was written.
+    sim, rec = vanefit.simulate(new, fit)["ramp.csv"], new.recording("ramp.csv")
+    for c in ("speed_rpm", "flow1_g_s"):
+        np.testing.assert_allclose(sim[c], rec[c], rtol=1e-4, atol=1e-3 * np.abs(rec[c]).max())
+    # Nothing printed, nothing left in the temporary folder.
+    captured = capfd.readouterr()
+    assert captured.out == "", captured.out
+    assert _tempdir_entries() == before
+
+
+def test_fits_in_memory_are_parameters(ds, cli_fit):
+    """A Fit held in memory simulates and costs like its file, without temporary files."""
+    before = _tempdir_entries()
+    fit = vanefit.Fit.from_json(cli_fit.read_text())
+    assert fit.path is None
+    assert vanefit.cost(ds, fit)["cost"] == vanefit.cost(ds, cli_fit)["cost"]
+    a, b = vanefit.simulate(ds, fit), vanefit.simulate(ds, cli_fit)
     for file in a:
         for col in a[file]:
             np.testing.assert_array_equal(a[file][col], b[file][col])
-    assert set(glob.glob(f"{tempfile.gettempdir()}/vanefit-fit-*")) == before
+    assert _tempdir_entries() == before
     # A malformed document is refused like a malformed file.
-    bad = dict(doc, parameters={"c_in1": {"value": "x"}})
+    bad = dict(fit.document, parameters={"c_in1": {"value": "x"}})
     with pytest.raises(vanefit.DataError, match="c_in1"):
         vanefit.cost(ds, bad)
+
+
+@pytest.mark.parametrize("study", sorted(vanefit.CONTROL_STUDIES))
+def test_control_options_are_the_commands(study):
+    """Every option of `vanefit control <study>` (but --params, --out) is an option of
+    vanefit.control with the same default, and no other."""
+    import re
+
+    text = run_cli("control", study, "--help").stdout
+    cli, current = {}, None
+    for line in text.splitlines():
+        m = re.match(r"\s+--([a-z0-9-]+)(?: <[A-Z0-9_]+>)?", line)
+        if m:
+            current = m.group(1).replace("-", "_")
+            cli[current] = None
+        d = re.search(r"\[default: ([^\]]+)\]", line)
+        if d and current:
+            cli[current] = d.group(1)
+    for name in ("params", "out", "help"):
+        cli.pop(name, None)
+    ours = vanefit.CONTROL_STUDIES[study]
+    assert set(cli) == set(ours)
+    for name, default in cli.items():
+        if default is None:
+            assert ours[name] is None, name
+        elif isinstance(ours[name], str):
+            assert ours[name] == default, name
+        else:
+            assert ours[name] == pytest.approx(float(default), rel=1e-12), name
+
+
+def test_control_files_and_tables_are_the_commands(tmp_path):
+    """A study run from Python writes the command's files byte for byte, and its tables in
+    memory are those files' numbers."""
+    r = vanefit.control("bode", out=tmp_path / "py", points=40, p_mean_mpa=0.4)
+    run_cli("control", "bode", "--points", 40, "--p-mean-mpa", 0.4, "--out", tmp_path / "cli")
+    py_files = sorted(p.name for p in (tmp_path / "py").iterdir() if not p.name.startswith("."))
+    cli_files = sorted(p.name for p in (tmp_path / "cli").iterdir() if not p.name.startswith("."))
+    assert py_files == cli_files and any(n.endswith(".svg") for n in py_files)
+    for name in cli_files:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    table = pd.read_csv(tmp_path / "cli" / "bode.csv")
+    assert list(r.tables["bode"].columns) == list(table.columns)
+    np.testing.assert_array_equal(r.tables["bode"].to_numpy(), table.to_numpy())
+    assert r["bode_fit"] == json.loads((tmp_path / "cli" / "bode_fit.json").read_text())
+    with pytest.raises(vanefit.ParameterError, match="pm_deg"):
+        vanefit.control("step", pm_deg=50)
+    with pytest.raises(vanefit.ParameterError, match="study"):
+        vanefit.control("nope")

@@ -34,6 +34,29 @@ def test_notebook_is_committed_without_outputs(path):
     assert "widgets" not in nb.get("metadata", {})
 
 
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_notebook_uses_only_the_public_api(path):
+    """No `vanefit._core`, no private name (`x._y`) of anything: what a notebook shows a user
+    can do, a user can do."""
+    import ast
+
+    nb = json.loads(path.read_text())
+    for i, cell in enumerate(nb["cells"]):
+        if cell["cell_type"] != "code":
+            continue
+        tree = ast.parse("".join(cell["source"]))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute):
+                private = node.attr.startswith("_") and not (
+                    node.attr.startswith("__") and node.attr.endswith("__"))
+                assert not private, f"{path.name} cell {i}: .{node.attr}"
+            if isinstance(node, ast.ImportFrom):
+                assert not (node.module or "").startswith("vanefit._"), f"{path.name} cell {i}"
+                assert all(not a.name.startswith("_") for a in node.names), f"{path.name} cell {i}"
+            if isinstance(node, ast.Import):
+                assert all(not a.name.startswith("vanefit._") for a in node.names), f"{path.name} cell {i}"
+
+
 def _kernel_name() -> str:
     """The `python3` kernel of this interpreter, installed into its prefix if missing."""
     from jupyter_client.kernelspec import KernelSpecManager, NoSuchKernel
@@ -113,7 +136,9 @@ def test_waterfall_parameters_profiles(plt, tiny_fit):
     assert ax.get_yscale() == "log"
     # The sorted costs, every start once.
     ys = np.concatenate([l.get_ydata() for l in ax.lines if l.get_linestyle() == "None"])
-    assert sorted(ys) == pytest.approx(sorted(s["cost"] for s in tiny_fit["start_results"]))
+    assert sorted(ys) == pytest.approx(sorted(tiny_fit.starts["cost"]))
+    # The Fit's own figures are the module's.
+    assert len(tiny_fit.plot.waterfall().axes[0].lines) == len(ax.lines)
 
     fig = plot.parameters(tiny_fit)
     assert isinstance(fig, Figure)
@@ -125,7 +150,7 @@ def test_waterfall_parameters_profiles(plt, tiny_fit):
 
     fig = plot.profiles(tiny_fit)
     assert isinstance(fig, Figure) and len(fig.axes) == 2
-    thr = tiny_fit["statistics"]["profile_threshold"]
+    thr = tiny_fit.statistics.profile_threshold
     for ax, name in zip(fig.axes, ["c_in1", "t_coulomb"]):
         assert ax.get_title().startswith(name)
         assert any(np.allclose(l.get_ydata(), thr) for l in ax.lines)  # the threshold
@@ -137,9 +162,9 @@ def test_plots_refuse_results_without_what_they_show(plt, tiny_fit):
     from vanefit import plot
 
     with pytest.raises(ValueError, match="start_results"):
-        plot.waterfall({k: v for k, v in tiny_fit.items() if k != "start_results"})
+        vanefit.Fit.read(tiny_fit.path).plot.waterfall()
     with pytest.raises(ValueError, match="profile"):
-        plot.profiles({**tiny_fit, "profiles": {}})
+        plot.profiles({**tiny_fit.document, "profiles": {}})
 
 
 def test_overlay_and_residuals(plt, ds, tiny_fit):

@@ -108,7 +108,7 @@ def test_export_errors_name_the_file_or_option(tmp_path, cli_fit):
     bad.write_text('{"format": "vanefit.fit/1", "parameters": {"c_in1": {"value": "x"}}}\n')
     p = run_cli("export-petab", bad, "--dataset", DATASET, "--out", tmp_path / "y", check=False)
     assert p.returncode == 1 and str(bad) in p.stderr and ":1:" in p.stderr, p.stderr
-    with pytest.raises(vanefit.DataError, match="--dataset"):
+    with pytest.raises(vanefit.DataError, match="dataset="):
         here = os.getcwd()
         os.chdir(tmp_path)
         try:

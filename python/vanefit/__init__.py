@@ -1,10 +1,18 @@
 """vanefit from Python: pneumatic vane motors simulated, fitted, diagnosed and predicted.
 
-Every function runs the same Rust code as the ``vanefit`` command line, so a seed gives the
-same fit in both and a bad file gets the same located message. Results are plain Python
-objects: dicts whose tables are dicts of numpy arrays (``pandas.DataFrame(table)`` reads
-them directly). Values are SI unless a name says otherwise (column names carry their unit,
-as in the recordings: ``speed_rpm``, ``flow1_g_s``, ``p_port1_mpa``).
+Every function calls the same Rust library functions as the ``vanefit`` command line (never
+the command line itself), so a seed gives the same fit in both and a bad file gets the same
+located message. Results are objects (:class:`Fit`, :class:`Diagnosis`, :class:`Prediction`,
+:class:`StudyResult`) whose tables are pandas DataFrames and whose ``.plot`` draws them;
+they read and write the files the command line writes, byte for byte. Values are SI unless
+a name says otherwise (column names carry their unit, as in the recordings: ``speed_rpm``,
+``flow1_g_s``, ``p_port1_mpa``). Nothing is printed and nothing is written unless ``out=``
+names where.
+
+Long calls (:func:`fit`, :func:`diagnose`, :func:`predict`) release the GIL and report
+progress to ``progress=`` (a callable, or ``True`` for a tqdm bar). Ctrl-C stops a fit at
+its next round of starts and raises ``KeyboardInterrupt``; with ``out=`` the finished starts
+are in its starts file, and ``fit(..., out=same, resume=True)`` continues from them.
 
 Errors: :class:`DataError` (a dataset, recording or fit file that cannot be read or used;
 the message names file, line and column), :class:`ParameterError` (a bad option, parameter
@@ -12,19 +20,18 @@ name or value), both subclasses of :class:`VanefitError`.
 
 Example::
 
-    import vanefit, pandas as pd
+    import vanefit
     ds = vanefit.load_dataset("measurements/ar034-synthetic")
-    fit = vanefit.fit(ds, starts=16, seed=1, progress=lambda done, total, best: None)
-    pd.DataFrame(vanefit.simulate(ds, fit)["ramp.csv"])
+    fit = vanefit.fit(ds, starts=16, seed=1, progress=True)
+    fit.parameters                      # DataFrame: value, lower, upper, unit, ...
+    fit.plot.waterfall()
+    vanefit.predict(fit, pressures=[4, 6.3]).catalogue
 """
 
 from __future__ import annotations
 
-import contextlib
-import csv
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -32,9 +39,16 @@ import numpy as np
 
 from . import _core
 from ._core import DataError, ParameterError, VanefitError, __version__
+from .progress import Progress, fit_progress, diagnose_progress
+from .results import Diagnosis, Fit, FitStatistics, Prediction, StudyResult
 
 __all__ = [
     "Dataset",
+    "Fit",
+    "FitStatistics",
+    "Diagnosis",
+    "Prediction",
+    "StudyResult",
     "Likelihood",
     "DataError",
     "ParameterError",
@@ -50,15 +64,15 @@ __all__ = [
     "diagnose",
     "predict",
     "control",
+    "CONTROL_STUDIES",
     "synth",
     "__version__",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
-#: Parameters: ``None`` (the dataset's nominal motor), a fit file's path, a fit document
-#: (a result of :func:`fit`, :func:`read_fit`, or a diagnosis' ``extended_fit``), or a dict
-#: ``{name: SI value}`` overriding the nominal motor.
-Params = Union[None, PathLike, Mapping[str, Any]]
+#: Parameters: ``None`` (the dataset's nominal motor), a :class:`Fit`, a fit file's path,
+#: or a dict ``{name: SI value}`` overriding the nominal motor.
+Params = Union[None, Fit, PathLike, Mapping[str, Any]]
 Table = Dict[str, np.ndarray]
 
 
@@ -85,7 +99,7 @@ class Dataset:
 
     def recording(self, file: str) -> Table:
         """A recording's columns as written (name with unit → values in that unit; an empty
-        cell is NaN)."""
+        cell is NaN); ``pandas.DataFrame(ds.recording(file))`` is the table."""
         return {name: np.asarray(v, dtype=float) for name, v in self._core.recording(file)}
 
     def __repr__(self) -> str:
@@ -103,61 +117,45 @@ def default_parameters(ds: Dataset) -> Dict[str, float]:
     return dict(_core.nominal_parameters(ds._core))
 
 
-def read_fit(path: PathLike) -> Dict[str, Any]:
-    """A fit file (``vanefit.fit/1``), read and checked, as a dict."""
-    return json.loads(_core.read_fit(os.fspath(path)))
+def read_fit(path: PathLike) -> Fit:
+    """A fit file (``vanefit.fit/1``), read and checked: :meth:`Fit.read`."""
+    return Fit.read(path)
 
 
-_DOCUMENT_KEYS = ("start_results", "out", "summary")
-
-
-class _FitDocument(str):
-    """The path of a fit document written to a temporary file for one call."""
-
-
-def _fit_document_file(doc: Mapping[str, Any]) -> str:
-    """Writes a fit document (without the Python-only keys) to a temporary file; the
-    caller removes it (:func:`_params`)."""
-    clean = {k: v for k, v in doc.items() if k not in _DOCUMENT_KEYS}
-    fd, path = tempfile.mkstemp(prefix="vanefit-fit-", suffix=".json")
-    with os.fdopen(fd, "w") as f:
-        json.dump(clean, f)
-    return _FitDocument(path)
-
-
-@contextlib.contextmanager
-def _params(params: Params):
-    """(fit file path or None, overrides) for the Rust side, for the duration of a call."""
-    path, overrides = _split_params(params)
-    try:
-        yield path, overrides
-    finally:
-        if isinstance(path, _FitDocument):
-            os.remove(path)
-
-
-def _split_params(params: Params) -> Tuple[Optional[str], List[Tuple[str, float]]]:
-    """(fit file path or None, overrides) for the Rust side."""
-    if params is None:
-        return None, []
+def _fit_source(params: Union[Fit, PathLike, Mapping[str, Any]]) -> Tuple[str, Optional[str]]:
+    """(path, text) of a fit for the Rust side: a file is read there; a Fit in memory goes
+    as its text (its path, if any, names it in messages). No temporary files."""
+    if isinstance(params, Fit):
+        return params.path or "<fit>", params.to_json()
     if isinstance(params, (str, os.PathLike)):
-        return os.fspath(params), []
+        return os.fspath(params), None
     if isinstance(params, Mapping):
-        if params.get("out") is not None and isinstance(params.get("parameters"), Mapping):
-            return os.fspath(params["out"]), []
+        return "<fit>", json.dumps(params)
+    raise ParameterError(
+        f"fit: expected a vanefit.Fit or a fit file's path, got {type(params).__name__}"
+    )
+
+
+def _split_params(params: Params) -> Tuple[Optional[str], Optional[str], List[Tuple[str, float]]]:
+    """(fit path or None, fit text or None, overrides) for the Rust side."""
+    if params is None:
+        return None, None, []
+    if isinstance(params, (Fit, str, os.PathLike)):
+        return (*_fit_source(params), [])
+    if isinstance(params, Mapping):
         if params.get("format") == "vanefit.fit/1" or isinstance(params.get("parameters"), Mapping):
-            # A fit document in memory (read_fit, fit without out, a diagnosis'
-            # extended_fit): checked by the same reader as a file.
-            return _fit_document_file(params), []
+            # A fit document as a dict: checked by the same reader as a file.
+            return (*_fit_source(params), [])
         overrides = []
         for name, v in params.items():
             try:
                 overrides.append((str(name), float(v)))
             except (TypeError, ValueError):
                 raise ParameterError(f"parameter {name!r}: {v!r} is not a number") from None
-        return None, overrides
+        return None, None, overrides
     raise ParameterError(
-        f"params: expected None, a fit file path or a dict of values, got {type(params).__name__}"
+        "params: expected None, a vanefit.Fit, a fit file path or a dict of values, "
+        f"got {type(params).__name__}"
     )
 
 
@@ -165,20 +163,20 @@ def simulate(ds: Dataset, params: Params = None) -> Dict[str, Table]:
     """Every experiment simulated, by recording file: the recording's input columns as
     recorded, then each simulated output under the recording's column name and unit, same
     rows (what ``vanefit simulate`` writes, at full precision)."""
-    with _params(params) as (fit_path, overrides):
-        tables = _core.simulate(ds._core, fit_path, overrides)
+    path, text, overrides = _split_params(params)
+    tables = _core.simulate(ds._core, path, text, overrides)
     return {file: {name: np.asarray(v, dtype=float) for name, v in cols} for file, cols in tables}
 
 
 def cost(ds: Dataset, params: Params = None) -> Dict[str, Any]:
-    """The cost J that :func:`fit`'s multi-start minimises (SPEC §2), with each channel's
-    term: ``{"cost", "chi2", "n_points", "failed", "channels": [...]}``. Its ``chi2`` is the
-    cost's own: the simulation against each channel's reference polynomial, in units of
-    the polynomial's residual σ. It is not the fit file's ``statistics.chi2`` (the recorded
-    rows against the data's noise) nor ``likelihood_chi2`` (what the estimate maximises;
-    see :class:`Likelihood`)."""
-    with _params(params) as (fit_path, overrides):
-        return json.loads(_core.cost(ds._core, fit_path, overrides))
+    """The cost J that :func:`fit`'s multi-start minimises (docs/model.md), with each
+    channel's term: ``{"cost", "chi2", "n_points", "failed", "channels": [...]}``. Its
+    ``chi2`` is the cost's own: the simulation against each channel's reference polynomial,
+    in units of the polynomial's residual σ. It is not the fit's χ²
+    (:attr:`FitStatistics.chi2`: the recorded rows against the data's noise) nor
+    ``likelihood_chi2`` (what the estimate maximises; see :class:`Likelihood`)."""
+    path, text, overrides = _split_params(params)
+    return json.loads(_core.cost(ds._core, path, text, overrides))
 
 
 def fit(
@@ -191,33 +189,41 @@ def fit(
     uncertainty: str = "profile",
     max_iters: int = 3000,
     out: Optional[PathLike] = None,
-    progress: Optional[Callable[[int, int, float], Any]] = None,
-) -> Dict[str, Any]:
+    resume: bool = False,
+    progress: Progress = None,
+) -> Fit:
     """Fits the dataset exactly as ``vanefit fit`` does (multi-start Nelder–Mead on J, the
     estimate at the likelihood's maximum, 95 % intervals), with the GIL released.
 
-    ``progress(done, total, best_cost)`` is called after every start. ``out``: also write
-    the fit file and its starts file there, as the command line does.
+    ``progress``: ``True`` for a tqdm bar over the starts, or a callable
+    ``progress(done, total, best_cost)`` called when the run begins (``done`` = starts
+    already finished, ``best_cost`` = inf) and after every start; an exception it raises
+    stops the fit at its next round and is raised. Ctrl-C does the same with
+    ``KeyboardInterrupt``.
 
-    Returns the fit file as a dict (``parameters``, ``statistics``, ``covariance``,
-    ``profiles``, ...) plus ``start_results`` (every start: ``index``, ``cost``, ``ending``,
-    ``parameters``) and ``out``."""
-    doc = json.loads(
-        _core.fit(
+    ``out``: also write the fit file there (byte for byte what ``vanefit fit --no-plots``
+    writes) and record every finished start in ``<out>.starts.jsonl``; ``resume=True``
+    continues an interrupted fit from that file.
+
+    Returns a :class:`Fit` (``.parameters``, ``.starts``, ``.statistics``, ``.profiles``,
+    ``.plot``)."""
+    if isinstance(ds, (str, os.PathLike)):
+        ds = load_dataset(ds)
+    with fit_progress(progress) as callback:
+        text, starts_json = _core.fit(
             ds.path,
             int(starts),
             int(seed),
             None if threads is None else int(threads),
-            ",".join(effects or []),
-            None if estimate is None else ",".join(estimate),
+            [str(e) for e in effects or []],
+            None if estimate is None else [str(n) for n in estimate],
             uncertainty,
             int(max_iters),
             None if out is None else os.fspath(out),
-            progress,
+            bool(resume),
+            callback,
         )
-    )
-    doc["out"] = None if out is None else os.fspath(out)
-    return doc
+    return Fit(text, starts=json.loads(starts_json), path=out)
 
 
 class Likelihood:
@@ -227,8 +233,9 @@ class Likelihood:
     by ``threshold``. Calling the object gives χ² or, where ``x`` is invalid or the
     simulation fails, a large finite penalty (for optimizers)."""
 
-    def __init__(self, ds: Dataset, fit: PathLike):
-        self._core = _core.PyLikelihood(ds._core, os.fspath(fit))
+    def __init__(self, ds: Dataset, fit: Union[Fit, PathLike]):
+        path, text = _fit_source(fit)
+        self._core = _core.PyLikelihood(ds._core, path, text)
 
     @property
     def names(self) -> List[str]:
@@ -291,27 +298,51 @@ class Likelihood:
         return b
 
 
-def likelihood(ds: Dataset, fit: PathLike) -> Likelihood:
-    """The :class:`Likelihood` of the fit file ``fit`` on ``ds``."""
+def likelihood(ds: Dataset, fit: Union[Fit, PathLike]) -> Likelihood:
+    """The :class:`Likelihood` of ``fit`` (a :class:`Fit` or a fit file's path) on ``ds``."""
     return Likelihood(ds, fit)
 
 
+def _find_dataset(fit_path: Optional[str], name: str) -> str:
+    """``measurements/<name>`` beside the fit file's folder, then in the current folder."""
+    tried = []
+    if fit_path and fit_path != "<fit>":
+        tried.append(Path(fit_path).resolve().parent.parent / "measurements" / name)
+    tried.append(Path("measurements") / name)
+    for p in tried:
+        if (p / "rig.toml").is_file():
+            return os.fspath(p)
+    raise DataError(
+        f"{fit_path or 'the fit'}: dataset {name!r} not found at "
+        f"{', '.join(map(str, tried))}; name it with dataset="
+    )
+
+
 def export_petab(
-    fit: PathLike, out: PathLike, dataset: Optional[PathLike] = None
+    fit: Union[Fit, PathLike], out: PathLike, dataset: Optional[Union[Dataset, PathLike]] = None
 ) -> Dict[str, Any]:
     """Writes the fit as a PEtab v1 problem into ``out`` (as ``vanefit export-petab``):
     ``parameters.tsv``, ``observables.tsv``, ``measurements.tsv``, ``conditions.tsv``,
     ``model.xml`` (SBML declaring the model's symbols; the dynamics are vanefit's),
-    ``problem.yaml`` and ``vanefit_export.json``. ``dataset``: the fit's dataset folder
-    (default: ``measurements/<name>`` beside the fit file's folder). Returns
-    ``vanefit_export.json`` as a dict (χ² of the tables at the fit, split into the rows and
-    the nuisance priors) with ``yaml``, the problem file's path. See :mod:`vanefit.petab` to
-    evaluate the tables with vanefit's simulation."""
-    args = ["export-petab", os.fspath(fit), "--out", os.fspath(out)]
-    if dataset is not None:
-        args += ["--dataset", os.fspath(dataset)]
-    _core.run_command(args, 1)
-    summary = json.loads((Path(out) / "vanefit_export.json").read_text())
+    ``problem.yaml`` and ``vanefit_export.json``. ``dataset``: the fit's dataset (default:
+    ``measurements/<name>`` beside the fit file's folder, or in the current folder).
+    Returns the summary (``measurements``, ``observables``, ``conditions``, ``chi2_rows``,
+    ``chi2_priors``, ``chi2``) with ``yaml``, the problem file's path. See
+    :mod:`vanefit.petab` to evaluate the tables with vanefit's simulation."""
+    path, text = _fit_source(fit)
+    if isinstance(dataset, Dataset):
+        dataset = dataset.path
+    if dataset is None:
+        name = (Fit(text) if text is not None else Fit.read(path)).dataset
+        dataset = _find_dataset(path, name)
+    if text is not None and path == "<fit>":
+        # A fit held in memory goes into the export beside its tables, so that
+        # vanefit_export.json names a file that vanefit.petab can rebuild it from.
+        Path(out).mkdir(parents=True, exist_ok=True)
+        path, text = os.fspath(Path(out) / "fit.json"), None
+        Path(path).write_text(fit.to_json() if isinstance(fit, Fit) else json.dumps(fit))
+    summary = json.loads(_core.export_petab(path, text, os.fspath(dataset), os.fspath(out)))
+    summary["chi2"] = summary["chi2_rows"] + summary["chi2_priors"]
     summary["yaml"] = os.fspath(Path(out) / "problem.yaml")
     return summary
 
@@ -322,137 +353,155 @@ def diagnose(
     seed: int = 1,
     threads: Optional[int] = None,
     out: Optional[PathLike] = None,
-    progress: Optional[Callable[[float, str], Any]] = None,
-) -> Dict[str, Any]:
+    progress: Progress = None,
+) -> Diagnosis:
     """Diagnoses the dataset as ``vanefit diagnose`` does: where the base model misses,
-    which missing physics explains it, the refit. Returns the diagnosis (``diagnosis.json``)
-    as a dict plus ``summary`` (the printed paragraph) and ``extended_fit`` (the chosen
-    model as a fit file). ``progress(elapsed_s, message)`` is called at every phase; ``out``
-    also writes the report, its plots and the JSON there."""
-    return json.loads(
-        _core.diagnose(
+    which missing physics explains it, the refit. Returns a :class:`Diagnosis`
+    (``.locations``, ``.candidates``, ``.selected``, ``.extended_fit``, ``.summary``,
+    ``.plot``). ``progress``: ``True`` for a tqdm line of the phases, or a callable
+    ``progress(elapsed_s, message)`` called at every phase; ``out`` also writes the report,
+    its plots and the JSON there. The diagnosis runs with the GIL released; Ctrl-C is
+    raised when it returns."""
+    if isinstance(ds, (str, os.PathLike)):
+        ds = load_dataset(ds)
+    with diagnose_progress(progress) as callback:
+        text, extended, summary = _core.diagnose(
             ds._core,
             int(starts),
             int(seed),
             None if threads is None else int(threads),
             None if out is None else os.fspath(out),
-            progress,
+            callback,
         )
-    )
-
-
-def _read_table(path: Path) -> Table:
-    """A CSV file as a dict of arrays (numbers as floats, other columns as strings)."""
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    header, body = rows[0], rows[1:]
-    out: Table = {}
-    for j, name in enumerate(header):
-        cells = [r[j] if j < len(r) else "" for r in body]
-        try:
-            out[name] = np.array([float(c) if c != "" else np.nan for c in cells])
-        except ValueError:
-            out[name] = np.array(cells, dtype=object)
-    return out
-
-
-def _option_args(options: Mapping[str, Any]) -> List[str]:
-    """``{"p_mean_mpa": 0.35, "anti_windup": "clamp"}`` → ``--p-mean-mpa 0.35 --anti-windup clamp``."""
-    args: List[str] = []
-    for key, value in options.items():
-        if value is None:
-            continue
-        flag = "--" + key.replace("_", "-")
-        if value is True:
-            args.append(flag)
-        elif value is False:
-            continue
-        elif isinstance(value, (list, tuple)):
-            args += [flag, ",".join(str(v) for v in value)]
-        else:
-            args += [flag, str(value)]
-    return args
-
-
-def _run_into(out: Optional[PathLike], args: List[str], error: int) -> Path:
-    """Runs a command writing into ``out`` (a fresh temporary folder if None)."""
-    folder = Path(tempfile.mkdtemp(prefix="vanefit-")) if out is None else Path(out)
-    _core.run_command(args + ["--out", os.fspath(folder)], error)
-    return folder
-
-
-def _tables(folder: Path) -> Dict[str, Any]:
-    """Every CSV (as a table) and JSON file of a folder, by file stem; ``folder`` too."""
-    result: Dict[str, Any] = {"folder": os.fspath(folder)}
-    for p in sorted(folder.glob("*.csv")):
-        result[p.stem] = _read_table(p)
-    for p in sorted(folder.glob("*.json")):
-        result[p.stem] = json.loads(p.read_text())
-    return result
+    return Diagnosis(text, extended, summary)
 
 
 def predict(
-    fit: PathLike,
+    fit: Union[Fit, PathLike],
     pressures: Optional[Sequence[float]] = None,
     unit: str = "bar_g",
+    reference: Optional[float] = None,
     inlet_nozzle: Optional[float] = None,
     outlet_nozzle: Optional[float] = None,
+    speed_grid_rpm: float = 1.0,
+    curve_points: int = 41,
     fixed_spread: Optional[float] = None,
     out: Optional[PathLike] = None,
-    **options: Any,
-) -> Dict[str, Any]:
+) -> Prediction:
     """The fitted motor at other supply pressures (in ``unit``: ``bar_g``, ``pa``, ``mpa``,
-    ...) or behind a nozzle (sonic conductance, m³/(s·Pa)), as ``vanefit predict``: tables
-    ``catalogue``, ``factors`` and ``curves`` (each a dict of arrays, columns as in the CSV
-    files, 95 % bands as ``_lo``/``_hi``) and the ``folder`` with the figures."""
-    args = ["predict", os.fspath(fit), "--unit", unit]
-    if pressures is not None:
-        args += ["--pressures", ",".join(repr(float(p)) for p in pressures)]
-    args += _option_args(
-        dict(
-            inlet_nozzle=inlet_nozzle,
-            outlet_nozzle=outlet_nozzle,
-            fixed_spread=fixed_spread,
-            **options,
-        )
-    )
-    return _tables(_run_into(out, args, 2))
+    ...; default 3, 4, 5, 6, 7 bar g) or behind a nozzle (sonic conductance, m³/(s·Pa)), as
+    ``vanefit predict``: a :class:`Prediction` with the DataFrames ``catalogue``,
+    ``factors`` and ``curves`` (the command's columns and numbers, 95 % bands as
+    ``_lo``/``_hi``), its ``notes`` and ``report``. ``fit``: a :class:`Fit` or a fit file's
+    path. ``reference``: the correction factors' reference pressure (default 6.3 bar g).
+    ``out``: also write the command's files (CSV, ``predict.md``, SVG figures) there."""
+    path, text = _fit_source(fit)
+    return Prediction(json.loads(_core.predict(
+        path, text,
+        None if pressures is None else [float(p) for p in pressures],
+        str(unit),
+        None if reference is None else float(reference),
+        None if inlet_nozzle is None else float(inlet_nozzle),
+        None if outlet_nozzle is None else float(outlet_nozzle),
+        float(speed_grid_rpm),
+        int(curve_points),
+        None if fixed_spread is None else float(fixed_spread),
+        None if out is None else os.fspath(out),
+    )))
+
+
+_MOTOR = {"effects": None, "brake_nm_s_rad": None}
+_VALVE = {"valve_tau_s": None, "valve_u_max_v": 10.0, "valve_p_max_bar_g": 6.0}
+_PI = {"ts_ms": 1.0, "speed_unit_rpm": 1000.0, "anti_windup": "conditional"}
+_GAINS = {"kp": 0.85, "ki": 4.0}
+_THROTTLE = {"p_supply_mpa": 0.73, "c_min_m3_s_pa": 3e-10, "c_max_m3_s_pa": 1e-7, "points": 40,
+             "curves_m3_s_pa": "none,1e-8,4e-9,2e-9,1e-9"}
+
+#: Every control study's options with their defaults (those of ``vanefit control <study>``;
+#: a test compares them with the command's ``--help``). ``None``: the study's or the
+#: motor's own (``valve_tau_s``: the parameter set's ``valve_tau``; ``brake_nm_s_rad``:
+#: 1e-4 N·m·s/rad, none for ``min-speed``; ``effects``: the fit's).
+CONTROL_STUDIES: Dict[str, Dict[str, Any]] = {
+    "throttle-inlet": {**_MOTOR, **_THROTTLE},
+    "throttle-outlet": {**_MOTOR, **_THROTTLE},
+    "bode": {**_MOTOR, **_VALVE, "p_mean_mpa": 0.35, "f_min_hz": 0.01, "f_max_hz": 100.0,
+             "points": 200},
+    "step": {**_MOTOR, **_VALVE, **_PI, **_GAINS, "from_rpm": 3000.0, "to_rpm": 4500.0,
+             "t_step_s": 0.5, "duration_s": 8.0},
+    "disturbance": {**_MOTOR, **_VALVE, **_PI, **_GAINS, "rpm": 4000.0, "load_step_nm": 0.03,
+                    "t_step_s": 0.5, "duration_s": 8.0},
+    "min-speed": {**_MOTOR, **_VALVE, **_PI, **_GAINS, "p_max_mpa": 0.73, "ramp_s": 60.0,
+                  "factor": 0.8, "floor_rpm": None, "stage_s": 5.0},
+    "design": {**_MOTOR, **_VALVE, **_PI, "pm_deg": 60.0, "crossover_hz": None,
+               "p_mean_mpa": 0.35, "step_rpm": 300.0, "duration_s": 5.0},
+}
 
 
 def control(
     study: str,
-    params: Optional[PathLike] = None,
+    params: Optional[Union[Fit, PathLike]] = None,
     out: Optional[PathLike] = None,
     **options: Any,
-) -> Dict[str, Any]:
+) -> StudyResult:
     """A speed-control study of paper §5 as ``vanefit control <study>`` (``bode``, ``step``,
     ``disturbance``, ``design``, ``throttle-inlet``, ``throttle-outlet``, ``min-speed``) on
-    the motor of a fit file (default: the AR034 motor). ``options`` are the command's
-    options with underscores (``kp=..., ki=..., pm_deg=60, p_mean_mpa=0.35``). Returns every
-    table the study writes (dicts of arrays, by file stem), its JSON summaries and the
-    ``folder`` with the figures."""
-    args = ["control", study]
-    if params is not None:
-        args += ["--params", os.fspath(params)]
-    return _tables(_run_into(out, args + _option_args(options), 2))
+    the motor of a fit (a :class:`Fit` or a fit file's path; default: the AR034 motor).
+    ``options`` are the study's options by name (``kp=..., ki=..., pm_deg=60,
+    p_mean_mpa=0.35``; every study's, with defaults: :data:`CONTROL_STUDIES`). Returns a
+    :class:`StudyResult`: every table the study writes (DataFrames in ``result.tables``, or
+    ``result["step"]``) and its JSON summaries (``result["design"]``); ``out`` also writes
+    its files and figures there. Runs with the GIL released."""
+    if study not in CONTROL_STUDIES:
+        raise ParameterError(f"study {study!r}: one of {', '.join(CONTROL_STUDIES)}")
+    known = CONTROL_STUDIES[study]
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise ParameterError(
+            f"{study}: no option {', '.join(unknown)}; its options are {', '.join(known)}"
+        )
+    given = {**known, **options}
+    if isinstance(given["effects"], (list, tuple)):
+        given["effects"] = ",".join(given["effects"])
+    path, text = (None, None) if params is None else _fit_source(params)
+    if text is not None:
+        if isinstance(params, Fit) and params.path is not None:
+            path = params.path
+        else:
+            raise ParameterError(
+                "control: the study reads its motor from a fit file; write the fit first "
+                "(fit.write(path)) and pass it or its path"
+            )
+    tables, summaries = _core.control(
+        study, path, json.dumps(given), None if out is None else os.fspath(out)
+    )
+    return StudyResult(
+        study,
+        {name: dict(cols) for name, cols in tables},
+        {name: json.loads(doc) for name, doc in summaries},
+        None if out is None else os.fspath(out),
+    )
 
 
 def synth(
     out: PathLike,
-    params: Optional[PathLike] = None,
+    params: Optional[Union[Fit, PathLike]] = None,
     effects: Optional[Sequence[str]] = None,
     noise: float = 1.0,
     seed: int = 1,
+    catalogue: bool = False,
+    pressures_bar_g: Sequence[float] = (6.3,),
 ) -> Dataset:
-    """Writes a synthetic dataset (the three reference experiments with typical sensor
-    noise, and ``truth.json``) from the motor of a fit file (default: the AR034 motor) with
-    the catalogued ``effects`` switched on, as ``vanefit synth``, and loads it."""
-    args = ["synth", os.fspath(out), "--noise", repr(float(noise)), "--seed", str(int(seed))]
-    if params is not None:
-        args += ["--params", os.fspath(params)]
-    if effects:
-        args += ["--effects", ",".join(effects)]
-    _core.run_command(args, 1)
+    """Writes a synthetic dataset into ``out`` (the three reference experiments with typical
+    sensor noise times ``noise``, and ``truth.json``) from the motor of a fit (default: the
+    AR034 motor) with the catalogued ``effects`` switched on (default: the fit's), as
+    ``vanefit synth``, and loads it. ``catalogue=True`` writes catalogue pages at
+    ``pressures_bar_g`` instead of rig recordings."""
+    path, text = (None, None) if params is None else _fit_source(params)
+    _core.synth(
+        os.fspath(out), path, text,
+        None if effects is None else [str(e) for e in effects],
+        float(noise), int(seed), bool(catalogue), [float(p) for p in pressures_bar_g],
+    )
     return load_dataset(out)
 
 

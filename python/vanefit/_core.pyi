@@ -1,14 +1,35 @@
-"""Type stubs of the compiled extension ``vanefit._core`` (pyo3). Users call the wrappers in
+"""Type stubs of the compiled extension ``vanefit._core`` (pyo3), checked against the built
+module by mypy's stubtest (python/tests/test_stubs.py). Users call the wrappers in
 :mod:`vanefit`; these are the raw functions they use. Paths are ``str`` or ``os.PathLike``;
-values are SI unless a column name says otherwise; JSON documents are returned as ``str``."""
+a fit held in memory goes as ``fit_text`` (its path then only names it in messages); values
+are SI unless a column name says otherwise; JSON documents are returned as ``str``."""
 
 import os
-from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, List, Optional, Sequence, Tuple, Union, final
 
 _Path = Union[str, "os.PathLike[str]"]
 _Columns = List[Tuple[str, List[float]]]
 
 __version__: str
+__all__ = [
+    "VanefitError",
+    "DataError",
+    "ParameterError",
+    "PyDataset",
+    "PyLikelihood",
+    "load_dataset",
+    "nominal_parameters",
+    "read_fit",
+    "simulate",
+    "cost",
+    "fit",
+    "diagnose",
+    "predict",
+    "export_petab",
+    "synth",
+    "control",
+    "__version__",
+]
 
 class VanefitError(Exception):
     """Anything vanefit refuses or fails at."""
@@ -20,6 +41,7 @@ class DataError(VanefitError):
 class ParameterError(VanefitError):
     """A bad option, parameter name or parameter value; the message names it."""
 
+@final
 class PyDataset:
     """A dataset read and checked (rig.toml and its recordings)."""
 
@@ -30,10 +52,11 @@ class PyDataset:
     def experiments_json(self) -> str: ...
     def recording(self, file: str) -> _Columns: ...
 
+@final
 class PyLikelihood:
     """A fit's likelihood rebuilt from its fit file, over the estimated parameters (SI)."""
 
-    def __init__(self, ds: PyDataset, fit: _Path) -> None: ...
+    def __new__(cls, ds: PyDataset, fit: _Path, fit_text: Optional[str] = None) -> "PyLikelihood": ...
     @property
     def names(self) -> List[str]: ...
     @property
@@ -53,15 +76,17 @@ class PyLikelihood:
 
 def load_dataset(path: _Path) -> PyDataset: ...
 def nominal_parameters(ds: PyDataset) -> List[Tuple[str, float]]: ...
-def read_fit(path: _Path) -> str: ...
+def read_fit(path: _Path, text: Optional[str] = None) -> str: ...
 def simulate(
     ds: PyDataset,
     fit: Optional[_Path] = None,
+    fit_text: Optional[str] = None,
     overrides: Sequence[Tuple[str, float]] = ...,
 ) -> List[Tuple[str, _Columns]]: ...
 def cost(
     ds: PyDataset,
     fit: Optional[_Path] = None,
+    fit_text: Optional[str] = None,
     overrides: Sequence[Tuple[str, float]] = ...,
 ) -> str: ...
 def fit(
@@ -69,13 +94,14 @@ def fit(
     starts: int,
     seed: int,
     threads: Optional[int],
-    effects: str,
-    estimate: Optional[str],
+    effects: Sequence[str],
+    estimate: Optional[Sequence[str]],
     uncertainty: str,
     max_iters: int,
     out: Optional[_Path],
+    resume: bool,
     progress: Optional[Callable[[int, int, float], Any]],
-) -> str: ...
+) -> Tuple[str, str]: ...
 def diagnose(
     ds: PyDataset,
     starts: int,
@@ -83,5 +109,34 @@ def diagnose(
     threads: Optional[int],
     out: Optional[_Path],
     progress: Optional[Callable[[float, str], Any]],
+) -> Tuple[str, str, str]: ...
+def predict(
+    fit: _Path,
+    fit_text: Optional[str],
+    pressures: Optional[Sequence[float]],
+    unit: str,
+    reference: Optional[float],
+    inlet_nozzle: Optional[float],
+    outlet_nozzle: Optional[float],
+    speed_grid_rpm: float,
+    curve_points: int,
+    fixed_spread: Optional[float],
+    out: Optional[_Path],
 ) -> str: ...
-def run_command(args: Sequence[str], error: int) -> None: ...
+def export_petab(fit: _Path, fit_text: Optional[str], dataset: _Path, out: _Path) -> str: ...
+def synth(
+    out: _Path,
+    fit: Optional[_Path],
+    fit_text: Optional[str],
+    effects: Optional[Sequence[str]],
+    noise: float,
+    seed: int,
+    catalogue: bool,
+    pressures_bar_g: Sequence[float],
+) -> None: ...
+def control(
+    study: str,
+    fit: Optional[_Path],
+    options: str,
+    out: Optional[_Path],
+) -> Tuple[List[Tuple[str, _Columns]], List[Tuple[str, str]]]: ...

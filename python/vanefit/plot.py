@@ -1,8 +1,8 @@
 """Figures of vanefit's results, drawn with matplotlib.
 
-Every function takes the package's plain results (a fit dict from :func:`vanefit.fit` or
-:func:`vanefit.read_fit`, a :class:`vanefit.Dataset`, the tables of :func:`vanefit.control`)
-and returns a :class:`matplotlib.figure.Figure`; nothing is shown or saved (call
+Every function takes the package's results (a :class:`vanefit.Fit`, a
+:class:`vanefit.Diagnosis`, a :class:`vanefit.Dataset`, the tables of a
+:class:`vanefit.StudyResult`; the result objects' ``.plot`` calls these) and returns a :class:`matplotlib.figure.Figure`; nothing is shown or saved (call
 ``fig.savefig(path)`` or let a notebook display it). matplotlib is imported only when a
 function is called, so ``import vanefit`` needs numpy alone.
 
@@ -176,12 +176,23 @@ def _plt():
     return plt
 
 
+def _document(result: Any) -> Mapping[str, Any]:
+    """The dict a figure draws: a :class:`vanefit.Fit` as its file with the starts
+    (``start_results``), a :class:`vanefit.Diagnosis` as its ``diagnosis.json``; a dict as
+    it is."""
+    if hasattr(result, "_plot_document"):
+        return result._plot_document()
+    if hasattr(result, "document"):
+        return result.document
+    return result
+
+
 def _start_results(fit: Mapping[str, Any]) -> List[Dict[str, Any]]:
     starts = fit.get("start_results")
     if not starts:
         raise ValueError(
-            "this fit has no 'start_results': pass the dict returned by vanefit.fit(...) "
-            "(a fit file read with read_fit holds only the estimate)"
+            "this fit has no 'start_results': pass the Fit returned by vanefit.fit(...) "
+            "(a fit file read with Fit.read holds only the estimate)"
         )
     return list(starts)
 
@@ -255,6 +266,7 @@ def waterfall(fit: Mapping[str, Any], rtol: float = 1e-3):
     reliably; further steps are other local minima. Starts within ``rtol`` (relative) of
     the best count as reaching it (the title says how many). Needs the dict returned by
     :func:`vanefit.fit` (its ``start_results``)."""
+    fit = _document(fit)
     plt = _plt()
     starts = sorted(_start_results(fit), key=lambda s: s["cost"])
     costs = np.array([max(s["cost"], 1e-12) for s in starts])
@@ -302,6 +314,7 @@ def parameters(fit: Mapping[str, Any], names: Optional[Sequence[str]] = None,
     determined. ``relative=False`` plots log10 of the SI values themselves (pyPESTO's own
     axis; parameters of different size then sit decades apart). Needs the dict returned by
     :func:`vanefit.fit`."""
+    fit = _document(fit)
     plt = _plt()
     from matplotlib import cm, colors
 
@@ -383,6 +396,7 @@ def profiles(fit: Mapping[str, Any], names: Optional[Sequence[str]] = None, ncol
     valley is a well-determined parameter; a profile that stays below the threshold on one
     side is not identifiable there. The axis shows Δχ² up to three thresholds (the search's
     far points rise into the thousands). Needs a fit with ``uncertainty="profile"``."""
+    fit = _document(fit)
     profs = fit.get("profiles") or {}
     if not profs:
         raise ValueError("this fit has no profiles: fit with uncertainty='profile'")
@@ -617,6 +631,7 @@ def candidates(diagnosis: Mapping[str, Any], select_below: float = -10.0):
     selected when it beats every simpler model by ΔBIC < ``select_below`` (−10, the
     dashed line); the selected ones are dark. ``diagnosis`` is the dict of
     :func:`vanefit.diagnose`."""
+    diagnosis = _document(diagnosis)
     plt = _plt()
     cands = sorted(diagnosis.get("candidates") or [], key=lambda c: c["delta_bic"])
     if not cands:

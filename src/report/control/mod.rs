@@ -37,27 +37,56 @@ pub enum ControlReportError {
     Plot(#[from] PlotError),
 }
 
-/// The output folder of a study and who hears of each file written.
+/// The output folder of a study and who hears of each file written — or, made by
+/// [`Writer::in_memory`], a list that keeps the tables and summaries as text.
 pub struct Writer<'a> {
-    dir: &'a Path,
-    on_written: &'a mut dyn FnMut(&Path),
+    sink: Sink<'a>,
+}
+
+/// Where a [`Writer`] puts what it writes.
+enum Sink<'a> {
+    /// Files in a folder; the callback hears of each.
+    Folder(&'a Path, &'a mut dyn FnMut(&Path)),
+    /// (file name, text) of the CSV tables and JSON summaries; no figure is drawn.
+    Memory(&'a mut Vec<(String, String)>),
 }
 
 impl<'a> Writer<'a> {
     /// Writes into `dir` (which exists), calling `on_written` with the path of every file
     /// once it is in place.
     pub fn new(dir: &'a Path, on_written: &'a mut dyn FnMut(&Path)) -> Self {
-        Self { dir, on_written }
+        Self {
+            sink: Sink::Folder(dir, on_written),
+        }
+    }
+
+    /// Writes nothing: keeps each CSV table and JSON summary as (file name, text) in
+    /// `files`, the same text a folder would get, and skips the figures (for callers that
+    /// read the results in memory, such as the Python package).
+    pub fn in_memory(files: &'a mut Vec<(String, String)>) -> Self {
+        Self {
+            sink: Sink::Memory(files),
+        }
     }
 
     /// Writes `bytes` to the file `name` atomically.
     fn bytes(&mut self, name: &str, bytes: &[u8]) -> Result<(), ControlReportError> {
-        let path = self.dir.join(name);
+        let (dir, on_written) = match &mut self.sink {
+            Sink::Folder(dir, on_written) => (*dir, on_written),
+            Sink::Memory(files) => {
+                files.push((
+                    name.to_string(),
+                    String::from_utf8_lossy(bytes).into_owned(),
+                ));
+                return Ok(());
+            }
+        };
+        let path = dir.join(name);
         crate::io::write_atomic(&path, bytes).map_err(|source| ControlReportError::Write {
             path: path.clone(),
             source,
         })?;
-        (self.on_written)(&path);
+        (on_written)(&path);
         Ok(())
     }
 
@@ -72,11 +101,25 @@ impl<'a> Writer<'a> {
         self.bytes(name, text.as_bytes())
     }
 
-    /// Writes a figure as SVG.
+    /// Writes a figure as SVG (in memory: not drawn).
     fn figure(&mut self, name: &str, fig: &Figure) -> Result<(), ControlReportError> {
+        if let Sink::Memory(_) = self.sink {
+            return Ok(());
+        }
         let svg = fig.to_svg()?;
         self.bytes(name, svg.as_bytes())
     }
+}
+
+/// The CSV tables and JSON summaries a study's `write` (e.g. [`bode::write`]) would write,
+/// as (file name, text), without writing anything or drawing the figures.
+pub fn texts<R>(
+    r: &R,
+    write: fn(&mut Writer, &R) -> Result<(), ControlReportError>,
+) -> Result<Vec<(String, String)>, ControlReportError> {
+    let mut files = Vec::new();
+    write(&mut Writer::in_memory(&mut files), r)?;
+    Ok(files)
 }
 
 /// A CSV table: header names with units, rows of numbers.

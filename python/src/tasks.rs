@@ -1,0 +1,159 @@
+//! Prediction, PEtab export and synthetic datasets: the library's functions called with
+//! typed values (no command line in between), returning the tables as the CSV text the
+//! command writes (so a DataFrame read from it equals one read from the file) and writing
+//! files only when the caller gives a folder.
+
+use crate::errors::{data_err, param_err, DataError, ParameterError, VanefitError};
+use crate::fitting::option_err;
+use pyo3::prelude::*;
+use std::path::{Path, PathBuf};
+use vanefit::data::dataset::Dataset;
+use vanefit::data::fitfile::FitFile;
+
+/// A fit file from `path`, or from `text` (a fit held in memory; `path` then only names it
+/// in messages).
+pub fn load_fit(path: &Path, text: Option<&str>) -> PyResult<FitFile> {
+    match text {
+        Some(t) => FitFile::parse(path, t).map_err(data_err),
+        None => FitFile::read(path).map_err(data_err),
+    }
+}
+
+/// What the fitted motor does at other supply pressures or behind a nozzle, as `vanefit
+/// predict`: JSON with the tables (`catalogue`, `factors`, `curves`: CSV text with the
+/// command's columns and numbers), `notes`, `report` (the markdown of `predict.md`) and
+/// `written` (the files, when `out` is given).
+#[pyfunction]
+#[pyo3(signature = (fit, fit_text, pressures, unit, reference, inlet_nozzle, outlet_nozzle, speed_grid_rpm, curve_points, fixed_spread, out))]
+#[allow(clippy::too_many_arguments)]
+pub fn predict(
+    py: Python<'_>,
+    fit: PathBuf,
+    fit_text: Option<String>,
+    pressures: Option<Vec<f64>>,
+    unit: String,
+    reference: Option<f64>,
+    inlet_nozzle: Option<f64>,
+    outlet_nozzle: Option<f64>,
+    speed_grid_rpm: f64,
+    curve_points: usize,
+    fixed_spread: Option<f64>,
+    out: Option<PathBuf>,
+) -> PyResult<String> {
+    use vanefit::report::predict as report;
+    use vanefit::task::predict::{self as task, PredictOptions};
+    let file = load_fit(&fit, fit_text.as_deref())?;
+    let settings = PredictOptions {
+        unit: task::pressure_unit("PredictOptions.unit", &unit).map_err(|e| option_err(&e))?,
+        pressures,
+        reference,
+        inlet_nozzle_m3_s_pa: inlet_nozzle,
+        outlet_nozzle_m3_s_pa: outlet_nozzle,
+        speed_grid_rpm,
+        curve_points,
+        fixed_spread,
+    }
+    .check(task::fit_atmosphere_pa(&file))
+    .map_err(|e| option_err(&e))?;
+    let pr = py
+        .detach(|| task::predict(&file, &settings))
+        .map_err(|e| VanefitError::new_err(e.to_string()))?;
+    let source = task::source_name(&fit, &file);
+    let mut written = Vec::new();
+    if let Some(dir) = &out {
+        vanefit::io::out::check_dir(dir).map_err(|e| param_err(format!("out {e}")))?;
+        written = py
+            .detach(|| task::write_prediction(&pr, &settings, &source, dir))
+            .map_err(|e| VanefitError::new_err(e.to_string()))?;
+    }
+    let display = settings.display();
+    Ok(serde_json::json!({
+        "catalogue": report::catalogue_csv(&pr, display),
+        "factors": report::factors_csv(&pr, display),
+        "curves": report::curves_csv(&pr, display),
+        "notes": report::notes(&pr, display),
+        "report": report::markdown(&pr, display, &source),
+        "unit": display.unit.suffix(),
+        "written": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+    })
+    .to_string())
+}
+
+/// Writes the fit as a PEtab v1 problem into `out` (as `vanefit export-petab`); returns the
+/// summary JSON (`measurements`, `observables`, `conditions`, `chi2_rows`, `chi2_priors`).
+#[pyfunction]
+#[pyo3(signature = (fit, fit_text, dataset, out))]
+pub fn export_petab(
+    py: Python<'_>,
+    fit: PathBuf,
+    fit_text: Option<String>,
+    dataset: PathBuf,
+    out: PathBuf,
+) -> PyResult<String> {
+    use vanefit::export::petab;
+    if out.is_file() {
+        return Err(ParameterError::new_err(format!(
+            "out {}: is a file, not a folder",
+            out.display()
+        )));
+    }
+    vanefit::io::out::check_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
+    let file = load_fit(&fit, fit_text.as_deref())?;
+    let ds = Dataset::load(&dataset).map_err(data_err)?;
+    let (tables, summary) = py
+        .detach(|| petab::tables(&ds, &file, &fit))
+        .map_err(data_err)?;
+    let _lock = vanefit::io::out::prepare_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
+    petab::write(&out, &tables).map_err(|e| VanefitError::new_err(e.to_string()))?;
+    Ok(serde_json::json!({
+        "measurements": summary.measurements, "observables": summary.observables,
+        "conditions": summary.conditions, "chi2_rows": summary.chi2_rows,
+        "chi2_priors": summary.chi2_priors,
+    })
+    .to_string())
+}
+
+/// Writes a synthetic dataset into `out` as `vanefit synth`: the three reference
+/// experiments of the motor of `fit` (none: the default motor) with `effects` switched on
+/// (none: the fit's), sensor noise `noise` times a typical rig's, and `truth.json`; or, with
+/// `catalogue`, catalogue pages at `pressures_bar_g`.
+#[pyfunction]
+#[pyo3(signature = (out, fit, fit_text, effects, noise, seed, catalogue, pressures_bar_g))]
+#[allow(clippy::too_many_arguments)]
+pub fn synth(
+    py: Python<'_>,
+    out: PathBuf,
+    fit: Option<PathBuf>,
+    fit_text: Option<String>,
+    effects: Option<Vec<String>>,
+    noise: f64,
+    seed: u64,
+    catalogue: bool,
+    pressures_bar_g: Vec<f64>,
+) -> PyResult<()> {
+    use vanefit::model::effects::EffectSet;
+    use vanefit::task::synth::{synth_motor, write_synthetic, SynthOptions};
+    let effects = effects
+        .map(|list| EffectSet::parse_list(&list.join(",")))
+        .transpose()
+        .map_err(|e| param_err(format!("effects: {e}")))?;
+    let settings = SynthOptions {
+        effects,
+        noise,
+        seed,
+        catalogue,
+        pressures_bar_g,
+    }
+    .check()
+    .map_err(|e| option_err(&e))?;
+    let file = fit
+        .as_deref()
+        .map(|p| load_fit(p, fit_text.as_deref()))
+        .transpose()?;
+    let name = out.file_name().unwrap_or_default().to_string_lossy();
+    let (motor, truth) = synth_motor(&name, file.as_ref(), &settings);
+    let _lock = vanefit::io::out::prepare_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
+    py.detach(|| write_synthetic(&out, &motor, &truth, &settings))
+        .map_err(|e| DataError::new_err(e.to_string()))?;
+    Ok(())
+}

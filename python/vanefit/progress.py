@@ -1,0 +1,101 @@
+"""Progress of long calls: ``progress=`` of :func:`vanefit.fit` and :func:`vanefit.diagnose`.
+
+``progress`` is ``None`` (silent), ``True`` (a tqdm bar: a widget in a notebook with
+ipywidgets, text otherwise) or a callable, called from the thread that made the call while
+the work runs on vanefit's threads (the GIL is taken only for the call):
+
+* fit: ``progress(done, total, best_cost)`` — when the run begins (``done`` = starts
+  already finished, e.g. read back on resume; ``best_cost`` = inf) and after every start;
+* diagnose: ``progress(elapsed_s, message)`` at every phase.
+
+An exception raised by the callable stops a fit at its next round of starts and is raised
+by :func:`vanefit.fit`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from typing import Any, Callable, Iterator, Optional, Union
+
+#: What ``progress=`` accepts.
+Progress = Union[None, bool, Callable[..., Any]]
+
+__all__ = ["Progress", "fit_progress", "diagnose_progress"]
+
+
+def _tqdm_class():
+    """tqdm's notebook bar when ipywidgets can draw it, its text bar otherwise."""
+    try:
+        import ipywidgets  # noqa: F401
+        from IPython import get_ipython
+
+        if get_ipython() is not None and "IPKernelApp" in get_ipython().config:
+            from tqdm.notebook import tqdm
+
+            return tqdm
+    except Exception:
+        pass
+    from tqdm.std import tqdm
+
+    return tqdm
+
+
+def _check(progress: Progress) -> None:
+    if progress is None or isinstance(progress, bool) or callable(progress):
+        return
+    from ._core import ParameterError
+
+    raise ParameterError(
+        f"progress: expected None, True or a callable, got {type(progress).__name__}"
+    )
+
+
+@contextlib.contextmanager
+def fit_progress(progress: Progress) -> Iterator[Optional[Callable[[int, int, float], Any]]]:
+    """The callback of a fit for ``progress=``; a tqdm bar over the starts for ``True``,
+    closed when the fit returns (or fails)."""
+    _check(progress)
+    if not progress:
+        yield None
+        return
+    if callable(progress):
+        yield progress
+        return
+    bar = _tqdm_class()(total=None, desc="fit", unit="start", leave=True)
+
+    def update(done: int, total: int, best: float) -> None:
+        if bar.total != total:
+            bar.total = total
+        bar.n = done
+        if math.isfinite(best):
+            bar.set_postfix_str(f"best J {best:.4g}", refresh=False)
+        bar.refresh()
+
+    try:
+        yield update
+    finally:
+        bar.close()
+
+
+@contextlib.contextmanager
+def diagnose_progress(progress: Progress) -> Iterator[Optional[Callable[[float, str], Any]]]:
+    """The callback of a diagnosis for ``progress=``; for ``True`` a tqdm line counting
+    the phases with the latest message."""
+    _check(progress)
+    if not progress:
+        yield None
+        return
+    if callable(progress):
+        yield progress
+        return
+    bar = _tqdm_class()(total=None, desc="diagnose", unit="step", leave=True)
+
+    def update(elapsed: float, message: str) -> None:
+        bar.update(1)
+        bar.set_postfix_str(message[:80], refresh=True)
+
+    try:
+        yield update
+    finally:
+        bar.close()
