@@ -455,12 +455,15 @@ mod tests {
         assert!(e.to_string().starts_with("m.toml:3:10"), "{e}");
         let e = parse("[batch]\ndatasets = [\".\"]\ntasks = [\"fit\"]\n[fit]\nstart = 3\n")
             .unwrap_err();
-        assert!(e.to_string().starts_with("m.toml:5:1"), "{e}");
+        assert!(e.to_string().starts_with("m.toml:5:1 (key 'start')"), "{e}");
         let e = parse(
             "[batch]\ndatasets = [\".\"]\ntasks = [\"fit\"]\n[fit]\nuncertainty = \"exact\"\n",
         )
         .unwrap_err();
-        assert!(e.to_string().starts_with("m.toml:5:15"), "{e}");
+        assert!(
+            e.to_string().starts_with("m.toml:5:15 (value '\"exact\"')"),
+            "{e}"
+        );
         let e = parse("[batch]\ndatasets = [\".\"]\ntasks = [\"predict\"]\n").unwrap_err();
         assert!(e.to_string().contains("predict needs fit"), "{e}");
     }
