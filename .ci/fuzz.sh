@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# A short coverage-guided fuzz run per target (issue 15): every target of fuzz/ for
+# A short coverage-guided fuzz run per target: every target of fuzz/ for
 # FUZZ_SECONDS (default 10) from its committed corpus (fuzz/corpus/<target>), failing on a
 # crash, a panic or a hang. The corpus itself is replayed by `cargo test` too
-# (tests/fuzz_corpus.rs); this adds mutations. The long campaigns (10 million executions
-# per target) are run by hand, see the README's hardening paragraph.
+# (tests/hardening/fuzz_corpus.rs); this adds mutations. The long campaigns (10 million executions
+# per target) are run by hand, see docs/validation.md, "Hardening".
 #
 # The cheapest real cargo-fuzz build: unoptimised and without debug information. Measured
 # on the 2-core machine with a fuzzer and other builds beside it: cold build 2 min 31 s,
 # the whole step 3 min 38 s (an optimised build takes about 6 min; the unoptimised targets
 # run at 250 to 25 000 executions per second, enough for a smoke run). A crash's input is
-# printed in base64, to be added to fuzz/corpus/<target>/ (which tests/fuzz_corpus.rs then
+# printed in base64, to be added to fuzz/corpus/<target>/ (which tests/hardening/fuzz_corpus.rs then
 # replays) once it is fixed.
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# CI step for issue 14: install Debian's Slurm and munge where they are missing, then run the
-# real-Slurm test of `vanefit batch --slurm` (tests/slurm/run.sh starts and stops its own
-# munged, slurmctld and slurmd; it needs root). Expects a release build (target/release).
+# CI step for the Slurm support: install Debian's Slurm and munge where they are missing,
+# then run the real-Slurm test of `vanefit batch --slurm` (tests/slurm/run.sh starts and
+# stops its own munged, slurmctld and slurmd; it needs root). Expects a release build
+# (target/release).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

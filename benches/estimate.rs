@@ -1,7 +1,7 @@
-//! Speed of estimation (issues 4 and 10):
+//! Speed of estimation:
 //! * `cost_evaluation/{rodas4,bdf}`: one full cost evaluation of the shipped dataset (25
 //!   datasheet speeds, 60 s pressure ramp, 65 s outlet throttle) on one core, with the
-//!   default solver and with the BDF used before issue 10, in the same run;
+//!   default solver and with the BDF used before Rodas4, in the same run;
 //! * `multistart_16_starts_200_iterations/{1,2}_threads`: a fixed amount of work (16
 //!   starts, 200 Nelder–Mead iterations each, no early stopping, no restarts) on one and on
 //!   two threads; parallel efficiency = t(1 thread) / (2 · t(2 threads)).

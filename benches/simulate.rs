@@ -1,7 +1,7 @@
-//! Speed of the simulation core (issues 2 and 10): one datasheet characteristic (25 speeds),
+//! Speed of the simulation core: one datasheet characteristic (25 speeds),
 //! one 60 s pressure ramp, one 65 s outlet-throttle ramp, and all three, each with the
 //! default solver (Rodas4, `numerics::DefaultSolver`) and with diffsol's BDF at its own
-//! default tolerance (the solver before issue 10), in one run so that the two compare on
+//! default tolerance (the solver before Rodas4), in one run so that the two compare on
 //! the same machine state. Run: `cargo bench --bench simulate`.
 
 use criterion::{criterion_group, criterion_main, Criterion};

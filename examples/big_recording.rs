@@ -1,7 +1,6 @@
 //! Writes the shipped dataset (`measurements/ar034-synthetic`) with its pressure ramp
 //! repeated until that one recording holds about `MB` megabytes, time still increasing: the
-//! large input of issue 15 (`check` on a 100 MB recording within 10 s and 500 MB),
-//! reproducible.
+//! large-input test (`check` on a 100 MB recording within 10 s and 500 MB), reproducible.
 //!
 //! ```text
 //! cargo run --release --example big_recording -- OUT_DIR [MB]    # MB: default 100

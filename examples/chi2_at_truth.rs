@@ -1,6 +1,7 @@
-//! χ² of the likelihood at a dataset's truth.json against the fit's estimate (a calibration
-//! probe for issue 11): `cargo run --release --example chi2_at_truth -- DATASET FIT.json`.
-//! Under a correct likelihood χ²(truth) − χ²(estimate) follows χ²(k), k estimated parameters.
+//! χ² of the likelihood at a dataset's truth.json against the fit's estimate (a probe of
+//! calibration: do the 95 % intervals hold the truth 95 % of the time?): `cargo run
+//! --release --example chi2_at_truth -- DATASET FIT.json`. Under a correct likelihood
+//! χ²(truth) − χ²(estimate) follows χ²(k), k estimated parameters.
 
 use std::path::Path;
 use vanefit::data::dataset::Dataset;

@@ -1,4 +1,5 @@
-//! Accuracy, smoothness and speed of the stiff solvers on the shipped dataset (issue 10):
+//! Accuracy, smoothness and speed of the stiff solvers on the shipped dataset (how the
+//! default solver and its tolerance were chosen):
 //! `cargo run --release --example solver_accuracy [n_timing]`.
 //!
 //! For each solver and tolerance it prints the time of one full cost evaluation, the

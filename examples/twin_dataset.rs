@@ -1,6 +1,6 @@
-//! Writes one twin-generator dataset (tests/twin: an independent implementation of the SPEC
-//! physics) with chosen noise, offsets and missing physics, e.g. for the README's diagnosis
-//! cases:
+//! Writes one twin-generator dataset (tests/twin: an independent implementation of the
+//! physics of docs/model.md) with chosen noise, offsets and missing physics, e.g. for the
+//! diagnosis cases of docs/validation.md:
 //!
 //! ```text
 //! cargo run --release --example twin_dataset -- OUT_DIR [--seed S] [--rate HZ]
@@ -14,7 +14,7 @@
 //! `--stiction` is t_static (N·m) and w_stribeck (rad/s); `--leak-dp2` is k in kg/(s·Pa²);
 //! `--seal` is g_seal and w_seal (rad/s); `--vane-w2` is c_w2 in N·m·s²/rad²;
 //! `--base-perturb` moves the conductances and friction by seeded factors in [0.7, 1.4];
-//! `--varied SEED` writes `tests/coverage.rs`'s case SEED (its base motor, rate, noise,
+//! `--varied SEED` writes `tests/estimate/coverage.rs`'s case SEED (its base motor, rate, noise,
 //! offsets and brake-torque channel; it overrides the other recording options and the seed).
 
 #[path = "../tests/twin/mod.rs"]

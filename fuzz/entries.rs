@@ -1,5 +1,5 @@
 //! The fuzzed entry points, shared by the fuzz targets (`fuzz_targets/*.rs`) and by the
-//! corpus replay of the test suite (`tests/fuzz_corpus.rs`), so a crash the fuzzer finds
+//! corpus replay of the test suite (`tests/hardening/fuzz_corpus.rs`), so a crash the fuzzer finds
 //! fails `cargo test` once its input is in the corpus. Each takes arbitrary bytes and must
 //! return (read or refused) without a panic.
 

@@ -8,7 +8,7 @@
 //! {`diagnose`, `control`, `predict`, `export`} → `report` → `task` → `batch` → `cli`. SI
 //! units everywhere inside; `units` converts at the file edge. `task` holds the work of the
 //! `fit`, `diagnose` and `predict` commands as library functions; `batch` runs them over a
-//! fleet of datasets in deterministic shards and merges the results (issue 14).
+//! fleet of datasets in deterministic shards and merges the results.
 
 pub mod batch;
 pub mod cli;

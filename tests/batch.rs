@@ -1,8 +1,9 @@
-//! `vanefit batch` and `vanefit merge` (issue 14, SPEC §7), through the binary: shards
+//! `vanefit batch` and `vanefit merge` (docs/formats.md, "Batches: manifest, unit folders,
+//! summary"), through the binary: shards
 //! partition the units, results do not depend on the shard or thread count, finished units
 //! are skipped, an interrupted fit resumes, a failing unit is recorded while the others
 //! finish, a bad manifest is refused at its line and column, and `summary.csv` has exactly
-//! the columns of SPEC §7.
+//! the columns of (docs/formats.md, "Contracts added later").
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -247,7 +248,8 @@ fn an_interrupted_fit_resumes() {
 
 /// A broken dataset fails its units with the data layer's located message; the others
 /// finish; the exit status is 1 with the count, or 0 with `--allow-failed-units`; the
-/// merge lists the failure and exits 1. `summary.csv` has exactly SPEC §7's columns.
+/// merge lists the failure and exits 1. `summary.csv` has exactly the columns of
+/// (docs/formats.md, "Contracts added later").
 #[test]
 fn a_failing_unit_is_recorded_and_the_others_finish() {
     let dir = fleet(2, true, "\"fit\", \"predict\"");

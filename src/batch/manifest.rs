@@ -1,6 +1,6 @@
-//! The batch manifest (`manifest.toml`, SPEC §7): which datasets, which tasks, and the shared
-//! options of each task. Every problem is refused at its place in the file (line and
-//! column, from the TOML parser's spans), before any unit runs.
+//! The batch manifest (`manifest.toml`; docs/formats.md, "Manifest"): which datasets, which
+//! tasks, and the shared options of each task. Every problem is refused at its place in the
+//! file (line and column, from the TOML parser's spans), before any unit runs.
 //!
 //! ```toml
 //! [batch]

@@ -1,9 +1,10 @@
 //! `vanefit merge DIR`: every unit of a batch folder into one fleet summary —
-//! `summary.csv` (SPEC §7: one row per dataset × task, `dataset, task, status, message`,
-//! then `cost` and `<name>, <name>_ci_lo, <name>_ci_hi` for every estimated parameter, SI),
-//! `summary.md` for people and `fleet.svg` (each parameter across the motors with its
-//! interval). Everything comes from the unit folders alone, in the batch's unit order, so
-//! the summary is the same whichever shards, machines or threads made the units.
+//! `summary.csv` (docs/formats.md, "Contracts added later": one row per dataset × task,
+//! `dataset, task, status, message`, then `cost` and `<name>, <name>_ci_lo, <name>_ci_hi`
+//! for every estimated parameter, SI), `summary.md` for people and `fleet.svg` (each
+//! parameter across the motors with its interval). Everything comes from the unit folders
+//! alone, in the batch's unit order, so the summary is the same whichever shards, machines
+//! or threads made the units.
 
 use super::manifest::TaskKind;
 use super::plan::Unit;
@@ -108,7 +109,7 @@ fn estimate(f: &FitFile, name: &str) -> (Option<f64>, Option<[f64; 2]>) {
     (f.params.get(name), ci)
 }
 
-/// `summary.csv` (SPEC §7).
+/// `summary.csv` (docs/formats.md, "`summary.csv`").
 fn summary_csv(rows: &[Row], names: &[&str]) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header: Vec<String> = ["dataset", "task", "status", "message", "cost"]

@@ -1,7 +1,7 @@
-//! Fleets (issue 14, SPEC §7): one manifest, many datasets, the work split into units
-//! (dataset × task) that run in deterministic shards on one machine or a Slurm cluster,
-//! each unit in its own folder with a status file, resumable; `merge` collects the units
-//! into a fleet summary.
+//! Fleets (docs/formats.md, "Contracts added later" and "Batches: manifest, unit folders,
+//! summary"): one manifest, many datasets, the work split into units (dataset × task) that
+//! run in deterministic shards on one machine or a Slurm cluster, each unit in its own
+//! folder with a status file, resumable; `merge` collects the units into a fleet summary.
 //!
 //! The batch folder holds `batch.json` (what the batch is: its manifest, settings and every
 //! unit, written by each shard alike), one folder per unit (`<dataset>/<task>/`, with

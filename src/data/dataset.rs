@@ -1,6 +1,6 @@
-//! Datasets on disk (SPEC §3): `rig.toml` plus one CSV recording per experiment.
-//! Everything is validated here, at the edge, and converted to SI; errors name the file,
-//! the line and the column.
+//! Datasets on disk (docs/formats.md, "Datasets", "rig.toml", "CSV recordings"): `rig.toml`
+//! plus one CSV recording per experiment. Everything is validated here, at the edge, and
+//! converted to SI; errors name the file, the line and the column.
 
 pub use crate::data::motor::MotorSection;
 use crate::model::motor::Load;

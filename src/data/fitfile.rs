@@ -1,6 +1,7 @@
-//! Fitted parameter sets as JSON, format `vanefit.fit/1` (SPEC §4): written by `fit`, read
-//! back by `simulate` and by other tools. Partial files mean defaults for the rest; unknown
-//! names, wrong units and non-physical values are refused with the file and line.
+//! Fitted parameter sets as JSON, format `vanefit.fit/1` (docs/formats.md, "Fit files"):
+//! written by `fit`, read back by `simulate` and by other tools. Partial files mean
+//! defaults for the rest; unknown names, wrong units and non-physical values are refused
+//! with the file and line.
 
 use crate::model::effects::{Effect, EffectSet};
 use crate::model::extra::{
@@ -14,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 
-/// The format tag of fit files (SPEC §4).
+/// The format tag of fit files (docs/formats.md, "Fit files").
 pub const FORMAT: &str = "vanefit.fit/1";
 
 /// A problem with a fit file, shown as `file:line: message` (or `file: message`).
@@ -42,7 +43,7 @@ pub struct ParamEntry {
     pub ci95: Option<[f64; 2]>,
 }
 
-/// What a fit could say of one estimated parameter's 95% interval (issue 11). Exported in
+/// What a fit could say of one estimated parameter's 95% interval. Exported in
 /// the parameter's entry beside `ci95` (which is `[lo, hi]` only when identifiable), so
 /// that "not identifiable" is distinct from "not computed": `"identifiable": false` with a
 /// `"why"`, and `"bounds95"` holding the ends that closed (`null` for an open side).

@@ -1,8 +1,8 @@
-//! Synthetic catalogue pages (issue 12): what a manufacturer would print for a motor, made
-//! by the simulator — at each supply pressure the curves of torque, power and air
-//! consumption against speed as sparse points read off a printed curve (three significant
-//! digits, not every quantity at every speed) and the key figures, in the units catalogues
-//! use (rpm, N·m, kW, l/s of free air, bar(g)). Written as a dataset folder marked synthetic.
+//! Synthetic catalogue pages: what a manufacturer would print for a motor, made by the
+//! simulator — at each supply pressure the curves of torque, power and air consumption
+//! against speed as sparse points read off a printed curve (three significant digits, not
+//! every quantity at every speed) and the key figures, in the units catalogues use (rpm,
+//! N·m, kW, l/s of free air, bar(g)). Written as a dataset folder marked synthetic.
 
 use crate::data::dataset::DataError;
 use crate::model::motor::Motor;

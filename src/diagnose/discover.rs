@@ -1,5 +1,6 @@
 //! Finding a term outside the catalog: sparse regression of the misfit over a library of
-//! candidate terms in each balance (SPEC §5, "uncatalogued").
+//! candidate terms in each balance (docs/model.md, "Missing-physics catalog":
+//! uncatalogued mismatches).
 //!
 //! # Method
 //!

@@ -1,5 +1,5 @@
-//! The machine-readable outputs of a diagnosis: `diagnosis.json` (SPEC §6) and the
-//! extended model's fit file.
+//! The machine-readable outputs of a diagnosis: `diagnosis.json` (docs/formats.md,
+//! "Diagnosis") and the extended model's fit file.
 
 use super::analysis::Location;
 use super::models::names_for;
@@ -7,9 +7,9 @@ use super::{discover, Diagnosis, ModelKind, FORMAT};
 use crate::data::fitfile::FitFile;
 use serde_json::{json, Value};
 
-/// `diagnosis.json` (SPEC §6). Uncatalogued entries of `selected` also carry `balance`,
-/// `feature`, `formula` and a `description` in words; a leak path also its ends `from`,
-/// `to` and its flow `law`.
+/// `diagnosis.json` (docs/formats.md, "Diagnosis"). Uncatalogued entries of `selected` also
+/// carry `balance`, `feature`, `formula` and a `description` in words; a leak path also its
+/// ends `from`, `to` and its flow `law`.
 pub fn to_json(d: &Diagnosis) -> Value {
     let loc = |l: &Location| {
         json!({
@@ -80,9 +80,10 @@ fn round(v: f64) -> f64 {
     }
 }
 
-/// The extended model as a fit file (SPEC §4, `vanefit.fit/1`). Discovered terms have no
-/// catalog id, so they go in the extra list `model.discovered` ([`FitFile::extra`]): readers
-/// that do not know it ignore it and then simulate without the terms.
+/// The extended model as a fit file (docs/formats.md, "Fit files", `vanefit.fit/1`).
+/// Discovered terms have no catalog id, so they go in the extra list `model.discovered`
+/// ([`FitFile::extra`]): readers that do not know it ignore it and then simulate without
+/// the terms.
 pub fn extended_fit_file(d: &Diagnosis) -> Value {
     let f = &d.extended.fitted;
     let mut file = FitFile::from_params(&d.dataset, f.params.clone(), f.effects.clone());

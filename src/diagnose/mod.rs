@@ -1,5 +1,6 @@
-//! Missing-physics diagnosis (SPEC §5, §6; `vanefit diagnose`): locate where the base model
-//! misses the data, name the physics it leaves out, model it, refit, and show the gain.
+//! Missing-physics diagnosis (docs/model.md, "Missing-physics catalog"; `vanefit diagnose`,
+//! docs/cli.md): locate where the base model misses the data, name the physics it leaves
+//! out, model it, refit, and show the gain.
 //!
 //! # What is fitted
 //!
@@ -15,11 +16,11 @@
 //!
 //! # Procedure
 //!
-//! 1. **Baseline.** The base model's default parameters (SPEC §1.7: six conductances,
-//!    `t_coulomb`, `visc`) are fitted by multi-start Nelder–Mead, one start at the rig's
-//!    nominal motor plus `starts − 1` Latin-hypercube starts. A warm refit of the same model
-//!    (the "null refit", same budget as a candidate) guards against crediting a candidate
-//!    with what is only further convergence.
+//! 1. **Baseline.** The base model's default parameters (docs/model.md, "Parameters": six
+//!    conductances, `t_coulomb`, `visc`) are fitted by multi-start Nelder–Mead, one start
+//!    at the rig's nominal motor plus `starts − 1` Latin-hypercube starts. A warm refit of
+//!    the same model (the "null refit", same budget as a candidate) guards against
+//!    crediting a candidate with what is only further convergence.
 //! 2. **Locate** ([`analysis`]): residuals against the recorded data in noise units;
 //!    regional bias, runs and trend per channel; the noise ratio.
 //! 3. **Concealment.** A plain fit can hide a missing effect by shifting the base

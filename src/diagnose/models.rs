@@ -80,7 +80,8 @@ impl Models {
     }
 }
 
-/// Names estimated in a model: the base model's (SPEC §1.7) and the effects' parameters.
+/// Names estimated in a model: the base model's (docs/model.md, "Parameters") and the
+/// effects' parameters.
 pub(crate) fn names_for(effects: &EffectSet) -> Vec<String> {
     let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
     for e in effects.iter() {

@@ -70,7 +70,7 @@ impl DiagnoseOptions {
 /// What kind of model a refit is (the order is the simplicity order of the selection).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum ModelKind {
-    /// The base model (SPEC §1.7).
+    /// The base model (docs/model.md, "Parameters", "What is estimated").
     Baseline,
     /// One catalog effect.
     Single,
@@ -142,12 +142,12 @@ impl Concealment {
     }
 }
 
-/// One selected extension (SPEC §6 `selected`).
+/// One selected extension (`selected` in docs/formats.md, "Diagnosis").
 #[derive(Debug, Clone)]
 pub struct Selected {
     /// Catalog id, or "uncatalogued".
     pub effect: String,
-    /// Category of the physics (SPEC §5).
+    /// Category of the physics (docs/model.md, "Missing-physics catalog").
     pub category: Category,
     /// Parameter names, SI values and units.
     pub parameters: Vec<(String, f64, String)>,
@@ -174,7 +174,7 @@ pub struct Diagnosis {
     pub dataset: String,
     /// Ambient pressure of the rig, Pa.
     pub p_atm_pa: f64,
-    /// The base model misses the data (SPEC §6 `mismatch`).
+    /// The base model misses the data (`mismatch` in docs/formats.md, "Diagnosis").
     pub mismatch: bool,
     /// The fitted base model.
     pub baseline: Candidate,

@@ -4,16 +4,17 @@
 //!
 //! # One estimate, two scores
 //!
-//! The multi-start minimises the cost J of SPEC §2 (simulation against the reference
-//! polynomials, each channel normalised by its polynomial's scatter): smooth, cheap to rank
-//! starts by, and the project's contract. Its best start is then carried to the maximum of
-//! the likelihood of the RECORDED rows ([`crate::objective::likelihood`]: σ from the data
-//! alone, the inputs' smooth driving the simulation, sensor offsets as nuisances), which is
-//! the estimate, whatever `--uncertainty` asks: a point and its interval belong to one
-//! likelihood, and the exported parameters do not depend on whether intervals were computed.
-//! J at that point is a little above the best start's J (the two scores weigh the channels
-//! differently); both are reported. The goodness of fit ([`super::goodness`]) is measured
-//! against the data's noise, and intervals are widened where the model misses it.
+//! The multi-start minimises the cost J (docs/model.md, "Cost J"; simulation against the
+//! reference polynomials, each channel normalised by its polynomial's scatter): smooth,
+//! cheap to rank starts by, and the project's contract. Its best start is then carried to
+//! the maximum of the likelihood of the RECORDED rows ([`crate::objective::likelihood`]: σ
+//! from the data alone, the inputs' smooth driving the simulation, sensor offsets as
+//! nuisances), which is the estimate, whatever `--uncertainty` asks: a point and its
+//! interval belong to one likelihood, and the exported parameters do not depend on whether
+//! intervals were computed. J at that point is a little above the best start's J (the two
+//! scores weigh the channels differently); both are reported. The goodness of fit
+//! ([`super::goodness`]) is measured against the data's noise, and intervals are widened
+//! where the model misses it.
 
 use super::engine::Engine;
 use super::error::EstimateError;
@@ -310,8 +311,8 @@ pub fn fit(
 /// The best start carried on to a tight convergence (simplex costs within 1e-6, restarts
 /// until one gains less than 1e-6 relative). The starts themselves stop at the looser
 /// [`MultiStartConfig::sd_tolerance`], enough to rank them; the one that is exported and
-/// that intervals are measured from is finished as every start used to be (issue 10:
-/// this keeps the estimate where a run with the tight tolerance for every start ends,
+/// that intervals are measured from is finished as every start used to be (this
+/// keeps the estimate where a run with the tight tolerance for every start ends,
 /// for a few hundred evaluations instead of a third of all of them).
 ///
 /// `f0` is the cost at `theta`, as the multi-start recorded it.
@@ -434,7 +435,8 @@ pub fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kind> {
         .map(|(k, _)| k)
 }
 
-/// The fit file of an outcome (SPEC §4, with identifiability and statistics).
+/// The fit file of an outcome (docs/formats.md, "Fit files", with identifiability and
+/// statistics).
 pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) -> FitFile {
     FitFile {
         dataset: dataset.to_string(),

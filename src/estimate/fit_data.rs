@@ -1,6 +1,7 @@
-//! What a fit is scored on: the cost J of SPEC §2 (on the dataset as recorded) and the
-//! likelihood of the recorded rows (inputs smoothed, sensor offsets and the supply-pressure
-//! sensor's offset as nuisances); see [`super::fit`] for how the two are used.
+//! What a fit is scored on: the cost J (docs/model.md, "Cost J"; on the dataset as
+//! recorded) and the likelihood of the recorded rows (inputs smoothed, sensor offsets and
+//! the supply-pressure sensor's offset as nuisances); see [`super::fit`] for how the two
+//! are used.
 
 use super::goodness::ChannelChi2;
 use crate::data::dataset::Dataset;
@@ -15,7 +16,7 @@ use crate::units::Quantity;
 /// What a fit is scored on: the cost J that the multi-start minimises, and the likelihood of
 /// the recorded rows that gives the estimate, its intervals and its goodness of fit.
 pub struct FitData {
-    /// J of SPEC §2 on the dataset as recorded.
+    /// J (docs/model.md, "Cost J") on the dataset as recorded.
     pub cost: CostModel,
     /// The same experiments driven by the smooth of each recorded input column.
     pub smoothed: CostModel,

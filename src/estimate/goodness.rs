@@ -1,5 +1,5 @@
 //! Goodness of fit against a noise estimate from the data, and the check that no other local
-//! optimum competes with the estimate (issue 11: intervals are trusted only where the model
+//! optimum competes with the estimate (intervals are trusted only where the model
 //! reaches the noise and the optimum is unique).
 //!
 //! # Noise ratio

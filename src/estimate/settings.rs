@@ -19,7 +19,7 @@ pub struct MultiStartConfig {
     /// Convergence: standard deviation of the simplex costs below this (cost units).
     /// Default 1e-5: at most 0.01 in χ² (the largest channel has ~650 rows, and χ² = Σ N_c·J_c),
     /// far below anything an interval sees, and about the cost's own jitter from adaptive
-    /// integration (issue 10: a tolerance below it is met only by a fully collapsed simplex).
+    /// integration (a tolerance below it is met only by a fully collapsed simplex).
     /// Measured on the shipped dataset, 32 starts: 38 038 evaluations instead of 60 121 at
     /// 1e-6, the best cost 1.4e-5 higher, every parameter within 6e-5 relative.
     pub sd_tolerance: f64,
@@ -36,7 +36,7 @@ pub struct MultiStartConfig {
     /// has already converged stops as `joined`: it has found a minimum of that cost, and
     /// polishing it to the last digit only repeats work (the best start is finished to
     /// full convergence before export anyway). Default 1e-4: Δχ² ≈ 0.1 at the shipped
-    /// dataset's optimum. Measured on 256 starts of the shipped dataset (issue 10): the
+    /// dataset's optimum. Measured on 256 starts of the shipped dataset: the
     /// converged starts used two thirds of all evaluations, half of them after reaching
     /// their final cost to 0.1%. Negative: never join.
     pub join_tolerance: f64,

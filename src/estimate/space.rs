@@ -12,7 +12,7 @@ use crate::model::params::{spec, Domain, MotorParams, ParamSet};
 /// One estimated parameter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dimension {
-    /// Parameter name (SPEC §1.7).
+    /// Parameter name (docs/model.md, "Parameters").
     pub name: String,
     /// Lower bound, SI.
     pub lo: f64,
@@ -42,8 +42,8 @@ pub struct ParamSpace {
 #[error("{0}")]
 pub struct SpaceError(pub String);
 
-/// The base model's estimated parameters by default (SPEC §1.7): six conductances and the
-/// two friction terms.
+/// The base model's estimated parameters by default (docs/model.md, "Parameters", "What is
+/// estimated"): six conductances and the two friction terms.
 pub const DEFAULT_ESTIMATED: [&str; 8] = [
     "c_in1",
     "c_out2",

@@ -154,10 +154,11 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
 /// a residual vector that cannot be computed at a step) divide the solver's jitter by h²
 /// and, at the estimate, by the tiny rise of χ² over one step: on twin data their
 /// correlations moved from run to run with rounding-level changes of the ODE solver, and one
-/// fit's H came out indefinite (issue 10); first differences of the residuals divide the
-/// jitter by h only, and JᵀJ is positive semi-definite by construction. The term the
-/// Gauss–Newton form drops, Σ r·∇²r, averages out where the residuals are the data's noise.
-/// `None` when the curvature is not positive definite (a flat or ill-posed direction).
+/// fit's H came out indefinite (twin seed 2 of the coverage test); first differences of the
+/// residuals divide the jitter by h only, and JᵀJ is positive semi-definite by
+/// construction. The term the Gauss–Newton form drops, Σ r·∇²r, averages out where the
+/// residuals are the data's noise. `None` when the curvature is not positive definite (a
+/// flat or ill-posed direction).
 pub fn curvature_covariance(
     problem: &Problem<'_>,
     theta: &[f64],

@@ -1,8 +1,9 @@
-//! Terms outside the catalog (SPEC §5, "uncatalogued"): `coefficient · pressure(x) · speed(ω)`
-//! added to one balance of the motor, or carried along a leak path between two volumes (or
-//! a volume and atmosphere), so that the mass one balance loses the other gains.
-//! `vanefit diagnose` finds them; fit files carry them in `model.discovered`, and every
-//! command that reads a fit file applies them.
+//! Terms outside the catalog (docs/model.md, "Missing-physics catalog", last paragraph:
+//! "uncatalogued"): `coefficient · pressure(x) · speed(ω)` added to one balance of the
+//! motor, or carried along a leak path between two volumes (or a volume and atmosphere), so
+//! that the mass one balance loses the other gains. `vanefit diagnose` finds them; fit
+//! files carry them in `model.discovered`, and every command that reads a fit file applies
+//! them.
 //!
 //! # Leak paths
 //!
@@ -21,7 +22,8 @@ use crate::numerics::ode::State;
 use PressureFactor as P;
 use SpeedFactor as W;
 
-/// The balance a discovered term enters (SPEC §5, uncatalogued mismatches).
+/// The balance a discovered term enters (docs/model.md, "Missing-physics catalog":
+/// uncatalogued mismatches).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum BalanceId {
     /// The torque balance: the term is a loss torque, N·m, added to the friction torque
@@ -149,9 +151,9 @@ impl LeakPath {
         Self { from, to }
     }
 
-    /// The SPEC §5 category of a leak along this path: between two volumes
-    /// `internal_leakage`; from V_1 to atmosphere (the supply side) `inlet_flow`; from V_2
-    /// or V_e to atmosphere `outlet_flow`.
+    /// The category (docs/model.md, "Missing-physics catalog") of a leak along this path:
+    /// between two volumes `internal_leakage`; from V_1 to atmosphere (the supply side)
+    /// `inlet_flow`; from V_2 or V_e to atmosphere `outlet_flow`.
     pub fn category(self) -> Category {
         use Chamber::*;
         match (self.from, self.to) {
@@ -357,10 +359,10 @@ impl Term for ExtraTerm {
     }
 }
 
-/// The SPEC §5 category of a discovered term: torque → torque_loss; a leak path by its path
-/// ([`LeakPath::category`]); a one-balance mass term driven by a pressure difference between
-/// two chambers → internal_leakage; other mass terms at V_1 → inlet_flow, at V_2 or V_e →
-/// outlet_flow.
+/// The category (docs/model.md, "Missing-physics catalog") of a discovered term: torque →
+/// torque_loss; a leak path by its path ([`LeakPath::category`]); a one-balance mass term
+/// driven by a pressure difference between two chambers → internal_leakage; other mass
+/// terms at V_1 → inlet_flow, at V_2 or V_e → outlet_flow.
 pub fn category(t: &ExtraTerm) -> Category {
     match t.balance {
         BalanceId::Torque => Category::TorqueLoss,

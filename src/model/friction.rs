@@ -1,4 +1,5 @@
-//! Friction torque of rotor, vanes and bearings (SPEC §1.5, §5), N·m.
+//! Friction torque of rotor, vanes and bearings (docs/model.md, "Mechanics and friction"
+//! and "Missing-physics catalog"), N·m.
 //!
 //! Base model: T_f = T_c·tanh(ω/ω_reg) + d·ω (regularised Coulomb plus viscous).
 //! The tanh regularisation replaces the discontinuous sign function so that the ODE has a
@@ -14,8 +15,8 @@ pub fn stribeck_dry(omega: f64, t_coulomb_nm: f64, t_static_nm: f64, w_stribeck:
     t_coulomb_nm + (t_static_nm - t_coulomb_nm) * (-(omega / w_stribeck).powi(2)).exp()
 }
 
-/// Stribeck breakaway friction (`breakaway_friction`, SPEC §5), N·m:
-/// T_f = (T_c + (T_s − T_c)·exp(−(ω/ω_s)²))·tanh(ω/ω_reg) + d·ω.
+/// Stribeck breakaway friction (`breakaway_friction`; docs/model.md, "Missing-physics
+/// catalog"), N·m: T_f = (T_c + (T_s − T_c)·exp(−(ω/ω_s)²))·tanh(ω/ω_reg) + d·ω.
 pub fn stribeck(
     omega: f64,
     t_coulomb_nm: f64,

@@ -1,4 +1,4 @@
-//! Compartment geometry of the vane motor (paper eqs. 1–7, SPEC §1.1).
+//! Compartment geometry of the vane motor (paper eqs. 1–7; docs/model.md, "Geometry").
 //!
 //! All lengths in m, volumes in m³, angles in rad. The paper's eq. 5 prints `V_α − V_{α−iγ}`
 //! for the middle branch; the compartment between two neighbouring vanes is bounded by the vane

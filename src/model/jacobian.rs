@@ -242,7 +242,7 @@ impl Motor {
     /// ```
     ///
     /// (units of dx/dt per second). A stiff integrator takes this instead of a forward
-    /// difference in time, which costs one more right-hand side per step (issue 10).
+    /// difference in time, which costs one more right-hand side per step.
     /// `None` under the same conditions as [`Motor::jacobian`] (effects or extra terms).
     pub fn time_slope(&self, x: &State, bc: &Boundary, rate: &BoundaryRate) -> Option<State> {
         if !self.effects.is_empty() || !self.extra.is_empty() {

@@ -1,6 +1,6 @@
-//! The motor model (SPEC §1, paper §2): geometry, polytropic cycle, nozzles, friction,
-//! the missing-physics catalog, parameters, the motor as parameters → state derivatives, and
-//! the analytic Jacobian of the base model.
+//! The motor model (docs/model.md; paper §2): geometry, polytropic cycle, nozzles,
+//! friction, the missing-physics catalog, parameters, the motor as parameters → state
+//! derivatives, and the analytic Jacobian of the base model.
 
 pub mod effects;
 pub mod extra;

@@ -1,4 +1,4 @@
-//! The motor model: parameters → state derivatives (SPEC §1, paper Figs. 7 and 8).
+//! The motor model: parameters → state derivatives (docs/model.md; paper Figs. 7 and 8).
 //!
 //! State x = [p_1, p_2, p_e, ω]: the pressures (Pa) of the three isothermal lumped volumes
 //! at the stator inlets and the rotor speed (rad/s). Pressures are states rather than masses
@@ -9,7 +9,7 @@
 //! port 1 → in_1 → V_1; V_2 → out_2 → port 2; V_e → EXT → atmosphere;
 //! leakage V_1 → V_e (1_Ext), V_2 → V_e (2_Ext), V_1 → V_2 (1_2);
 //! plus the displacement flows of the ideal motor (`thermo`).
-//! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (SPEC §1.5).
+//! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (docs/model.md, "Mechanics and friction").
 
 use crate::model::effects::{CatalogEffect, Effect, EffectSet, SupplyValve, Term};
 use crate::model::extra::slot;
@@ -176,7 +176,7 @@ impl Motor {
         Self::new(MotorParams::default(), EffectSet::empty())
     }
 
-    /// The ideal motor's polytropic cycle (SPEC §1.2).
+    /// The ideal motor's polytropic cycle (docs/model.md, "Cycle work and torque").
     pub fn cycle(&self) -> &Cycle {
         &self.cycle
     }
@@ -273,7 +273,8 @@ impl Motor {
             .expect("the catalog describes the supply valve (valve_dynamics)")
     }
 
-    /// Torque of the ideal motor with the forward/reverse blend of SPEC §1.2, N·m.
+    /// Torque of the ideal motor with the forward/reverse blend of docs/model.md, "Cycle
+    /// work and torque", N·m.
     fn ideal_torque(&self, p1: f64, p2: f64, pe: f64, omega: f64) -> f64 {
         let w_fwd = forward_weight(omega);
         let fill_fwd = self.filling_pressure(p1, pe, omega);
@@ -378,7 +379,8 @@ impl Motor {
         }
     }
 
-    /// Time derivatives of the state, dx/dt (paper eqs. 14–15 and SPEC §1.5).
+    /// Time derivatives of the state, dx/dt (paper eqs. 14–15; docs/model.md, "Mechanics
+    /// and friction").
     pub fn derivatives(&self, x: &State, bc: &Boundary) -> State {
         let b = self.balance(x, bc);
         self.derivatives_from(&b)

@@ -1,5 +1,6 @@
 //! ISO 6358 (1989 form) restriction with a laminar extension near pressure ratio 1
-//! (SPEC §1.4). Used for the ducts and for every leakage path.
+//! (docs/model.md, "Lumped volumes and nozzles"). Used for the ducts and for every leakage
+//! path.
 //!
 //! ṁ = C·ρ0·p_u·√(T0/T_u)·ψ(r),  r = p_d/p_u,
 //! ψ = 1                                 for r ≤ b       (choked)
@@ -89,7 +90,7 @@ pub fn series_flow(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64,
 /// boundaries (p_m = b_up·p_u, where the first nozzle stops choking, and p_m = p_d/b_down,
 /// where the second starts) tells which pair holds the root; one quadratic is then solved.
 /// Returns p_m and ṁ² there from the upstream nozzle's polynomial (the flow itself without
-/// evaluating either nozzle again: issue 10, the outlet throttle's rows and right-hand
+/// evaluating either nozzle again: the outlet throttle's rows and right-hand
 /// sides spend most of their time here); `None` when the root lies in a laminar range.
 fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<(f64, f64)> {
     let (k1, k2) = (

@@ -1,5 +1,6 @@
-//! Motor parameters: names, units, defaults and bounds (SPEC §1.6, §5), and the one place
-//! where unchecked values become checked parameters (as linfa's `ParamGuard`).
+//! Motor parameters: names, units, defaults and bounds (docs/model.md, "Parameters"), and
+//! the one place where unchecked values become checked parameters (as linfa's
+//! `ParamGuard`).
 //!
 //! Every parameter is SI. The names are the contract used in fit files and on the command
 //! line; they must not change.
@@ -100,7 +101,7 @@ macro_rules! base_params {
         #[allow(non_camel_case_types)]
         enum Base { $( $field, )* }
 
-        /// The base model's parameters (SPEC §1.6), first in [`PARAMS`].
+        /// The base model's parameters (docs/model.md, "Parameters"), first in [`PARAMS`].
         pub const BASE_PARAMS: &[ParamSpec] = &[
             $( ParamSpec { name: stringify!($field), unit: $unit, default: $default, domain: $domain,
                            search: ($lo, $hi), effect: None, off: OffValue::NotAnEffect,
@@ -288,7 +289,7 @@ pub fn conductance_dm3_s_bar(c_m3_s_pa: f64) -> f64 {
 }
 
 impl Default for MotorParams {
-    /// Motor AR034-11 with the appendix conductances (SPEC §1.6).
+    /// Motor AR034-11 with the appendix conductances (docs/model.md, "Parameters").
     fn default() -> Self {
         Self::defaults()
     }

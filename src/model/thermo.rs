@@ -1,5 +1,6 @@
 //! Thermodynamics of the ideal motor: polytropic cycle work and torque (paper eqs. 8–13 with
-//! the sign corrections of SPEC §1.2) and the displacement flows (eqs. 14–18, SPEC §1.3).
+//! the sign corrections of docs/model.md, "Cycle work and torque") and the displacement
+//! flows (eqs. 14–18; docs/model.md, "Flows through the ideal motor").
 //!
 //! Pressures in Pa (absolute), volumes in m³, work in J, torque in N·m, ω in rad/s,
 //! mass flows in kg/s.
@@ -74,7 +75,8 @@ impl Cycle {
         self.vanes * self.v_fill_m3
     }
 
-    /// Work done BY the air in one compartment per cycle (eqs. 9–12, SPEC §1.2), J:
+    /// Work done BY the air in one compartment per cycle (eqs. 9–12; docs/model.md, "Cycle
+    /// work and torque"), J:
     ///
     /// ```text
     /// W = (p_a − p_b)(V_fill − V_d)
@@ -95,7 +97,8 @@ impl Cycle {
     }
 }
 
-/// Weight of the forward direction in the torque blend, ½(1 + tanh(ω/ω_b)) (SPEC §1.2).
+/// Weight of the forward direction in the torque blend, ½(1 + tanh(ω/ω_b)) (docs/model.md,
+/// "Cycle work and torque").
 pub fn forward_weight(omega: f64) -> f64 {
     0.5 * (1.0 + (omega / OMEGA_BLEND_RAD_S).tanh())
 }
@@ -113,7 +116,8 @@ pub struct DisplacementFlows {
     pub into_e_kg_s: f64,
 }
 
-/// Displacement flows (eqs. 16–18, SPEC §1.3) for speed ω (rad/s).
+/// Displacement flows (eqs. 16–18; docs/model.md, "Flows through the ideal motor") for
+/// speed ω (rad/s).
 ///
 /// Forward (ω > 0): ṁ_from1 = p_fill·ω·V_disp/(2π·RT) leaves volume 1,
 /// ṁ_to2 = p_e·ω·ε·V_disp/(2π·RT) enters volume 2, the rest ṁ_from1 − ṁ_to2 enters volume e.

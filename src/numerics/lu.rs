@@ -18,8 +18,8 @@ pub struct Lu {
 
 impl Lu {
     /// Factors `a`; `None` when a pivot is zero or not finite (a singular step matrix).
-    /// Plain index loops over the fixed size, so that the compiler unrolls them (issue 10:
-    /// with iterator adapters one factorisation took ~700 instructions).
+    /// Plain index loops over the fixed size, so that the compiler unrolls them
+    /// (with iterator adapters one factorisation took ~700 instructions).
     #[inline]
     // Index loops on purpose: the pivot row and the row it updates are rows of one array.
     #[allow(clippy::needless_range_loop)]

@@ -56,10 +56,9 @@ impl Default for Tolerances {
     /// its own, see [`super::rodas::Rodas4`]). Chosen by measurement so that
     /// the fitting cost is smooth in the parameters: an adaptive integrator changes its step
     /// sequence when a parameter changes, and the cost jitters with its tolerance. Over a
-    /// 1e-5 change of c_12 (examples in the issue-4 note) the jitter was 2e-2 cost units at
-    /// rtol 1e-6, 3e-3 at 1e-7 and 5e-4 at 3e-8, and the largest output error 0.02σ, 0.006σ
-    /// and 0.0004σ of the sensor noise; Nelder–Mead stalls in this problem's narrow valleys
-    /// at the looser settings.
+    /// 1e-5 change of c_12 the jitter was 2e-2 cost units at rtol 1e-6, 3e-3 at 1e-7 and
+    /// 5e-4 at 3e-8, and the largest output error 0.02σ, 0.006σ and 0.0004σ of the sensor
+    /// noise; Nelder–Mead stalls in this problem's narrow valleys at the looser settings.
     fn default() -> Self {
         Self::with_rtol(3e-8)
     }

@@ -123,18 +123,18 @@ pub struct Rodas4 {
 
 impl Default for Rodas4 {
     /// rtol 3e-7 with 2 mPa on pressures and 1e-3 rad/s on speed, chosen by measurement
-    /// (`cargo run --release --example solver_accuracy`, issue 10). The largest deviation
-    /// of any simulated output of the shipped dataset's experiments from an rtol-1e-12
-    /// reference, in units of that channel's noise σ: 0.0015σ for the default motor and
-    /// 0.0015σ for one with 3× the cross leak and 2× the friction (`MOTOR=leaky`; diffsol's
-    /// BDF at its default rtol 3e-8: 0.0030σ and 0.0017σ), for about 3.5× fewer
-    /// instructions per evaluation. The absolute tolerance on pressures is what matters near
-    /// atmosphere, where the laminar range of the nozzles turns millipascals into
-    /// measurable flow; the worst deviations sit at the start of the pressure ramp, where
-    /// the nozzles cross their laminar thresholds one after another, and move with where
-    /// the steps fall against those kinks. Steps land just past the kinks the model reports
-    /// ([`StiffSolver::solve_with_kinks`]); with that, 3 mPa gave 0.0021σ and 0.0015σ,
-    /// 2.5 mPa with rtol 2.5e-7 0.0014σ, 2 mPa with rtol 2e-7 0.0014σ for 10 % more steps.
+    /// (`cargo run --release --example solver_accuracy`). The largest deviation of any
+    /// simulated output of the shipped dataset's experiments from an rtol-1e-12 reference,
+    /// in units of that channel's noise σ: 0.0015σ for the default motor and 0.0015σ for
+    /// one with 3× the cross leak and 2× the friction (`MOTOR=leaky`; diffsol's BDF at its
+    /// default rtol 3e-8: 0.0030σ and 0.0017σ), for about 3.5× fewer instructions per
+    /// evaluation. The absolute tolerance on pressures is what matters near atmosphere,
+    /// where the laminar range of the nozzles turns millipascals into measurable flow; the
+    /// worst deviations sit at the start of the pressure ramp, where the nozzles cross
+    /// their laminar thresholds one after another, and move with where the steps fall
+    /// against those kinks. Steps land just past the kinks the model reports
+    /// ([`StiffSolver::solve_with_kinks`]); with that, 3 mPa gave 0.0021σ and 0.0015σ, 2.5
+    /// mPa with rtol 2.5e-7 0.0014σ, 2 mPa with rtol 2e-7 0.0014σ for 10 % more steps.
     fn default() -> Self {
         Self {
             tol: Tolerances {
@@ -220,7 +220,7 @@ pub fn step(rhs: &Rhs<'_>, t: f64, y: &State, lin: &Linearisation, h: f64) -> Op
     let mut k = [[0.0; N_STATES]; 6];
     k[0] = lu.solve(std::array::from_fn(|i| lin.f[i] + D[0] * h * lin.f_t[i]));
     // Stages 2–6 written out, each sum over a fixed number of earlier stages, so that every
-    // loop has constant bounds and unrolls (issue 10: the generic stage loop cost a sixth of
+    // loop has constant bounds and unrolls (the generic stage loop cost a sixth of
     // an evaluation's instructions). The sums add in the same order as Σ_j from j = 1.
     let stage = |arg: &State, c: f64, d: f64, couplings: State| -> State {
         let f = rhs(t + c * h, arg);
@@ -348,7 +348,7 @@ impl StepControl {
 }
 
 /// x^(1/4) as two square roots: the step control asks for it after every step, and `powf`
-/// cost ~2 % of an evaluation's instructions (issue 10).
+/// cost ~2 % of an evaluation's instructions.
 fn fourth_root(x: f64) -> f64 {
     x.sqrt().sqrt()
 }

@@ -1,4 +1,5 @@
-//! The fitting cost (SPEC §2, issue 3): simulation against the reference polynomials.
+//! The fitting cost (docs/model.md, "Cost J"): simulation against the reference
+//! polynomials.
 //!
 //! For every measured channel c of every experiment e, with reference polynomial ŷ_c(x)
 //! and noise level σ_c (both from [`crate::objective::reference`], SI), the simulated value y_c,i at
@@ -158,7 +159,8 @@ pub fn compared_rows(abscissa: &[f64], reference: &Reference, values: &[f64]) ->
         .collect()
 }
 
-/// The cost of SPEC §2 for one dataset: experiments and references are built once.
+/// The cost J (docs/model.md, "Cost J") of one dataset: experiments and references are
+/// built once.
 #[derive(Debug)]
 pub struct CostModel {
     experiments: Vec<ExperimentCost>,

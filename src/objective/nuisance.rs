@@ -1,5 +1,5 @@
 //! Systematic errors of a rig as linear nuisance parameters, profiled out in closed form
-//! (issue 11: sensor offsets and the supply-pressure sensor's offset).
+//! (sensor offsets and the supply-pressure sensor's offset).
 //!
 //! A nuisance β_k (a sensor's zero offset, SI of that sensor; the recorded supply pressure's
 //! offset, Pa) moves the compared rows by β_k·a_k, with a_k its effect on every row (SI per

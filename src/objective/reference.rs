@@ -1,6 +1,7 @@
-//! Reference responses (paper §4.2, SPEC §2): each measured channel of each experiment is
-//! described by a least-squares polynomial of its abscissa, valid only over the measured
-//! range. The cost ([`crate::objective::cost`]) compares simulations against these polynomials.
+//! Reference responses (paper §4.2; docs/model.md, "Reference experiments"): each measured
+//! channel of each experiment is described by a least-squares polynomial of its abscissa,
+//! valid only over the measured range. The cost ([`crate::objective::cost`]) compares
+//! simulations against these polynomials.
 //!
 //! # Method
 //!

@@ -1,4 +1,5 @@
-//! Predictions from a fit (issue 12, SPEC §7): what the fitted motor does at other supply
+//! Predictions from a fit (docs/formats.md, "Contracts added later"; docs/model.md,
+//! "Catalogue figures and predictions"): what the fitted motor does at other supply
 //! pressures, or with an extra nozzle at its inlet or outlet, and how sure that is.
 //!
 //! For each asked supply pressure: the catalogue row of [`crate::sim::operating_point`]

@@ -1,13 +1,14 @@
-//! The written results of `vanefit predict` (SPEC §7): `catalogue.csv`, `factors.csv`,
-//! `curves.csv`, `predict.md` and SVG figures, all written atomically.
+//! The written results of `vanefit predict` (docs/formats.md, "Contracts added later"):
+//! `catalogue.csv`, `factors.csv`, `curves.csv`, `predict.md` and SVG figures, all written
+//! atomically.
 //!
 //! Units at this edge: supply pressure in the unit asked for (column `p_supply_<unit>`,
-//! a pressure unit of `p_port1` columns, SPEC §3; bar g unless asked otherwise), speeds in
-//! rpm, power in W, torque in N·m, air consumption in l/s ANR (the mass flow into port 1
-//! divided by ρ0 = 1.185 kg/m³, ISO 8778 / SPEC §1). Every figure has its 95 % band in
-//! `<column>_lo` and `<column>_hi` (empty when the fit gives no band); `extrapolated` is
-//! `true` for a pressure outside those the fitted data covered (empty when the fit does not
-//! say which).
+//! a pressure unit of `p_port1` columns, docs/formats.md, "CSV recordings"; bar g unless
+//! asked otherwise), speeds in rpm, power in W, torque in N·m, air consumption in l/s ANR
+//! (the mass flow into port 1 divided by ρ0 = 1.185 kg/m³, ISO 8778; docs/model.md,
+//! "Constants"). Every figure has its 95 % band in `<column>_lo` and `<column>_hi` (empty
+//! when the fit gives no band); `extrapolated` is `true` for a pressure outside those the
+//! fitted data covered (empty when the fit does not say which).
 
 use crate::predict::{Banded, Prediction, PressurePrediction};
 use crate::report::plot::{PlotError, COLOURS};
@@ -80,7 +81,8 @@ fn l_s_anr(v: f64) -> f64 {
     Unit::LSAnr.from_si(v, 0.0)
 }
 
-/// The catalogue's columns, in the order of `predict::ROW_FIGURES` (SPEC §7's names).
+/// The catalogue's columns, in the order of `predict::ROW_FIGURES` (the names of
+/// docs/formats.md, "Contracts added later").
 const CATALOGUE: [Column; 7] = [
     Column {
         name: "free_speed_rpm",
@@ -244,8 +246,9 @@ fn banded_header(columns: &[Column]) -> Vec<String> {
     h
 }
 
-/// `catalogue.csv`: one row per pressure (SPEC §7's first eight columns, then the bands,
-/// `extrapolated` and the speed grid of the maximum power in rpm).
+/// `catalogue.csv`: one row per pressure (the first eight columns of docs/formats.md,
+/// "Contracts added later", then the bands, `extrapolated` and the speed grid of the
+/// maximum power in rpm).
 pub fn catalogue_csv(pr: &Prediction, display: &PressureDisplay) -> String {
     let mut header = vec![display.column()];
     header.extend(banded_header(&CATALOGUE));
@@ -264,8 +267,8 @@ pub fn catalogue_csv(pr: &Prediction, display: &PressureDisplay) -> String {
     csv(&header, &rows)
 }
 
-/// `factors.csv`: one row per pressure (SPEC §7's five columns, then the bands and
-/// `extrapolated`).
+/// `factors.csv`: one row per pressure (the five columns of docs/formats.md, "Contracts
+/// added later", then the bands and `extrapolated`).
 pub fn factors_csv(pr: &Prediction, display: &PressureDisplay) -> String {
     let mut header = vec![display.column()];
     header.extend(banded_header(&FACTORS));

@@ -1,5 +1,6 @@
-//! Simulation: the reference experiments (SPEC §2) driven by recorded inputs, steady states,
-//! steady operating points and catalogue figures, input schedules.
+//! Simulation: the reference experiments (docs/model.md, "Reference experiments") driven by
+//! recorded inputs, steady states, steady operating points and catalogue figures, input
+//! schedules.
 
 pub mod experiment;
 pub mod operating_point;

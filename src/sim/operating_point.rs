@@ -1,13 +1,15 @@
 //! Steady operating points of a motor at a supply pressure, and the figures a catalogue
 //! gives for it (free speed, maximum power, stall torque, air consumption): what `vanefit
-//! predict` (SPEC §7) tabulates.
+//! predict` tabulates (docs/formats.md, "Contracts added later"; docs/model.md, "Catalogue
+//! figures and predictions").
 //!
 //! Every point is a steady state at an imposed speed ω ([`steady::at_speed`], as the
-//! datasheet experiment of SPEC §2 measures it) with no load, supply at port 1, port 2 and
-//! the exhaust to atmosphere, and optionally an extra ISO 6358 nozzle in series in front of
-//! port 1 or behind port 2 ([`Boundary::c_port1_m3_s_pa`], [`Boundary::c_port2_m3_s_pa`]).
-//! The shaft torque is T − T_f (SPEC §1.5); at exactly ω = 0 it is the stall torque by the
-//! convention of SPEC §2 ([`shaft_torque`], shared with the datasheet experiment).
+//! datasheet experiment measures it; docs/model.md, "Reference experiments") with no load,
+//! supply at port 1, port 2 and the exhaust to atmosphere, and optionally an extra ISO 6358
+//! nozzle in series in front of port 1 or behind port 2 ([`Boundary::c_port1_m3_s_pa`],
+//! [`Boundary::c_port2_m3_s_pa`]). The shaft torque is T − T_f (docs/model.md, "Mechanics
+//! and friction"); at exactly ω = 0 it is the stall torque by the convention of
+//! docs/model.md, "Conventions" ([`shaft_torque`], shared with the datasheet experiment).
 //! Power is P = T·ω (W); air consumption is the mass flow into port 1 (kg/s).
 
 use crate::model::motor::{idx, Balance, Boundary, Load, Motor, State};
@@ -75,8 +77,8 @@ pub struct OperatingPoint {
 /// exactly ω = 0 the air torque less the full dry friction at rest
 /// ([`Motor::friction_at_rest`]), since a brake holding the rotor measures a datasheet's
 /// stall torque against the breakaway friction, where the regularised T_c·tanh(ω/ω_reg)
-/// would be zero (SPEC §2, datasheet). The one place this rule lives: the datasheet
-/// experiment and the catalogue figures use it alike.
+/// would be zero (docs/model.md, "Reference experiments", datasheet). The one place this
+/// rule lives: the datasheet experiment and the catalogue figures use it alike.
 pub fn shaft_torque(motor: &Motor, x: &State, b: &Balance) -> f64 {
     if x[idx::OMEGA] == 0.0 {
         b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
@@ -368,7 +370,8 @@ mod tests {
         );
         assert_eq!(best.speed_rad_s, row.speed_at_max_power_rad_s);
         assert!(row.optimum.power_w >= row.max_power_w);
-        // SPEC §1.6: ≈ 100 W near half the free speed, ≈ 12 000 rpm free (at 0.73 MPa).
+        // docs/model.md, "Parameters": ≈ 100 W near half the free speed, ≈ 12 000 rpm free
+        // (at 0.73 MPa).
         assert!((60.0..140.0).contains(&row.max_power_w), "{row:?}");
         let ratio = row.speed_at_max_power_rad_s / row.free_speed_rad_s;
         assert!((0.3..0.7).contains(&ratio), "{ratio}");
@@ -421,7 +424,7 @@ mod tests {
         for (p, t) in points.iter().zip(torque) {
             assert!((p.torque_nm - t).abs() < 1e-9, "{} vs {t}", p.torque_nm);
         }
-        // ≈ 0.31 N·m at 0.73 MPa (SPEC §1.6), less the friction at rest.
+        // ≈ 0.31 N·m at 0.73 MPa (docs/model.md, "Parameters"), less the friction at rest.
         assert!((0.2..0.4).contains(&row.stall_torque_nm), "{row:?}");
     }
 
@@ -452,7 +455,7 @@ mod tests {
 
     #[test]
     fn a_motor_starved_by_its_inlet_nozzle_does_not_start_instead_of_failing() {
-        // Issue 15: `predict --inlet-nozzle 1e-13` ended in "no steady state". Starved, the
+        // `predict --inlet-nozzle 1e-13` used to end in "no steady state". Starved, the
         // chambers sit at atmosphere and the stall torque is the friction at rest, −T_c.
         let m = Motor::new(MotorParams::default(), Default::default());
         for c in [1e-12, 1e-13, 1e-15] {

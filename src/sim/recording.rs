@@ -50,7 +50,7 @@ pub struct Column {
 /// The cells of a column as written, in one buffer with the end of each cell: a recording
 /// of a million rows would otherwise hold millions of small strings (each a 24-byte handle
 /// and a heap block of 32 bytes for some ten bytes of text; 0.8 GB resident for `check` of
-/// a 100 MB file, issue 15). Indexing gives the cell's text (`raw[k]` is a `&str`).
+/// a 100 MB file). Indexing gives the cell's text (`raw[k]` is a `&str`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Cells {
     text: String,
@@ -165,7 +165,8 @@ impl Recording {
     }
 }
 
-/// The experiment kinds of SPEC §2 (defined by the registry of `sim::experiment`).
+/// The experiment kinds (docs/model.md, "Reference experiments"; defined by the registry of
+/// `sim::experiment`).
 pub use crate::sim::experiment::Kind;
 
 /// One experiment as the rig file describes it, with its recording.

@@ -8,11 +8,11 @@
 //! exactly. Outside the knots it extends linearly.
 
 /// Upper bound on the knots of a schedule. The reference experiments are slow ramps
-/// (SPEC §2): 16 knots follow any input that changes over more than a sixteenth of the
-/// record, and each knot averages ~40 samples of a 10 Hz, 60 s record, so 1 kPa of sensor
-/// noise leaves ≈0.15 kPa. Measured on the shipped dataset: one cost evaluation took
-/// 1.76 ms with 64 knots, 1.01 ms with 32 and 0.76 ms with 16 (noisy knots make the
-/// integrator follow wiggles that are not in the applied input).
+/// (docs/model.md, "Reference experiments"): 16 knots follow any input that changes over
+/// more than a sixteenth of the record, and each knot averages ~40 samples of a 10 Hz, 60 s
+/// record, so 1 kPa of sensor noise leaves ≈0.15 kPa. Measured on the shipped dataset: one
+/// cost evaluation took 1.76 ms with 64 knots, 1.01 ms with 32 and 0.76 ms with 16 (noisy
+/// knots make the integrator follow wiggles that are not in the applied input).
 pub const MAX_KNOTS: usize = 16;
 
 /// A C¹ monotone-cubic function of time.

@@ -66,7 +66,7 @@ fn solve(
     let n_free = if speed_fixed { 3 } else { 4 };
     let f = |x: &State| motor.derivatives(x, bc);
     // f and, for the base model, its Jacobian in one pass: the Jacobian at each accepted
-    // point is the next iteration's (issue 10: a separate Jacobian evaluated f again).
+    // point is the next iteration's (a separate Jacobian would evaluate f again).
     let linearise = |x: &State| match motor.derivatives_and_jacobian(x, bc) {
         Some((fx, jac)) => (fx, Some(jac)),
         None => (f(x), None),

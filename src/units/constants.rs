@@ -1,4 +1,4 @@
-//! Physical constants fixed by SPEC §1 (SI units).
+//! Physical constants of the model (docs/model.md, "Constants"; SI units).
 
 /// Specific gas constant of air, R = 287 J/(kg·K).
 pub const R_AIR: f64 = 287.0;
@@ -10,12 +10,14 @@ pub const RT0: f64 = R_AIR * T0_K;
 pub const RHO0_KG_M3: f64 = 1.185;
 /// Standard atmosphere, used unless the rig file gives its own p_atm.
 pub const P_ATM_PA: f64 = 101_325.0;
-/// Speed scale of the forward/reverse torque blend (SPEC §1.2), rad/s.
+/// Speed scale of the forward/reverse torque blend (docs/model.md, "Cycle work and
+/// torque"), rad/s.
 pub const OMEGA_BLEND_RAD_S: f64 = 1.0;
 
 /// Specific gas constant of dry air for converting volume flows at stated reference
-/// conditions to mass (ISO 2533 value), J/(kg·K). The model itself uses [`R_AIR`] (SPEC
-/// §1); this one only turns a catalogue's "l/s at 1 bar, 20 °C" into kg/s.
+/// conditions to mass (ISO 2533 value), J/(kg·K). The model itself uses [`R_AIR`]
+/// (docs/model.md, "Constants"); this one only turns a catalogue's "l/s at 1 bar, 20 °C"
+/// into kg/s.
 pub const R_DRY_AIR: f64 = 287.052_87;
 /// Free air (ISO 1217 reference inlet conditions, which compressor and air-motor
 /// catalogues quote "free air" at): 100 kPa, 20 °C, dry: ρ = p/(R·T) ≈ 1.18836 kg/m³.

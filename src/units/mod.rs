@@ -1,6 +1,7 @@
-//! Column names and units at the file edge (SPEC §3). Every CSV column name is a quantity
-//! followed by its unit (`flow1_g_s`, `p_port1_bar_g`); values convert to SI on import and
-//! back on export. Nothing inside the crate sees any unit but SI.
+//! Column names and units at the file edge (docs/formats.md, "CSV recordings"). Every CSV
+//! column name is a quantity followed by its unit (`flow1_g_s`, `p_port1_bar_g`); values
+//! convert to SI on import and back on export. Nothing inside the crate sees any unit but
+//! SI.
 
 pub mod constants;
 pub mod format;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `vanefit batch --slurm` against a real Slurm (issue 14), not a mock.
+# `vanefit batch --slurm` against a real Slurm, not a mock.
 #
 # Starts its own munged (as user munge, on a socket in a temporary folder), slurmctld and
 # slurmd (one node "localhost", 2 CPUs, config in the temporary folder, passed as

@@ -1,4 +1,5 @@
-//! The three reference experiments of SPEC §2, noise-free, in SI units.
+//! The three reference experiments (docs/model.md, "Reference experiments"), noise-free, in
+//! SI units.
 
 use super::motor::{self, TwinMotor};
 use super::ode::{State, Tolerances, TrBdf2};
@@ -25,7 +26,7 @@ pub struct Conditions {
     /// Number of datasheet points, evenly spaced from 0 to the free speed.
     pub datasheet_points: usize,
     /// Critical pressure ratio of the outlet throttle, 1; `None`: the motor's b_crit
-    /// (SPEC §1.6: "critical pressure ratio of every nozzle").
+    /// ((docs/model.md, "Parameters"): "critical pressure ratio of every nozzle").
     pub throttle_b_crit: Option<f64>,
     /// Integrator tolerances of the transients.
     pub tol: Tolerances,
@@ -100,7 +101,8 @@ pub fn free_running_state(m: &TwinMotor, c: &Conditions) -> Result<State, String
     steady_state(|y| rig::rhs(m, &bc, y, false), &atm_state(c), false)
 }
 
-/// Datasheet (SPEC §2.1): steady pressures at N speeds evenly spaced from 0 to the free speed.
+/// Datasheet (docs/model.md, "Reference experiments"): steady pressures at N speeds evenly spaced
+/// from 0 to the free speed.
 pub fn datasheet(m: &TwinMotor, c: &Conditions) -> Result<DatasheetRows, String> {
     let w_free = free_running_state(m, c)?[3];
     let bc = open_boundary(c, c.p_supply_pa, 0.0);
@@ -122,15 +124,16 @@ pub fn datasheet(m: &TwinMotor, c: &Conditions) -> Result<DatasheetRows, String>
     Ok(rows)
 }
 
-/// Pressure ramp (SPEC §2.2): port 1 from p_atm linearly to the supply over `ramp_s`.
+/// Pressure ramp (docs/model.md, "Reference experiments"): port 1 from p_atm linearly to the supply
+/// over `ramp_s`.
 pub fn pressure_ramp(m: &TwinMotor, c: &Conditions) -> Result<TransientRows, String> {
     let slope_pa_s = (c.p_supply_pa - c.p_atm_pa) / c.ramp_s;
     let bc = |t: f64| open_boundary(c, c.p_atm_pa + slope_pa_s * t, c.brake_nm_s_rad);
     transient(m, c, c.ramp_s, bc, |b| b.p_port1_pa)
 }
 
-/// Outlet throttle (SPEC §2.3): constant supply; the port-2 nozzle's conductance falls
-/// log-spaced, c(t) = c_0·(c_1/c_0)^(t/T), over `throttle_s`.
+/// Outlet throttle (docs/model.md, "Reference experiments"): constant supply; the port-2 nozzle's
+/// conductance falls log-spaced, c(t) = c_0·(c_1/c_0)^(t/T), over `throttle_s`.
 pub fn outlet_throttle(m: &TwinMotor, c: &Conditions) -> Result<TransientRows, String> {
     let (c0, c1) = c.c_throttle_m3_s_pa;
     let bc = |t: f64| Boundary {

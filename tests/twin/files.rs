@@ -1,4 +1,5 @@
-//! rig.toml (SPEC §3) and truth.json (vanefit.fit/1, SPEC §4) of a twin dataset.
+//! rig.toml (docs/formats.md, "rig.toml") and truth.json (vanefit.fit/1, docs/formats.md,
+//! "Fit files") of a twin dataset.
 
 use super::motor::TwinMotor;
 use super::record::{Offsets, RecordConfig};
@@ -19,7 +20,8 @@ pub fn effect_ids(m: &TwinMotor) -> Vec<&'static str> {
     ids
 }
 
-/// (name, value, unit) of every parameter vanefit knows, base (SPEC §1.6) then effects (§5).
+/// (name, value, unit) of every parameter vanefit knows, base (docs/model.md,
+/// "Parameters") then effects ("Missing-physics catalog").
 pub fn parameters(m: &TwinMotor) -> Vec<(&'static str, f64, &'static str)> {
     let cond = "m3/(s*Pa)";
     let mut p = vec![
@@ -110,7 +112,7 @@ pub fn rig_toml(m: &TwinMotor, cfg: &RecordConfig, seed: u64, off: &Offsets) -> 
     );
     format!(
         "# Synthetic dataset written by the twin generator (tests/twin), an independent\n\
-         # implementation of the SPEC physics. seed {seed}.\n\
+         # implementation of the physics of docs/model.md. seed {seed}.\n\
          synthetic = true\n\
          description = \"{desc}\"\n\n\
          [motor]\nname = \"AR034-11 (twin)\"\nvanes = {}\ndisplacement_m3 = {:e}\n\

@@ -1,9 +1,11 @@
-//! The twin generator (issue 11): an independent implementation of the SPEC §1–§2 physics
-//! (and some §5 effects), written from the SPEC and the paper only, that writes datasets in
-//! vanefit's file formats. It shares no code with vanefit (no `use vanefit::…`), and
-//! integrates with TR-BDF2 where vanefit uses Rodas4/BDF: "same physics, different code".
+//! The twin generator: an independent implementation of the model and the reference experiments of
+//! docs/model.md (and some effects of its "Missing-physics catalog"), written from the docs and the
+//! paper only, that writes datasets in vanefit's file formats, so that a mistake shared by
+//! vanefit's model and its own synthetic data can show. It shares no code with vanefit (no `use
+//! vanefit::…`), and integrates with TR-BDF2 where vanefit uses Rodas4/BDF: "same physics,
+//! different code".
 //!
-//! Include it with `mod twin;` from an integration test, or with
+//! Include it with `#[path = "../twin/mod.rs"] mod twin;` from a test binary's `main.rs`, or with
 //! `#[path = "../tests/twin/mod.rs"] mod twin;` from an example.
 #![allow(dead_code, unused_imports)]
 

@@ -1,22 +1,25 @@
-//! The twin's motor: SPEC §1.2–§1.6 (and the §5 effects the twin supports), written from the
-//! SPEC and the paper only. SI units throughout: Pa absolute, kg/s, rad/s, N·m, m³.
+//! The twin's motor: docs/model.md from "Cycle work and torque" to "Parameters" (and the
+//! effects of its "Missing-physics catalog" the twin supports), written from the docs and the
+//! paper only. SI units throughout: Pa absolute, kg/s, rad/s, N·m, m³.
 
-/// Specific gas constant of air R, J/(kg·K) (SPEC §1).
+/// Specific gas constant of air R, J/(kg·K) (docs/model.md).
 pub const R_J_KG_K: f64 = 287.0;
-/// Reference temperature T0, K (SPEC §1); the volumes are isothermal at T0.
+/// Reference temperature T0, K (docs/model.md); the volumes are isothermal at T0.
 pub const T0_K: f64 = 293.15;
 /// R·T0, J/kg.
 pub const RT0_J_KG: f64 = R_J_KG_K * T0_K;
-/// ISO 6358 reference density ρ0, kg/m³ (SPEC §1).
+/// ISO 6358 reference density ρ0, kg/m³ (docs/model.md).
 pub const RHO0_KG_M3: f64 = 1.185;
 /// Standard atmosphere, Pa.
 pub const P_ATM_PA: f64 = 101_325.0;
-/// Speed scale ω_b of the forward/reverse torque blend, rad/s (SPEC §1.2).
+/// Speed scale ω_b of the forward/reverse torque blend, rad/s (docs/model.md,
+/// "Cycle work and torque").
 pub const OMEGA_BLEND_RAD_S: f64 = 1.0;
-/// Pressure ratio above which a nozzle's flow is laminar (SPEC §1.4).
+/// Pressure ratio above which a nozzle's flow is laminar (docs/model.md, "Lumped volumes and
+/// nozzles").
 pub const R_LAMINAR: f64 = 0.999;
 
-/// Breakaway (Stribeck) friction, SPEC §5 `breakaway_friction`:
+/// Breakaway (Stribeck) friction, `breakaway_friction` (docs/model.md, "Missing-physics catalog"):
 /// T_f = (T_c + (T_s − T_c)·exp(−(ω/ω_s)²))·tanh(ω/ω_reg) + d·ω.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Breakaway {
@@ -26,7 +29,8 @@ pub struct Breakaway {
     pub w_stribeck_rad_s: f64,
 }
 
-/// Vanes seal better at speed, SPEC §5 `speed_dependent_leakage`: the three leak
+/// Vanes seal better at speed, `speed_dependent_leakage` (docs/model.md, "Missing-physics
+/// catalog"): the three leak
 /// conductances c_1e, c_2e, c_12 are multiplied by 1 + g/(1 + (ω/ω_seal)²).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SealLeakage {
@@ -36,7 +40,8 @@ pub struct SealLeakage {
     pub w_seal_rad_s: f64,
 }
 
-/// A vane motor: the SPEC §1.6 parameters (names as there) and optional effects.
+/// A vane motor: the parameters of (docs/model.md, "Parameters") (names as there) and optional
+/// effects.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TwinMotor {
     /// Sonic conductance supply → V_1 (nozzle in_1), m³/(s·Pa).
@@ -77,11 +82,12 @@ pub struct TwinMotor {
     pub visc: f64,
     /// Friction regularisation speed ω_reg, rad/s.
     pub w_reg: f64,
-    /// SPEC §5 `breakaway_friction`.
+    /// `breakaway_friction` (docs/model.md, "Missing-physics catalog").
     pub breakaway_friction: Option<Breakaway>,
-    /// SPEC §5 `vane_friction_speed_squared`: c_w2 in N·m·s²/rad², extra torque c_w2·ω·|ω|.
+    /// `vane_friction_speed_squared` (docs/model.md, "Missing-physics catalog"): c_w2 in
+    /// N·m·s²/rad², extra torque c_w2·ω·|ω|.
     pub vane_friction_speed_squared: Option<f64>,
-    /// SPEC §5 `speed_dependent_leakage`.
+    /// `speed_dependent_leakage` (docs/model.md, "Missing-physics catalog").
     pub speed_dependent_leakage: Option<SealLeakage>,
     /// Worn vane tips: internal leak V_1 → V_e, ṁ = k·(p_1 − p_e)·|p_1 − p_e| with k in
     /// kg/(s·Pa²). Not in vanefit's catalogue.
@@ -89,7 +95,8 @@ pub struct TwinMotor {
 }
 
 impl Default for TwinMotor {
-    /// Motor AR034-11 with the SPEC §1.6 defaults (paper appendix conductances).
+    /// Motor AR034-11 with the defaults of (docs/model.md, "Parameters") (paper appendix
+    /// conductances).
     fn default() -> Self {
         Self {
             c_in1: 6.758282e-9,
@@ -132,7 +139,8 @@ impl TwinMotor {
     }
 }
 
-/// ISO 6358 flow function ψ(r) with critical ratio b (SPEC §1.4): 1 for r ≤ b,
+/// ISO 6358 flow function ψ(r) with critical ratio b (docs/model.md, "Lumped volumes and
+/// nozzles"): 1 for r ≤ b,
 /// √(1 − ((r − b)/(1 − b))²) up to r_lam = 0.999, then linear to 0 at r = 1 (laminar
 /// extension, continuous at r_lam, finite slope everywhere).
 pub fn iso6358_psi(r: f64, b: f64) -> f64 {
@@ -150,7 +158,8 @@ pub fn iso6358_psi(r: f64, b: f64) -> f64 {
 }
 
 /// Mass flow through an ISO 6358 nozzle from side a to side b, kg/s (negative when the air
-/// flows from b to a, by symmetry): ṁ = C·ρ0·p_u·ψ(p_d/p_u) at T_u = T0 (SPEC §1.4).
+/// flows from b to a, by symmetry): ṁ = C·ρ0·p_u·ψ(p_d/p_u) at T_u = T0 (docs/model.md,
+/// "Lumped volumes and nozzles").
 pub fn nozzle_flow_kg_s(c_m3_s_pa: f64, b: f64, pa_pa: f64, pb_pa: f64) -> f64 {
     if pa_pa >= pb_pa {
         c_m3_s_pa * RHO0_KG_M3 * pa_pa * iso6358_psi(pb_pa / pa_pa, b)
@@ -169,7 +178,8 @@ fn expm1_over(a: f64, l: f64) -> f64 {
 }
 
 /// Mean torque of a cycle driven at pressure p_a into the compartment, discharged at p_b and
-/// exhausting at p_e, with positive rotation: T = z·W/(2π), where (SPEC §1.2, work by the air)
+/// exhausting at p_e, with positive rotation: T = z·W/(2π), where ((docs/model.md,
+/// "Cycle work and torque"), work by the air)
 ///
 /// W = (p_a − p_b)(V_fill − V_d) + p_a·V_fill·(1 − ε^(1−n))/(n−1) − p_e·V_exp·(ε^(n−1) − 1)/(n−1)
 ///
@@ -187,7 +197,8 @@ pub fn cycle_torque_nm(m: &TwinMotor, pa_pa: f64, pb_pa: f64, pe_pa: f64) -> f64
     m.z * work_j / (2.0 * std::f64::consts::PI)
 }
 
-/// Air torque of the ideal motor, N·m (SPEC §1.2): forward T_fwd = z·W(p_1, p_2)/(2π),
+/// Air torque of the ideal motor, N·m (docs/model.md, "Cycle work and torque"):
+/// forward T_fwd = z·W(p_1, p_2)/(2π),
 /// reverse T_rev = −z·W(p_2, p_1)/(2π), blended by ½(1 ± tanh(ω/ω_b)), ω_b = 1 rad/s.
 pub fn air_torque_nm(m: &TwinMotor, p_pa: [f64; 3], w_rad_s: f64) -> f64 {
     let [p1, p2, pe] = p_pa;
@@ -197,7 +208,8 @@ pub fn air_torque_nm(m: &TwinMotor, p_pa: [f64; 3], w_rad_s: f64) -> f64 {
     0.5 * (1.0 + s) * fwd + 0.5 * (1.0 - s) * rev
 }
 
-/// Friction torque T_f(ω), N·m (SPEC §1.5 and §5): T_c·tanh(ω/ω_reg) + d·ω, with T_c
+/// Friction torque T_f(ω), N·m (docs/model.md, "Mechanics and friction" and
+/// "Missing-physics catalog"): T_c·tanh(ω/ω_reg) + d·ω, with T_c
 /// replaced by T_c + (T_s − T_c)·exp(−(ω/ω_s)²) under breakaway friction, plus c_w2·ω·|ω|
 /// under vane friction ∝ ω².
 pub fn friction_torque_nm(m: &TwinMotor, w_rad_s: f64) -> f64 {
@@ -214,13 +226,15 @@ pub fn friction_torque_nm(m: &TwinMotor, w_rad_s: f64) -> f64 {
     dry_nm * (w_rad_s / m.w_reg).tanh() + m.visc * w_rad_s + vane_nm
 }
 
-/// Full dry friction at rest, N·m: T_s under breakaway friction, else T_c (SPEC §2: the
+/// Full dry friction at rest, N·m: T_s under breakaway friction, else T_c ((docs/model.md,
+/// "Reference experiments"): the
 /// datasheet's stall torque is the air torque less this).
 pub fn static_friction_nm(m: &TwinMotor) -> f64 {
     m.breakaway_friction.map_or(m.t_coulomb, |b| b.t_static_nm)
 }
 
-/// Factor on the three leak conductances, 1 + g/(1 + (ω/ω_seal)²) (SPEC §5), else 1.
+/// Factor on the three leak conductances, 1 + g/(1 + (ω/ω_seal)²) (docs/model.md,
+/// "Missing-physics catalog"), else 1.
 pub fn leak_factor(m: &TwinMotor, w_rad_s: f64) -> f64 {
     m.speed_dependent_leakage.map_or(1.0, |s| {
         let x = w_rad_s / s.w_seal_rad_s;
@@ -228,7 +242,8 @@ pub fn leak_factor(m: &TwinMotor, w_rad_s: f64) -> f64 {
     })
 }
 
-/// Mass flows of the ideal motor into V_1, V_2, V_e, kg/s (SPEC §1.3, paper eqs. 16–18).
+/// Mass flows of the ideal motor into V_1, V_2, V_e, kg/s (docs/model.md, "Flows through
+/// the ideal motor", paper eqs. 16–18).
 /// Forward: out of V_1 p_1·ω·V_disp/(2π·RT0), into V_2 p_e·ω·ε·V_disp/(2π·RT0), the rest
 /// into V_e; reverse rotation mirrors ports 1 and 2. The three sum to zero exactly.
 pub fn ideal_motor_flows_kg_s(m: &TwinMotor, p_pa: [f64; 3], w_rad_s: f64) -> [f64; 3] {

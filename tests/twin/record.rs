@@ -1,4 +1,5 @@
-//! Sensors and files: noise, offsets, column units, and the dataset writer (SPEC §3, §4).
+//! Sensors and files: noise, offsets, column units, and the dataset writer (docs/formats.md,
+//! "Datasets" and "Fit files").
 
 use super::experiment::{self, Conditions, DatasheetRows, TransientRows};
 use super::motor::{TwinMotor, RHO0_KG_M3};
@@ -121,7 +122,8 @@ impl OffsetSpec {
     }
 }
 
-/// Unit of the flow columns (SPEC §3; ANR free air at ρ0 = 1.185 kg/m³, as vanefit reads it).
+/// Unit of the flow columns ((docs/formats.md, "CSV recordings"); ANR free air at ρ0 = 1.185 kg/m³,
+/// as vanefit reads it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FlowUnit {
     /// g/s (`_g_s`).

@@ -1,4 +1,5 @@
-//! The motor on the rig: port boundaries, load and the state equations (SPEC §1.4, §1.5, §2).
+//! The motor on the rig: port boundaries, load and the state equations (docs/model.md,
+//! "Lumped volumes and nozzles", "Mechanics and friction", "Reference experiments").
 //!
 //! State y = [p_1, p_2, p_e, ω] (Pa, Pa, Pa, rad/s). Isothermal volumes:
 //! dp_i/dt = R·T0/V_i · Σṁ_i; mechanics: J·dω/dt = T_air − T_f(ω) − T_load.
@@ -25,8 +26,9 @@ pub struct Boundary {
     pub p_atm_pa: f64,
     /// Viscous brake coefficient c, N·m·s/rad (load torque c·ω).
     pub brake_nm_s_rad: f64,
-    /// Critical pressure ratio of the rig's outlet throttle, 1; `None`: the motor's b_crit,
-    /// which SPEC §1.6 defines as the ratio "of every nozzle" (vanefit reads it so too).
+    /// Critical pressure ratio of the rig's outlet throttle, 1; `None`: the motor's b_crit, which
+    /// (docs/model.md, "Parameters") defines as the ratio "of every nozzle" (vanefit reads it so
+    /// too).
     pub throttle_b_crit: Option<f64>,
 }
 

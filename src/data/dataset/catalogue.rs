@@ -1,13 +1,14 @@
-//! Catalogue pages in (issue 12): one `[[experiment]] kind = "catalogue"` per supply
+//! Catalogue pages as experiments: one `[[experiment]] kind = "catalogue"` per supply
 //! pressure, with the curves read off the page (`file`, optional: speed and any of torque,
-//! power and air consumption, empty cells allowed) and the key figures (`[experiment.figures]`,
-//! optional: `free_speed = "9000 rpm"`, `max_power = "0.12 kW"`, …, each a number and the
-//! unit the catalogue prints). The figures become points of the same curves, so one
-//! experiment describes the page: the stall torque is the torque at ω = 0 (the datasheet's
-//! stall convention), the free speed is where the torque is 0, the max-power figures are the
-//! torque, power and air at the speed at max power. The minimum start torque is read and
-//! shown but not compared: the model averages the torque over the rotor angle (SPEC §1.2)
-//! and has no position-dependent starting torque.
+//! power and air consumption, empty cells allowed) and the key figures
+//! (`[experiment.figures]`, optional: `free_speed = "9000 rpm"`, `max_power = "0.12 kW"`,
+//! …, each a number and the unit the catalogue prints). The figures become points of the
+//! same curves, so one experiment describes the page: the stall torque is the torque at ω =
+//! 0 (the datasheet's stall convention), the free speed is where the torque is 0, the
+//! max-power figures are the torque, power and air at the speed at max power. The minimum
+//! start torque is read and shown but not compared: the model averages the torque over the
+//! rotor angle (docs/model.md, "Cycle work and torque") and has no position-dependent
+//! starting torque.
 
 use super::{key_location, located, DataError, Table};
 use crate::sim::recording::{Column, Figure, Recording};

@@ -2,8 +2,8 @@
 //!
 //! A recording is validated once, here, for every command: `check`, `fit`, `simulate`,
 //! `diagnose` and `predict` all load a dataset through [`super::Dataset::load`], so a value
-//! one of them refuses is refused by all of them with the same located message (issue 15,
-//! "one gate for values"). Without this gate a speed of 1e30 rpm or a port pressure of
+//! one of them refuses is refused by all of them with the same located message ("one
+//! gate for values"). Without this gate a speed of 1e30 rpm or a port pressure of
 //! 1e30 MPa in one row was simulated into flows of 1e29 g/s by `simulate`, passed `check`
 //! when the reference polynomial happened to absorb it, and was refused by `fit` only with
 //! an unlocated "no degree can be cross-validated".

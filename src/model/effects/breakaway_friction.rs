@@ -1,7 +1,7 @@
-//! `breakaway_friction` (SPEC §5, torque loss): static friction above Coulomb at standstill,
-//! decaying to Coulomb with speed (Stribeck). The dry friction becomes
-//! T_c + (T_s − T_c)·exp(−(ω/ω_s)²), N·m, where T_s keeps its excess over the base T_c when
-//! other hooks raise T_c (e.g. `pressure_dependent_friction`).
+//! `breakaway_friction` (docs/model.md, "Missing-physics catalog"; torque loss): static
+//! friction above Coulomb at standstill, decaying to Coulomb with speed (Stribeck). The dry
+//! friction becomes T_c + (T_s − T_c)·exp(−(ω/ω_s)²), N·m, where T_s keeps its excess over
+//! the base T_c when other hooks raise T_c (e.g. `pressure_dependent_friction`).
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::friction;

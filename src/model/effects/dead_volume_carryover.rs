@@ -1,5 +1,6 @@
-//! `dead_volume_carryover` (SPEC §5, inlet flow): air left in the dead volume at discharge
-//! pressure is carried back to the inlet side, p_discharge·V_carry·z·|ω|/(2π·R·T0), kg/s.
+//! `dead_volume_carryover` (docs/model.md, "Missing-physics catalog"; inlet flow): air left
+//! in the dead volume at discharge pressure is carried back to the inlet side,
+//! p_discharge·V_carry·z·|ω|/(2π·R·T0), kg/s.
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};

@@ -1,6 +1,6 @@
-//! `incomplete_filling` (SPEC §5, inlet flow): at speed a compartment does not reach the
-//! port pressure before cut-off; it is filled to p_e + (p_inlet − p_e)·η(ω),
-//! η = 1/(1 + (ω/ω_f)²).
+//! `incomplete_filling` (docs/model.md, "Missing-physics catalog"; inlet flow): at speed a
+//! compartment does not reach the port pressure before cut-off; it is filled to p_e +
+//! (p_inlet − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};

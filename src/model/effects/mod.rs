@@ -1,5 +1,5 @@
-//! The missing-physics catalog (SPEC §5): effects the base model leaves out, each a model
-//! extension with its own parameters, switched on by id.
+//! The missing-physics catalog (docs/model.md, "Missing-physics catalog"): effects the base
+//! model leaves out, each a model extension with its own parameters, switched on by id.
 //!
 //! Every effect lives in its own file, which declares everything about it: its id,
 //! category and one line of physics, its parameters ([`ParamSpec`], with the value that
@@ -16,7 +16,8 @@ use crate::numerics::ode::State;
 use std::fmt;
 use std::str::FromStr;
 
-/// Where in the model an effect acts (SPEC §5 categories).
+/// Where in the model an effect acts (the categories of docs/model.md, "Missing-physics
+/// catalog").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Category {
     /// A torque lost to friction or drag.
@@ -155,9 +156,10 @@ pub trait Term: Sync {
 /// A catalog effect: what it is, its parameters, where it can show, and (through [`Term`])
 /// where it acts.
 pub trait CatalogEffect: Term {
-    /// The id in files and on the command line (fixed once used, SPEC §5).
+    /// The id in files and on the command line (fixed once used; docs/model.md,
+    /// "Missing-physics catalog").
     fn id(&self) -> &'static str;
-    /// Where it acts (SPEC §5 category).
+    /// Where it acts (its category in docs/model.md, "Missing-physics catalog").
     fn category(&self) -> Category;
     /// One line of physics for reports.
     fn physics(&self) -> &'static str;
@@ -229,7 +231,7 @@ const fn names<const N: usize>(specs: &[ParamSpec]) -> [&'static str; N] {
 }
 
 /// A catalogued effect: a handle to its entry in the registry. The ids are fixed once used
-/// (SPEC §5); the order is the registry's.
+/// (docs/model.md, "Missing-physics catalog"); the order is the registry's.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Effect(u8);
 
@@ -249,7 +251,7 @@ impl Effect {
         self.model().id()
     }
 
-    /// Where it acts (SPEC §5 category).
+    /// Where it acts (its category in docs/model.md, "Missing-physics catalog").
     pub fn category(self) -> Category {
         self.model().category()
     }

@@ -1,5 +1,6 @@
-//! `pressure_dependent_friction` (SPEC §5, torque loss): the supply pressure presses the
-//! vanes out, so the Coulomb friction grows by k·max(p_inlet − p_e, 0), N·m.
+//! `pressure_dependent_friction` (docs/model.md, "Missing-physics catalog"; torque loss):
+//! the supply pressure presses the vanes out, so the Coulomb friction grows by
+//! k·max(p_inlet − p_e, 0), N·m.
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};

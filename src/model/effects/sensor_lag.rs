@@ -1,5 +1,6 @@
-//! `sensor_lag` (SPEC §5, measurement): the flow and speed sensors lag their signal by a
-//! first order, y_m' = (y − y_m)/τ; it shows only in transient recordings.
+//! `sensor_lag` (docs/model.md, "Missing-physics catalog"; measurement): the flow and speed
+//! sensors lag their signal by a first order, y_m' = (y − y_m)/τ; it shows only in
+//! transient recordings.
 
 use super::{Category, CatalogEffect, Effect, ShowsIn, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};

@@ -1,6 +1,6 @@
-//! `speed_dependent_leakage` (SPEC §5, internal leakage): the vanes seal better as the
-//! centrifugal force grows, so every leakage conductance is multiplied by
-//! 1 + g/(1 + (ω/ω_seal)²).
+//! `speed_dependent_leakage` (docs/model.md, "Missing-physics catalog"; internal leakage):
+//! the vanes seal better as the centrifugal force grows, so every leakage conductance is
+//! multiplied by 1 + g/(1 + (ω/ω_seal)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};

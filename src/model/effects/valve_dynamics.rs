@@ -1,7 +1,8 @@
-//! `valve_dynamics` (SPEC §5, supply): the pressure control valve is slower or of higher
-//! order than first order: τ²·p̈ + 2ζτ·ṗ + p = p_cmd instead of τ·ṗ + p = p_cmd. The valve
-//! exists in the control studies without the effect too (first order with τ); the reference
-//! experiments are driven by the recorded valve output, so it never shows in them.
+//! `valve_dynamics` (docs/model.md, "Missing-physics catalog"; supply): the pressure
+//! control valve is slower or of higher order than first order: τ²·p̈ + 2ζτ·ṗ + p = p_cmd
+//! instead of τ·ṗ + p = p_cmd. The valve exists in the control studies without the effect
+//! too (first order with τ); the reference experiments are driven by the recorded valve
+//! output, so it never shows in them.
 
 use super::{Category, CatalogEffect, Effect, ShowsIn, SupplyValve, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};

@@ -1,5 +1,6 @@
-//! `vane_friction_speed_squared` (SPEC §5, torque loss): vane-tip friction from the
-//! centrifugal force, and windage: c₂·ω·|ω|, N·m, added to the smooth part of the friction.
+//! `vane_friction_speed_squared` (docs/model.md, "Missing-physics catalog"; torque loss):
+//! vane-tip friction from the centrifugal force, and windage: c₂·ω·|ω|, N·m, added to the
+//! smooth part of the friction.
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};

@@ -2,11 +2,11 @@
 //! study here, and the one-line descriptions of valve, load and controller that the figures
 //! and the printed summaries share.
 //!
-//! CSV columns carry their unit in the name, as the data files do (SPEC §3): speeds in rpm,
-//! pressures in MPa absolute, conductances in m3/(s*Pa) (and in dm3/(s*bar), the catalogues'
-//! unit, in an extra last column), torques in N*m, flows in g/s, commands in V. Every file is
-//! written atomically; the caller hears of each one written (the command line prints
-//! `wrote <path>`).
+//! CSV columns carry their unit in the name, as the data files do (docs/formats.md, "CSV
+//! recordings"): speeds in rpm, pressures in MPa absolute, conductances in m3/(s*Pa) (and
+//! in dm3/(s*bar), the catalogues' unit, in an extra last column), torques in N*m, flows in
+//! g/s, commands in V. Every file is written atomically; the caller hears of each one
+//! written (the command line prints `wrote <path>`).
 
 pub mod bode;
 pub mod closed_loop;

@@ -1,10 +1,10 @@
 //! The catalogue experiment: a manufacturer's curves and key figures at one supply
-//! pressure, read off a printed page. Like the datasheet (SPEC §2, experiment 1) it is a
-//! set of steady states at imposed speeds, but it measures shaft torque, shaft power
-//! P = T·ω and air consumption (the port-1 flow) and its points are sparse: a row may give
-//! any subset of them. Key figures arrive as rows too (the data layer turns free speed,
-//! stall torque and the max-power point into points on these curves), so the stall row at
-//! ω = 0 follows the datasheet's stall convention.
+//! pressure, read off a printed page. Like the datasheet (docs/model.md, "Reference
+//! experiments", 1) it is a set of steady states at imposed speeds, but it measures shaft
+//! torque, shaft power P = T·ω and air consumption (the port-1 flow) and its points are
+//! sparse: a row may give any subset of them. Key figures arrive as rows too (the data
+//! layer turns free speed, stall torque and the max-power point into points on these
+//! curves), so the stall row at ω = 0 follows the datasheet's stall convention.
 
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, Setting, SimError, Simulated};
 use crate::model::motor::Motor;

@@ -1,5 +1,6 @@
-//! The datasheet experiment (SPEC §2): steady states at imposed speeds and supply
-//! pressures, one per row; measured torque and flows against speed.
+//! The datasheet experiment (docs/model.md, "Reference experiments"): steady states at
+//! imposed speeds and supply pressures, one per row; measured torque and flows against
+//! speed.
 
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, Setting, SimError, Simulated};
 use crate::model::motor::{Boundary, Load, Motor, State};

@@ -1,5 +1,6 @@
-//! The reference experiments of SPEC §2 as first-class types: each knows its inputs (from the
-//! rig and its recording) and simulates the channels that were measured, one value per row.
+//! The reference experiments (docs/model.md, "Reference experiments") as first-class types:
+//! each knows its inputs (from the rig and its recording) and simulates the channels that
+//! were measured, one value per row.
 //!
 //! Every experiment kind lives in its own file and implements [`ExperimentKind`]: its id
 //! (as rig.toml writes it), the inputs it reads from a recording and how they are checked,
@@ -103,7 +104,7 @@ pub trait Drive: fmt::Debug + Send + Sync {
     ) -> Result<Simulated, SimError>;
 }
 
-/// An experiment kind of SPEC §2.
+/// An experiment kind (docs/model.md, "Reference experiments").
 pub trait ExperimentKind: Sync {
     /// The id in rig.toml and reports.
     fn id(&self) -> &'static str;
@@ -126,7 +127,8 @@ macro_rules! registry {
     ($( $file:ident :: $ty:ident ; )*) => {
         $( pub mod $file; )*
 
-        /// The experiment kinds of SPEC §2 (rig.toml `kind = "…"`).
+        /// The experiment kinds (docs/model.md, "Reference experiments"; rig.toml `kind =
+        /// "…"`).
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize, PartialOrd, Ord)]
         #[serde(rename_all = "snake_case")]
         pub enum Kind {

@@ -1,5 +1,6 @@
-//! The outlet throttle (SPEC §2): a transient at constant supply driven by the recorded
-//! port-2 conductance; measured flows, speed and torque against log10 of that conductance.
+//! The outlet throttle (docs/model.md, "Reference experiments"): a transient at constant
+//! supply driven by the recorded port-2 conductance; measured flows, speed and torque
+//! against log10 of that conductance.
 
 use super::transient::{supply_schedule, SupplyFrom, Transient, CHANNELS};
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, SimError};

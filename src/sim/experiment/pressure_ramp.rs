@@ -1,5 +1,6 @@
-//! The pressure ramp (SPEC §2): a transient driven by the recorded supply pressure at
-//! port 1; measured flows, speed and torque against that pressure.
+//! The pressure ramp (docs/model.md, "Reference experiments"): a transient driven by the
+//! recorded supply pressure at port 1; measured flows, speed and torque against that
+//! pressure.
 
 use super::transient::{supply_schedule, SupplyFrom, Transient, CHANNELS};
 use super::{missing, AbscissaSpec, Drive, ExperimentKind, InputCheck, SimError};

@@ -22,8 +22,8 @@ pub(super) struct Transient {
     log10_c_port2: Option<Schedule>,
     /// The inputs at each recorded row (supply pressure, Pa; port-2 conductance,
     /// m³/(s·Pa)), evaluated once: they do not depend on the motor, and every evaluation
-    /// of the cost needs the port flows at every row (issue 10: the schedules and the
-    /// conductance's `exp` were ~5 % of an evaluation's instructions).
+    /// of the cost needs the port flows at every row (evaluated per step, the schedules and
+    /// the conductance's `exp` were ~5 % of an evaluation's instructions).
     row_inputs: Vec<(f64, Option<f64>)>,
 }
 

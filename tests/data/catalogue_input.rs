@@ -1,4 +1,4 @@
-//! Catalogue pages in (issue 12): printed units read and converted, key figures turned into
+//! Catalogue pages in: printed units read and converted, key figures turned into
 //! points of the curves, and bad catalogue input refused with its file, line and column.
 
 use std::path::Path;

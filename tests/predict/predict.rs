@@ -1,6 +1,6 @@
-//! `vanefit predict` (issue 12, SPEC §7) end to end on the shipped fit: the files and their
-//! fixed columns, the physics the numbers must show, extrapolation flags, refusals of bad
-//! input, and the delta-method bands checked against Monte Carlo.
+//! `vanefit predict` (docs/formats.md, "Contracts added later") end to end on the shipped fit: the
+//! files and their fixed columns, the physics the numbers must show, extrapolation flags, refusals
+//! of bad input, and the delta-method bands checked against Monte Carlo.
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};

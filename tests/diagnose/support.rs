@@ -56,9 +56,9 @@ pub fn dataset(name: &str, experiments: Vec<ExperimentData>) -> Dataset {
     }
 }
 
-/// The sensor noise of issue 11's rig recordings: 0.03 g/s on the flows, 15 rpm on the
+/// The sensor noise of a test rig's recordings: 0.03 g/s on the flows, 15 rpm on the
 /// speed, 4 mN·m on the torque, 2 kPa on the recorded supply pressure.
-pub fn issue_noise() -> SensorNoise {
+pub fn rig_noise() -> SensorNoise {
     SensorNoise {
         flow_kg_s: 3e-5,
         speed_rad_s: 15.0 * std::f64::consts::PI / 30.0,
@@ -68,16 +68,16 @@ pub fn issue_noise() -> SensorNoise {
     }
 }
 
-/// The paper's experiments recorded at 20 Hz (issue 11).
-pub fn issue_plan() -> SynthPlan {
+/// The paper's experiments recorded at 20 Hz, as a test rig does.
+pub fn rig_plan() -> SynthPlan {
     SynthPlan {
         sample_rate_hz: 20.0,
         ..SynthPlan::default()
     }
 }
 
-/// [`synthesize`] with the issue's plan and `noise`.
+/// [`synthesize`] with the rig's plan and `noise`.
 pub fn synthesize_with(truth: &Motor, seed: u64, noise: &SensorNoise) -> Vec<ExperimentData> {
-    vanefit::data::synth::synthesize(truth, &DefaultSolver::default(), &issue_plan(), noise, seed)
+    vanefit::data::synth::synthesize(truth, &DefaultSolver::default(), &rig_plan(), noise, seed)
         .unwrap()
 }

@@ -1,4 +1,4 @@
-//! Parameter recovery (issue 4): data synthesised from known parameters are fitted back.
+//! Parameter recovery: data synthesised from known parameters are fitted back.
 //! Without noise the estimates land within 1% of the truth; with sensor noise the truth lies
 //! inside the reported 95% intervals of the identifiable parameters.
 

@@ -2,7 +2,7 @@
 //! `simulate --params` reads back, a resumed run reproduces it, and bad options exit 1 with
 //! the option named (bad usage: 2).
 
-mod common;
+use crate::common;
 use common::{stderr, vanefit, DATASET};
 
 use std::path::Path;
@@ -36,8 +36,9 @@ fn short_fit_exports_a_fit_that_simulate_reads_back_and_resume_reproduces() {
     assert_eq!(doc["parameters"]["inertia"]["estimated"], false);
     assert!(Path::new(&dir.path().join("short.starts.jsonl")).exists());
 
-    // Issue 12: the summary and the report name each parameter in words, give conductances
-    // in m3/(s*Pa) and dm3/(s*bar), and say what cost J, chi2/dof and the noise ratio are.
+    // Read without the source: the summary and the report name each parameter in words,
+    // give conductances in m3/(s*Pa) and dm3/(s*bar), and say what cost J, chi2/dof and the
+    // noise ratio are.
     let printed = String::from_utf8_lossy(&o.stdout).into_owned();
     let report = std::fs::read_to_string(dir.path().join("short.report.md")).unwrap();
     let c_in1 = doc["parameters"]["c_in1"]["value"].as_f64().unwrap();
@@ -156,7 +157,7 @@ fn bad_options_name_the_option_and_exit_1() {
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
         assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
     }
-    // Issue 15: values clap can check alone are bad usage, status 2 as the README says.
+    // Values clap can check alone are bad usage, status 2 as the README says.
     for (extra, needle) in [
         (vec!["--starts", "0"], "--starts"),
         (vec!["--effects", "magic_friction"], "--effects"),
@@ -231,7 +232,7 @@ fn fit_json(dataset: &Path, out: &Path, uncertainty: &str) -> serde_json::Value 
     serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap()
 }
 
-/// Issue 11: 25 datasheet points cannot pin eight parameters. The fit says so parameter by
+/// 25 datasheet points cannot pin eight parameters. The fit says so parameter by
 /// parameter, in the file (`identifiable: false` with a reason, distinct from the `null` of
 /// "not computed"), and the estimate is the same whether intervals are computed or not.
 #[test]

@@ -1,4 +1,4 @@
-//! Import hardening (issue 3): every refused case names the file, the line and the column,
+//! Import hardening: every refused case names the file, the line and the column,
 //! and no input whatsoever makes the import panic (property tests on malformed CSV and
 //! rig.toml text).
 

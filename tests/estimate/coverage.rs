@@ -1,7 +1,8 @@
-//! Are the fit's 95% intervals calibrated on data vanefit did not make? (issue 11)
+//! Are the fit's 95% intervals calibrated on data vanefit did not make? Intervals checked
+//! only on vanefit's own synthetic data would share its mistakes.
 //!
 //! Every dataset here comes from the twin generator (`tests/twin/`): an independent
-//! implementation of SPEC §1–§2 (its own code and integrator, TR-BDF2), with a recording
+//! implementation of docs/model.md (its own code and integrator, TR-BDF2), with a recording
 //! configuration unlike vanefit's `synth` defaults, drawn per seed ([`twin::varied_config`]):
 //! 5, 10, 20 or 50 Hz; each channel's noise 0.5–3× (0.03 g/s, 15 rpm, 4 mN·m); 2 kPa noise
 //! on the recorded supply pressure and 0.5% on the throttle's conductance; constant sensor
@@ -16,11 +17,10 @@
 //! parameter) is `#[ignore]`d and writes `target/coverage-table.md`:
 //!
 //! ```sh
-//! cargo test --release --test coverage -- --ignored --nocapture coverage_table
+//! cargo test --release --test estimate -- --ignored --nocapture coverage_table
 //! ```
 
-#[allow(clippy::type_complexity)]
-mod twin;
+use crate::twin;
 
 use std::fmt::Write as _;
 use vanefit::data::dataset::Dataset;
@@ -299,7 +299,7 @@ fn intervals_cover_the_truth_on_twin_data() {
 }
 
 #[test]
-#[ignore = "50 fits, several minutes: the issue-11 coverage table"]
+#[ignore = "50 fits, several minutes: the coverage table on twin data"]
 fn coverage_table() {
     let engine = Engine::with_threads(None).unwrap();
     let mut cases = Vec::new();
@@ -336,7 +336,7 @@ fn coverage_table() {
     );
 }
 
-/// SPEC §6: results never depend on the thread count, the intervals and the polish of the
+/// Results never depend on the thread count (docs/cli.md), the intervals and the polish of the
 /// local optima included.
 #[test]
 fn a_fit_with_intervals_does_not_depend_on_the_thread_count() {

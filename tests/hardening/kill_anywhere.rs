@@ -1,4 +1,4 @@
-//! Issue 15, kill anywhere: `fit`, `diagnose` and `batch` killed with SIGKILL at many
+//! Kill anywhere: `fit`, `diagnose` and `batch` killed with SIGKILL at many
 //! moments and run again each time end with the result an uninterrupted run of the same seed
 //! gives, no output file is ever seen half-written (a result is absent or whole JSON after
 //! every kill), and the run that finishes leaves no temporary file of a killed one behind.

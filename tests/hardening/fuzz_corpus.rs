@@ -1,9 +1,9 @@
-//! Replays every committed fuzz corpus file (`fuzz/corpus/<target>/`) through the entry point
-//! its fuzz target calls (`fuzz/entries.rs`, shared with the targets): none may panic. The
-//! cheap CI half of issue 15's fuzzing; a crash the fuzzer finds is added to the corpus (or
-//! as a test here) and stays fixed.
+//! Replays every committed fuzz corpus file (`fuzz/corpus/<target>/`) through the entry point its
+//! fuzz target calls (`fuzz/entries.rs`, shared with the targets): none may panic. The cheap CI
+//! half of the fuzzing (the other is `.ci/fuzz.sh`); a crash the fuzzer finds is added to the
+//! corpus (or as a test here) and stays fixed.
 
-#[path = "../fuzz/entries.rs"]
+#[path = "../../fuzz/entries.rs"]
 mod entries;
 
 use std::path::Path;
@@ -38,8 +38,8 @@ fn every_corpus_file_is_read_or_refused_without_a_panic() {
     }
 }
 
-/// Regression inputs: the shapes spreadsheets and loggers produce that once misbehaved
-/// (issue 15), through the same entry points.
+/// Regression inputs: the shapes spreadsheets and loggers produce that once misbehaved,
+/// through the same entry points.
 #[test]
 fn odd_inputs_are_refused_without_a_panic() {
     for text in [

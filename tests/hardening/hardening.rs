@@ -1,7 +1,7 @@
-//! Issue 15, hardened: a closed stdout, progress in logs, two runs on one output, outputs
+//! Hardened: a closed stdout, progress in logs, two runs on one output, outputs
 //! checked before work, exit codes of bad usage, and `check` of a long recording.
 
-mod common;
+use crate::common;
 use common::{stderr, vanefit, DATASET};
 
 use std::path::Path;
@@ -359,7 +359,7 @@ fn long_ramp(dir: &Path, rows: usize) {
 
 #[test]
 fn check_is_linear_in_the_rows() {
-    // Before issue 15: 6k rows 0.55 s, 20k 3.5 s, 60k 26 s (a split search refined at every
+    // Before the fix: 6k rows 0.55 s, 20k 3.5 s, 60k 26 s (a split search refined at every
     // index around its best coarse step). Now 60k rows take about 0.4 s in release; the
     // bound leaves room for a busy machine and a debug build.
     let dir = tempfile::tempdir().unwrap();

@@ -1,4 +1,4 @@
-//! One gate for values (issue 15): `check` refuses every value that `fit`, `simulate`,
+//! One gate for values: `check` refuses every value that `fit`, `simulate`,
 //! `diagnose` or `export-petab --dataset` would refuse, with the same located message, and
 //! exit status 1.
 //!
@@ -8,7 +8,7 @@
 //! `check` and made `fit` exit 0 with a cost of 6e75, and a port pressure of 1e30 MPa in
 //! one row was simulated into flows of 1e29 g/s.
 
-mod common;
+use crate::common;
 
 use common::{stderr, vanefit, DATASET};
 use std::path::Path;

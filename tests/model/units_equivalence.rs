@@ -1,10 +1,10 @@
-//! The same data written in other units gives the same simulation and the same cost
-//! (issue 3). `measurements/ar034-synthetic-units` is `measurements/ar034-synthetic` with
-//! speed in rad/s, flows in l/min ANR and kg/s, port-1 pressure in bar gauge and the
-//! throttle in dm³/(s·bar), row for row. It is written by `regenerate_units_dataset` below:
+//! The same data written in other units gives the same simulation and the same cost: a unit is read
+//! once, at the import. `measurements/ar034-synthetic-units` is `measurements/ar034-synthetic` with
+//! speed in rad/s, flows in l/min ANR and kg/s, port-1 pressure in bar gauge and the throttle in
+//! dm³/(s·bar), row for row. It is written by `regenerate_units_dataset` below:
 //!
 //! ```text
-//! cargo test --test units_equivalence -- --ignored regenerate_units_dataset
+//! cargo test --test model -- --ignored regenerate_units_dataset
 //! ```
 //!
 //! and `shipped_units_dataset_is_up_to_date` checks the shipped copy against it.

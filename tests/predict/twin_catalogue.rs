@@ -1,9 +1,9 @@
-//! `vanefit predict` against the twin (issue 12): the catalogue rows a motor gives at 3 to
+//! `vanefit predict` against the twin: the catalogue rows a motor gives at 3 to
 //! 7 bar(g) — free speed, max power and where it lies, stall torque, air consumption — as
 //! vanefit predicts them from a fit file, and as the independent twin (its own model,
 //! integrator, steady states and golden-section search) computes them.
 
-mod twin;
+use crate::twin;
 
 use std::path::Path;
 use std::process::Command;

@@ -1,9 +1,9 @@
-//! Issue 15, disk faults: output into a read-only file system, under a missing parent and
+//! Disk faults: output into a read-only file system, under a missing parent and
 //! onto a full one. Each ends with a message naming the path, exit status 1, no temporary
 //! or lock file left and earlier results intact. The file systems are small tmpfs mounts,
 //! which need root: without it the test says loudly that it did not run.
 
-mod common;
+use crate::common;
 use common::{stderr, vanefit, DATASET};
 
 use std::path::{Path, PathBuf};
@@ -71,8 +71,8 @@ fn fill(dir: &Path, pages: usize) {
 #[test]
 fn full_read_only_and_missing_folders_fail_cleanly_naming_the_path() {
     let dir = tempfile::tempdir().unwrap();
-    // A missing parent: created and said (see tests/hardening.rs); a parent that is a file
-    // is named.
+    // A missing parent: created and said (see tests/hardening/hardening.rs); a parent that is a
+    // file is named.
     let Some(ro) = Mount::new(&dir.path().join("ro"), "ro,size=64k") else {
         return;
     };

@@ -1,4 +1,5 @@
-//! `vanefit export-petab` (SPEC §7) and the profile paths of the fit file.
+//! `vanefit export-petab` (docs/formats.md, "Contracts added later") and the profile paths
+//! of the fit file.
 //!
 //! The PEtab tables are read back here as plain TSV, independently of the exporter: every
 //! compared row is present once with its recorded value, every observable's formula names
@@ -7,7 +8,7 @@
 //! from the tables and the simulated rows, and bad input is refused with exit status 1.
 //! (The PEtab library's own linter and χ² are run on the same export by the Python tests.)
 
-mod common;
+use crate::common;
 use common::{stderr, vanefit, vanefit_in, DATASET};
 
 use std::collections::{BTreeMap, BTreeSet};

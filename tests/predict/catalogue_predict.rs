@@ -1,4 +1,4 @@
-//! Catalogue → fit → predict (issue 12): a catalogue page made by `synth --catalogue` at
+//! Catalogue → fit → predict: a catalogue page made by `synth --catalogue` at
 //! 6.3 bar(g) is fitted alone and `predict` at 3–7 bar(g) is compared with the generator's
 //! own catalogue rows (the truth's prediction) — within 2 % per figure and 0.02 per
 //! correction factor for the default motor — and, for a motor whose parameters are not the

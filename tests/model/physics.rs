@@ -1,5 +1,5 @@
 //! Physics the simulation core must reproduce: limits, conservation, symmetry, closed forms,
-//! and the default motor's published figures (SPEC §1, issue 2).
+//! and the default motor's published figures (docs/model.md).
 
 use proptest::prelude::*;
 use std::f64::consts::PI;

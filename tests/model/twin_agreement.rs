@@ -1,6 +1,7 @@
-//! Issue 11: vanefit against an independent implementation of the same physics.
+//! vanefit against an independent implementation of the same physics: a mistake shared by
+//! the model and the synthetic data it fits cannot show otherwise.
 //!
-//! The twin generator (`tests/twin`, written from SPEC §1–§2/§5 and the paper, integrated
+//! The twin generator (`tests/twin`, written from docs/model.md and the paper, integrated
 //! with TR-BDF2) writes noise-free datasets; `vanefit simulate <dataset> --params truth.json`
 //! recomputes every recorded channel with vanefit's own model and solvers; the two must agree
 //! row by row to a small fraction of a typical sensor's noise (flow 0.01 g/s, speed 5 rpm,
@@ -8,9 +9,9 @@
 //! not even around the breakaway jump of the stiction case (both models regularise friction
 //! with tanh(ω/ω_reg), so the jump is steep but continuous and both resolve it).
 //!
-//! Run with `cargo test --release --test twin_agreement -- --nocapture` to see the figures.
+//! Run with `cargo test --release --test model twin_agreement -- --nocapture` to see the figures.
 
-mod twin;
+use crate::twin;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -200,8 +201,8 @@ fn speed_dependent_leakage_agrees() {
     agreement("seal", &m, &RecordConfig::noise_free());
 }
 
-/// Other critical ratio, isothermal cycle, other volumes, inertia and dead volume, 5 Hz.
-/// (With b_crit ≠ 0.5 the twin follows SPEC §1.6, "critical pressure ratio of every
+/// Other critical ratio, isothermal cycle, other volumes, inertia and dead volume, 5 Hz. (With
+/// b_crit ≠ 0.5 the twin follows (docs/model.md, "Parameters"), "critical pressure ratio of every
 /// nozzle", and gives the rig's outlet throttle the motor's b_crit, as vanefit does.)
 #[test]
 fn other_fixed_parameters_agree() {
@@ -234,9 +235,10 @@ fn other_units_rate_and_brake_torque_agree() {
     agreement("units", &twin::perturbed_motor(5), &cfg);
 }
 
-// ---- Twin-only physics checks (SPEC §1) -------------------------------------------------
+// ---- Twin-only physics checks (docs/model.md) -------------------------------------------
 
-/// Steady state: what enters at port 1 leaves at port 2 and the exhaust (SPEC §1.3–§1.4),
+/// Steady state: what enters at port 1 leaves at port 2 and the exhaust (docs/model.md,
+/// "Flows through the ideal motor" and "Lumped volumes and nozzles"),
 /// also with the Δp² leak and speed-dependent leakage on.
 #[test]
 fn steady_state_conserves_mass() {

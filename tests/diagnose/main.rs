@@ -1,0 +1,11 @@
+//! The missing-physics diagnosis (`vanefit::diagnose`) on synthetic data with known truth:
+//! the cases and their checks ([`cases`]), vanefit's own synthetic data ([`own_data`]) and
+//! data written by the independent twin generator ([`twin_data`]).
+
+mod cases;
+mod own_data;
+mod support;
+#[allow(clippy::type_complexity)] // the twin generator is another engineer's code
+#[path = "../twin/mod.rs"]
+mod twin;
+mod twin_data;

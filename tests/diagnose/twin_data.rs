@@ -1,0 +1,283 @@
+//! The diagnosis on data NOT made by vanefit: the independent twin generator (tests/twin).
+
+use crate::cases::*;
+use crate::support::{dataset, perturbed_base, rig_noise, synthesize_with};
+use crate::twin;
+use std::time::Instant;
+use vanefit::data::dataset::Dataset;
+use vanefit::diagnose::{diagnose, summary, DiagnoseOptions, Diagnosis};
+use vanefit::model::effects::{Effect, EffectSet};
+use vanefit::model::motor::{Chamber, LeakPath, Motor, PressureFactor};
+
+/// A test rig's recording: 20 Hz, flows 0.03 g/s, speed 15 rpm, torques 4 mN·m, recorded
+/// supply pressure 2 kPa, no calibration offsets.
+fn twin_rig_config() -> twin::RecordConfig {
+    let mut cfg = twin::RecordConfig {
+        noise: twin::NoiseSigmas {
+            flow1_g_s: 0.03,
+            flow2_g_s: 0.03,
+            speed_rpm: 15.0,
+            torque_nm: 0.004,
+            brake_torque_nm: 0.004,
+            p_port1_pa: 2000.0,
+            c_port2_rel: 0.005,
+        },
+        ..twin::RecordConfig::default()
+    };
+    cfg.conditions.rate_hz = 20.0;
+    cfg
+}
+
+/// A twin dataset written to a temporary folder and loaded as vanefit reads any rig.
+fn twin_dataset(motor: &twin::TwinMotor, cfg: &twin::RecordConfig, seed: u64) -> Dataset {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(format!("twin-{seed}"));
+    twin::write_dataset(&path, motor, cfg, seed).unwrap();
+    vanefit::data::dataset::Dataset::load(&path).unwrap()
+}
+
+/// A twin case: its motor, what must be selected, and the truth of the checked values.
+struct TwinCase {
+    motor: twin::TwinMotor,
+    expect: Expect,
+    truth: Vec<(&'static str, f64)>,
+}
+
+fn twin_case(name: &str) -> TwinCase {
+    let base = twin::perturbed_motor(7);
+    let t_c = base.t_coulomb;
+    match name {
+        "stiction" => TwinCase {
+            motor: twin::TwinMotor {
+                breakaway_friction: Some(twin::Breakaway {
+                    t_static_nm: 3.0 * t_c,
+                    w_stribeck_rad_s: 8.0,
+                }),
+                ..base
+            },
+            expect: Expect::Effects(
+                vec![Effect::BreakawayFriction],
+                vec![("t_static", 0.15), ("w_stribeck", 0.5)],
+            ),
+            truth: vec![("t_static", 3.0 * t_c), ("w_stribeck", 8.0)],
+        },
+        "dp2 leak v1-ve" => TwinCase {
+            motor: twin::TwinMotor {
+                leak_1e_dp2_kg_s_pa2: Some(6e-16),
+                ..base
+            },
+            expect: Expect::Leak(
+                LeakPath::new(Chamber::V1, Chamber::Ve),
+                PressureFactor::Quadratic,
+                0.25,
+            ),
+            truth: vec![("coefficient", 6e-16)],
+        },
+        "leakage+vane pair" => TwinCase {
+            motor: twin::TwinMotor {
+                speed_dependent_leakage: Some(twin::SealLeakage {
+                    g_seal: 0.5,
+                    w_seal_rad_s: 300.0,
+                }),
+                vane_friction_speed_squared: Some(1e-8),
+                ..base
+            },
+            expect: Expect::Effects(
+                vec![
+                    Effect::SpeedDependentLeakage,
+                    Effect::VaneFrictionSpeedSquared,
+                ],
+                vec![("g_seal", 0.3), ("c_w2", 0.25)],
+            ),
+            truth: vec![("g_seal", 0.5), ("w_seal", 300.0), ("c_w2", 1e-8)],
+        },
+        _ => panic!("no twin case {name}"),
+    }
+}
+
+/// Diagnoses a twin case and checks it (selected physics, category, parameters, noise ratio).
+fn twin_run(name: &str, opts: &DiagnoseOptions) -> (Diagnosis, f64, Result<(), String>) {
+    let c = twin_case(name);
+    let ds = twin_dataset(&c.motor, &twin_rig_config(), 11);
+    let t0 = Instant::now();
+    let d = diagnose(&ds, opts).unwrap();
+    let wall_s = t0.elapsed().as_secs_f64();
+    let truth = |n: &str| c.truth.iter().find(|(k, _)| *k == n).unwrap().1;
+    let (_, after) = d.noise_ratios();
+    let ok = match &c.expect {
+        Expect::Effects(effects, tol) => check_effects(effects, tol, &truth, &d),
+        Expect::Leak(path, law, tol) => check_leak(*path, *law, *tol, truth("coefficient"), &d),
+        _ => Ok(()),
+    }
+    .and_then(|()| {
+        (after <= RIG_RATIO)
+            .then_some(())
+            .ok_or(format!("noise ratio {after:.3}"))
+    });
+    eprintln!(
+        "twin {name}: {}\n  phases {:?}, {wall_s:.1} s",
+        summary(&d),
+        d.phases
+    );
+    print_candidates(&d);
+    (d, wall_s, ok)
+}
+
+/// Rig case on twin data: stiction is breakaway friction alone, reproduced to the noise
+/// (fixed by the Levenberg–Marquardt polish and the breakaway starts that lower T_c and
+/// unpin c_12 from the bound the base fit drove it to).
+#[test]
+fn twin_stiction_is_breakaway_friction() {
+    let (d, _, ok) = twin_run("stiction", &DiagnoseOptions::quick(1));
+    ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+}
+
+/// Rig case on twin data: the Δp² leak V1 -> Ve is that leak path.
+#[test]
+fn twin_quadratic_leak_is_a_leak_path() {
+    let (d, _, ok) = twin_run("dp2 leak v1-ve", &DiagnoseOptions::quick(1));
+    ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+}
+
+/// Rig case on twin data: the pair is found as the pair (full effort: `#[ignore]`d, it is
+/// in the normal run on vanefit's own data).
+#[test]
+#[ignore]
+fn twin_leakage_and_vane_friction_pair() {
+    let (d, _, ok) = twin_run("leakage+vane pair", &DiagnoseOptions::quick(1));
+    ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+}
+
+/// A clean twin dataset: a perturbed motor ([`twin::perturbed_motor`]) recorded with a
+/// varied configuration ([`twin::varied_config`]: rate, noise levels, brake channel) but
+/// without calibration offsets (a rig's zero errors are not in any model).
+fn clean_twin(seed: u64) -> Dataset {
+    let cfg = twin::RecordConfig {
+        offsets: twin::record::OffsetSpec::None,
+        ..twin::varied_config(seed)
+    };
+    twin_dataset(&twin::perturbed_motor(seed), &cfg, seed)
+}
+
+/// One row of the false-alarm table.
+fn false_alarm_row(seed: u64, opts: &DiagnoseOptions) -> (bool, String) {
+    let d = diagnose(&clean_twin(seed), opts).unwrap();
+    let best = d
+        .candidates
+        .iter()
+        .map(|c| c.delta_bic)
+        .fold(f64::INFINITY, f64::min);
+    let selected: Vec<&str> = d.selected.iter().map(|s| s.effect.as_str()).collect();
+    let row = format!(
+        "| twin seed {seed} | {} | {:.3} | {} | {:.1} | {:.1} |\n",
+        d.mismatch,
+        d.baseline.noise_ratio,
+        if selected.is_empty() {
+            "-".to_string()
+        } else {
+            selected.join(" + ")
+        },
+        best,
+        d.wall_s
+    );
+    eprint!("{row}");
+    (d.mismatch, row)
+}
+
+/// Clean data are not flagged (normal run: two clean twin datasets, quick options).
+#[test]
+fn clean_twin_datasets_are_not_flagged() {
+    for seed in [7, 8] {
+        let (mismatch, row) = false_alarm_row(seed, &DiagnoseOptions::quick(1));
+        assert!(!mismatch, "false alarm: {row}");
+    }
+}
+
+/// At most 1 false alarm in 20 clean twin datasets (different base motors, rates and noise
+/// levels); writes `target/false-alarms.md`:
+///
+/// ```sh
+/// cargo test --release --test diagnose -- --ignored --nocapture false_alarm_table
+/// ```
+#[test]
+#[ignore]
+fn false_alarm_table() {
+    let mut md = String::from(
+        "| dataset | mismatch | noise ratio | selected | best ΔBIC | wall s |\n|---|---|---|---|---|---|\n",
+    );
+    let mut alarms = 0;
+    for seed in 1..=20 {
+        let (mismatch, row) = false_alarm_row(seed, &DiagnoseOptions::quick(1));
+        alarms += usize::from(mismatch);
+        md += &row;
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/false-alarms.md");
+    std::fs::write(&path, &md).unwrap();
+    println!("{md}");
+    assert!(alarms <= 1, "{alarms} false alarms in 20\n{md}");
+}
+
+/// The one false alarm of the table (seed 11), alone. KNOWN FAILING (ignored): with the
+/// Levenberg–Marquardt polish the baseline still ends at noise ratio 1.101 and an
+/// uncatalogued term gains ΔBIC −270.6: not a stalled baseline fit; cause not yet found.
+///
+/// ```sh
+/// cargo test --release --test diagnose -- --ignored --nocapture false_alarm_seed_11
+/// ```
+#[test]
+#[ignore]
+fn false_alarm_seed_11() {
+    let (mismatch, row) = false_alarm_row(11, &DiagnoseOptions::quick(1));
+    assert!(!mismatch, "false alarm: {row}");
+}
+
+/// χ² of breakaway friction at the true parameters and a refit started there (synth and
+/// twin stiction): whether the fitted Stribeck speed is the likelihood's or a stall.
+#[test]
+#[ignore]
+fn stiction_likelihood_at_the_truth() {
+    use vanefit::diagnose::fitting::{run_job, FitJob};
+    use vanefit::objective::{cost::CostModel, cost::CostOptions, likelihood::Target};
+    let c = case("stiction");
+    let synth = truth(&c);
+    let ds_synth = dataset("synth", synthesize_with(&synth, 11, &rig_noise()));
+    let tc = twin_case("stiction");
+    let mut p = perturbed_base();
+    for (n, v, _) in twin::files::parameters(&tc.motor) {
+        p = p.with(n, v).unwrap();
+    }
+    let ds_twin = twin_dataset(&tc.motor, &twin_rig_config(), 11);
+    let engine = vanefit::estimate::engine::Engine::with_threads(Some(1)).unwrap();
+    let effects = EffectSet::empty().with(Effect::BreakawayFriction);
+    let mut names: Vec<String> = vanefit::estimate::space::DEFAULT_ESTIMATED
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    names.extend(["t_static".to_string(), "w_stribeck".to_string()]);
+    for (label, ds, params) in [("synth", ds_synth, synth.params), ("twin", ds_twin, p)] {
+        let cost = CostModel::new(&ds, CostOptions::default()).unwrap();
+        let target = Target::new(&cost, &ds).unwrap();
+        let solver = vanefit::numerics::DefaultSolver::default();
+        let m = Motor::new(params.clone(), effects.clone());
+        let chi2 = target.chi2(&cost, &m, &solver).unwrap();
+        let job = FitJob {
+            label: label.into(),
+            effects: effects.clone(),
+            extra: Vec::new(),
+            names: names.clone(),
+            starts: vec![params],
+            lhs: 0,
+            max_iters: 1500,
+            seed: 1,
+        };
+        let f = run_job(&cost, &target, &job, &engine).unwrap();
+        eprintln!(
+            "{label}: n {} chi2 at truth {chi2:.1}; refit from truth chi2 {:.1} t_static {:.4e} w_stribeck {:.3} t_coulomb {:.4e}",
+            target.n_points(),
+            f.chi2,
+            f.params.get("t_static").unwrap(),
+            f.params.get("w_stribeck").unwrap(),
+            f.params.get("t_coulomb").unwrap()
+        );
+    }
+}

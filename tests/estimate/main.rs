@@ -1,0 +1,16 @@
+//! Estimation: the `fit` command end to end ([`cli_fit`]), the multi-start runner
+//! ([`multistart`]), parameter recovery ([`recovery`]) and interval coverage on independent
+//! data ([`coverage`]), the likelihood rebuilt from a fit file ([`fit_likelihood`]) and its
+//! PEtab export ([`export_petab`]).
+
+mod cli_fit;
+#[path = "../common/mod.rs"]
+mod common;
+mod coverage;
+mod export_petab;
+mod fit_likelihood;
+mod multistart;
+mod recovery;
+#[allow(clippy::type_complexity)] // the twin generator is another engineer's code
+#[path = "../twin/mod.rs"]
+mod twin;

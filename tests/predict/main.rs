@@ -1,0 +1,9 @@
+//! `vanefit predict`: the shipped fit end to end ([`predict`]), a catalogue page fitted and
+//! predicted at other pressures ([`catalogue_predict`]) and the catalogue rows against the
+//! independent twin ([`twin_catalogue`]).
+
+mod catalogue_predict;
+mod predict;
+#[path = "../twin/mod.rs"]
+mod twin;
+mod twin_catalogue;
