@@ -463,9 +463,9 @@ pub fn overlays(
                 .map(|(x, y)| (ax.display(*x, p_atm), reference.display(*y, p_atm)))
                 .collect();
             let mut chart = Chart::new(
-                &format!("{} — {}", ex.file, reference.column),
+                &format!("{} — {}", ex.file, quantity_words(&reference.column)),
                 &axis_label(ax),
-                &reference.column,
+                &column_label(&reference.column),
             )
             .with(Series::points("data", data));
             if ax.log10 {
@@ -529,13 +529,28 @@ fn with_simulations(
     chart
 }
 
-/// The abscissa's axis title.
+/// The abscissa's axis title: its quantity and unit in words.
 fn axis_label(ax: &Abscissa) -> String {
     if ax.log10 {
-        format!("{} (log scale)", ax.column)
+        format!("{} (log scale)", column_label(&ax.column))
     } else {
-        ax.column.clone()
+        column_label(&ax.column)
     }
+}
+
+/// A recording's column as an axis title, quantity and unit as people write them
+/// (`p_port1_mpa` → `port 1 pressure [MPa]`); the column itself if it names no quantity.
+pub fn column_label(column: &str) -> String {
+    match crate::units::parse_column(column) {
+        Ok((q, u)) => format!("{} [{}]", q.words(), u.symbol()),
+        Err(_) => column.to_string(),
+    }
+}
+
+/// A column's quantity in words (`p_port1_mpa` → "port 1 pressure"), for panel titles.
+fn quantity_words(column: &str) -> String {
+    crate::units::parse_column(column)
+        .map_or_else(|_| column.to_string(), |(q, _)| q.words().into())
 }
 
 #[cfg(test)]
@@ -587,6 +602,28 @@ mod tests {
         );
         assert!(lines[6].contains("NOT IDENTIFIABLE: the data do not bound it from above"));
         assert_eq!(lines.len(), 7);
+    }
+
+    /// Overlay axes name the quantity and its unit, not the raw column.
+    #[test]
+    fn axes_name_quantity_and_unit() {
+        assert_eq!(column_label("p_port1_mpa"), "port 1 pressure [MPa]");
+        assert_eq!(column_label("torque_nm"), "torque [N·m]");
+        assert_eq!(
+            column_label("air_l_min_anr"),
+            "port 1 mass flow (air consumption) [l/min ANR]"
+        );
+        assert_eq!(column_label("no_such_column"), "no_such_column");
+        let ax = Abscissa {
+            quantity: crate::units::Quantity::CPort2,
+            column: "c_port2_m3_s_pa".into(),
+            unit: crate::units::Unit::M3SPa,
+            log10: true,
+        };
+        assert_eq!(
+            axis_label(&ax),
+            "port 2 nozzle conductance [m³/(s·Pa)] (log scale)"
+        );
     }
 
     #[test]
