@@ -345,6 +345,22 @@ fn a_bad_manifest_is_refused_where_it_is_wrong() {
             "bad.toml:4:1",
             "not a pressure unit",
         ),
+        // Globs that would walk the file system outside the manifest's folder.
+        (
+            "[batch]\ndatasets = [\"ds/*\", \"/*/*/*\"]\ntasks = [\"fit\"]\n",
+            "bad.toml:2:21 (value '\"/*/*/*\"')",
+            "is an absolute path: dataset globs stay inside the manifest's folder",
+        ),
+        (
+            "[batch]\ndatasets = [\"../x/*\"]\ntasks = [\"fit\"]\n",
+            "bad.toml:2:13",
+            "climbs out with '..'",
+        ),
+        (
+            "[batch]\ndatasets = [\"ds/.?/.?/*\"]\ntasks = [\"fit\"]\n",
+            "bad.toml:2:13",
+            "has a component that matches '..'",
+        ),
     ];
     for (manifest, place, what) in cases {
         std::fs::write(p.join("bad.toml"), manifest).unwrap();
@@ -402,6 +418,23 @@ fn a_diagnose_unit_is_summarised() {
     let md = read(&p.join("r/summary.md"));
     let verdict = if mismatch { "yes" } else { "no" };
     assert!(md.contains(&format!("| m1 | {verdict} |")), "{md}");
+}
+
+/// A dataset's predict runs after its fit, whatever lies between them in the plan (here its
+/// diagnose) and however many threads run the groups: every unit is done. (With a thread
+/// per unit, a predict that did not wait would start beside the fit and fail.)
+#[test]
+fn a_predict_waits_for_its_fit_whatever_the_threads() {
+    let dir = fleet(1, false, "\"fit\", \"diagnose\", \"predict\"");
+    let p = dir.path();
+    let manifest = read(&p.join("m.toml")) + "\n[diagnose]\nstarts = 1\neffort = \"quick\"\n";
+    std::fs::write(p.join("m.toml"), manifest).unwrap();
+    let o = vanefit(&["batch", "m.toml", "--out", "r", "--threads", "3"], p);
+    assert!(o.status.success(), "{}", text(&o));
+    for unit in ["m1/fit", "m1/diagnose", "m1/predict"] {
+        let status = status_of(&p.join("r"), unit);
+        assert_eq!(status["status"], "done", "{unit}: {status}");
+    }
 }
 
 /// A CSV cell as the csv crate writes it (quoted when it holds a comma or a quote).

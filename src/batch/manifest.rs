@@ -223,6 +223,19 @@ fn datasets(
     if globs.get_ref().is_empty() {
         return Err(src.at(globs.span(), "give at least one dataset folder or glob"));
     }
+    // Every glob is judged before any is walked: one that could leave the folder would walk
+    // the machine's file system (`/*/*/*`, or `.?/`, which glob lets match `..`).
+    for g in globs.get_ref() {
+        if let Some(why) = leaves_folder(g.get_ref()) {
+            return Err(src.at(
+                g.span(),
+                format!(
+                    "'{}' {why}: dataset globs stay inside the manifest's folder; put the manifest in a folder that holds its datasets",
+                    g.get_ref()
+                ),
+            ));
+        }
+    }
     let mut out: Vec<DatasetEntry> = Vec::new();
     for g in globs.get_ref() {
         let pattern = base.join(g.get_ref());
@@ -263,6 +276,36 @@ fn datasets(
     }
     out.sort_by(|a, b| a.name.cmp(&b.name));
     Ok(out)
+}
+
+/// Why the dataset glob `glob` could match a path outside the manifest's folder, if it
+/// could: an absolute path, a `..` component, or a wildcard component that glob lets match
+/// `..` (one that begins with a literal dot, such as `.?` or `.*`: glob offers `.` and `..`
+/// to those). Judged on the components alone, before any walking; a symbolic link inside
+/// the folder is followed, as the user made it.
+fn leaves_folder(glob: &str) -> Option<&'static str> {
+    use std::path::Component;
+    let path = Path::new(glob);
+    if path
+        .components()
+        .any(|c| matches!(c, Component::RootDir | Component::Prefix(_)))
+    {
+        return Some("is an absolute path");
+    }
+    for component in glob.split(std::path::is_separator) {
+        if component == ".." {
+            return Some("climbs out with '..'");
+        }
+        // glob offers `.` and `..` only to a component that begins with a literal dot.
+        let wild = component.contains(['*', '?', '[']);
+        if component.starts_with('.')
+            && wild
+            && glob::Pattern::new(component).is_ok_and(|p| p.matches(".."))
+        {
+            return Some("has a component that matches '..' (a wildcard after a leading dot)");
+        }
+    }
+    None
 }
 
 /// The tasks in their run order; `predict` needs `fit`, since it predicts from its file.
@@ -422,15 +465,66 @@ mod tests {
     fn errors_are_located() {
         let e = parse("[batch]\ndatasets = [\"x\"]\ntasks = [\"fitt\"]\n").unwrap_err();
         assert!(e.to_string().starts_with("m.toml:3:10"), "{e}");
-        let e = parse("[batch]\ndatasets = [\"/\"]\ntasks = [\"fit\"]\n[fit]\nstart = 3\n")
+        let e = parse("[batch]\ndatasets = [\".\"]\ntasks = [\"fit\"]\n[fit]\nstart = 3\n")
             .unwrap_err();
-        assert!(e.to_string().starts_with("m.toml:5:1"), "{e}");
+        assert!(e.to_string().starts_with("m.toml:5:1 (key 'start')"), "{e}");
         let e = parse(
-            "[batch]\ndatasets = [\"/\"]\ntasks = [\"fit\"]\n[fit]\nuncertainty = \"exact\"\n",
+            "[batch]\ndatasets = [\".\"]\ntasks = [\"fit\"]\n[fit]\nuncertainty = \"exact\"\n",
         )
         .unwrap_err();
-        assert!(e.to_string().starts_with("m.toml:5:15"), "{e}");
-        let e = parse("[batch]\ndatasets = [\"/\"]\ntasks = [\"predict\"]\n").unwrap_err();
+        assert!(
+            e.to_string().starts_with("m.toml:5:15 (value '\"exact\"')"),
+            "{e}"
+        );
+        let e = parse("[batch]\ndatasets = [\".\"]\ntasks = [\"predict\"]\n").unwrap_err();
         assert!(e.to_string().contains("predict needs fit"), "{e}");
+    }
+
+    /// A glob that could leave the manifest's folder is refused at its place before any
+    /// walking (a walk of `/*/*/*` takes minutes); globs inside it are read.
+    #[test]
+    fn globs_stay_inside_the_manifest_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        for d in ["measurements/a", "measurements/b", ".hidden/c"] {
+            std::fs::create_dir_all(dir.path().join(d)).unwrap();
+        }
+        let at = |glob: &str| {
+            let text =
+                format!("[batch]\ntasks = [\"fit\"]\ndatasets = [\"measurements/*\", {glob:?}]\n");
+            Manifest::parse(&dir.path().join("m.toml"), Path::new("m.toml"), &text)
+        };
+        for bad in [
+            "/*/*/*",
+            "/",
+            "../x/*",
+            "measurements/../../*",
+            ".?/*",
+            ".*",
+            "measurements/.?/.?/*",
+            "./.[.]/*",
+        ] {
+            let e = at(bad).map(|_| ()).unwrap_err().to_string();
+            assert!(e.starts_with("m.toml:3:31"), "{bad}: {e}");
+            assert!(
+                e.contains("stay inside the manifest's folder"),
+                "{bad}: {e}"
+            );
+        }
+        for good in [
+            "measurements/a",
+            "./measurements/?",
+            ".hidden/*",
+            "**/b",
+            ".",
+        ] {
+            assert!(at(good).is_ok(), "{good}: {:?}", at(good).map(|_| ()));
+        }
+        let names: Vec<String> = at("measurements/[ab]")
+            .unwrap()
+            .datasets
+            .iter()
+            .map(|d| d.name.clone())
+            .collect();
+        assert_eq!(names, ["a", "b"]);
     }
 }

@@ -245,11 +245,16 @@ fn diagnoses_md(s: &mut String, rows: &[Row]) {
     let _ = writeln!(s);
 }
 
-/// `fleet.svg`: one panel per parameter, the motors (numbered as in `summary.md`) along x,
+/// `fleet.svg`: one panel per parameter, the motors (by dataset name) along x,
 /// each estimate a point and its 95 % interval a vertical bar, in percent from the fleet's
 /// median, so that an odd motor stands out and the axis labels read as the spread (the
 /// values themselves differ in the 4th digit, which absolute tick labels would not show).
 fn fleet_plot(rows: &[Row], names: &[&str]) -> Option<Figure> {
+    let motors: Vec<String> = rows
+        .iter()
+        .filter(|r| r.fit.is_some())
+        .map(|r| r.unit.dataset.clone())
+        .collect();
     let fits: Vec<&FitFile> = rows.iter().filter_map(|r| r.fit.as_ref()).collect();
     if fits.is_empty() || names.is_empty() {
         return None;
@@ -275,10 +280,11 @@ fn fleet_plot(rows: &[Row], names: &[&str]) -> Option<Figure> {
             }
             let unit = crate::model::params::spec(n).map_or("", |s| s.unit);
             let title = format!("{n} (fleet median {median:.5e} {unit})");
-            let mut chart = Chart::new(&title, "motor (# of summary.md)", "% from the median")
+            let mut chart = Chart::new(&title, "motor (dataset)", "% from the median")
                 .with(Series::points("estimate", points))
                 .with(Series::line("95 % interval", bars));
             chart.x_range = Some((0.5, fits.len() as f64 + 0.5));
+            chart.x_names = motors.clone();
             chart
         })
         .collect();

@@ -86,13 +86,7 @@ pub fn run(manifest: &Manifest, opts: &RunOptions) -> Result<RunOutcome, BatchEr
         record.units.len(),
         engine.threads()
     ));
-    let mut groups: Vec<Vec<Unit>> = Vec::new();
-    for u in units {
-        match groups.last_mut() {
-            Some(g) if g[0].group == u.group => g.push(u),
-            _ => groups.push(vec![u]),
-        }
-    }
+    let groups = by_group(units);
     let ran = engine.map(&groups, |group| {
         group
             .iter()
@@ -120,6 +114,21 @@ pub fn run(manifest: &Manifest, opts: &RunOptions) -> Result<RunOutcome, BatchEr
     }
     progress.line("shard finished");
     Ok(outcome)
+}
+
+/// The units gathered by group, groups in order of their first unit, each group's units in
+/// plan order. A group's units need not be neighbours in the plan (a dataset's predict comes
+/// after its diagnose, in the fit's group): gathering only neighbours would run a predict
+/// beside its fit instead of after it, and fail it for want of a fit on more than one thread.
+fn by_group(units: Vec<Unit>) -> Vec<Vec<Unit>> {
+    let mut groups: Vec<Vec<Unit>> = Vec::new();
+    for u in units {
+        match groups.iter_mut().find(|g| g[0].group == u.group) {
+            Some(g) => g.push(u),
+            None => groups.push(vec![u]),
+        }
+    }
+    groups
 }
 
 /// Skips a finished unit (done, or failed unless `retry_failed`), runs any other, and says
@@ -269,5 +278,47 @@ fn execute(
                 p.written.len()
             ))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn unit(dataset: &str, task: TaskKind, group: usize) -> Unit {
+        Unit {
+            dataset: dataset.into(),
+            path: PathBuf::from(dataset),
+            task,
+            group,
+        }
+    }
+
+    /// The plan of `tasks = ["fit", "diagnose", "predict"]`: each predict runs in its fit's
+    /// group, after the fit, whatever lies between them in the plan.
+    #[test]
+    fn a_predict_runs_after_its_fit_in_one_group() {
+        let plan = vec![
+            unit("a", TaskKind::Fit, 0),
+            unit("a", TaskKind::Diagnose, 1),
+            unit("a", TaskKind::Predict, 0),
+            unit("b", TaskKind::Fit, 2),
+            unit("b", TaskKind::Diagnose, 3),
+            unit("b", TaskKind::Predict, 2),
+        ];
+        let labels: Vec<Vec<String>> = by_group(plan)
+            .iter()
+            .map(|g| g.iter().map(Unit::label).collect())
+            .collect();
+        assert_eq!(
+            labels,
+            [
+                vec!["a/fit", "a/predict"],
+                vec!["a/diagnose"],
+                vec!["b/fit", "b/predict"],
+                vec!["b/diagnose"],
+            ]
+        );
     }
 }

@@ -45,7 +45,7 @@ pub(crate) fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
         summary.conditions
     );
     say!(
-        "chi2 at the fit: {:.6} (rows {:.6} + nuisance priors {:.6})",
+        "likelihood chi2 at the fit: {:.6} (rows {:.6} + nuisance priors {:.6}; statistics.likelihood_chi2 of the fit file)",
         summary.chi2_rows + summary.chi2_priors,
         summary.chi2_rows,
         summary.chi2_priors

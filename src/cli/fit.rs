@@ -358,8 +358,7 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
 /// What the estimate is, how well it fits, and cost against χ².
 fn print_goodness(out: &FitOutcome) {
     say!(
-        "estimate: the maximum-likelihood point of the recorded rows (chi2 {:.1} over {} points; each channel's σ from the data's noise, a catalogue's from its reading tolerance; recorded sensors' offsets within calibration tolerance profiled out)",
-        out.chi2, out.n_points
+        "estimate: the maximum-likelihood point of the recorded rows (each channel's σ from the data's noise, a catalogue's from its reading tolerance; recorded sensors' offsets within calibration tolerance profiled out)"
     );
     if !out.nuisances.is_empty() {
         let list: Vec<String> = out
@@ -387,12 +386,15 @@ fn print_goodness(out: &FitOutcome) {
             )
         };
         say!(
-            "goodness of fit: chi2/dof {:.3} (dof {}), noise ratio {:.3} (limit {:.3}): {verdict}",
-            g.chi2_per_dof,
-            g.dof,
+            "goodness of fit: {}, noise ratio {:.3} (limit {:.3}): {verdict}",
+            report::chi2_summary(g),
             g.noise_ratio,
             g.noise_ratio_limit
         );
+    }
+    let likelihood = report::likelihood_chi2_summary(out);
+    if let Some(line) = &likelihood {
+        say!("{line}");
     }
     say!(
         "cost J {:.4} at the estimate; the best start reached {:.4} (J weighs each channel by its reference polynomial's scatter, chi2 by the data's noise, so their optima differ a little)",
@@ -400,6 +402,9 @@ fn print_goodness(out: &FitOutcome) {
     );
     say!("  what these are: {}.", explain::NOISE_RATIO);
     say!("  {}; {}.", explain::CHI2_PER_DOF, explain::CHI2_OFFSETS);
+    if likelihood.is_some() {
+        say!("  {}.", explain::LIKELIHOOD_CHI2);
+    }
     say!("  {}.", explain::COST_J);
     say!("  {}.", explain::CONDUCTANCE_UNITS);
 }

@@ -18,24 +18,55 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 /// A located problem with input data (the data layer's error): shown as
-/// `file:line:column (column 'name'): message`, with whatever of the location is known.
+/// `file:line:column (column 'name'): message` for a CSV file, `file:line:column (key
+/// 'name'): message` for a TOML file, with whatever of the location is known.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{}", located_text(.file, *.line, .column.as_ref(), .message))]
+#[error("{}", located_text(.file, *.line, .column.as_ref(), .named, .message))]
 pub struct DataError {
     /// The file at fault.
     pub file: PathBuf,
     /// 1-based line, where known.
     pub line: Option<u64>,
-    /// 1-based column index and its name, where known.
+    /// 1-based column index (characters in the line) and the name found there, where known.
     pub column: Option<(usize, String)>,
+    /// What the name in `column` is: a CSV column, or a TOML key, value or table.
+    pub named: Named,
     /// What is wrong.
     pub message: String,
+}
+
+/// What the name beside a located error's column is, as its message says it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Named {
+    /// A CSV column's header.
+    #[default]
+    Column,
+    /// A TOML key.
+    Key,
+    /// A TOML value.
+    Value,
+    /// A TOML table.
+    Table,
+}
+
+impl Named {
+    /// The word messages use.
+    pub fn word(self) -> &'static str {
+        match self {
+            Named::Column => "column",
+            Named::Key => "key",
+            Named::Value => "value",
+            Named::Table => "table",
+        }
+    }
 }
 
 fn located_text(
     file: &Path,
     line: Option<u64>,
     column: Option<&(usize, String)>,
+    named: &Named,
     message: &str,
 ) -> String {
     let mut s = file.display().to_string();
@@ -46,9 +77,17 @@ fn located_text(
         }
     }
     if let Some((_, name)) = column {
-        s += &format!(" (column '{name}')");
+        s += &format!(" ({} '{name}')", named.word());
     }
     s + ": " + message
+}
+
+/// Whether `text` has a comma between two digits (`0,1003551`, `6,3`): a number written with
+/// a decimal comma (or a thousands separator), which neither a CSV field nor a value reads.
+pub(crate) fn digit_comma_digit(text: &str) -> bool {
+    let b = text.as_bytes();
+    (1..b.len().saturating_sub(1))
+        .any(|i| b[i] == b',' && b[i - 1].is_ascii_digit() && b[i + 1].is_ascii_digit())
 }
 
 impl DataError {
@@ -58,6 +97,7 @@ impl DataError {
             file: file.to_path_buf(),
             line: None,
             column: None,
+            named: Named::Column,
             message: message.into(),
         }
     }
@@ -166,10 +206,7 @@ fn decimal_commas(e: &csv::Error, text: &str, line: u64) -> Option<String> {
     let row = text
         .lines()
         .nth(usize::try_from(line).ok()?.checked_sub(1)?)?;
-    let b = row.as_bytes();
-    let digit_comma_digit = (1..b.len().saturating_sub(1))
-        .any(|i| b[i] == b',' && b[i - 1].is_ascii_digit() && b[i + 1].is_ascii_digit());
-    (*len > *expected_len && digit_comma_digit).then(|| {
+    (*len > *expected_len && digit_comma_digit(row)).then(|| {
         format!(
             "{len} fields where the header has {expected_len}: the numbers look written with a \
              decimal comma, which a comma-separated file cannot hold; save the sheet with '.' \
@@ -666,6 +703,13 @@ pub fn locate_span(
             .count();
         err = err.at(line);
         let token: String = text[start..end].trim().chars().take(40).collect();
+        err.named = if token.starts_with('[') {
+            Named::Table
+        } else if text[end..].trim_start().starts_with('=') {
+            Named::Key
+        } else {
+            Named::Value
+        };
         err.column = Some((col + 1, token));
     }
     err
@@ -752,6 +796,7 @@ fn located(path: &Path, text: &str, table: Table, key: &str, message: String) ->
     if let Some((line, col)) = key_location(text, table, key) {
         err.line = Some(line);
         err.column = Some((col, key.to_string()));
+        err.named = Named::Key;
     }
     err
 }
@@ -1010,6 +1055,30 @@ mod tests {
         let cells: Cells = ["a", "", "bc"].into_iter().collect();
         assert_eq!(cells.to_strings(), ["a", "", "bc"]);
         assert_eq!(cells, ["a", "", "bc"].into_iter().collect::<Cells>());
+    }
+
+    /// A rig.toml value with a decimal comma is refused at its key, naming the comma.
+    #[test]
+    fn a_decimal_comma_in_rig_toml_is_named_at_its_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let from = Path::new("measurements/ar034-synthetic-catalogue");
+        for e in std::fs::read_dir(from).unwrap().flatten() {
+            std::fs::copy(e.path(), dir.path().join(e.file_name())).unwrap();
+        }
+        let rig = dir.path().join("rig.toml");
+        let text = std::fs::read_to_string(&rig).unwrap();
+        let line = text
+            .lines()
+            .position(|l| l.starts_with("p_supply"))
+            .unwrap()
+            + 1;
+        std::fs::write(&rig, text.replacen("\"6.3 bar(g)\"", "\"6,3 bar(g)\"", 1)).unwrap();
+        let e = Dataset::load(dir.path()).unwrap_err().to_string();
+        let want = format!(
+            "rig.toml:{line}:1 (key 'p_supply'): p_supply: '6,3 bar(g)' is written with a \
+             decimal comma: write the decimal mark as a point ('6.3 bar(g)')"
+        );
+        assert!(e.ends_with(&want), "{e}");
     }
 
     #[test]

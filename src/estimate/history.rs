@@ -47,9 +47,11 @@ fn not_of_this_run(r: &StartResult, n: usize) -> Option<String> {
     None
 }
 
-/// Append-only file of finished starts (JSON lines).
+/// Append-only file of finished starts (JSON lines). Workers append the starts they finish
+/// concurrently; a lock keeps each record a line of its own.
 pub struct ResultsFile {
     path: PathBuf,
+    appending: std::sync::Mutex<()>,
 }
 
 impl ResultsFile {
@@ -57,6 +59,7 @@ impl ResultsFile {
     pub fn new(path: &Path) -> Self {
         Self {
             path: path.to_path_buf(),
+            appending: std::sync::Mutex::new(()),
         }
     }
 
@@ -153,8 +156,17 @@ impl ResultsFile {
         crate::io::write_atomic(&self.path, (header + "\n").as_bytes()).map_err(|e| self.io(e))
     }
 
-    /// Appends finished starts and syncs them to disk.
+    /// Appends finished starts, each a whole line written at once, and syncs them to disk.
     pub(crate) fn append(&self, results: &[StartResult]) -> Result<(), EstimateError> {
+        if results.is_empty() {
+            return Ok(());
+        }
+        // A worker that panicked while holding the lock wrote whole lines or a torn last one,
+        // which `load` cuts: the file is still usable.
+        let _one_writer = self
+            .appending
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let mut f = std::fs::OpenOptions::new()
             .append(true)
             .open(&self.path)

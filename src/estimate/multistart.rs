@@ -2,11 +2,13 @@
 //! whatever the thread count, interruptible without losing finished starts.
 //!
 //! Starts advance in rounds of `stage_iters` iterations. Between rounds (a barrier, so the
-//! decision never depends on thread timing) starts that have converged or used their budget
-//! finish, and starts that stall far above the best cost seen so far stop early. Each
-//! finished start is appended to a results file at once; `resume` reads it back and replays
-//! the kill decisions from the recorded per-round histories, so a resumed run ends exactly
-//! where an uninterrupted one would.
+//! decision never depends on thread timing) starts that stall far above the best cost seen
+//! so far stop early, and starts that reach the cost of a converged one join it. A start
+//! that converges or uses its budget ends by itself: it is appended to the results file the
+//! moment its stage ends, by the worker that ran it, not at the round's end, so a run killed
+//! inside its first (possibly only) round keeps every start that had ended. `resume` reads
+//! the file back and replays the round decisions from the recorded per-round histories, so
+//! a resumed run ends exactly where an uninterrupted one would, whatever the thread count.
 
 use super::engine::Engine;
 use super::error::EstimateError;
@@ -106,6 +108,10 @@ struct Runner {
     evaluations: u64,
     history: Vec<f64>,
     trace: Vec<f64>,
+    /// How the start ended by itself in the last stage (converged, failed, out of budget).
+    ended: Option<Ending>,
+    /// The outcome of recording that ending in the results file (checked at the barrier).
+    recorded: Option<Result<(), EstimateError>>,
 }
 
 impl Runner {
@@ -117,6 +123,8 @@ impl Runner {
             evaluations: 0,
             history: Vec::new(),
             trace: Vec::new(),
+            ended: None,
+            recorded: None,
         }
     }
 
@@ -136,41 +144,64 @@ impl Runner {
         }
     }
 
-    /// How the start ends after a round, if it does (`best`: best cost over every start;
-    /// `known`: best cost of the starts that converged in earlier rounds).
-    fn ending(
+    /// How the start ends by itself after its stage, if it does: converged, failed or out of
+    /// budget. This needs no other start, so the worker decides it (and records the start)
+    /// as soon as the stage ends.
+    fn own_ending(&self, cfg: &MultiStartSettings) -> Option<Ending> {
+        match self.search.status() {
+            Status::Converged => Some(Ending::Converged),
+            Status::Failed => Some(Ending::Budget),
+            Status::Running if self.search.iterations() >= cfg.max_iters() => Some(Ending::Budget),
+            Status::Running => None,
+        }
+    }
+
+    /// How a start still running after a round ends at the barrier, if it does (`best`: best
+    /// cost over every start; `known`: best cost of the starts that converged in earlier
+    /// rounds).
+    fn round_ending(
         &self,
         cfg: &MultiStartSettings,
         round: usize,
         best: f64,
         known: f64,
     ) -> Option<Ending> {
-        match self.search.status() {
-            Status::Converged => Some(Ending::Converged),
-            Status::Failed => Some(Ending::Budget),
-            Status::Running if self.search.iterations() >= cfg.max_iters() => Some(Ending::Budget),
-            Status::Running if cfg.joins(self.search.cost(), known) => Some(Ending::Joined),
-            Status::Running
-                if round >= cfg.kill_after_rounds()
-                    && cfg.stops_early(self.search.cost(), best) =>
-            {
-                Some(Ending::StoppedEarly)
-            }
-            Status::Running => None,
+        if cfg.joins(self.search.cost(), known) {
+            Some(Ending::Joined)
+        } else if round >= cfg.kill_after_rounds() && cfg.stops_early(self.search.cost(), best) {
+            Some(Ending::StoppedEarly)
+        } else {
+            None
         }
     }
 
-    fn finish(self, ending: Ending, keep_trace: bool) -> StartResult {
+    fn result(&self, ending: Ending, keep_trace: bool) -> StartResult {
         StartResult {
             index: self.index,
-            theta0: self.theta0,
+            theta0: self.theta0.clone(),
             theta: self.search.x().to_vec(),
             cost: self.search.cost(),
             ending,
             iterations: self.search.iterations(),
             evaluations: self.evaluations,
-            history: self.history,
-            trace: keep_trace.then_some(self.trace),
+            history: self.history.clone(),
+            trace: keep_trace.then(|| self.trace.clone()),
+        }
+    }
+
+    /// One stage, then (on the worker) the start's own ending, recorded in `file` at once.
+    fn stage(
+        &mut self,
+        objective: &dyn Objective,
+        space: &ParamSpace,
+        cfg: &MultiStartSettings,
+        file: Option<&ResultsFile>,
+    ) {
+        self.advance(objective, space, cfg);
+        self.history.push(self.search.cost());
+        self.ended = self.own_ending(cfg);
+        if let (Some(ending), Some(f)) = (self.ended, file) {
+            self.recorded = Some(f.append(&[self.result(ending, cfg.keep_traces())]));
         }
     }
 }
@@ -297,11 +328,12 @@ impl Rounds<'_> {
             if !self.observer.keep_going() {
                 return Err(EstimateError::Interrupted);
             }
+            let file = self.results_file;
             self.engine
-                .for_each_mut(&mut live, |r| r.advance(objective, space, cfg));
+                .for_each_mut(&mut live, |r| r.stage(objective, space, cfg, file));
             round += 1;
-            for r in &mut live {
-                r.history.push(r.search.cost());
+            if let Some(e) = live.iter_mut().find_map(|r| r.recorded.take()?.err()) {
+                return Err(e);
             }
             // Best cost after this round over every start, replaying resumed ones' histories.
             let best = live
@@ -326,30 +358,31 @@ impl Rounds<'_> {
                 .map(|f| f.cost)
                 .fold(f64::INFINITY, f64::min);
             let mut still = Vec::with_capacity(live.len());
-            let mut newly = Vec::new();
+            let (mut newly, mut unrecorded) = (Vec::new(), Vec::new());
             for r in live {
-                match r.ending(cfg, round, best, known) {
-                    Some(e) => newly.push(r.finish(e, cfg.keep_traces())),
-                    None => still.push(r),
+                if let Some(e) = r.ended {
+                    newly.push(r.result(e, cfg.keep_traces()));
+                } else if let Some(e) = r.round_ending(cfg, round, best, known) {
+                    newly.push(r.result(e, cfg.keep_traces()));
+                    unrecorded.push(newly.len() - 1);
+                } else {
+                    still.push(r);
                 }
             }
             live = still;
-            self.report(&finished, &newly, best)?;
+            if let Some(f) = self.results_file {
+                let at_barrier: Vec<StartResult> =
+                    unrecorded.iter().map(|&i| newly[i].clone()).collect();
+                f.append(&at_barrier)?;
+            }
+            self.report(&finished, &newly, best);
             finished.extend(newly);
         }
         Ok(finished)
     }
 
-    /// Appends the starts that ended this round to the results file and tells the observer.
-    fn report(
-        &self,
-        finished: &[StartResult],
-        newly: &[StartResult],
-        best: f64,
-    ) -> Result<(), EstimateError> {
-        if let Some(f) = self.results_file {
-            f.append(newly)?;
-        }
+    /// Tells the observer of the starts that ended this round (in start order).
+    fn report(&self, finished: &[StartResult], newly: &[StartResult], best: f64) {
         let best_now = finished
             .iter()
             .chain(newly)
@@ -358,7 +391,6 @@ impl Rounds<'_> {
         for r in newly {
             self.observer.start_finished(r, best_now);
         }
-        Ok(())
     }
 }
 
@@ -405,4 +437,105 @@ pub fn cluster(results: &[StartResult], space: &ParamSpace, radius: f64) -> Vec<
         }
     }
     clusters
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::objective::Evaluation;
+    use crate::estimate::settings::MultiStartConfig;
+    use crate::estimate::space::DEFAULT_ESTIMATED;
+    use crate::model::effects::EffectSet;
+    use crate::model::motor::Motor;
+    use crate::model::params::MotorParams;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// A bowl in the log-parameters that stands for a kill (panics) at its `kill_at`-th
+    /// evaluation: the run dies mid-round, as a fit killed with SIGKILL does.
+    struct Bowl {
+        evaluations: AtomicU64,
+        kill_at: u64,
+    }
+
+    impl Objective for Bowl {
+        fn evaluate(&self, motor: &Motor) -> Evaluation {
+            if self.evaluations.fetch_add(1, Ordering::SeqCst) + 1 == self.kill_at {
+                panic!("killed");
+            }
+            let chi2: f64 = DEFAULT_ESTIMATED
+                .iter()
+                .map(|n| (motor.params.get(n).unwrap().ln() - 1e-9f64.ln()).powi(2))
+                .sum();
+            Evaluation {
+                cost: chi2,
+                chi2,
+                n_points: 10,
+                failed: false,
+            }
+        }
+    }
+
+    fn bowl(kill_at: u64) -> Bowl {
+        Bowl {
+            evaluations: AtomicU64::new(0),
+            kill_at,
+        }
+    }
+
+    fn run_on(
+        threads: usize,
+        obj: &Bowl,
+        cfg: &MultiStartSettings,
+        file: &ResultsFile,
+        resume: bool,
+    ) -> MultiStartOutcome {
+        let engine = Engine::with_threads(Some(threads)).unwrap();
+        let space = ParamSpace::new(
+            &DEFAULT_ESTIMATED,
+            MotorParams::default(),
+            EffectSet::empty(),
+        )
+        .unwrap();
+        run(&engine, obj, &space, cfg, &Silent, Some(file), resume).unwrap()
+    }
+
+    #[test]
+    fn a_run_killed_inside_its_only_round_keeps_the_starts_that_ended() {
+        // Every start ends in the first round (its budget is shorter than a stage).
+        let cfg = MultiStartConfig {
+            starts: 4,
+            seed: 7,
+            stage_iters: 100,
+            max_iters: 60,
+            ..Default::default()
+        }
+        .check()
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let whole = ResultsFile::new(&dir.path().join("whole.jsonl"));
+        let full = run_on(2, &bowl(0), &cfg, &whole, false);
+        assert!(full.results.iter().all(|r| r.history.len() == 1));
+
+        // One worker runs the starts in index order: killed inside start 2, starts 0 and 1
+        // have ended and must be on disk.
+        let path = dir.path().join("killed.jsonl");
+        let killed = ResultsFile::new(&path);
+        let kill_at = full.results[0].evaluations + full.results[1].evaluations + 5;
+        let died = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            run_on(1, &bowl(kill_at), &cfg, &killed, false)
+        }));
+        assert!(died.is_err());
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text.lines().count(), 3, "header and two starts:\n{text}");
+
+        // Resumed (on another thread count), it runs only the other two and ends as the
+        // uninterrupted run did.
+        let counting = bowl(0);
+        let resumed = run_on(2, &counting, &cfg, &killed, true);
+        assert_eq!(resumed.results, full.results);
+        assert_eq!(
+            counting.evaluations.load(Ordering::SeqCst),
+            full.results[2].evaluations + full.results[3].evaluations
+        );
+    }
 }

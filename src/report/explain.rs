@@ -25,6 +25,13 @@ pub const CHI2_PER_DOF: &str = "chi2 = sum over the recorded rows of \
     chi2/(rows − estimated parameters) ≈ 1 when the model explains the data to within their \
     noise, well above 1 when it misses";
 
+/// What a fit's likelihood χ² is, and how it differs from χ².
+pub const LIKELIHOOD_CHI2: &str = "likelihood chi2 = what the estimate minimises and the \
+    profile intervals rise from: chi2 with the σ of each channel whose residuals scatter more \
+    than its noise estimate widened to that scatter, plus the sensor offsets' calibration \
+    priors; lower than chi2 where a channel was widened (fit file: \
+    statistics.likelihood_chi2; chi2 is statistics.chi2)";
+
 /// How a fit's χ² treats the rig's systematic errors (the diagnosis keeps none).
 pub const CHI2_OFFSETS: &str = "in a fit, each sensor's zero offset and the supply-pressure \
     sensor's offset are profiled out of chi2 within their calibration tolerances";

@@ -198,6 +198,38 @@ pub fn markdown(
     md
 }
 
+/// χ² of a fit as the terminal and the report name it: `chi2 X over N rows, chi2/dof Y
+/// (dof D)`, the rows against the data's own noise (docs/model.md, "χ² and χ²/dof").
+pub fn chi2_summary(g: &crate::estimate::goodness::GoodnessOfFit) -> String {
+    format!(
+        "chi2 {:.1} over {} rows, chi2/dof {:.3} (dof {})",
+        g.chi2, g.n_points, g.chi2_per_dof, g.dof
+    )
+}
+
+/// The likelihood χ² of a fit (what the estimate minimises), named apart from χ², with the
+/// channels whose σ was widened; `None` when it is χ² itself (no channel widened and χ²
+/// known), so that one number is never shown under two names.
+pub fn likelihood_chi2_summary(out: &FitOutcome) -> Option<String> {
+    if out.goodness.is_some() && out.widening.is_empty() {
+        return None;
+    }
+    let widened = if out.widening.is_empty() {
+        "no channel widened".to_string()
+    } else {
+        let list: Vec<String> = out
+            .widening
+            .iter()
+            .map(|(c, f)| format!("{c} ×{f:.2}"))
+            .collect();
+        format!("σ widened: {}", list.join(", "))
+    };
+    Some(format!(
+        "likelihood chi2 {:.1} over {} rows ({widened})",
+        out.chi2, out.n_points
+    ))
+}
+
 /// The goodness of fit and the cost, each with one line on what it is.
 fn goodness_section(md: &mut String, out: &FitOutcome) {
     let _ = writeln!(md, "## How well it fits\n");
@@ -212,24 +244,30 @@ fn goodness_section(md: &mut String, out: &FitOutcome) {
         };
         let _ = writeln!(
             md,
-            "* noise ratio {:.3} (limit {:.3}): {verdict}\n* chi2 {:.1} over {} rows, \
-             chi2/dof {:.3} (dof {})",
-            g.noise_ratio, g.noise_ratio_limit, g.chi2, g.n_points, g.chi2_per_dof, g.dof
+            "* noise ratio {:.3} (limit {:.3}): {verdict}\n* {}",
+            g.noise_ratio,
+            g.noise_ratio_limit,
+            chi2_summary(g)
         );
-    } else {
-        let _ = writeln!(md, "* chi2 {:.1} over {} rows", out.chi2, out.n_points);
+    }
+    let likelihood = likelihood_chi2_summary(out);
+    if let Some(line) = &likelihood {
+        let _ = writeln!(md, "* {line}");
     }
     let _ = writeln!(
         md,
         "* cost J {:.4} at the estimate; the best start reached {:.4}\n\n\
-         What these are:\n\n* {}.\n* {}; {}.\n* {}.\n",
+         What these are:\n\n* {}.\n* {}; {}.",
         out.cost,
         out.best_start_cost,
         explain::NOISE_RATIO,
         explain::CHI2_PER_DOF,
         explain::CHI2_OFFSETS,
-        explain::COST_J
     );
+    if likelihood.is_some() {
+        let _ = writeln!(md, "* {}.", explain::LIKELIHOOD_CHI2);
+    }
+    let _ = writeln!(md, "* {}.\n", explain::COST_J);
 }
 
 /// The table of estimated parameters, conductances in both units.
@@ -425,9 +463,9 @@ pub fn overlays(
                 .map(|(x, y)| (ax.display(*x, p_atm), reference.display(*y, p_atm)))
                 .collect();
             let mut chart = Chart::new(
-                &format!("{} — {}", ex.file, reference.column),
+                &format!("{} — {}", ex.file, quantity_words(&reference.column)),
                 &axis_label(ax),
-                &reference.column,
+                &column_label(&reference.column),
             )
             .with(Series::points("data", data));
             if ax.log10 {
@@ -491,13 +529,28 @@ fn with_simulations(
     chart
 }
 
-/// The abscissa's axis title.
+/// The abscissa's axis title: its quantity and unit in words.
 fn axis_label(ax: &Abscissa) -> String {
     if ax.log10 {
-        format!("{} (log scale)", ax.column)
+        format!("{} (log scale)", column_label(&ax.column))
     } else {
-        ax.column.clone()
+        column_label(&ax.column)
     }
+}
+
+/// A recording's column as an axis title, quantity and unit as people write them
+/// (`p_port1_mpa` → `port 1 pressure [MPa]`); the column itself if it names no quantity.
+pub fn column_label(column: &str) -> String {
+    match crate::units::parse_column(column) {
+        Ok((q, u)) => format!("{} [{}]", q.words(), u.symbol()),
+        Err(_) => column.to_string(),
+    }
+}
+
+/// A column's quantity in words (`p_port1_mpa` → "port 1 pressure"), for panel titles.
+fn quantity_words(column: &str) -> String {
+    crate::units::parse_column(column)
+        .map_or_else(|_| column.to_string(), |(q, _)| q.words().into())
 }
 
 #[cfg(test)]
@@ -549,6 +602,28 @@ mod tests {
         );
         assert!(lines[6].contains("NOT IDENTIFIABLE: the data do not bound it from above"));
         assert_eq!(lines.len(), 7);
+    }
+
+    /// Overlay axes name the quantity and its unit, not the raw column.
+    #[test]
+    fn axes_name_quantity_and_unit() {
+        assert_eq!(column_label("p_port1_mpa"), "port 1 pressure [MPa]");
+        assert_eq!(column_label("torque_nm"), "torque [N·m]");
+        assert_eq!(
+            column_label("air_l_min_anr"),
+            "port 1 mass flow (air consumption) [l/min ANR]"
+        );
+        assert_eq!(column_label("no_such_column"), "no_such_column");
+        let ax = Abscissa {
+            quantity: crate::units::Quantity::CPort2,
+            column: "c_port2_m3_s_pa".into(),
+            unit: crate::units::Unit::M3SPa,
+            log10: true,
+        };
+        assert_eq!(
+            axis_label(&ax),
+            "port 2 nozzle conductance [m³/(s·Pa)] (log scale)"
+        );
     }
 
     #[test]

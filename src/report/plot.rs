@@ -117,6 +117,9 @@ pub struct Chart {
     pub legend: Legend,
     /// The curves.
     pub series: Vec<Series>,
+    /// Names of the categories at x = 1, 2, … (a fleet's motors), written as the x tick
+    /// labels instead of numbers; empty for a numeric x axis.
+    pub x_names: Vec<String>,
 }
 
 /// Why a chart could not be drawn.
@@ -649,12 +652,29 @@ where
             None => tick(*v),
         }
     };
-    let (fx, fy) = (label(0), label(1));
+    let (numeric_x, fy) = (label(0), label(1));
+    // Named categories at the integers 1..=n: their names there, nothing between.
+    let fx = |v: &f64| {
+        if chart.x_names.is_empty() {
+            return numeric_x(v);
+        }
+        let k = v.round();
+        match chart.x_names.get((k as usize).wrapping_sub(1)) {
+            Some(name) if (v - k).abs() < 1e-9 && k >= 1.0 => name.clone(),
+            _ => String::new(),
+        }
+    };
     // Long scientific labels on a linear x axis: fewer of them, so that they do not touch.
     let scientific = |span: Option<(f64, f64)>| {
         span.is_some_and(|(lo, hi)| !(1e-3..1e5).contains(&lo.abs().max(hi.abs())))
     };
-    let x_labels = if scientific(spans[0]) { 6 } else { 10 };
+    let x_labels = if !chart.x_names.is_empty() {
+        chart.x_names.len()
+    } else if scientific(spans[0]) {
+        6
+    } else {
+        10
+    };
     cc.configure_mesh()
         .x_labels(x_labels)
         .x_desc(chart.x_label.as_str())
@@ -695,6 +715,25 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Named categories (a fleet's motors) label the x axis by name, not by number.
+    #[test]
+    fn named_categories_label_the_x_axis() {
+        let mut chart = Chart::new("c_in1", "motor (dataset)", "%").with(Series::points(
+            "estimate",
+            vec![(1.0, 0.1), (2.0, -0.1), (3.0, 0.0)],
+        ));
+        chart.x_range = Some((0.5, 3.5));
+        chart.x_names = vec!["ar034-a".into(), "ar034-b".into(), "ar034-c".into()];
+        let svg = chart.to_svg().unwrap();
+        let texts: Vec<&str> = svg.lines().map(str::trim).collect();
+        for name in &chart.x_names {
+            assert!(texts.contains(&name.as_str()), "{name} missing");
+        }
+        for number in ["0.5", "1", "1.5", "2", "3"] {
+            assert!(!texts.contains(&number), "{number} on the x axis");
+        }
+    }
 
     fn sine(n: usize) -> Vec<(f64, f64)> {
         (0..n)

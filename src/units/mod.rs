@@ -61,6 +61,21 @@ impl Quantity {
         }
     }
 
+    /// The quantity in words, for axis titles ("port 1 pressure").
+    pub fn words(self) -> &'static str {
+        match self {
+            Quantity::Time => "time",
+            Quantity::Speed => "speed",
+            Quantity::Torque => "torque",
+            Quantity::Flow1 => "port 1 mass flow (air consumption)",
+            Quantity::Flow2 => "port 2 mass flow",
+            Quantity::PPort1 => "port 1 pressure",
+            Quantity::PPort2 => "port 2 pressure",
+            Quantity::CPort2 => "port 2 nozzle conductance",
+            Quantity::Power => "shaft power",
+        }
+    }
+
     /// Other prefixes a column name may start with: catalogues call the port-1 flow `air`
     /// (air consumption) and the port-1 pressure `p_supply`.
     pub fn aliases(self) -> &'static [&'static str] {
@@ -193,6 +208,40 @@ impl Unit {
             Unit::PsiA => "psi_a",
             Unit::W => "w",
             Unit::Kw => "kw",
+            Unit::Hp => "hp",
+        }
+    }
+
+    /// The unit as people write it, for axis titles (`N·m`, `bar(g)`, `l/min ANR`).
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Unit::S => "s",
+            Unit::Rpm => "rpm",
+            Unit::RadS => "rad/s",
+            Unit::Nm => "N·m",
+            Unit::GS => "g/s",
+            Unit::KgS => "kg/s",
+            Unit::LMinAnr => "l/min ANR",
+            Unit::LSAnr => "l/s ANR",
+            Unit::Mpa => "MPa",
+            Unit::BarAbs => "bar(a)",
+            Unit::BarG => "bar(g)",
+            Unit::Pa => "Pa",
+            Unit::Kpa => "kPa",
+            Unit::M3SPa => "m³/(s·Pa)",
+            Unit::Dm3SBar => "dm³/(s·bar)",
+            Unit::LbfFt => "lbf·ft",
+            Unit::LbfIn => "lbf·in",
+            Unit::LS => "l/s",
+            Unit::LMin => "l/min",
+            Unit::M3Min => "m³/min",
+            Unit::Cfm => "cfm",
+            Unit::Scfm => "scfm",
+            Unit::NlMin => "Nl/min",
+            Unit::PsiG => "psi(g)",
+            Unit::PsiA => "psi(a)",
+            Unit::W => "W",
+            Unit::Kw => "kW",
             Unit::Hp => "hp",
         }
     }

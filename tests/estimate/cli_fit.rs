@@ -62,6 +62,37 @@ fn short_fit_exports_a_fit_that_simulate_reads_back_and_resume_reproduces() {
         report.contains("| `c_in1` | inlet port, supply → chamber 1 |"),
         "{report}"
     );
+    // One χ² under one name: every "chi2 <number>" printed or reported is the fit file's
+    // statistics.chi2, every "likelihood chi2 <number>" its likelihood_chi2.
+    let stats = &doc["statistics"];
+    let one = |key: &str| format!("{:.1}", stats[key].as_f64().unwrap());
+    let (chi2, likelihood) = (one("chi2"), one("likelihood_chi2"));
+    assert_ne!(chi2, likelihood, "the test needs two different numbers");
+    for text in [&printed, &report] {
+        let mut shown = 0;
+        for (i, _) in text.match_indices("chi2 ") {
+            let number: String = text[i + 5..]
+                .chars()
+                .take_while(|c| c.is_ascii_digit() || *c == '.')
+                .collect();
+            if number.is_empty() {
+                continue;
+            }
+            let want = if text[..i].ends_with("likelihood ") {
+                &likelihood
+            } else {
+                &chi2
+            };
+            assert_eq!(
+                &number,
+                want,
+                "at {:?}",
+                &text[i.saturating_sub(30)..i + 12]
+            );
+            shown += 1;
+        }
+        assert!(shown >= 2, "chi2 and likelihood chi2 shown:\n{text}");
+    }
 
     // The exported fit simulates.
     let sim_dir = dir.path().join("sim");

@@ -52,15 +52,17 @@ fn a_closed_stdout_ends_quietly_after_every_file_is_written() {
     assert!(bode.join("bode.svg").is_file());
     let o = with_closed_stdout(&["check", DATASET]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    // A batch and its merge too (a manifest beside the shipped dataset's folder).
+    // A batch and its merge too (a manifest beside a copy of the shipped dataset: globs
+    // stay inside the manifest's folder).
     let manifest = dir.path().join("fleet.toml");
-    let ds = std::fs::canonicalize(DATASET).unwrap();
+    let ds = dir.path().join("ds");
+    std::fs::create_dir_all(&ds).unwrap();
+    for e in std::fs::read_dir(DATASET).unwrap().flatten() {
+        std::fs::copy(e.path(), ds.join(e.file_name())).unwrap();
+    }
     std::fs::write(
         &manifest,
-        format!(
-            "[batch]\ndatasets = [{:?}]\ntasks = [\"fit\"]\n[fit]\nstarts = 2\nuncertainty = \"none\"\n",
-            ds.display().to_string()
-        ),
+        "[batch]\ndatasets = [\"ds\"]\ntasks = [\"fit\"]\n[fit]\nstarts = 2\nuncertainty = \"none\"\n",
     )
     .unwrap();
     let fleet = dir.path().join("fleet");

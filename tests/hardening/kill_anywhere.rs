@@ -111,10 +111,31 @@ fn fit_killed_anywhere_and_resumed_equals_an_uninterrupted_run() {
     let full = t0.elapsed();
 
     let out = dir.path().join("killed/fit.json");
+    // An early kill first: every start of this fit ends in its first round (80 iterations,
+    // a stage is 100), and the run is killed the moment its starts file holds a finished
+    // start. Each start is recorded when it ends, so the others are still running then, and
+    // the next run must resume from the ones kept.
+    let starts_file = out.with_extension("starts.jsonl");
+    let finished_starts = || {
+        std::fs::read_to_string(&starts_file).map_or(0, |t| {
+            t.lines().skip(1).filter(|l| l.ends_with('}')).count()
+        })
+    };
+    let mut child = fit_command(&out, false).spawn().unwrap();
+    while finished_starts() == 0 && child.try_wait().unwrap().is_none() {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let kept = finished_starts();
+    assert!(
+        (1..6).contains(&kept),
+        "killed inside the first round, {kept} of 6 starts kept (want some, not all)"
+    );
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut kills = 0;
-    for round in 0..40 {
-        let mut child = fit_command(&out, round > 0).spawn().unwrap();
+    let mut kills = 1;
+    for _ in 0..40 {
+        let mut child = fit_command(&out, true).spawn().unwrap();
         let wait = full.mul_f64(0.05 + 0.6 * next_fraction(&mut state));
         std::thread::sleep(wait);
         if child.try_wait().unwrap().is_some() {
@@ -131,7 +152,7 @@ fn fit_killed_anywhere_and_resumed_equals_an_uninterrupted_run() {
     assert!(fit_command(&out, true).status().unwrap().success());
     assert!(!stale.exists(), "the killed run's temporary is removed");
     assert_eq!(temporaries(out.parent().unwrap()), Vec::<String>::new());
-    eprintln!("kill points tried: {kills}");
+    eprintln!("kill points tried: {kills}, the first inside the first round ({kept} starts kept)");
     assert!(
         kills >= 3,
         "only {kills} kills: the fit ran too fast to interrupt"

@@ -95,6 +95,14 @@ pub enum ValueError {
     /// The value overflows.
     #[error("'{0}' is not a finite number")]
     NotFinite(String),
+    /// A number with a comma in it ("6,3 bar(g)", "1,450 rpm").
+    #[error("'{text}' is written with a decimal comma: write the decimal mark as a point ({suggestion})")]
+    DecimalComma {
+        /// The text.
+        text: String,
+        /// The text with its decimal comma written as a point.
+        suggestion: String,
+    },
 }
 
 /// Reads "6.3 bar(g)", "0.12 kW", "12 lbf·ft", "7.4 cfm": a number and a unit of `q`,
@@ -117,6 +125,26 @@ pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit,
         .trim()
         .parse()
         .map_err(|_| ValueError::NotANumber(text.to_string()))?;
+    // "6,3 bar(g)" reads as 6 in the unit ",3 bar(g)": name the comma instead, as the CSV
+    // reader does for a row of decimal commas.
+    if super::digit_comma_digit(text) {
+        let point = text.replacen(',', ".", 1);
+        let after = text.split_once(',').map_or("", |(_, a)| a);
+        let digits = after.chars().take_while(char::is_ascii_digit).count();
+        // Three digits after the comma may be thousands ("1,450 rpm"): offer both readings.
+        let suggestion = if digits == 3 {
+            format!(
+                "'{point}'; or, if the comma separates thousands, without it: '{}'",
+                text.replacen(',', "", 1)
+            )
+        } else {
+            format!("'{point}'")
+        };
+        return Err(ValueError::DecimalComma {
+            text: text.to_string(),
+            suggestion,
+        });
+    }
     if unit.trim().is_empty() {
         return Err(ValueError::NoUnit {
             text: text.to_string(),
@@ -473,6 +501,25 @@ fn interpolate(points: &[(f64, f64)], x: f64) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A decimal comma is named, with the value written with a point; three digits after it
+    /// may be thousands, and both readings are offered.
+    #[test]
+    fn a_decimal_comma_is_named() {
+        let e = parse_value("6,3 bar(g)", Quantity::PPort1, 101_325.0).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "'6,3 bar(g)' is written with a decimal comma: write the decimal mark as a point ('6.3 bar(g)')"
+        );
+        let e = parse_value("1,450 rpm", Quantity::Speed, 101_325.0).unwrap_err();
+        assert!(
+            e.to_string().contains(
+                "'1.450 rpm'; or, if the comma separates thousands, without it: '1450 rpm'"
+            ),
+            "{e}"
+        );
+        assert!(parse_value("6.3 bar(g)", Quantity::PPort1, 101_325.0).is_ok());
+    }
 
     #[test]
     fn printed_units_are_read() {
