@@ -1,7 +1,16 @@
 #!/usr/bin/env bash
-# CI step for issue 14: install Debian's Slurm and munge where they are missing, then run the
-# real-Slurm test of `vanefit batch --slurm` (tests/slurm/run.sh starts and stops its own
-# munged, slurmctld and slurmd; it needs root). Expects a release build (target/release).
+# CI step: install Debian's Slurm and munge where they are missing, then run the real-Slurm
+# test of `vanefit batch --slurm` (tests/slurm/run.sh starts and stops its own munged,
+# slurmctld and slurmd; it needs root).
+#
+#   .ci/slurm.sh            install if missing, then test
+#   .ci/slurm.sh install    only install (CI does this early, in the background)
+#
+# The binary tested is VANEFIT_BIN when set (CI passes the one `cargo test --release` built,
+# which pytest uses too); otherwise target/release/vanefit, built here first. Building it in
+# CI would compile vanefit and 18 of its dependencies again: a plain `cargo build` resolves
+# the dependencies' features without the dev-dependencies', so it cannot reuse the test
+# build's (about 3 CPU-minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -13,5 +22,9 @@ if ! command -v slurmctld >/dev/null 2>&1 || ! command -v munged >/dev/null 2>&1
   apt-get update
   DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends slurm-wlm munge
 fi
-cargo build --release
+[ "${1:-}" = install ] && exit 0
+
+if [ -z "${VANEFIT_BIN:-}" ]; then
+  cargo build --release
+fi
 tests/slurm/run.sh
