@@ -242,13 +242,39 @@ pub fn control(
 }
 
 /// A study's error as the exception Python users catch: a fit file that cannot be read is
-/// a DataError, a bad option a ParameterError, a study that fails a VanefitError.
+/// a DataError, a bad option a ParameterError, a study that fails a VanefitError. Options
+/// are named as the Python keywords ([`keywords`]).
 fn control_err(e: ControlError) -> PyErr {
+    let message = keywords(&e.to_string());
     match e {
-        ControlError::FitFile(_) => DataError::new_err(e.to_string()),
+        ControlError::FitFile(_) => DataError::new_err(message),
         ControlError::Settings(_) | ControlError::SetPoint { .. } => {
-            ParameterError::new_err(e.to_string())
+            ParameterError::new_err(message)
         }
-        other => VanefitError::new_err(other.to_string()),
+        _ => VanefitError::new_err(message),
     }
+}
+
+/// A message of the control layer with its option fields (`StepOptions.from_rpm`) named as
+/// the keywords of `control()` (`from_rpm`): the field's name, `valve_` before the valve's,
+/// and `fit` for the fit file.
+fn keywords(message: &str) -> String {
+    const TYPES: [(&str, &str); 11] = [
+        ("MotorOptions.params", "fit"),
+        ("ValveOptions.", "valve_"),
+        ("MotorOptions.", ""),
+        ("PiOptions.", ""),
+        ("GainOptions.", ""),
+        ("ThrottleOptions.", ""),
+        ("BodeOptions.", ""),
+        ("StepOptions.", ""),
+        ("DisturbanceOptions.", ""),
+        ("MinSpeedOptions.", ""),
+        ("DesignOptions.", ""),
+    ];
+    let mut m = message.to_string();
+    for (field, keyword) in TYPES {
+        m = m.replace(field, keyword);
+    }
+    m
 }

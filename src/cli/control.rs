@@ -286,6 +286,50 @@ pub(crate) struct DesignArgs {
     duration_s: f64,
 }
 
+/// The control studies' option fields (`vanefit::control::study`, as their errors name
+/// them) and the flags that set them. No field here starts with another, so the order does
+/// not matter.
+pub(crate) const FLAGS: &[(&str, &str)] = &[
+    ("BodeOptions.p_mean_mpa", "--p-mean-mpa"),
+    ("BodeOptions.f_min_hz", "--f-min-hz"),
+    ("BodeOptions.f_max_hz", "--f-max-hz"),
+    ("BodeOptions.points", "--points"),
+    ("ThrottleOptions.p_supply_mpa", "--p-supply-mpa"),
+    ("ThrottleOptions.c_min_m3_s_pa", "--c-min-m3-s-pa"),
+    ("ThrottleOptions.c_max_m3_s_pa", "--c-max-m3-s-pa"),
+    ("ThrottleOptions.curves_m3_s_pa", "--curves-m3-s-pa"),
+    ("ThrottleOptions.points", "--points"),
+    ("StepOptions.from_rpm", "--from-rpm"),
+    ("StepOptions.to_rpm", "--to-rpm"),
+    ("StepOptions.t_step_s", "--t-step-s"),
+    ("StepOptions.duration_s", "--duration-s"),
+    ("DisturbanceOptions.rpm", "--rpm"),
+    ("DisturbanceOptions.load_step_nm", "--load-step-nm"),
+    ("DisturbanceOptions.t_step_s", "--t-step-s"),
+    ("DisturbanceOptions.duration_s", "--duration-s"),
+    ("MinSpeedOptions.p_max_mpa", "--p-max-mpa"),
+    ("MinSpeedOptions.ramp_s", "--ramp-s"),
+    ("MinSpeedOptions.factor", "--factor"),
+    ("MinSpeedOptions.floor_rpm", "--floor-rpm"),
+    ("MinSpeedOptions.stage_s", "--stage-s"),
+    ("DesignOptions.pm_deg", "--pm-deg"),
+    ("DesignOptions.crossover_hz", "--crossover-hz"),
+    ("DesignOptions.p_mean_mpa", "--p-mean-mpa"),
+    ("DesignOptions.step_rpm", "--step-rpm"),
+    ("DesignOptions.duration_s", "--duration-s"),
+    ("MotorOptions.params", "--params"),
+    ("MotorOptions.effects", "--effects"),
+    ("MotorOptions.brake_nm_s_rad", "--brake-nm-s-rad"),
+    ("ValveOptions.tau_s", "--valve-tau-s"),
+    ("ValveOptions.u_max_v", "--valve-u-max-v"),
+    ("ValveOptions.p_max_bar_g", "--valve-p-max-bar-g"),
+    ("PiOptions.ts_ms", "--ts-ms"),
+    ("PiOptions.speed_unit_rpm", "--speed-unit-rpm"),
+    ("PiOptions.anti_windup", "--anti-windup"),
+    ("GainOptions.kp", "--kp"),
+    ("GainOptions.ki", "--ki"),
+];
+
 /// Runs `vanefit control <study>`.
 pub(crate) fn run(args: ControlArgs) -> Result<(), Failure> {
     let (common, study) = study(&args.study);

@@ -162,10 +162,11 @@ const FLAGS: &[(&str, &str)] = &[
     ("`dataset`", "--dataset"),
 ];
 
-/// A message with every library field name replaced by its flag.
+/// A message with every library field name replaced by its flag (the tasks' here, the
+/// control studies' in `cli::control::FLAGS`).
 pub(crate) fn flags(message: &str) -> String {
     let mut m = message.to_string();
-    for (field, flag) in FLAGS {
+    for (field, flag) in FLAGS.iter().chain(crate::cli::control::FLAGS) {
         if m.contains(field) {
             m = m.replace(field, flag);
         }
@@ -404,6 +405,28 @@ fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<()
 mod tests {
     use super::Cli;
     use clap::{CommandFactory, Parser};
+
+    /// No library field of the flag tables starts with another field (it would be replaced
+    /// by the other's flag), and a control study's field becomes its flag.
+    #[test]
+    fn flag_fields_do_not_clash() {
+        let tasks: Vec<&str> = super::FLAGS.iter().map(|(f, _)| *f).collect();
+        let control: Vec<&str> = crate::cli::control::FLAGS.iter().map(|(f, _)| *f).collect();
+        // The tasks' table is ordered longest first; a control field must not start with,
+        // nor be the start of, any other field.
+        for a in &control {
+            for b in tasks.iter().chain(&control) {
+                assert!(
+                    a == b || !(a.starts_with(b) || b.starts_with(a)),
+                    "{a} / {b}"
+                );
+            }
+        }
+        assert_eq!(
+            super::flags("StepOptions.t_step_s 9: must be before StepOptions.duration_s"),
+            "--t-step-s 9: must be before --duration-s"
+        );
+    }
 
     /// The help of a subcommand, as `vanefit <path> --help` prints it.
     fn help(path: &[&str]) -> String {

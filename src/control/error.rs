@@ -1,19 +1,20 @@
 //! Why a control study could not be done: [`SettingsError`] for a bad option value, found
-//! before any work, and [`ControlError`] for everything else. The messages are the ones users
-//! see after `error: `; options are named as on the command line.
+//! before any work, and [`ControlError`] for everything else. Options are named by their
+//! field, `Type.field` (e.g. `ThrottleOptions.points`), as `task::OptionError` names them;
+//! the command line shows its flags instead, Python its keywords.
 
 use crate::data::fitfile::FitFileError;
 use crate::numerics::ode::SolveError;
 use crate::sim::steady::SteadyError;
 
-/// A bad option value of a control study (`vanefit control <study> --…`).
+/// A bad option value of a control study (a field of its `…Options`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SettingsError {
     /// A quantity that must be a finite number > 0.
     #[error("{option} {value}: must be a number > 0")]
     NotPositive {
-        /// The option, e.g. `--ts-ms`.
+        /// The option's field, e.g. `PiOptions.ts_ms`.
         option: &'static str,
         /// The value given.
         value: f64,
@@ -21,7 +22,7 @@ pub enum SettingsError {
     /// A quantity that must be a finite number ≥ 0.
     #[error("{option} {value}: must be a number >= 0")]
     Negative {
-        /// The option, e.g. `--kp`.
+        /// The option's field, e.g. `GainOptions.kp`.
         option: &'static str,
         /// The value given.
         value: f64,
@@ -29,7 +30,7 @@ pub enum SettingsError {
     /// A quantity that must be finite (of either sign).
     #[error("{option} {value}: must be a number")]
     NotFinite {
-        /// The option, e.g. `--load-step-nm`.
+        /// The option's field, e.g. `DisturbanceOptions.load_step_nm`.
         option: &'static str,
         /// The value given.
         value: f64,
@@ -37,7 +38,7 @@ pub enum SettingsError {
     /// An absolute pressure at or below atmosphere (101 325 Pa).
     #[error("{option} {value}: must be above atmospheric (0.101325)")]
     NotAboveAtmosphere {
-        /// The option, e.g. `--p-supply-mpa`.
+        /// The option's field, e.g. `ThrottleOptions.p_supply_mpa`.
         option: &'static str,
         /// The value given, MPa absolute.
         value: f64,
@@ -45,50 +46,62 @@ pub enum SettingsError {
     /// The upper end of a range at or below its lower end.
     #[error("{option} {value}: must be larger than {lower}")]
     EmptyRange {
-        /// The option of the upper end, e.g. `--f-max-hz`.
+        /// The field of the upper end, e.g. `BodeOptions.f_max_hz`.
         option: &'static str,
         /// The value given.
         value: f64,
-        /// The option of the lower end.
+        /// The field of the lower end.
         lower: &'static str,
     },
     /// Too few grid points for the study.
-    #[error("--points {value}: must be at least {min}")]
+    #[error("{option} {value}: must be at least {min}")]
     TooFewPoints {
+        /// The option's field, e.g. `ThrottleOptions.points`.
+        option: &'static str,
         /// The value given.
         value: usize,
         /// The least the study needs.
         min: usize,
     },
-    /// An item of `--curves-m3-s-pa` that is neither `none` nor a number.
-    #[error("--curves-m3-s-pa {0}: must be \"none\" or a conductance > 0")]
+    /// An item of `ThrottleOptions.curves_m3_s_pa` that is neither `none` nor a number.
+    #[error("ThrottleOptions.curves_m3_s_pa {0}: must be \"none\" or a conductance > 0")]
     NotAConductance(String),
-    /// `--curves-m3-s-pa` without any item.
-    #[error("--curves-m3-s-pa {0}: must be a non-empty list")]
+    /// `ThrottleOptions.curves_m3_s_pa` without any item.
+    #[error("ThrottleOptions.curves_m3_s_pa {0}: must be a non-empty list")]
     NoCurves(String),
     /// A controller sample time above 100 ms, ms.
-    #[error("--ts-ms {0}: must be at most 100 ms")]
+    #[error("PiOptions.ts_ms {0}: must be at most 100 ms")]
     SampleTimeTooLong(f64),
-    /// An unknown `--anti-windup` scheme.
-    #[error("--anti-windup: {0}")]
+    /// An unknown `PiOptions.anti_windup` scheme.
+    #[error("PiOptions.anti_windup: {0}")]
     AntiWindup(#[from] UnknownAntiWindup),
     /// Back-calculation needs both gains for its tracking time K_p/K_i.
-    #[error("--anti-windup back-calculation needs --kp > 0 and --ki > 0 (tracking time kp/ki)")]
+    #[error(
+        "PiOptions.anti_windup back-calculation needs GainOptions.kp > 0 and GainOptions.ki > 0 \
+         (tracking time kp/ki)"
+    )]
     BackCalculationWithoutGains,
-    /// An unknown effect in `--effects` (the model's message).
-    #[error("--effects: {0}")]
+    /// An unknown effect in `MotorOptions.effects` (the model's message).
+    #[error("MotorOptions.effects: {0}")]
     Effects(#[from] crate::model::effects::UnknownEffect),
-    /// `--t-step-s` at or after the end of the scenario, s.
-    #[error("--t-step-s {0}: must be before --duration-s")]
-    StepAfterEnd(f64),
-    /// `--factor` outside (0, 1).
-    #[error("--factor {0}: must be between 0 and 1")]
+    /// A step time at or after the end of the scenario.
+    #[error("{option} {value}: must be before {end}")]
+    StepAfterEnd {
+        /// The field of the step time, e.g. `StepOptions.t_step_s`.
+        option: &'static str,
+        /// The value given, s.
+        value: f64,
+        /// The field of the scenario's length, e.g. `StepOptions.duration_s`.
+        end: &'static str,
+    },
+    /// `MinSpeedOptions.factor` outside (0, 1).
+    #[error("MinSpeedOptions.factor {0}: must be between 0 and 1")]
     Factor(f64),
-    /// `--stage-s` not longer than the hold window plus 1 s, s.
-    #[error("--stage-s {0}: must be longer than 3 s")]
+    /// `MinSpeedOptions.stage_s` not longer than the hold window plus 1 s, s.
+    #[error("MinSpeedOptions.stage_s {0}: must be longer than 3 s")]
     StageTooShort(f64),
-    /// `--pm-deg` outside (0, 90).
-    #[error("--pm-deg {0}: must be between 0 and 90")]
+    /// `DesignOptions.pm_deg` outside (0, 90).
+    #[error("DesignOptions.pm_deg {0}: must be between 0 and 90")]
     PhaseMargin(f64),
 }
 
@@ -104,7 +117,7 @@ pub enum ControlError {
     /// A bad option value.
     #[error(transparent)]
     Settings(#[from] SettingsError),
-    /// The fit file of `--params` could not be read.
+    /// The fit file of `MotorOptions.params` could not be read.
     #[error(transparent)]
     FitFile(#[from] FitFileError),
     /// No steady state.
@@ -258,7 +271,7 @@ pub enum ControlError {
     /// The loop cannot be settled at the set-point an option asks for.
     #[error("{option} {value}: {source}")]
     SetPoint {
-        /// The option, e.g. `--from-rpm`.
+        /// The option's field, e.g. `StepOptions.from_rpm`.
         option: &'static str,
         /// The value given, rpm.
         value: f64,
@@ -279,7 +292,8 @@ pub enum ControlError {
     /// The designed PI does not settle in the check simulation.
     #[error(
         "the designed loop does not settle in the {duration_s} s check simulation (final error \
-         {final_error_rpm:.1} rpm); try a larger --pm-deg or a lower --crossover-hz"
+         {final_error_rpm:.1} rpm); try a larger DesignOptions.pm_deg or a lower \
+         DesignOptions.crossover_hz"
     )]
     NotSettled {
         /// Length of the check simulation, s.

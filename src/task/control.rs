@@ -183,3 +183,79 @@ pub fn write_study(
         StudyResult::Design(r) => rc::design::write(w, r),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::study::step::StepOptions;
+    use crate::control::study::throttle::ThrottleOptions;
+    use crate::control::study::{GainOptions, PiOptions, ValveOptions};
+    use crate::control::throttle::Port;
+
+    fn loop_options() -> LoopOptions {
+        LoopOptions {
+            valve: ValveOptions {
+                tau_s: None,
+                u_max_v: 10.0,
+                p_max_bar_g: 6.0,
+            },
+            pi: PiOptions {
+                ts_ms: 1.0,
+                speed_unit_rpm: 1000.0,
+                anti_windup: "conditional".into(),
+            },
+            gains: Some(GainOptions { kp: 0.85, ki: 4.0 }),
+        }
+    }
+
+    fn message(study: Study) -> String {
+        let s = ControlStudy {
+            motor: MotorOptions::default(),
+            study,
+        };
+        s.check().unwrap_err().to_string()
+    }
+
+    /// The library names a bad option by its field (`ThrottleOptions.points`), never by a
+    /// command-line flag: the command line and Python name it their own way.
+    #[test]
+    fn bad_options_name_the_field() {
+        let throttle = Study::Throttle(ThrottleOptions {
+            port: Port::Inlet,
+            p_supply_mpa: 0.73,
+            c_min_m3_s_pa: 3e-10,
+            c_max_m3_s_pa: 1e-7,
+            points: 1,
+            curves_m3_s_pa: "none".into(),
+        });
+        assert_eq!(
+            message(throttle),
+            "ThrottleOptions.points 1: must be at least 2"
+        );
+        let step = StepOptions {
+            from_rpm: 3000.0,
+            to_rpm: 4500.0,
+            t_step_s: 9.0,
+            duration_s: 8.0,
+        };
+        assert_eq!(
+            message(Study::Step(loop_options(), step.clone())),
+            "StepOptions.t_step_s 9: must be before StepOptions.duration_s"
+        );
+        let mut lp = loop_options();
+        lp.pi.anti_windup = "back-calculation".into();
+        lp.gains = Some(GainOptions { kp: 0.0, ki: 4.0 });
+        let m = message(Study::Step(
+            lp,
+            StepOptions {
+                t_step_s: 0.5,
+                ..step
+            },
+        ));
+        assert!(
+            m.starts_with("PiOptions.anti_windup back-calculation needs GainOptions.kp"),
+            "{m}"
+        );
+        assert!(!m.contains("--"), "{m}");
+    }
+}

@@ -32,18 +32,19 @@ pub struct BodeOptions {
 impl BodeOptions {
     /// Checks every option; the valve is the motor's unless the options say otherwise.
     pub fn check(&self, motor: &Motor) -> Result<BodeSettings, SettingsError> {
-        let p_mean_mpa = positive("--p-mean-mpa", self.p_mean_mpa)?;
-        let f_min_hz = positive("--f-min-hz", self.f_min_hz)?;
-        let f_max_hz = positive("--f-max-hz", self.f_max_hz)?;
+        let p_mean_mpa = positive("BodeOptions.p_mean_mpa", self.p_mean_mpa)?;
+        let f_min_hz = positive("BodeOptions.f_min_hz", self.f_min_hz)?;
+        let f_max_hz = positive("BodeOptions.f_max_hz", self.f_max_hz)?;
         if f_max_hz <= f_min_hz {
             return Err(SettingsError::EmptyRange {
-                option: "--f-max-hz",
+                option: "BodeOptions.f_max_hz",
                 value: f_max_hz,
-                lower: "--f-min-hz",
+                lower: "BodeOptions.f_min_hz",
             });
         }
         if self.points < 5 {
             return Err(SettingsError::TooFewPoints {
+                option: "BodeOptions.points",
                 value: self.points,
                 min: 5,
             });

@@ -42,16 +42,16 @@ impl DesignOptions {
         }
         let target = match self.crossover_hz {
             Some(f) => Target::Bandwidth {
-                crossover_rad_s: rad_s(positive("--crossover-hz", f)?),
+                crossover_rad_s: rad_s(positive("DesignOptions.crossover_hz", f)?),
                 pm_deg: pm,
             },
             None => Target::PhaseMargin { pm_deg: pm },
         };
         Ok(DesignSettings {
             target,
-            p_mean_mpa: positive("--p-mean-mpa", self.p_mean_mpa)?,
-            step_rpm: positive("--step-rpm", self.step_rpm)?,
-            duration_s: positive("--duration-s", self.duration_s)?,
+            p_mean_mpa: positive("DesignOptions.p_mean_mpa", self.p_mean_mpa)?,
+            step_rpm: positive("DesignOptions.step_rpm", self.step_rpm)?,
+            duration_s: positive("DesignOptions.duration_s", self.duration_s)?,
         })
     }
 }

@@ -25,15 +25,18 @@ pub struct DisturbanceOptions {
 impl DisturbanceOptions {
     /// Checks every option.
     pub fn check(&self) -> Result<DisturbanceSettings, SettingsError> {
-        let rpm = positive("--rpm", self.rpm)?;
+        let rpm = positive("DisturbanceOptions.rpm", self.rpm)?;
         let load_step_nm = self.load_step_nm;
         if !load_step_nm.is_finite() {
             return Err(SettingsError::NotFinite {
-                option: "--load-step-nm",
+                option: "DisturbanceOptions.load_step_nm",
                 value: load_step_nm,
             });
         }
-        let (duration_s, t_step_s) = step_window(self.duration_s, self.t_step_s)?;
+        let (duration_s, t_step_s) = step_window(
+            ("DisturbanceOptions.duration_s", self.duration_s),
+            ("DisturbanceOptions.t_step_s", self.t_step_s),
+        )?;
         Ok(DisturbanceSettings {
             rpm,
             load_step_nm,
@@ -106,7 +109,7 @@ pub fn study(
     let m = plant.motor();
     let w = s.setpoint_rad_s();
     let start = lp.settled_at(m, w).map_err(|e| ControlError::SetPoint {
-        option: "--rpm",
+        option: "DisturbanceOptions.rpm",
         value: s.rpm,
         source: Box::new(e),
     })?;

@@ -36,16 +36,16 @@ pub struct MinSpeedOptions {
 impl MinSpeedOptions {
     /// Checks every option; the default floor is the motor's.
     pub fn check(&self, motor: &Motor) -> Result<MinSpeedSettings, SettingsError> {
-        let p_max_mpa = absolute_pressure_mpa("--p-max-mpa", self.p_max_mpa)?;
-        let ramp_s = positive("--ramp-s", self.ramp_s)?;
+        let p_max_mpa = absolute_pressure_mpa("MinSpeedOptions.p_max_mpa", self.p_max_mpa)?;
+        let ramp_s = positive("MinSpeedOptions.ramp_s", self.ramp_s)?;
         if !(self.factor > 0.0 && self.factor < 1.0) {
             return Err(SettingsError::Factor(self.factor));
         }
         let floor_rad_s = match self.floor_rpm {
-            Some(f) => positive("--floor-rpm", f)? * RAD_S_PER_RPM,
+            Some(f) => positive("MinSpeedOptions.floor_rpm", f)? * RAD_S_PER_RPM,
             None => lowest_running_speed_rad_s(motor),
         };
-        let stage_s = positive("--stage-s", self.stage_s)?;
+        let stage_s = positive("MinSpeedOptions.stage_s", self.stage_s)?;
         if stage_s <= HOLD_WINDOW_S + 1.0 {
             return Err(SettingsError::StageTooShort(stage_s));
         }

@@ -50,13 +50,20 @@ pub(crate) fn absolute_pressure_mpa(option: &'static str, mpa: f64) -> Result<f6
     Ok(mpa)
 }
 
-/// A scenario's length and the time of its step, s: `--t-step-s` must fall inside
-/// `--duration-s`.
-pub(crate) fn step_window(duration_s: f64, t_step_s: f64) -> Result<(f64, f64), SettingsError> {
-    let dur = positive("--duration-s", duration_s)?;
-    let t_step = non_negative("--t-step-s", t_step_s)?;
+/// A scenario's length and the time of its step, s, each with its option's field: the step
+/// must fall inside the length.
+pub(crate) fn step_window(
+    (duration_field, duration_s): (&'static str, f64),
+    (t_step_field, t_step_s): (&'static str, f64),
+) -> Result<(f64, f64), SettingsError> {
+    let dur = positive(duration_field, duration_s)?;
+    let t_step = non_negative(t_step_field, t_step_s)?;
     if t_step >= dur {
-        return Err(SettingsError::StepAfterEnd(t_step));
+        return Err(SettingsError::StepAfterEnd {
+            option: t_step_field,
+            value: t_step,
+            end: duration_field,
+        });
     }
     Ok((dur, t_step))
 }
@@ -89,7 +96,7 @@ impl MotorOptions {
             effects = EffectSet::parse_list(list).map_err(SettingsError::Effects)?;
         }
         let brake = non_negative(
-            "--brake-nm-s-rad",
+            "MotorOptions.brake_nm_s_rad",
             self.brake_nm_s_rad.unwrap_or(default_brake_nm_s_rad),
         )?;
         let load = if brake > 0.0 {
@@ -140,7 +147,7 @@ impl ValveOptions {
     pub fn check(&self, motor: &Motor) -> Result<Valve, SettingsError> {
         let mut v = Valve::for_motor(motor, P_ATM_PA);
         if let Some(tau) = self.tau_s {
-            let tau = positive("--valve-tau-s", tau)?;
+            let tau = positive("ValveOptions.tau_s", tau)?;
             v.dynamics = match v.dynamics {
                 ValveDynamics::FirstOrder { .. } => ValveDynamics::FirstOrder { tau_s: tau },
                 ValveDynamics::SecondOrder { zeta, .. } => {
@@ -148,8 +155,8 @@ impl ValveOptions {
                 }
             };
         }
-        v.u_max_v = positive("--valve-u-max-v", self.u_max_v)?;
-        v.p_max_gauge_pa = positive("--valve-p-max-bar-g", self.p_max_bar_g)? * 1e5;
+        v.u_max_v = positive("ValveOptions.u_max_v", self.u_max_v)?;
+        v.p_max_gauge_pa = positive("ValveOptions.p_max_bar_g", self.p_max_bar_g)? * 1e5;
         Ok(v)
     }
 }
@@ -184,10 +191,13 @@ impl PiOptions {
     ) -> Result<PiController, SettingsError> {
         let base = PiController::default();
         let (kp, ki) = match gains {
-            Some(g) => (non_negative("--kp", g.kp)?, non_negative("--ki", g.ki)?),
+            Some(g) => (
+                non_negative("GainOptions.kp", g.kp)?,
+                non_negative("GainOptions.ki", g.ki)?,
+            ),
             None => (base.kp, base.ki),
         };
-        let ts = positive("--ts-ms", self.ts_ms)? * 1e-3;
+        let ts = positive("PiOptions.ts_ms", self.ts_ms)? * 1e-3;
         if ts > 0.1 {
             return Err(SettingsError::SampleTimeTooLong(self.ts_ms));
         }
@@ -199,7 +209,7 @@ impl PiOptions {
             kp,
             ki,
             ts_s: ts,
-            speed_unit_rpm: positive("--speed-unit-rpm", self.speed_unit_rpm)?,
+            speed_unit_rpm: positive("PiOptions.speed_unit_rpm", self.speed_unit_rpm)?,
             u_min_v: 0.0,
             u_max_v: valve.u_max_v,
             anti_windup,

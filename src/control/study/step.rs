@@ -26,9 +26,12 @@ pub struct StepOptions {
 impl StepOptions {
     /// Checks every option.
     pub fn check(&self) -> Result<StepSettings, SettingsError> {
-        let from_rpm = positive("--from-rpm", self.from_rpm)?;
-        let to_rpm = positive("--to-rpm", self.to_rpm)?;
-        let (duration_s, t_step_s) = step_window(self.duration_s, self.t_step_s)?;
+        let from_rpm = positive("StepOptions.from_rpm", self.from_rpm)?;
+        let to_rpm = positive("StepOptions.to_rpm", self.to_rpm)?;
+        let (duration_s, t_step_s) = step_window(
+            ("StepOptions.duration_s", self.duration_s),
+            ("StepOptions.t_step_s", self.t_step_s),
+        )?;
         Ok(StepSettings {
             from_rpm,
             to_rpm,
@@ -99,7 +102,7 @@ pub fn study(plant: &Plant, lp: &Loop, s: &StepSettings) -> Result<StepStudy, Co
     let m = plant.motor();
     let (from, to) = (s.from_rad_s(), s.to_rad_s());
     let start = lp.settled_at(m, from).map_err(|e| ControlError::SetPoint {
-        option: "--from-rpm",
+        option: "StepOptions.from_rpm",
         value: s.from_rpm,
         source: Box::new(e),
     })?;

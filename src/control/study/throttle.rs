@@ -35,18 +35,20 @@ pub struct ThrottleOptions {
 impl ThrottleOptions {
     /// Checks every option.
     pub fn check(&self) -> Result<ThrottleSettings, SettingsError> {
-        let p_supply_mpa = absolute_pressure_mpa("--p-supply-mpa", self.p_supply_mpa)?;
-        let c_min = positive("--c-min-m3-s-pa", self.c_min_m3_s_pa)?;
-        let c_max = positive("--c-max-m3-s-pa", self.c_max_m3_s_pa)?;
+        let p_supply_mpa =
+            absolute_pressure_mpa("ThrottleOptions.p_supply_mpa", self.p_supply_mpa)?;
+        let c_min = positive("ThrottleOptions.c_min_m3_s_pa", self.c_min_m3_s_pa)?;
+        let c_max = positive("ThrottleOptions.c_max_m3_s_pa", self.c_max_m3_s_pa)?;
         if c_max <= c_min {
             return Err(SettingsError::EmptyRange {
-                option: "--c-max-m3-s-pa",
+                option: "ThrottleOptions.c_max_m3_s_pa",
                 value: c_max,
-                lower: "--c-min-m3-s-pa",
+                lower: "ThrottleOptions.c_min_m3_s_pa",
             });
         }
         if self.points < 2 {
             return Err(SettingsError::TooFewPoints {
+                option: "ThrottleOptions.points",
                 value: self.points,
                 min: 2,
             });
@@ -72,7 +74,7 @@ fn parse_curves(list: &str) -> Result<Vec<Option<f64>>, SettingsError> {
             let v: f64 = item
                 .parse()
                 .map_err(|_| SettingsError::NotAConductance(item.to_string()))?;
-            out.push(Some(positive("--curves-m3-s-pa", v)?));
+            out.push(Some(positive("ThrottleOptions.curves_m3_s_pa", v)?));
         }
     }
     if out.is_empty() {
