@@ -522,6 +522,13 @@ fn with_simulations(
                 .map(|((x, m), s)| (*x, *m, *s))
                 .collect();
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if let [(x, _, s)] = pairs[..] {
+            // A single point (a catalogue's key figure): no line to draw, so the fitted value
+            // is a marker, and a polynomial through one point says nothing.
+            let point = (ax.display(x, p_atm), reference.display(s, p_atm));
+            chart = chart.with(Series::marker(name, vec![point]));
+            continue;
+        }
         if k == 0 {
             let line = pairs
                 .iter()
@@ -615,6 +622,7 @@ fn quantity_words(column: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::plot::Style;
 
     fn row(name: &str, value: f64, interval: Option<(Option<f64>, Option<f64>)>) -> ParamRow {
         let s = spec(name).unwrap();
@@ -755,6 +763,49 @@ mod tests {
         assert!(
             svg.contains("data − fit, torque [N·m]"),
             "axis label missing"
+        );
+    }
+
+    /// A channel with a single compared point shows the fitted value as a marker named
+    /// after the model, and no reference polynomial; a longer one gets lines.
+    #[test]
+    fn single_point_channel_gets_a_fit_marker() {
+        let reference = torque_reference(&[100.0, 200.0, 300.0, 400.0], &[0.3, 0.2, 0.1, 0.0]);
+        let one = vec![(
+            "fit",
+            vec![channel_residuals(&reference, vec![1], vec![0.21])],
+        )];
+        let chart = with_simulations(Chart::new("t", "x", "y"), &one, "page.csv", &reference, 1e5);
+        assert_eq!(chart.series.len(), 1);
+        assert_eq!(chart.series[0].name, "fit");
+        assert_eq!(chart.series[0].style, Style::Marker);
+        let (px, py) = chart.series[0].points[0];
+        assert!((px - 1.0 * 60.0 / (2.0 * std::f64::consts::PI)).abs() < 1e-9);
+        assert_eq!(py, 0.21);
+        let svg = chart.to_svg().unwrap();
+        assert!(
+            svg.contains(">fit<") || svg.contains(">\nfit"),
+            "no legend entry"
+        );
+        let many = vec![(
+            "fit",
+            vec![channel_residuals(&reference, vec![0, 1, 2], vec![0.3; 3])],
+        )];
+        let chart = with_simulations(
+            Chart::new("t", "x", "y"),
+            &many,
+            "page.csv",
+            &reference,
+            1e5,
+        );
+        let styles: Vec<_> = chart
+            .series
+            .iter()
+            .map(|s| (s.name.as_str(), s.style))
+            .collect();
+        assert_eq!(
+            styles,
+            [("reference polynomial", Style::Line), ("fit", Style::Line)]
         );
     }
 
