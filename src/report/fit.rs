@@ -449,7 +449,7 @@ pub fn overlays(
     let mut written = Vec::new();
     for ex in &ds.experiments {
         let rec = &ex.recording;
-        let mut panels = Vec::new();
+        let (mut panels, mut residuals) = (Vec::new(), Vec::new());
         for reference in cost.references().filter(|r| r.file == ex.file) {
             let ax = &reference.abscissa;
             let x_meas = ax.measured(rec).map_err(|e| PlotError(e.to_string()))?;
@@ -473,16 +473,25 @@ pub fn overlays(
             }
             chart = with_simulations(chart, &runs, &ex.file, reference, p_atm);
             panels.push(chart);
+            residuals.push(residual_panel(
+                &runs,
+                &ex.file,
+                reference,
+                (&x_meas, y_meas),
+                p_atm,
+            ));
         }
         if panels.is_empty() {
             continue;
         }
+        // One column per channel, its residuals in the row under it.
+        let columns = panels.len();
+        panels.extend(residuals);
         let stem = Path::new(&ex.file)
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
         let path = PathBuf::from(format!("{}.{stem}.svg", prefix.display()));
-        let columns = panels.len().min(3);
         Figure::new(panels, columns).write_svg(&path)?;
         written.push(path);
     }
@@ -513,6 +522,13 @@ fn with_simulations(
                 .map(|((x, m), s)| (*x, *m, *s))
                 .collect();
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if let [(x, _, s)] = pairs[..] {
+            // A single point (a catalogue's key figure): no line to draw, so the fitted value
+            // is a marker, and a polynomial through one point says nothing.
+            let point = (ax.display(x, p_atm), reference.display(s, p_atm));
+            chart = chart.with(Series::marker(name, vec![point]));
+            continue;
+        }
         if k == 0 {
             let line = pairs
                 .iter()
@@ -525,6 +541,56 @@ fn with_simulations(
             .map(|(x, _, s)| (ax.display(*x, p_atm), reference.display(*s, p_atm)))
             .collect();
         chart = chart.with(Series::line(name, line));
+    }
+    chart
+}
+
+/// The residual panel of the channel `reference` of experiment `file`: the recorded value
+/// minus each model's simulation at every compared row (not the reference polynomial, which
+/// only describes the data), in the channel's unit, against the recorded abscissa, with a
+/// zero line. `data` holds the recording's abscissa (as [`Abscissa::measured`]) and channel
+/// values, SI, indexed by row.
+fn residual_panel(
+    runs: &[(&str, Vec<ChannelResiduals>)],
+    file: &str,
+    reference: &ChannelReference,
+    (x_meas, y_meas): (&[f64], &[f64]),
+    p_atm: f64,
+) -> Chart {
+    let ax = &reference.abscissa;
+    let mut chart = Chart::new(
+        &format!("{file} — {} residual", quantity_words(&reference.column)),
+        &axis_label(ax),
+        &format!("data − fit, {}", column_label(&reference.column)),
+    );
+    if ax.log10 {
+        chart = chart.log_x();
+    }
+    let (mut x_lo, mut x_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (name, res) in runs {
+        let Some(ch) = res
+            .iter()
+            .find(|c| c.file == file && c.channel == reference.quantity)
+        else {
+            continue;
+        };
+        let points: Vec<(f64, f64)> = ch
+            .rows
+            .iter()
+            .zip(&ch.simulated)
+            .filter_map(|(&i, s)| {
+                let x = ax.display(*x_meas.get(i)?, p_atm);
+                Some((x, reference.display_difference(y_meas.get(i)? - s, p_atm)))
+            })
+            .collect();
+        for (x, _) in points.iter().filter(|p| p.0.is_finite()) {
+            x_lo = x_lo.min(*x);
+            x_hi = x_hi.max(*x);
+        }
+        chart = chart.with(Series::points(&format!("data − {name}"), points));
+    }
+    if x_lo <= x_hi {
+        chart = chart.with(Series::line("", vec![(x_lo, 0.0), (x_hi, 0.0)]));
     }
     chart
 }
@@ -556,6 +622,7 @@ fn quantity_words(column: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::plot::Style;
 
     fn row(name: &str, value: f64, interval: Option<(Option<f64>, Option<f64>)>) -> ParamRow {
         let s = spec(name).unwrap();
@@ -623,6 +690,122 @@ mod tests {
         assert_eq!(
             axis_label(&ax),
             "port 2 nozzle conductance [m³/(s·Pa)] (log scale)"
+        );
+    }
+
+    /// A torque channel of a catalogue page against speed, its reference fitted to `y`.
+    fn torque_reference(x: &[f64], y: &[f64]) -> ChannelReference {
+        let (quantity, unit) = crate::units::parse_column("torque_nm").unwrap();
+        let (ax_q, ax_unit) = crate::units::parse_column("speed_rpm").unwrap();
+        let options = crate::objective::reference::FitOptions::default();
+        ChannelReference {
+            kind: crate::data::dataset::Kind::Catalogue,
+            file: "page.csv".into(),
+            quantity,
+            column: "torque_nm".into(),
+            unit,
+            abscissa: Abscissa {
+                quantity: ax_q,
+                column: "speed_rpm".into(),
+                unit: ax_unit,
+                log10: false,
+            },
+            reference: crate::objective::reference::Reference::fit(x, y, &options).unwrap(),
+        }
+    }
+
+    /// Residuals of `reference`'s channel at recording `rows`, the simulation `simulated` and
+    /// a reference polynomial value far from the data.
+    fn channel_residuals(
+        reference: &ChannelReference,
+        rows: Vec<usize>,
+        simulated: Vec<f64>,
+    ) -> ChannelResiduals {
+        ChannelResiduals {
+            experiment_kind: reference.kind,
+            file: reference.file.clone(),
+            channel: reference.quantity,
+            column: reference.column.clone(),
+            x: rows.iter().map(|&i| i as f64).collect(),
+            measured: vec![100.0; rows.len()],
+            normalized: vec![0.0; rows.len()],
+            rows,
+            simulated,
+            sigma: 1.0,
+            weight: 1.0,
+        }
+    }
+
+    /// The residual panel shows recorded value − simulation at the compared rows (not the
+    /// reference polynomial), in the channel's unit, with a zero line, and is labelled so.
+    #[test]
+    fn residual_panel_is_data_minus_fit_at_the_compared_rows() {
+        let x = [100.0, 200.0, 300.0, 400.0];
+        let y = [0.30, 0.9, 0.20, 0.10];
+        let reference = torque_reference(&x, &y);
+        let runs = vec![(
+            "fit",
+            vec![channel_residuals(&reference, vec![0, 2], vec![0.25, 0.26])],
+        )];
+        let chart = residual_panel(&runs, "page.csv", &reference, (&x, &y), 101_325.0);
+        assert_eq!(chart.y_label, "data − fit, torque [N·m]");
+        assert_eq!(chart.series[0].name, "data − fit");
+        let got = &chart.series[0].points;
+        assert_eq!(got.len(), 2);
+        let rpm = |w: f64| w * 60.0 / (2.0 * std::f64::consts::PI);
+        for ((gx, gy), (wx, wy)) in got.iter().zip([(rpm(100.0), 0.05), (rpm(300.0), -0.06)]) {
+            assert!((gx - wx).abs() < 1e-9 && (gy - wy).abs() < 1e-12, "{got:?}");
+        }
+        let zero = &chart.series[1];
+        assert_eq!(zero.points, vec![(rpm(100.0), 0.0), (rpm(300.0), 0.0)]);
+        assert!(zero.name.is_empty());
+        let svg = Figure::new(vec![chart], 1).to_svg().unwrap();
+        assert!(
+            svg.contains("data − fit, torque [N·m]"),
+            "axis label missing"
+        );
+    }
+
+    /// A channel with a single compared point shows the fitted value as a marker named
+    /// after the model, and no reference polynomial; a longer one gets lines.
+    #[test]
+    fn single_point_channel_gets_a_fit_marker() {
+        let reference = torque_reference(&[100.0, 200.0, 300.0, 400.0], &[0.3, 0.2, 0.1, 0.0]);
+        let one = vec![(
+            "fit",
+            vec![channel_residuals(&reference, vec![1], vec![0.21])],
+        )];
+        let chart = with_simulations(Chart::new("t", "x", "y"), &one, "page.csv", &reference, 1e5);
+        assert_eq!(chart.series.len(), 1);
+        assert_eq!(chart.series[0].name, "fit");
+        assert_eq!(chart.series[0].style, Style::Marker);
+        let (px, py) = chart.series[0].points[0];
+        assert!((px - 1.0 * 60.0 / (2.0 * std::f64::consts::PI)).abs() < 1e-9);
+        assert_eq!(py, 0.21);
+        let svg = chart.to_svg().unwrap();
+        assert!(
+            svg.contains(">fit<") || svg.contains(">\nfit"),
+            "no legend entry"
+        );
+        let many = vec![(
+            "fit",
+            vec![channel_residuals(&reference, vec![0, 1, 2], vec![0.3; 3])],
+        )];
+        let chart = with_simulations(
+            Chart::new("t", "x", "y"),
+            &many,
+            "page.csv",
+            &reference,
+            1e5,
+        );
+        let styles: Vec<_> = chart
+            .series
+            .iter()
+            .map(|s| (s.name.as_str(), s.style))
+            .collect();
+        assert_eq!(
+            styles,
+            [("reference polynomial", Style::Line), ("fit", Style::Line)]
         );
     }
 

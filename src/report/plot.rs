@@ -34,6 +34,9 @@ pub enum Style {
     Line,
     /// Markers only (measured data).
     Points,
+    /// A cross at each point, larger than [`Style::Points`] (a fitted value where there is
+    /// a single point to compare, so no line to draw).
+    Marker,
 }
 
 /// One named curve.
@@ -55,6 +58,15 @@ impl Series {
             name: name.to_string(),
             points,
             style: Style::Line,
+        }
+    }
+
+    /// Crosses at the points ([`Style::Marker`]).
+    pub fn marker(name: &str, points: Vec<(f64, f64)>) -> Self {
+        Self {
+            name: name.to_string(),
+            points,
+            style: Style::Marker,
         }
     }
 
@@ -143,6 +155,8 @@ const LEGEND_FONT: u32 = 13;
 /// Width of one legend character, pixels: a generous average for a sans-serif font at
 /// 10.5 px (≈ 0.6 em), so that the box holds its text in the usual viewers.
 const LEGEND_CHAR_W: f64 = 6.2;
+/// Half the width of a [`Style::Marker`] cross, pixels.
+const MARKER_SIZE: i32 = 6;
 /// Height of one legend row, pixels.
 const LEGEND_ROW_H: i32 = 18;
 /// Length of a legend's line sample, pixels.
@@ -480,6 +494,11 @@ fn draw_legend<DB: DrawingBackend>(
                 3,
                 e.colour.filled(),
             )),
+            Style::Marker => cell.draw(&Cross::new(
+                (x + LEGEND_GLYPH_W / 2, y),
+                MARKER_SIZE,
+                e.colour.stroke_width(2),
+            )),
         }
         .map_err(err)?;
         let text_x = x + LEGEND_GLYPH_W + LEGEND_SPACE;
@@ -704,6 +723,12 @@ where
                     .map_err(err)?,
                 Style::Points => cc
                     .draw_series(run.into_iter().map(|p| Circle::new(p, 3, colour.filled())))
+                    .map_err(err)?,
+                Style::Marker => cc
+                    .draw_series(
+                        run.into_iter()
+                            .map(|p| Cross::new(p, MARKER_SIZE, colour.stroke_width(2))),
+                    )
                     .map_err(err)?,
             };
         }
