@@ -305,8 +305,22 @@ def _tempdir_entries():
     return set(os.listdir(tempfile.gettempdir()))
 
 
-def test_predict_control_and_synth_tables(cli_fit, tmp_path, capfd):
+@pytest.fixture
+def private_tmp(tmp_path_factory, monkeypatch):
+    """A temporary folder of this test's own, for Python (tempfile) and for the Rust side
+    (TMPDIR): the machine's /tmp is shared with whatever else runs, so only a folder of the
+    test's own shows what the package left behind."""
+    import tempfile
+
+    d = tmp_path_factory.mktemp("private-tmp")
+    monkeypatch.setenv("TMPDIR", str(d))
+    monkeypatch.setattr(tempfile, "tempdir", str(d))
+    return d
+
+
+def test_predict_control_and_synth_tables(cli_fit, tmp_path, capfd, private_tmp):
     before = _tempdir_entries()
+    assert before == set()
     fit = vanefit.Fit.read(cli_fit)
     p = vanefit.predict(fit, pressures=[4, 6.3])
     assert isinstance(p, vanefit.Prediction)
@@ -339,9 +353,10 @@ def test_predict_control_and_synth_tables(cli_fit, tmp_path, capfd):
     assert _tempdir_entries() == before
 
 
-def test_fits_in_memory_are_parameters(ds, cli_fit):
+def test_fits_in_memory_are_parameters(ds, cli_fit, private_tmp):
     """A Fit held in memory simulates and costs like its file, without temporary files."""
     before = _tempdir_entries()
+    assert before == set()
     fit = vanefit.Fit.from_json(cli_fit.read_text())
     assert fit.path is None
     assert vanefit.cost(ds, fit)["cost"] == vanefit.cost(ds, cli_fit)["cost"]
