@@ -87,7 +87,7 @@ pub struct Silent;
 impl RunObserver for Silent {}
 
 /// Latin-hypercube start points in the unit cube, one row per start, from the seed alone.
-pub fn latin_hypercube(starts: usize, dims: usize, seed: u64) -> Vec<Vec<f64>> {
+fn latin_hypercube(starts: usize, dims: usize, seed: u64) -> Vec<Vec<f64>> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let mut points = vec![vec![0.0; dims]; starts];
     for d in 0..dims {

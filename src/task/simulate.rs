@@ -33,10 +33,7 @@ pub enum SimulateError {
 }
 
 /// Parameters for a dataset: the fit file's, or else the rig's nominal motor.
-pub fn params_for(
-    ds: &Dataset,
-    fit: Option<&FitFile>,
-) -> Result<(MotorParams, EffectSet), DataError> {
+fn params_for(ds: &Dataset, fit: Option<&FitFile>) -> Result<(MotorParams, EffectSet), DataError> {
     if let Some(f) = fit {
         return Ok((f.params.clone(), f.effects.clone()));
     }
