@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use vanefit::control::study::step::StepOptions;
-use vanefit::control::study::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
+use vanefit::control::study::{LoopOptions, MotorOptions};
 use vanefit::prelude::*;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -16,19 +16,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..MotorOptions::default()
         },
         study: Study::Step(
-            LoopOptions {
-                valve: ValveOptions {
-                    tau_s: None,
-                    u_max_v: 10.0,
-                    p_max_bar_g: 6.0,
-                },
-                pi: PiOptions {
-                    ts_ms: 1.0,
-                    speed_unit_rpm: 1000.0,
-                    anti_windup: "conditional".into(),
-                },
-                gains: Some(GainOptions { kp: 0.85, ki: 4.0 }),
-            },
+            LoopOptions::default(),
             StepOptions {
                 from_rpm: 3000.0,
                 to_rpm: 4500.0,

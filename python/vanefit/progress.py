@@ -52,50 +52,57 @@ def _check(progress: Progress) -> None:
 
 
 @contextlib.contextmanager
-def fit_progress(progress: Progress) -> Iterator[Optional[Callable[[int, int, float], Any]]]:
+def _progress(
+    progress: Progress, desc: str, unit: str, updater: Callable[[Any], Callable[..., Any]]
+) -> Iterator[Optional[Callable[..., Any]]]:
+    """The callback for ``progress=``: none for ``None``/``False``, the caller's own
+    callable, or for ``True`` ``updater(bar)`` on a tqdm bar, closed when the call returns
+    (or fails)."""
+    _check(progress)
+    if not progress:
+        yield None
+        return
+    if callable(progress):
+        yield progress
+        return
+    bar = _tqdm_class()(total=None, desc=desc, unit=unit, leave=True)
+    try:
+        yield updater(bar)
+    finally:
+        bar.close()
+
+
+def fit_progress(
+    progress: Progress,
+) -> contextlib.AbstractContextManager[Optional[Callable[[int, int, float], Any]]]:
     """The callback of a fit for ``progress=``; a tqdm bar over the starts for ``True``,
     closed when the fit returns (or fails)."""
-    _check(progress)
-    if not progress:
-        yield None
-        return
-    if callable(progress):
-        yield progress
-        return
-    bar = _tqdm_class()(total=None, desc="fit", unit="start", leave=True)
 
-    def update(done: int, total: int, best: float) -> None:
-        if bar.total != total:
-            bar.total = total
-        bar.n = done
-        if math.isfinite(best):
-            bar.set_postfix_str(f"best J {best:.4g}", refresh=False)
-        bar.refresh()
+    def updater(bar: Any) -> Callable[[int, int, float], None]:
+        def update(done: int, total: int, best: float) -> None:
+            if bar.total != total:
+                bar.total = total
+            bar.n = done
+            if math.isfinite(best):
+                bar.set_postfix_str(f"best J {best:.4g}", refresh=False)
+            bar.refresh()
 
-    try:
-        yield update
-    finally:
-        bar.close()
+        return update
+
+    return _progress(progress, "fit", "start", updater)
 
 
-@contextlib.contextmanager
-def diagnose_progress(progress: Progress) -> Iterator[Optional[Callable[[float, str], Any]]]:
+def diagnose_progress(
+    progress: Progress,
+) -> contextlib.AbstractContextManager[Optional[Callable[[float, str], Any]]]:
     """The callback of a diagnosis for ``progress=``; for ``True`` a tqdm line counting
     the phases with the latest message."""
-    _check(progress)
-    if not progress:
-        yield None
-        return
-    if callable(progress):
-        yield progress
-        return
-    bar = _tqdm_class()(total=None, desc="diagnose", unit="step", leave=True)
 
-    def update(elapsed: float, message: str) -> None:
-        bar.update(1)
-        bar.set_postfix_str(message[:80], refresh=True)
+    def updater(bar: Any) -> Callable[[float, str], None]:
+        def update(elapsed: float, message: str) -> None:
+            bar.update(1)
+            bar.set_postfix_str(message[:80], refresh=True)
 
-    try:
-        yield update
-    finally:
-        bar.close()
+        return update
+
+    return _progress(progress, "diagnose", "step", updater)

@@ -41,7 +41,7 @@ struct Row {
 }
 
 /// Reads a file's text: the file system for `merge`, memory for the fuzz target.
-pub type ReadText<'a> = &'a dyn Fn(&Path) -> std::io::Result<String>;
+pub(crate) type ReadText<'a> = &'a dyn Fn(&Path) -> std::io::Result<String>;
 
 /// Reads a unit's status and, for a done fit or diagnosis, its result file; a result file
 /// that cannot be read makes the row failed with the reason.

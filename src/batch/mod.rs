@@ -70,14 +70,14 @@ pub enum BatchError {
 }
 
 /// The format of `batch.json`.
-pub const BATCH_FORMAT: &str = "vanefit.batch/1";
+const BATCH_FORMAT: &str = "vanefit.batch/1";
 
 /// `batch.json`: what the batch in a folder is. Every shard writes the same record, and
 /// refuses to run into a folder whose record differs (other datasets, tasks or settings),
 /// so that one folder never mixes two batches.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BatchRecord {
-    /// [`BATCH_FORMAT`].
+    /// `BATCH_FORMAT`.
     pub format: String,
     /// The manifest (absolute path).
     pub manifest: PathBuf,

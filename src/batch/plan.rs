@@ -47,7 +47,7 @@ impl Shard {
     pub const ALL: Shard = Shard { index: 1, count: 1 };
 
     /// Whether group `group` is this shard's.
-    pub fn owns(&self, group: usize) -> bool {
+    pub(crate) fn owns(&self, group: usize) -> bool {
         group % self.count + 1 == self.index
     }
 }

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 const EVERY: Duration = Duration::from_secs(5);
 
 /// The batch's clock and counters.
-pub struct BatchProgress {
+pub(crate) struct BatchProgress {
     t0: Instant,
     total: usize,
     finished: AtomicUsize,
@@ -42,7 +42,7 @@ impl BatchProgress {
     }
 
     /// A unit finished (done, failed or skipped).
-    pub fn unit_finished(&self) {
+    pub(crate) fn unit_finished(&self) {
         self.finished.fetch_add(1, Ordering::Relaxed);
     }
 
@@ -59,7 +59,7 @@ impl BatchProgress {
 }
 
 /// Progress of one unit.
-pub struct UnitProgress<'a> {
+pub(crate) struct UnitProgress<'a> {
     batch: &'a BatchProgress,
     label: String,
     last: Mutex<Instant>,

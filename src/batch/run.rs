@@ -43,7 +43,7 @@ pub struct RunOutcome {
 /// Why a unit failed (recorded in its status file; the batch goes on).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum UnitError {
+pub(crate) enum UnitError {
     /// The fit failed.
     #[error(transparent)]
     Fit(#[from] FitError),

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The format of status files.
-pub const STATUS_FORMAT: &str = "vanefit.unit/1";
+const STATUS_FORMAT: &str = "vanefit.unit/1";
 
 /// Where a unit is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -42,7 +42,7 @@ impl State {
 
 /// The contents of a status file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct UnitStatus {
+pub(crate) struct UnitStatus {
     /// [`STATUS_FORMAT`].
     pub format: String,
     /// The dataset's name.

@@ -57,7 +57,7 @@ use nalgebra::{Complex, Matrix2, Vector2};
 
 /// How the valve's output pressure follows its set pressure.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum ValveDynamics {
+pub(crate) enum ValveDynamics {
     /// τ·ṗ + p = p_cmd.
     FirstOrder {
         /// Time constant τ, s.
@@ -76,11 +76,11 @@ pub enum ValveDynamics {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Valve {
     /// How the output pressure follows the set pressure.
-    pub dynamics: ValveDynamics,
+    pub(crate) dynamics: ValveDynamics,
     /// Command for full pressure, V (default 10).
     pub u_max_v: f64,
     /// Gauge pressure at full command, Pa (default 6 bar).
-    pub p_max_gauge_pa: f64,
+    pub(crate) p_max_gauge_pa: f64,
     /// Atmosphere, Pa.
     pub p_atm_pa: f64,
 }
@@ -91,14 +91,14 @@ pub struct ValveState {
     /// Output pressure, Pa absolute.
     pub p_pa: f64,
     /// Its rate, Pa/s.
-    pub dp_pa_s: f64,
+    dp_pa_s: f64,
 }
 
 impl Valve {
     /// The valve that the motor's model implies: second order with `valve_tau` and
     /// `valve_zeta` when the `valve_dynamics` effect is on, otherwise first order with
     /// `valve_tau` (default 0.05 s); 0–10 V → 0–6 bar gauge.
-    pub fn for_motor(motor: &Motor, p_atm_pa: f64) -> Self {
+    pub(crate) fn for_motor(motor: &Motor, p_atm_pa: f64) -> Self {
         let valve = motor.supply_valve();
         let dynamics = match valve.zeta {
             Some(zeta) => ValveDynamics::SecondOrder {
@@ -116,12 +116,12 @@ impl Valve {
     }
 
     /// Static gain, Pa per V.
-    pub fn gain_pa_per_v(&self) -> f64 {
+    fn gain_pa_per_v(&self) -> f64 {
         self.p_max_gauge_pa / self.u_max_v
     }
 
     /// Set pressure (absolute, Pa) for command u (V), saturated to [0, u_max].
-    pub fn set_pressure_pa(&self, u_v: f64) -> f64 {
+    pub(crate) fn set_pressure_pa(&self, u_v: f64) -> f64 {
         self.p_atm_pa + self.gain_pa_per_v() * u_v.clamp(0.0, self.u_max_v)
     }
 
@@ -131,7 +131,7 @@ impl Valve {
     }
 
     /// Settled at a command.
-    pub fn settled(&self, u_v: f64) -> ValveState {
+    pub(crate) fn settled(&self, u_v: f64) -> ValveState {
         ValveState {
             p_pa: self.set_pressure_pa(u_v),
             dp_pa_s: 0.0,
@@ -206,11 +206,11 @@ pub struct PiController {
     /// V per speed unit per second.
     pub ki: f64,
     /// Sample time, s.
-    pub ts_s: f64,
+    pub(crate) ts_s: f64,
     /// Speed unit of the error, rpm (1000: error in krpm).
     pub speed_unit_rpm: f64,
     /// Lower output limit, V.
-    pub u_min_v: f64,
+    pub(crate) u_min_v: f64,
     /// Upper output limit, V.
     pub u_max_v: f64,
     /// What the integrator does while the output is saturated.
@@ -234,7 +234,7 @@ impl Default for PiController {
 
 impl PiController {
     /// Speed unit in rad/s.
-    pub fn speed_unit_rad_s(&self) -> f64 {
+    pub(crate) fn speed_unit_rad_s(&self) -> f64 {
         self.speed_unit_rpm * RAD_S_PER_RPM
     }
 
@@ -272,7 +272,7 @@ impl PiController {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Steps {
     /// Value before the first step.
-    pub initial: f64,
+    pub(crate) initial: f64,
     /// (time s, value) of each step, times increasing.
     pub steps: Vec<(f64, f64)>,
 }
@@ -325,7 +325,7 @@ pub struct Scenario {
     pub setpoint_rad_s: Steps,
     /// Extra load torque on top of `Loop::load`, N·m: constant, opposing forward rotation
     /// (an active load like `Load::Torque`, it would also drive a standing motor backwards).
-    pub load_torque_nm: Steps,
+    pub(crate) load_torque_nm: Steps,
 }
 
 /// Recorded signals, one entry per controller sample (t = 0, T_s, 2T_s, …).
@@ -340,13 +340,13 @@ pub struct Trace {
     /// Controller output (held over the following sample), V.
     pub command_v: Vec<f64>,
     /// Valve output pressure, Pa absolute.
-    pub p_valve_pa: Vec<f64>,
+    pub(crate) p_valve_pa: Vec<f64>,
     /// Pressure in the motor's inlet volume V_1, Pa absolute.
     pub p1_pa: Vec<f64>,
     /// Controller integral state, V.
-    pub integral_v: Vec<f64>,
+    pub(crate) integral_v: Vec<f64>,
     /// Total load torque (base load + extra), N·m.
-    pub load_nm: Vec<f64>,
+    pub(crate) load_nm: Vec<f64>,
 }
 
 /// Where the loop starts.
@@ -357,13 +357,13 @@ pub struct LoopStart {
     /// The valve's state.
     pub valve: ValveState,
     /// The controller's integral state, V.
-    pub integral_v: f64,
+    pub(crate) integral_v: f64,
 }
 
 impl Loop {
     /// The same loop with the controller's gains set to zero: the command stays where it
     /// started (the open-loop comparison of a disturbance study).
-    pub fn without_control(&self) -> Self {
+    pub(crate) fn without_control(&self) -> Self {
         Self {
             pi: PiController {
                 kp: 0.0,
@@ -388,7 +388,7 @@ impl Loop {
     /// settled at u₀ and the integral at u₀ (so that the start is bumpless). A set-point the
     /// motor cannot reach open loop (above its speed at full command, or in a speed band
     /// where there is no steady state) is an error.
-    pub fn settled_at(
+    pub(crate) fn settled_at(
         &self,
         motor: &Motor,
         setpoint_rad_s: f64,
@@ -459,7 +459,7 @@ impl Loop {
 
     /// Like [`Loop::simulate`], also returning the loop's state at the end (to continue
     /// from; the command computed at the last sample is not yet applied).
-    pub fn simulate_to_end(
+    pub(crate) fn simulate_to_end(
         &self,
         motor: &Motor,
         solver: &dyn StiffSolver,
@@ -525,7 +525,7 @@ pub struct StepMetrics {
 }
 
 /// Step metrics for a set-point step from `from` to `to` (rad/s) at `t_step` (s).
-pub fn step_metrics(tr: &Trace, t_step: f64, from: f64, to: f64) -> StepMetrics {
+pub(crate) fn step_metrics(tr: &Trace, t_step: f64, from: f64, to: f64) -> StepMetrics {
     let h = to - from;
     let after: Vec<(f64, f64)> = tr
         .t_s
@@ -554,7 +554,7 @@ pub fn step_metrics(tr: &Trace, t_step: f64, from: f64, to: f64) -> StepMetrics 
 }
 
 /// Mean of set-point − speed over the last `fraction` of the trace, rad/s.
-pub fn tail_mean_error(tr: &Trace, fraction: f64) -> f64 {
+pub(crate) fn tail_mean_error(tr: &Trace, fraction: f64) -> f64 {
     let n = tr.t_s.len();
     let k0 = ((1.0 - fraction) * n as f64) as usize;
     let m = (n - k0.min(n)).max(1) as f64;
@@ -578,7 +578,7 @@ pub struct DisturbanceMetrics {
 
 /// Disturbance figures of the trace for a load step at `t_step` (s), recovery band
 /// `band_rad_s`.
-pub fn disturbance_metrics(tr: &Trace, t_step: f64, band_rad_s: f64) -> DisturbanceMetrics {
+pub(crate) fn disturbance_metrics(tr: &Trace, t_step: f64, band_rad_s: f64) -> DisturbanceMetrics {
     let idx: Vec<usize> = (0..tr.t_s.len()).filter(|k| tr.t_s[*k] >= t_step).collect();
     let err = |k: usize| tr.setpoint_rad_s[k] - tr.speed_rad_s[k];
     let max_drop = idx.iter().map(|k| err(*k)).fold(0.0, f64::max);

@@ -29,7 +29,7 @@ pub fn plant(lin: &LinearModel, valve: &Valve, pi: &PiController, w_rad_s: f64) 
 }
 
 /// Open-loop L(jw) = C(jw)·P(jw).
-pub fn open_loop(
+pub(crate) fn open_loop(
     lin: &LinearModel,
     valve: &Valve,
     pi: &PiController,
@@ -46,7 +46,7 @@ pub struct Margins {
     /// 180° + arg L at crossover, degrees.
     pub phase_margin_deg: f64,
     /// Phase crossover arg L = −180°, rad/s (NaN if none in the band).
-    pub phase_crossover_rad_s: f64,
+    phase_crossover_rad_s: f64,
     /// −20·log10|L| at the phase crossover, dB (+∞ if none).
     pub gain_margin_db: f64,
 }
@@ -118,11 +118,11 @@ pub enum Target {
 }
 
 /// Phase lag the PI may add at crossover when only a phase margin is asked for, degrees.
-pub const PI_LAG_DEG: f64 = 15.0;
+const PI_LAG_DEG: f64 = 15.0;
 
 /// PI gains for `target` on the loop of `lin` and `valve`; `base` gives the sample time,
 /// speed unit, limits and anti-windup that are kept.
-pub fn design_pi(
+pub(crate) fn design_pi(
     lin: &LinearModel,
     valve: &Valve,
     base: &PiController,

@@ -40,13 +40,13 @@ impl OperatingPoint {
 
 /// Lowest speed at which the motor counts as running for linearisation, rad/s:
 /// 50·ω_reg (so that the Coulomb friction is saturated, tanh(50) = 1) and at least 10 rad/s.
-pub fn min_running_speed_rad_s(motor: &Motor) -> f64 {
+fn min_running_speed_rad_s(motor: &Motor) -> f64 {
     (50.0 * motor.params.w_reg()).max(10.0)
 }
 
 /// Steady state with free speed under `bc`, started from standstill (so that, where several
 /// steady states exist, it is the one reached by starting the motor). Refuses a stalled
-/// motor (speed below [`min_running_speed_rad_s`]).
+/// motor (speed below `min_running_speed_rad_s`).
 pub fn operating_point(motor: &Motor, bc: &Boundary) -> Result<OperatingPoint, ControlError> {
     let x = steady::free(motor, bc, &steady::initial_guess(bc))?;
     let w = x[idx::OMEGA];
@@ -83,7 +83,7 @@ impl LinearModel {
     /// Linearises `motor` about `op` by central differences of `Motor::derivatives`.
     /// Refuses an operating point at which the linear model is unstable (a pole with a
     /// non-negative real part): the steady state is then not one the motor can run at.
-    pub fn linearise(motor: &Motor, op: &OperatingPoint) -> Result<Self, ControlError> {
+    pub(crate) fn linearise(motor: &Motor, op: &OperatingPoint) -> Result<Self, ControlError> {
         let f = |x: &State, bc: &Boundary| motor.derivatives(x, bc);
         let mut a = Matrix4::zeros();
         for j in 0..N_STATES {
@@ -123,7 +123,7 @@ impl LinearModel {
     }
 
     /// Speed per supply pressure at angular frequency w (rad/s): G(jw), (rad/s)/Pa.
-    pub fn speed_per_supply(&self, w_rad_s: f64) -> Complex<f64> {
+    pub(crate) fn speed_per_supply(&self, w_rad_s: f64) -> Complex<f64> {
         self.response(w_rad_s, &self.b)
     }
 
@@ -167,7 +167,7 @@ impl LinearModel {
 }
 
 /// Log-spaced frequencies from f_min to f_max (both included), Hz.
-pub fn log_grid(f_min: f64, f_max: f64, n: usize) -> Vec<f64> {
+pub(crate) fn log_grid(f_min: f64, f_max: f64, n: usize) -> Vec<f64> {
     let n = n.max(2);
     let (l0, l1) = (f_min.log10(), f_max.log10());
     (0..n)
@@ -177,7 +177,7 @@ pub fn log_grid(f_min: f64, f_max: f64, n: usize) -> Vec<f64> {
 
 /// Phase in degrees, unwrapped along the list (no jumps of more than 180°), starting in
 /// (−180°, 180°].
-pub fn unwrapped_phase_deg(g: &[Complex<f64>]) -> Vec<f64> {
+pub(crate) fn unwrapped_phase_deg(g: &[Complex<f64>]) -> Vec<f64> {
     let mut out: Vec<f64> = Vec::with_capacity(g.len());
     for z in g {
         let mut p = z.arg().to_degrees();
@@ -214,7 +214,7 @@ impl TwoLags {
     }
 }
 
-/// Result of [`fit_two_lags`], with the fit error over the fitted band.
+/// Result of `fit_two_lags`, with the fit error over the fitted band.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LagFit {
     /// The fitted lags.
@@ -235,7 +235,7 @@ pub struct LagFit {
 /// parameters ln K, ln T1, ln T2. `guess` seeds the search (e.g. K = static gain, T from the
 /// two slowest poles). The data must have a positive static gain (phase near 0 at low
 /// frequency).
-pub fn fit_two_lags(w_rad_s: &[f64], g: &[Complex<f64>], guess: TwoLags) -> LagFit {
+pub(crate) fn fit_two_lags(w_rad_s: &[f64], g: &[Complex<f64>], guess: TwoLags) -> LagFit {
     let resid = |th: &[f64; 3]| -> Vec<Complex<f64>> {
         let m = TwoLags {
             k: th[0].exp(),
@@ -331,7 +331,7 @@ fn normal_equations(
 
 /// A start for [`fit_two_lags`] from the model: K = static gain, T1 and T2 = 1/|λ| of the two
 /// slowest poles.
-pub fn two_lag_guess(lin: &LinearModel) -> TwoLags {
+pub(crate) fn two_lag_guess(lin: &LinearModel) -> TwoLags {
     let p = lin.poles();
     let t = |k: usize| p.get(k).map_or(1e-3, |z| 1.0 / z.norm().max(1e-9));
     TwoLags {

@@ -3,7 +3,7 @@
 //!
 //! **Without control** the supply pressure is raised slowly from atmospheric (reference
 //! experiment 2, the pressure ramp) and the motor follows its steady states
-//! quasi-statically. For each speed ω ≥ ω_lo (see [`lowest_running_speed_rad_s`]) let
+//! quasi-statically. For each speed ω ≥ ω_lo (see `lowest_running_speed_rad_s`) let
 //! p_eq(ω) be the supply pressure at which ω is a steady speed: the root in p of the net
 //! torque N(ω, p) = T(ω, p) − T_f(ω) − T_load(ω) with the pressures of V_1, V_2, V_e in
 //! steady state at that speed (`steady::at_speed`). N rises with p, so
@@ -18,7 +18,7 @@
 //!
 //! **With control** the loop is settled at a reachable start speed and the set-point is
 //! lowered in a staircase, by a constant factor every few seconds, as an operator would;
-//! a stage counts as held when over its last [`HOLD_WINDOW_S`] the mean speed is within
+//! a stage counts as held when over its last `HOLD_WINDOW_S` the mean speed is within
 //! 5 % (at least 5 rpm) of the set-point, the speed varies by less than 20 % of it peak to
 //! peak and never drops below half of it. The lowest set-point held before the first stage
 //! that is not is the minimum speed with control. What ends the staircase is the loop
@@ -61,7 +61,7 @@ pub struct StartUp {
 /// regularisation tanh(ω/ω_reg) and the forward/reverse torque blend tanh(ω/ω_b) are not
 /// yet saturated; those are numerical devices for standstill, and the motor counts as
 /// standing there.
-pub fn lowest_running_speed_rad_s(motor: &Motor) -> f64 {
+pub(crate) fn lowest_running_speed_rad_s(motor: &Motor) -> f64 {
     5.0 * motor
         .params
         .w_reg()
@@ -175,7 +175,7 @@ fn breakaway_pressure(
 /// Open-loop start-up on a slow pressure ramp from atmosphere to `p_max_pa` (see module
 /// doc), on `n` log-spaced speeds from [`lowest_running_speed_rad_s`] up to the speed
 /// `p_max_pa` can hold.
-pub fn open_loop_start(
+pub(crate) fn open_loop_start(
     motor: &Motor,
     load: Load,
     p_atm_pa: f64,
@@ -249,7 +249,7 @@ pub fn open_loop_start(
 }
 
 /// Seconds at the end of each closed-loop run over which "held" is judged.
-pub const HOLD_WINDOW_S: f64 = 2.0;
+pub(crate) const HOLD_WINDOW_S: f64 = 2.0;
 
 /// One closed-loop attempt to hold a set-point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -257,7 +257,7 @@ pub struct HoldAttempt {
     /// The set-point, rad/s.
     pub setpoint_rad_s: f64,
     /// Mean speed over the hold window, rad/s.
-    pub mean_rad_s: f64,
+    pub(crate) mean_rad_s: f64,
     /// Lowest speed over the hold window, rad/s.
     pub min_rad_s: f64,
     /// Highest speed over the hold window, rad/s.
@@ -267,7 +267,7 @@ pub struct HoldAttempt {
 }
 
 /// Whether a trace's last [`HOLD_WINDOW_S`] holds `setpoint` (see module doc).
-pub fn judge_hold(t_s: &[f64], speed: &[f64], setpoint: f64) -> HoldAttempt {
+fn judge_hold(t_s: &[f64], speed: &[f64], setpoint: f64) -> HoldAttempt {
     let t_end = t_s.last().copied().unwrap_or(0.0);
     let w: Vec<f64> = t_s
         .iter()
@@ -290,7 +290,7 @@ pub fn judge_hold(t_s: &[f64], speed: &[f64], setpoint: f64) -> HoldAttempt {
     }
 }
 
-/// Result of [`closed_loop_min_speed`].
+/// Result of `closed_loop_min_speed`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ControlledMin {
     /// Every stage, from the highest set-point down.
@@ -298,7 +298,7 @@ pub struct ControlledMin {
     /// Lowest set-point held (NaN if none was).
     pub w_min_rad_s: f64,
     /// Speed the loop was settled at before the first stage, rad/s.
-    pub w_start_rad_s: f64,
+    w_start_rad_s: f64,
     /// The whole staircase run, stages joined end to end (time from the first stage).
     pub trace: Trace,
 }
@@ -307,7 +307,7 @@ pub struct ControlledMin {
 /// `w_start` (reachable open loop), then the set-point is lowered by `factor` every
 /// `stage_s` seconds (each stage continuing from where the last one ended) until a stage
 /// is not held or the set-point falls below `w_floor`.
-pub fn closed_loop_min_speed(
+pub(crate) fn closed_loop_min_speed(
     motor: &Motor,
     lp: &Loop,
     w_start_rad_s: f64,
@@ -366,7 +366,7 @@ fn append(all: &mut Trace, tr: &Trace, t0: f64) {
 /// Speed against supply pressure on a ramp from atmosphere to `p_max_pa` over `ramp_s`,
 /// simulated (the dynamic counterpart of [`open_loop_start`], reference experiment 2),
 /// sampled `n` times: (p Pa, ω rad/s).
-pub fn ramp_simulation(
+pub(crate) fn ramp_simulation(
     motor: &Motor,
     load: Load,
     p_atm_pa: f64,

@@ -34,7 +34,7 @@ pub mod throttle;
 pub use error::{ControlError, SettingsError};
 
 /// rad/s per rpm.
-pub const RAD_S_PER_RPM: f64 = std::f64::consts::PI / 30.0;
+pub(crate) const RAD_S_PER_RPM: f64 = std::f64::consts::PI / 30.0;
 
 /// A speed in rpm from rad/s.
 pub fn rpm(w_rad_s: f64) -> f64 {

@@ -4,9 +4,9 @@
 //! The throttle is an ISO 6358 nozzle of sonic conductance C_th (m³/(s·Pa)) in series with the
 //! motor's own duct (`Boundary::c_port1_m3_s_pa` / `c_port2_m3_s_pa`), with the motor's
 //! critical ratio b and no volume between the two (`nozzle::series_flow`).
-//! * [`speed_vs_conductance`]: steady speed (free speed under the load, e.g. the rig's
+//! * `speed_vs_conductance`: steady speed (free speed under the load, e.g. the rig's
 //!   eddy-current brake) against C_th at constant supply pressure (Fig. 14).
-//! * [`torque_speed`]: shaft torque T − T_f against imposed speed for one throttle (Fig. 15),
+//! * `torque_speed`: shaft torque T − T_f against imposed speed for one throttle (Fig. 15),
 //!   from standstill up to the speed where the shaft torque reaches zero (free speed).
 
 use super::ControlError;
@@ -32,7 +32,13 @@ impl Port {
     }
 
     /// Boundary with supply at port 1 and the throttle fitted (`None`: no throttle).
-    pub fn boundary(self, p_supply_pa: f64, p_atm_pa: f64, load: Load, c: Option<f64>) -> Boundary {
+    pub(crate) fn boundary(
+        self,
+        p_supply_pa: f64,
+        p_atm_pa: f64,
+        load: Load,
+        c: Option<f64>,
+    ) -> Boundary {
         let mut bc = Boundary::supplied(p_supply_pa, p_atm_pa, load);
         match self {
             Port::Inlet => bc.c_port1_m3_s_pa = c,
@@ -60,7 +66,7 @@ pub struct ThrottlePoint {
 /// Steady speed against throttle conductance at supply `p_supply_pa` under `load`.
 /// Solved from the largest conductance down, each state seeding the next. Errors name the
 /// conductance at which no steady state was found.
-pub fn speed_vs_conductance(
+pub(crate) fn speed_vs_conductance(
     motor: &Motor,
     port: Port,
     p_supply_pa: f64,
@@ -102,7 +108,7 @@ pub fn speed_vs_conductance(
 
 /// First speed of a torque–speed curve, rad/s (≈ 48 rpm: friction and the forward/reverse
 /// torque blend are fully developed, tanh(5/ω_reg) = tanh(5/ω_b) ≈ 1).
-pub const W_CURVE_START_RAD_S: f64 = 5.0;
+const W_CURVE_START_RAD_S: f64 = 5.0;
 
 /// A point of a torque–speed characteristic.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -121,7 +127,7 @@ pub struct TorquePoint {
 /// interpolation. It starts just above standstill because at ω = 0 exactly the regularised
 /// Coulomb friction T_c·tanh(ω/ω_reg) is zero, which would show the stall torque without
 /// friction.
-pub fn torque_speed(
+pub(crate) fn torque_speed(
     motor: &Motor,
     port: Port,
     p_supply_pa: f64,
@@ -169,7 +175,7 @@ pub fn torque_speed(
 }
 
 /// Log-spaced conductances from `c_min` to `c_max` (both included), m³/(s·Pa).
-pub fn conductance_grid(c_min: f64, c_max: f64, n: usize) -> Vec<f64> {
+pub(crate) fn conductance_grid(c_min: f64, c_max: f64, n: usize) -> Vec<f64> {
     super::linear::log_grid(c_min, c_max, n)
 }
 

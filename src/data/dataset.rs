@@ -30,7 +30,7 @@ pub struct DataError {
     /// 1-based column index (characters in the line) and the name found there, where known.
     pub column: Option<(usize, String)>,
     /// What the name in `column` is: a CSV column, or a TOML key, value or table.
-    pub named: Named,
+    pub(crate) named: Named,
     /// What is wrong.
     pub message: String,
 }
@@ -38,7 +38,7 @@ pub struct DataError {
 /// What the name beside a located error's column is, as its message says it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
-pub enum Named {
+pub(crate) enum Named {
     /// A CSV column's header.
     #[default]
     Column,
@@ -52,7 +52,7 @@ pub enum Named {
 
 impl Named {
     /// The word messages use.
-    pub fn word(self) -> &'static str {
+    pub(crate) fn word(self) -> &'static str {
         match self {
             Named::Column => "column",
             Named::Key => "key",
@@ -118,7 +118,7 @@ impl From<MissingColumn> for DataError {
 }
 
 /// The fewest rows a recording may have: a reference polynomial needs at least this many.
-pub const MIN_ROWS: usize = 4;
+pub(crate) const MIN_ROWS: usize = 4;
 
 /// The columns a CSV header names (quantity and unit of each), empty; a name that is not a
 /// quantity and its unit, or a quantity given twice, is refused at its column.
@@ -368,7 +368,7 @@ impl Recording {
     }
 
     /// Refuses an abscissa that does not span a range (a ramp that does not ramp).
-    pub fn check_spans(&self, q: Quantity, min_relative_span: f64) -> Result<(), DataError> {
+    fn check_spans(&self, q: Quantity, min_relative_span: f64) -> Result<(), DataError> {
         let v = self.values(q)?;
         if v.is_empty() {
             return Err(DataError::new(&self.file, "no data rows").at(1));
@@ -679,7 +679,7 @@ fn locate_toml_error(path: &Path, text: &str, e: &toml::de::Error) -> DataError 
 
 /// A problem with the TOML text `text` of `path` at the byte range `span` (a parser's or a
 /// `toml::Spanned` value's), as a located error: line, column and the offending token.
-pub fn locate_span(
+pub(crate) fn locate_span(
     path: &Path,
     text: &str,
     span: Option<std::ops::Range<usize>>,

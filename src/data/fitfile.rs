@@ -16,7 +16,7 @@ use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 
 /// The format tag of fit files (docs/formats.md, "Fit files").
-pub const FORMAT: &str = "vanefit.fit/1";
+pub(crate) const FORMAT: &str = "vanefit.fit/1";
 
 /// A problem with a fit file, shown as `file:line: message` (or `file: message`).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -32,7 +32,7 @@ pub struct FitFileError {
 
 /// One parameter's entry.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ParamEntry {
+pub(crate) struct ParamEntry {
     /// Value in SI.
     pub value: f64,
     /// SI unit (checked on reading; no conversion is done).
@@ -74,7 +74,7 @@ pub struct FitStatistics {
     /// n − k.
     pub dof: usize,
     /// χ²/dof.
-    pub chi2_per_dof: f64,
+    pub(crate) chi2_per_dof: f64,
     /// RMS residual over noise, channels averaged alike.
     pub noise_ratio: f64,
     /// The largest noise ratio of a model that reaches the noise.
@@ -150,7 +150,7 @@ pub struct LogCovariance {
 /// What is wrong with one field of a fit file (located by the reader).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{0}")]
-pub struct FieldError(pub String);
+pub(crate) struct FieldError(pub String);
 
 impl From<&str> for FieldError {
     fn from(message: &str) -> Self {

@@ -4,4 +4,4 @@ pub mod dataset;
 pub mod fitfile;
 pub mod motor;
 pub mod synth;
-pub mod synth_catalogue;
+pub(crate) mod synth_catalogue;

@@ -1,7 +1,7 @@
 //! The `[motor]` table of rig.toml: the motor either by its volumes (`displacement_m3`,
 //! `expansion_ratio`, `dead_volume_m3`) or by its geometry (rotor length L, stator and rotor
 //! radii R_S and R_R, vanes z and the port timing angles), from which paper eqs. 1–7
-//! ([`VaneGeometry::derived_volumes`]) give V_disp,nom = z·V_fill, ε = V_exp/V_fill and V_d.
+//! (`VaneGeometry::derived_volumes`) give V_disp,nom = z·V_fill, ε = V_exp/V_fill and V_d.
 
 use crate::model::geometry::{PortTiming, VaneGeometry};
 use crate::model::params::{MotorParams, ParamError, ParamSet};
@@ -22,25 +22,25 @@ pub struct MotorSection {
     pub expansion_ratio: Option<f64>,
     /// Dead volume per compartment V_d, m³.
     #[serde(default)]
-    pub dead_volume_m3: Option<f64>,
+    dead_volume_m3: Option<f64>,
     /// Rotor length L, m.
     #[serde(default)]
-    pub length_m: Option<f64>,
+    pub(crate) length_m: Option<f64>,
     /// Stator radius R_S, m.
     #[serde(default)]
     pub r_stator_m: Option<f64>,
     /// Rotor radius R_R, m.
     #[serde(default)]
-    pub r_rotor_m: Option<f64>,
+    pub(crate) r_rotor_m: Option<f64>,
     /// Angle of the leading vane when a compartment opens to the inlet (its dead volume), °.
     #[serde(default)]
-    pub alpha_dead_deg: Option<f64>,
+    alpha_dead_deg: Option<f64>,
     /// Angle of the leading vane at inlet cut-off (the filling volume), °.
     #[serde(default)]
     pub alpha_fill_deg: Option<f64>,
     /// Angle of the leading vane when the exhaust opens (the expanded volume), °.
     #[serde(default)]
-    pub alpha_exp_deg: Option<f64>,
+    alpha_exp_deg: Option<f64>,
 }
 
 /// A `[motor]` table that does not describe a motor; each names the key to blame.
@@ -197,7 +197,7 @@ impl MotorSection {
 /// vane and seal areas times a radius (∝ s); viscous friction is a sheared area times a
 /// radius squared over an unchanged clearance (∝ s^{4/3}); inertia is a mass times a radius
 /// squared (∝ s^{5/3}).
-pub const SIZE_EXPONENTS: [(&str, f64); 12] = [
+const SIZE_EXPONENTS: [(&str, f64); 12] = [
     ("c_in1", 2.0 / 3.0),
     ("c_out2", 2.0 / 3.0),
     ("c_ext", 2.0 / 3.0),
@@ -214,7 +214,7 @@ pub const SIZE_EXPONENTS: [(&str, f64); 12] = [
 
 /// The AR034-11 defaults of [`SIZE_EXPONENTS`] scaled to a motor `size` times its
 /// displacement (nothing when the size is 1, so the default motor keeps its exact values).
-pub fn scaled_defaults(size: f64) -> Vec<(&'static str, f64)> {
+fn scaled_defaults(size: f64) -> Vec<(&'static str, f64)> {
     if size == 1.0 || !(size.is_finite() && size > 0.0) {
         return Vec::new();
     }

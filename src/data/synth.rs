@@ -272,7 +272,7 @@ fn add_noise(values: &[f64], sd: f64, rng: &mut Xoshiro256PlusPlus) -> Vec<f64> 
 }
 
 /// Renders a recording as CSV text (header, then one line per row, raw values).
-pub fn recording_csv(rec: &Recording) -> String {
+fn recording_csv(rec: &Recording) -> String {
     let mut s = rec
         .columns
         .iter()

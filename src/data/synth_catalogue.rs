@@ -15,7 +15,7 @@ use std::path::Path;
 
 /// What the synthetic catalogue prints.
 #[derive(Debug, Clone, PartialEq)]
-pub struct CataloguePlan {
+pub(crate) struct CataloguePlan {
     /// Supply pressures, bar(g) (one page each).
     pub pressures_bar_g: Vec<f64>,
     /// Atmosphere, Pa.
@@ -108,7 +108,7 @@ fn page(
 
 /// Writes the catalogue dataset to `dir` (rig.toml marked synthetic and one curve file per
 /// pressure) and returns the generator's catalogue rows.
-pub fn write_catalogue(
+pub(crate) fn write_catalogue(
     dir: &Path,
     motor: &Motor,
     plan: &CataloguePlan,

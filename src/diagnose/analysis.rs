@@ -45,7 +45,7 @@ use crate::sim::experiment::SimError;
 use crate::units::{Quantity, Unit};
 
 /// Family-wise false-alarm rate of the location tests.
-pub const LOCATION_ALPHA: f64 = 0.01;
+const LOCATION_ALPHA: f64 = 0.01;
 
 /// One channel of one experiment: simulation against data at the compared rows, SI.
 #[derive(Debug, Clone)]
@@ -76,7 +76,7 @@ pub struct ChannelData {
 
 impl ChannelData {
     /// Normalised residuals (sim − data)/σ.
-    pub fn normalized(&self) -> Vec<f64> {
+    pub(crate) fn normalized(&self) -> Vec<f64> {
         self.sim
             .iter()
             .zip(&self.data)
@@ -85,14 +85,14 @@ impl ChannelData {
     }
 
     /// Mean squared normalised residual against the data.
-    pub fn mean_square(&self) -> f64 {
+    pub(crate) fn mean_square(&self) -> f64 {
         let r = self.normalized();
         r.iter().map(|v| v * v).sum::<f64>() / r.len().max(1) as f64
     }
 
     /// An abscissa value (SI, log10 SI for conductance) as SI of the abscissa quantity
     /// (the conductance itself, m³/(s·Pa)).
-    pub fn x_si(&self, x: f64) -> f64 {
+    fn x_si(&self, x: f64) -> f64 {
         if self.abscissa.log10 {
             10f64.powf(x)
         } else {
@@ -103,7 +103,7 @@ impl ChannelData {
 
 /// Simulation against data for every compared row of every channel (`target` built on
 /// `cost`).
-pub fn channel_data(
+pub(crate) fn channel_data(
     cost: &CostModel,
     target: &Target,
     motor: &Motor,
@@ -139,13 +139,6 @@ pub fn noise_ratio(channels: &[ChannelData]) -> f64 {
     (channels.iter().map(ChannelData::mean_square).sum::<f64>() / channels.len() as f64).sqrt()
 }
 
-/// χ² against the data, Σ_c Σ_i r_ci², and the number of points.
-pub fn chi2_data(channels: &[ChannelData]) -> (f64, usize) {
-    channels.iter().fold((0.0, 0), |(c, n), ch| {
-        (c + ch.mean_square() * ch.x.len() as f64, n + ch.x.len())
-    })
-}
-
 /// Where a model misses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Location {
@@ -158,16 +151,16 @@ pub struct Location {
     /// The channel's quantity.
     pub quantity: Quantity,
     /// Abscissa range, SI of the abscissa quantity (rad/s, Pa, m³/(s·Pa)), ascending.
-    pub x_range: [f64; 2],
+    pub(crate) x_range: [f64; 2],
     /// The same range in the abscissa column's unit, ascending.
-    pub x_range_display: [f64; 2],
+    pub(crate) x_range_display: [f64; 2],
     /// Abscissa column name (for reports).
-    pub x_column: String,
+    pub(crate) x_column: String,
     /// |mean normalised residual| over the region, σ units.
     pub severity: f64,
     /// Mean (sim − data) over the region, in the channel's column unit (signed: positive
     /// means the model over-predicts).
-    pub bias_display: f64,
+    pub(crate) bias_display: f64,
     /// The column's unit suffix.
     pub unit: String,
     /// What fired: "bias", "runs+trend".
@@ -176,7 +169,7 @@ pub struct Location {
 
 /// Locations of every channel that misses by more than noise (see the module docs), most
 /// severe first.
-pub fn locate(channels: &[ChannelData], p_atm_pa: f64) -> Vec<Location> {
+pub(crate) fn locate(channels: &[ChannelData], p_atm_pa: f64) -> Vec<Location> {
     let n_windows: usize = channels
         .iter()
         .map(|c| stats::window_count(c.x.len()))
@@ -237,12 +230,4 @@ pub fn locate(channels: &[ChannelData], p_atm_pa: f64) -> Vec<Location> {
     }
     out.sort_by(|a, b| b.severity.total_cmp(&a.severity));
     out
-}
-
-/// Per-channel noise ratios, for reports: (file, column, √mean r²).
-pub fn channel_ratios(channels: &[ChannelData]) -> Vec<(String, String, f64)> {
-    channels
-        .iter()
-        .map(|c| (c.file.clone(), c.column.clone(), c.mean_square().sqrt()))
-        .collect()
 }

@@ -18,7 +18,7 @@ pub(crate) struct Refits {
     /// The baseline, replaced by the null refit when that converged further.
     pub baseline: Fitted,
     /// Each single effect's refit.
-    pub singles: Vec<(FitJob, Fitted)>,
+    pub(crate) singles: Vec<(FitJob, Fitted)>,
     /// The catalog effects not tried.
     pub skipped: Vec<Skipped>,
 }

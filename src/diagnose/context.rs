@@ -34,7 +34,7 @@ pub(crate) struct Context<'a> {
     /// The rig's nominal motor (the first baseline start).
     pub nominal: MotorParams,
     /// Names estimated in the base model.
-    pub base_names: Vec<String>,
+    pub(crate) base_names: Vec<String>,
     /// The one thread pool every fit and regression of the diagnosis runs on.
     pub engine: &'a Engine,
     observer: &'a dyn DiagnoseObserver,
@@ -80,7 +80,7 @@ impl<'a> Context<'a> {
     }
 
     /// Ends the phase `name` (its time counts from the end of the previous one).
-    pub fn end_phase(&self, name: &str) {
+    pub(crate) fn end_phase(&self, name: &str) {
         let seconds = self.phase_start.get().elapsed().as_secs_f64();
         self.phases.borrow_mut().push((name.to_string(), seconds));
         self.phase_start.set(Instant::now());
@@ -103,7 +103,7 @@ impl<'a> Context<'a> {
     }
 
     /// The baseline fit: the nominal motor plus Latin-hypercube starts.
-    pub fn base_job(&self) -> FitJob {
+    pub(crate) fn base_job(&self) -> FitJob {
         FitJob {
             label: "baseline".into(),
             effects: EffectSet::empty(),
@@ -117,7 +117,7 @@ impl<'a> Context<'a> {
     }
 
     /// A warm refit of a model from given starts, with the refit budget.
-    pub fn refit_job(
+    pub(crate) fn refit_job(
         &self,
         label: String,
         effects: EffectSet,

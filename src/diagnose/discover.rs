@@ -20,8 +20,8 @@
 //! [`crate::objective::likelihood`]) and S the normalised
 //! sensitivities, forward selection with BIC: the nuisance columns are projected out, each
 //! library column's χ² reduction (sᵀr)²/(sᵀs) of the projected quantities is computed, and
-//! the best is kept while its ΔBIC = −Δχ² + ln n is below [`DISCOVERY_DELTA_BIC`]; at most
-//! [`MAX_TERMS`] terms. The linear step only proposes: the chosen term is then put into the
+//! the best is kept while its ΔBIC = −Δχ² + ln n is below `DISCOVERY_DELTA_BIC`; at most
+//! `MAX_TERMS` terms. The linear step only proposes: the chosen term is then put into the
 //! model and refitted nonlinearly, and only the refitted ΔBIC counts.
 //!
 //! # Library
@@ -38,7 +38,7 @@
 //! pressure is the laminar path to atmosphere and is left to the paths); ω, absolute
 //! pressures times ω and pressure differences times ω (speed-driven flows: pumping,
 //! carry-over). 95 terms in all. A one-balance mass term gives way to a path that explains
-//! the misfit within [`PATH_PREFERENCE`] as well (mass conservation is physics).
+//! the misfit within `PATH_PREFERENCE` as well (mass conservation is physics).
 
 use super::fitting::Fitted;
 pub use crate::data::fitfile::{term_from_json, term_to_json};
@@ -58,12 +58,12 @@ use crate::objective::likelihood::Target;
 use nalgebra::{DMatrix, DVector};
 
 /// Linearised ΔBIC a library term must reach to be refitted.
-pub const DISCOVERY_DELTA_BIC: f64 = -10.0;
+const DISCOVERY_DELTA_BIC: f64 = -10.0;
 /// χ² by which a leak path may explain less than a one-balance mass term and still be
 /// preferred to it (the selection's own margin, [`super::SELECT_DELTA_BIC`]).
-pub const PATH_PREFERENCE: f64 = 10.0;
+const PATH_PREFERENCE: f64 = 10.0;
 /// Most terms selected in one regression.
-pub const MAX_TERMS: usize = 2;
+const MAX_TERMS: usize = 2;
 
 /// Typical state used to size the perturbation δ of each feature.
 const TYPICAL: [f64; 4] = [5e5, 2e5, 1.5e5, 800.0];
@@ -219,7 +219,7 @@ fn outputs(
 
 /// Regresses the misfit of `model` (estimated parameters `names`, whose sensitivities are
 /// nuisance) over the library (see the module documentation).
-pub fn regress(
+pub(crate) fn regress(
     cost: &CostModel,
     target: &Target,
     model: &Fitted,

@@ -81,7 +81,7 @@ impl Fitted {
     }
 
     /// BIC = χ² + k·ln n (χ² is −2 ln L up to a constant for Gaussian noise of known σ).
-    pub fn bic(&self) -> f64 {
+    pub(crate) fn bic(&self) -> f64 {
         self.chi2 + self.k as f64 * (self.n_points.max(1) as f64).ln()
     }
 }
@@ -288,7 +288,7 @@ fn lm_polish<C: Coordinates + ?Sized>(problem: &Problem<'_, C>, x: Vec<f64>) -> 
 /// Runs several fits at once on the engine, results in job order. Each fit's starts use the
 /// same threads (so the last, longest fits do not leave a core idle); results do not
 /// depend on the number of threads.
-pub fn run_jobs(
+pub(crate) fn run_jobs(
     cost: &CostModel,
     target: &Target,
     jobs: &[FitJob],

@@ -24,7 +24,7 @@ pub(crate) struct Baseline {
 
 impl Baseline {
     /// The baseline as a scored model (ΔBIC 0).
-    pub fn candidate(&self) -> Candidate {
+    pub(crate) fn candidate(&self) -> Candidate {
         Candidate {
             label: "baseline".into(),
             kind: ModelKind::Baseline,

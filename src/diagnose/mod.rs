@@ -11,7 +11,7 @@
 //! fit (threefold for a ramp's speed), and their systematic error is a signal that a fit to
 //! one experiment can chase; both would make a correct model look wrong and separate fits
 //! "disagree" on clean data. The recorded inputs of transients are replaced by their smooth
-//! in time (errors in variables, [`crate::objective::likelihood::smooth_inputs`]). `cost` in the output is J at the
+//! in time (errors in variables, `crate::objective::likelihood::smooth_inputs`). `cost` in the output is J at the
 //! fitted parameters, as `vanefit fit` reports it.
 //!
 //! # Procedure
@@ -21,7 +21,7 @@
 //!    at the rig's nominal motor plus `starts − 1` Latin-hypercube starts. A warm refit of
 //!    the same model (the "null refit", same budget as a candidate) guards against
 //!    crediting a candidate with what is only further convergence.
-//! 2. **Locate** ([`analysis`]): residuals against the recorded data in noise units;
+//! 2. **Locate** (`analysis`): residuals against the recorded data in noise units;
 //!    regional bias, runs and trend per channel; the noise ratio.
 //! 3. **Concealment.** A plain fit can hide a missing effect by shifting the base
 //!    parameters. Each experiment is fitted alone (warm from the baseline): if the
@@ -29,7 +29,7 @@
 //!    ones by a χ²(k·(E − 1)) amount only (likelihood-ratio/Chow test; k estimated
 //!    parameters, E experiments; the df is an upper bound when some parameter is not
 //!    identifiable from one experiment alone, which makes the test conservative; rejected
-//!    at p < [`CONCEALMENT_ALPHA`]). And each experiment is predicted from a fit to the
+//!    at p < `CONCEALMENT_ALPHA`). And each experiment is predicted from a fit to the
 //!    others (held-out noise ratio), for the baseline, the best candidates and the selected
 //!    model. The test is reported; it does not decide `mismatch` (ΔBIC does, and is more
 //!    sensitive: an effect can fail this test and still be found by its refit).
@@ -51,7 +51,7 @@
 //!    effect: the best single effect is then also paired with the best catalog effect of
 //!    the term's category, so that "pair" and "single + uncatalogued" compete.
 //! 6. **Selection.** Among the baseline and every refitted model, the simplest one within
-//!    [`SELECT_DELTA_BIC`] = 10 of the lowest BIC is chosen, simplicity ordered baseline <
+//!    `SELECT_DELTA_BIC` = 10 of the lowest BIC is chosen, simplicity ordered baseline <
 //!    one catalog effect < two catalog effects < an uncatalogued term < catalog effect(s)
 //!    plus an uncatalogued term. ΔBIC < −10 is "very strong" evidence on Kass and
 //!    Raftery's scale (a likelihood ratio above e⁵ ≈ 150 after the ln n penalty per
@@ -64,7 +64,7 @@
 //!
 //! # Code
 //!
-//! [`diagnose_observed`] runs the phases in turn, one file each, passing a small context
+//! `diagnose_observed` runs the phases in turn, one file each, passing a small context
 //! (dataset, cost, likelihood target, options, observer, phase clock): `baseline.rs` (1),
 //! `candidates.rs` (the single refits with the null refit, which may still improve the
 //! baseline, so they run before locating; then the pairs), `locate.rs` (2),
@@ -86,7 +86,7 @@ mod summary;
 mod types;
 mod uncatalogued;
 
-pub mod analysis;
+pub(crate) mod analysis;
 pub mod discover;
 pub mod fitting;
 pub mod stats;
@@ -112,11 +112,11 @@ use models::Models;
 use std::time::Instant;
 
 /// A refitted model must beat the simpler ones by this much BIC to be selected.
-pub const SELECT_DELTA_BIC: f64 = 10.0;
+pub(crate) const SELECT_DELTA_BIC: f64 = 10.0;
 /// Significance level of the concealment test.
-pub const CONCEALMENT_ALPHA: f64 = 1e-3;
+pub(crate) const CONCEALMENT_ALPHA: f64 = 1e-3;
 /// The format of `diagnosis.json`.
-pub const FORMAT: &str = "vanefit.diagnosis/1";
+pub(crate) const FORMAT: &str = "vanefit.diagnosis/1";
 /// Runs a diagnosis of a dataset, silently, on a thread pool of `opts.threads` threads.
 pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis, DiagnoseError> {
     let engine = Engine::with_threads(opts.threads)?;
@@ -126,7 +126,7 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
 /// Runs a diagnosis of a dataset, telling `observer` how it goes: the phases of the module
 /// documentation, one after the other, every fit on `engine` (the thread count of
 /// `opts` is not used: the engine has its own).
-pub fn diagnose_observed(
+pub(crate) fn diagnose_observed(
     recorded: &Dataset,
     opts: &DiagnoseOptions,
     engine: &Engine,
@@ -180,7 +180,7 @@ pub fn diagnose_observed(
 }
 
 /// The catalog effects tried on a dataset, and those skipped with the reason.
-pub fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
+pub(crate) fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
     let transient = ds.experiments.iter().any(|e| e.kind.is_transient());
     let mut tried = Vec::new();
     let mut skipped = Vec::new();

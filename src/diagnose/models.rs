@@ -12,7 +12,7 @@ use crate::model::effects::EffectSet;
 /// Every refitted model so far, scored against the baseline's BIC.
 pub(crate) struct Models {
     /// BIC of the baseline (after the null refit).
-    pub base_bic: f64,
+    base_bic: f64,
     /// The refitted models.
     pub all: Vec<Candidate>,
 }
@@ -32,7 +32,7 @@ impl Models {
     }
 
     /// A fit with its ΔBIC and noise ratio.
-    pub fn score(
+    pub(crate) fn score(
         &self,
         cx: &Context,
         label: &str,

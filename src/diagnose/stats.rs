@@ -3,13 +3,13 @@
 //! standard normal under the null hypothesis "the model explains the data to within noise".
 
 /// Standard normal cumulative distribution Φ(z).
-pub fn normal_cdf(z: f64) -> f64 {
+fn normal_cdf(z: f64) -> f64 {
     0.5 * erfc(-z / std::f64::consts::SQRT_2)
 }
 
 /// Complementary error function, |relative error| < 1.2e-7 everywhere (Numerical Recipes'
 /// Chebyshev fit, `erfcc`), enough for p-values.
-pub fn erfc(x: f64) -> f64 {
+fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
     let r = t
@@ -32,7 +32,7 @@ pub fn erfc(x: f64) -> f64 {
 
 /// Quantile of the standard normal, Φ⁻¹(p), by Acklam's rational approximation refined by
 /// one Halley step (relative error ≈ 1e-9).
-pub fn normal_quantile(p: f64) -> f64 {
+pub(crate) fn normal_quantile(p: f64) -> f64 {
     if p <= 0.0 {
         return f64::NEG_INFINITY;
     }
@@ -90,7 +90,7 @@ pub fn normal_quantile(p: f64) -> f64 {
 }
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, n = 9; ≈ 1e-15 relative).
-pub fn ln_gamma(x: f64) -> f64 {
+fn ln_gamma(x: f64) -> f64 {
     const G: [f64; 9] = [
         0.999_999_999_999_809_9,
         676.520_368_121_885_1,
@@ -118,7 +118,7 @@ pub fn ln_gamma(x: f64) -> f64 {
 /// Upper tail of the χ² distribution with `df` degrees of freedom: P(X > x), through the
 /// regularised incomplete gamma function Q(df/2, x/2) (series below a + 1, continued
 /// fraction above, as in Numerical Recipes).
-pub fn chi2_sf(x: f64, df: f64) -> f64 {
+pub(crate) fn chi2_sf(x: f64, df: f64) -> f64 {
     if x <= 0.0 {
         return 1.0;
     }
@@ -168,7 +168,7 @@ pub fn chi2_sf(x: f64, df: f64) -> f64 {
 /// score (negative: fewer runs than chance, i.e. residuals come in systematic blocks) and
 /// the one-sided p-value P(Z ≤ z). Zero residuals are skipped. `None` with fewer than ten
 /// signs of either kind, where the normal approximation is poor.
-pub fn runs_test(r: &[f64]) -> Option<(f64, f64)> {
+pub(crate) fn runs_test(r: &[f64]) -> Option<(f64, f64)> {
     let signs: Vec<bool> = r.iter().filter(|v| **v != 0.0).map(|v| *v > 0.0).collect();
     let n_pos = signs.iter().filter(|s| **s).count() as f64;
     let n_neg = signs.len() as f64 - n_pos;
@@ -190,7 +190,7 @@ pub fn runs_test(r: &[f64]) -> Option<(f64, f64)> {
 /// Trend test: least squares of standard-normal residuals r on Legendre polynomials
 /// P_1..P_d of the abscissa scaled to [−1, 1]. With unit noise variance the explained sum
 /// of squares is χ²(d) under the null; returns (statistic, p-value).
-pub fn trend_test(x: &[f64], r: &[f64], degree: usize) -> Option<(f64, f64)> {
+pub(crate) fn trend_test(x: &[f64], r: &[f64], degree: usize) -> Option<(f64, f64)> {
     let n = x.len();
     if n < 3 * (degree + 1) {
         return None;
@@ -233,7 +233,7 @@ pub fn trend_test(x: &[f64], r: &[f64], degree: usize) -> Option<(f64, f64)> {
 
 /// A run of consecutive points (in abscissa order) whose mean residual is far from zero.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Region {
+pub(crate) struct Region {
     /// First and last index (inclusive) in the sorted order.
     pub first: usize,
     /// Last index (inclusive).
@@ -246,7 +246,7 @@ pub struct Region {
 }
 
 /// Window widths tried on a channel of n points: n/20, n/10 and n/5, at least 5 points.
-pub fn window_widths(n: usize) -> Vec<usize> {
+fn window_widths(n: usize) -> Vec<usize> {
     let mut w: Vec<usize> = [n / 20, n / 10, n / 5]
         .into_iter()
         .map(|w| w.max(5))
@@ -257,7 +257,7 @@ pub fn window_widths(n: usize) -> Vec<usize> {
 }
 
 /// Number of windows [`biased_regions`] tests on n points (for the Bonferroni correction).
-pub fn window_count(n: usize) -> usize {
+pub(crate) fn window_count(n: usize) -> usize {
     window_widths(n)
         .into_iter()
         .map(|w| (n - w) / (w / 2).max(1) + 1)
@@ -268,7 +268,7 @@ pub fn window_count(n: usize) -> usize {
 /// (standard normal under the null, in abscissa order). A window whose mean m has
 /// |m|·√w > `z_crit` is flagged; overlapping flagged windows of the same sign form a region,
 /// which spans those of its windows whose |m| is at least half the largest.
-pub fn biased_regions(r: &[f64], z_crit: f64) -> Vec<Region> {
+pub(crate) fn biased_regions(r: &[f64], z_crit: f64) -> Vec<Region> {
     let n = r.len();
     let mut prefix = vec![0.0; n + 1];
     for (i, v) in r.iter().enumerate() {

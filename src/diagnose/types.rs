@@ -93,11 +93,11 @@ pub struct Candidate {
     pub fitted: Fitted,
     /// BIC(this) − BIC(baseline).
     pub delta_bic: f64,
-    /// Noise ratio against the data (see [`super::analysis`]).
+    /// Noise ratio against the data (see `super::analysis`).
     pub noise_ratio: f64,
     /// √(mean over experiments of the squared noise ratio of each experiment predicted by
     /// a fit to the others), when computed.
-    pub held_out: Option<f64>,
+    pub(crate) held_out: Option<f64>,
 }
 
 /// One experiment in the concealment test.
@@ -136,7 +136,7 @@ pub struct Concealment {
 }
 
 impl Concealment {
-    /// The parameters disagree between experiments (p below [`CONCEALMENT_ALPHA`]).
+    /// The parameters disagree between experiments (p below `CONCEALMENT_ALPHA`).
     pub fn disagree(&self) -> bool {
         self.p_value < CONCEALMENT_ALPHA
     }

@@ -9,7 +9,7 @@ use nalgebra::DMatrix;
 /// H_ij = (f(x+h·e_i+h·e_j) − f(x+h·e_i−h·e_j) − f(x−h·e_i+h·e_j) + f(x−h·e_i−h·e_j))/(4h²).
 /// The diagonal steps are taken first, then the mixed ones row by row (2k + 2k(k−1)
 /// evaluations); f0 is passed in because every caller already has it.
-pub fn hessian(f: &dyn Fn(&[f64]) -> f64, x: &[f64], f0: f64, h: f64) -> DMatrix<f64> {
+pub(crate) fn hessian(f: &dyn Fn(&[f64]) -> f64, x: &[f64], f0: f64, h: f64) -> DMatrix<f64> {
     let k = x.len();
     let at = |moves: &[(usize, f64)]| {
         let mut t = x.to_vec();
@@ -36,7 +36,7 @@ pub fn hessian(f: &dyn Fn(&[f64]) -> f64, x: &[f64], f0: f64, h: f64) -> DMatrix
 
 /// One Jacobian column by central differences: (y(+) − y(−))/`width`, where `width` is the
 /// distance between the two perturbed inputs.
-pub fn central_column(plus: &[f64], minus: &[f64], width: f64) -> Vec<f64> {
+pub(crate) fn central_column(plus: &[f64], minus: &[f64], width: f64) -> Vec<f64> {
     plus.iter()
         .zip(minus)
         .map(|(a, b)| (a - b) / width)

@@ -45,7 +45,7 @@ impl Engine {
     }
 
     /// `f` on every item in place, in parallel.
-    pub fn for_each_mut<T, F>(&self, items: &mut [T], f: F)
+    pub(crate) fn for_each_mut<T, F>(&self, items: &mut [T], f: F)
     where
         T: Send,
         F: Fn(&mut T) + Sync + Send,

@@ -118,7 +118,7 @@ pub struct FitOutcome {
     /// J of the best start (the multi-start's optimum, before the likelihood's polish).
     pub best_start_cost: f64,
     /// The likelihood's χ² at the estimate: the function the estimate minimises and the
-    /// intervals are profiled on (σ widened per [`FitOutcome::widening`], the nuisances'
+    /// intervals are profiled on (σ widened per `FitOutcome::widening`, the nuisances'
     /// prior terms included).
     pub chi2: f64,
     /// Rise of that χ² that bounds a 95 % profile interval (`None` without a simulation).
@@ -134,7 +134,7 @@ pub struct FitOutcome {
     pub nuisances: Vec<(String, f64)>,
     /// Channels whose noise estimate was widened to their residual scatter ("file column",
     /// factor > 1), widened where the residuals at the estimate scatter more than the data's σ.
-    pub widening: Vec<(String, f64)>,
+    pub(crate) widening: Vec<(String, f64)>,
     /// The estimated parameters (name, SI value) at which the supply-pressure offset's effect
     /// on the rows was linearised ([`FitData::target_at`]).
     pub linearised_at: Vec<(String, f64)>,
@@ -142,7 +142,7 @@ pub struct FitOutcome {
     pub intervals: Vec<Interval>,
     /// Covariance of θ (optimizer coordinates) from the curvature of χ², scaled as the
     /// intervals are (`None` when no intervals were asked for or the curvature is not
-    /// positive definite); see [`FitOutcome::log_covariance`].
+    /// positive definite); see `FitOutcome::log_covariance`.
     pub covariance: Option<DMatrix<f64>>,
     /// The atmosphere and the supply pressures that the fitted recordings cover.
     pub conditions: FitConditions,
@@ -157,13 +157,8 @@ pub struct FitOutcome {
 }
 
 impl FitOutcome {
-    /// Bayesian information criterion, χ² + k·ln n.
-    pub fn bic(&self) -> f64 {
-        self.chi2 + self.theta.len() as f64 * (self.n_points.max(1) as f64).ln()
-    }
-
     /// The covariance of the estimated parameters' logarithms ([`log_covariance`]).
-    pub fn log_covariance(&self, space: &ParamSpace) -> Option<LogCovariance> {
+    fn log_covariance(&self, space: &ParamSpace) -> Option<LogCovariance> {
         log_covariance(space, &self.theta, self.covariance.as_ref()?)
     }
 }
@@ -174,11 +169,7 @@ impl FitOutcome {
 /// (hi − lo)·u·(1 − u)/v on a linear one (`estimate::space`). Symmetrised against rounding.
 /// `None` when the sizes disagree or a linearly placed parameter is not positive (it has no
 /// logarithm).
-pub fn log_covariance(
-    space: &ParamSpace,
-    theta: &[f64],
-    cov: &DMatrix<f64>,
-) -> Option<LogCovariance> {
+fn log_covariance(space: &ParamSpace, theta: &[f64], cov: &DMatrix<f64>) -> Option<LogCovariance> {
     let k = space.len();
     if cov.nrows() != k || cov.ncols() != k || theta.len() != k {
         return None;
@@ -391,7 +382,7 @@ fn intervals(
 /// The experiment kind whose outputs move most (relative to typical sensor noise) when a
 /// parameter changes by 20%, among the three reference experiments: where a parameter that
 /// these data leave open would be pinned down.
-pub fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kind> {
+pub(crate) fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kind> {
     use crate::data::synth::{free_speed, plan_experiments, SensorNoise, SynthPlan};
     use crate::sim::experiment::Experiment;
     use crate::units::Quantity;

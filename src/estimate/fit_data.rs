@@ -99,7 +99,7 @@ impl FitData {
     }
 
     /// Each channel's χ² under the likelihood of `target`, from [`FitData::simulate`]'s values.
-    pub fn channel_chi2(&self, target: &Target, simulated: &[Vec<f64>]) -> Vec<ChannelChi2> {
+    pub(crate) fn channel_chi2(&self, target: &Target, simulated: &[Vec<f64>]) -> Vec<ChannelChi2> {
         self.smoothed
             .references()
             .zip(simulated)

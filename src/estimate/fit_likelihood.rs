@@ -95,7 +95,7 @@ pub struct ChannelRows {
     /// Per nuisance (in [`Breakdown::nuisances`]' order), how one unit of it moves each of
     /// these rows, SI (a_k restricted to the channel: 1 on the rows of an offset sensor's
     /// own channel, the linearised response to the supply pressure's offset, 0 elsewhere).
-    pub nuisance_shapes: Vec<Vec<f64>>,
+    pub(crate) nuisance_shapes: Vec<Vec<f64>>,
 }
 
 /// χ² at a parameter vector, split into its parts.
@@ -267,7 +267,7 @@ impl FitLikelihood {
     }
 
     /// The estimated parameters' search dimensions (bounds, scales), in the fit file's order.
-    pub fn dimensions(&self) -> &[Dimension] {
+    pub(crate) fn dimensions(&self) -> &[Dimension] {
         &self.dims
     }
 

@@ -45,7 +45,7 @@ pub struct GoodnessOfFit {
     /// Degrees of freedom, n − k.
     pub dof: usize,
     /// χ²/dof.
-    pub chi2_per_dof: f64,
+    pub(crate) chi2_per_dof: f64,
     /// r of eq. \[1\].
     pub noise_ratio: f64,
     /// The largest r of a model that reaches the noise (eq. \[2\]).
@@ -109,12 +109,16 @@ pub struct Competitor {
     /// θ of the optimum.
     pub theta: Vec<f64>,
     /// Its χ² minus the estimate's.
-    pub excess: f64,
+    pub(crate) excess: f64,
 }
 
 /// The other local optima (θ and χ², each already polished on χ²: they were found on the
 /// cost J, whose weights differ) that fit within `threshold` of the estimate's χ².
-pub fn competitors(others: &[(Vec<f64>, f64)], chi2_min: f64, threshold: f64) -> Vec<Competitor> {
+pub(crate) fn competitors(
+    others: &[(Vec<f64>, f64)],
+    chi2_min: f64,
+    threshold: f64,
+) -> Vec<Competitor> {
     others
         .iter()
         .map(|(theta, chi2)| Competitor {

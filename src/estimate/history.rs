@@ -156,6 +156,34 @@ impl ResultsFile {
         crate::io::write_atomic(&self.path, (header + "\n").as_bytes()).map_err(|e| self.io(e))
     }
 
+    /// Rewrites the file with its starts in start order (temp + rename) once a run has
+    /// ended: workers append starts as they finish, so the order of the lines depends on
+    /// timing, while a finished run's file should not. Each line is kept as written.
+    pub(crate) fn sort(&self) -> Result<(), EstimateError> {
+        /// The start index of a record (the rest is kept as text).
+        #[derive(Deserialize)]
+        struct Index {
+            index: usize,
+        }
+        let text = std::fs::read_to_string(&self.path).map_err(|e| self.io(e))?;
+        let mut lines = text.lines();
+        let Some(header) = lines.next() else {
+            return Ok(());
+        };
+        let mut starts = std::collections::BTreeMap::new();
+        for line in lines {
+            if let Ok(r) = serde_json::from_str::<Index>(line) {
+                starts.entry(r.index).or_insert(line);
+            }
+        }
+        let mut sorted = String::from(header) + "\n";
+        for line in starts.values() {
+            sorted += line;
+            sorted.push('\n');
+        }
+        crate::io::write_atomic(&self.path, sorted.as_bytes()).map_err(|e| self.io(e))
+    }
+
     /// Appends finished starts, each a whole line written at once, and syncs them to disk.
     pub(crate) fn append(&self, results: &[StartResult]) -> Result<(), EstimateError> {
         if results.is_empty() {

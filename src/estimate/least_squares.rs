@@ -23,7 +23,7 @@ const H: f64 = 1e-3;
 
 /// When Levenberg–Marquardt stops.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LmSettings {
+pub(crate) struct LmSettings {
     /// Most iterations (each costs k + 1 residual evaluations, plus refused steps).
     pub max_iters: usize,
     /// Stop when an accepted step lowers χ² by less than this.
@@ -63,7 +63,7 @@ fn jacobian(f: &dyn Fn(&[f64]) -> Option<Vec<f64>>, x: &[f64], r0: &[f64]) -> Op
 
 /// Minimises ‖f(x)‖² from `x0`; returns the best point and its χ² (`x0` and its χ², or ∞,
 /// when no step helps).
-pub fn levenberg_marquardt(
+pub(crate) fn levenberg_marquardt(
     f: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
     x0: &[f64],
     settings: LmSettings,
@@ -118,7 +118,7 @@ pub fn levenberg_marquardt(
 /// Levenberg–Marquardt on a problem's residuals from `x`, kept only where χ² falls: the
 /// better of the start and the polish, with its χ²; `None` when the problem has no residuals
 /// at `x` (not a least-squares objective, or a failed simulation).
-pub fn polish_residuals<C: Coordinates + ?Sized>(
+pub(crate) fn polish_residuals<C: Coordinates + ?Sized>(
     problem: &Problem<'_, C>,
     x: &[f64],
 ) -> Option<(Vec<f64>, f64)> {

@@ -29,7 +29,7 @@ pub(crate) struct MlFit {
     /// The same with each channel's σ widened to its residual scatter where that is larger.
     pub widened: Target,
     /// The widened channels and their factors.
-    pub widening: Vec<(String, f64)>,
+    pub(crate) widening: Vec<(String, f64)>,
     /// The points, each polished on the widened target's χ².
     pub polished: Vec<Polished>,
     /// The motor at which the supply-pressure offset's effect was linearised (the best

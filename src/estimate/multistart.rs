@@ -87,7 +87,7 @@ pub struct Silent;
 impl RunObserver for Silent {}
 
 /// Latin-hypercube start points in the unit cube, one row per start, from the seed alone.
-pub fn latin_hypercube(starts: usize, dims: usize, seed: u64) -> Vec<Vec<f64>> {
+fn latin_hypercube(starts: usize, dims: usize, seed: u64) -> Vec<Vec<f64>> {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let mut points = vec![vec![0.0; dims]; starts];
     for d in 0..dims {
@@ -296,6 +296,9 @@ pub fn run(
     let mut finished = rounds.run(live, &done)?;
     observer.finished();
     finished.sort_by_key(|r| r.index);
+    if let Some(f) = results_file {
+        f.sort()?;
+    }
     Ok(MultiStartOutcome {
         evaluations: finished.iter().map(|r| r.evaluations).sum(),
         results: finished,
@@ -533,6 +536,16 @@ mod tests {
         let counting = bowl(0);
         let resumed = run_on(2, &counting, &cfg, &killed, true);
         assert_eq!(resumed.results, full.results);
+        // Recorded as they end, rewritten in start order when the run ends: the resumed
+        // run's file is the uninterrupted one's, line for line.
+        let whole_text = std::fs::read_to_string(dir.path().join("whole.jsonl")).unwrap();
+        let order: Vec<usize> = whole_text
+            .lines()
+            .skip(1)
+            .map(|l| serde_json::from_str::<StartResult>(l).unwrap().index)
+            .collect();
+        assert_eq!(order, [0, 1, 2, 3]);
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), whole_text);
         assert_eq!(
             counting.evaluations.load(Ordering::SeqCst),
             full.results[2].evaluations + full.results[3].evaluations

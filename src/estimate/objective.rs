@@ -15,7 +15,7 @@ use std::sync::Mutex;
 
 /// Cost returned for parameters that break a model constraint. Large, finite, and constant:
 /// Nelder–Mead only compares costs, so a plateau is enough to turn it back.
-pub const INVALID_PARAMS_COST: f64 = 1e12;
+const INVALID_PARAMS_COST: f64 = 1e12;
 
 /// What an objective says about one motor.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,7 +46,7 @@ pub trait Objective: Sync {
 }
 
 /// What a point of the search coordinates is: a motor, or `None` where the point breaks a
-/// model constraint (penalised with [`INVALID_PARAMS_COST`]).
+/// model constraint (penalised with `INVALID_PARAMS_COST`).
 pub trait Coordinates: Sync {
     /// The motor at `x`.
     fn motor(&self, x: &[f64]) -> Option<Motor>;
@@ -118,7 +118,7 @@ impl<'a, C: Coordinates + ?Sized> Problem<'a, C> {
     }
 
     /// The costs recorded since the last call (`None` without a trace).
-    pub fn take_trace(&self) -> Option<Vec<f64>> {
+    pub(crate) fn take_trace(&self) -> Option<Vec<f64>> {
         self.trace
             .as_ref()
             .map(|t| std::mem::take(&mut *t.lock().expect("trace lock")))
@@ -142,15 +142,15 @@ impl<C: Coordinates + ?Sized> CostFunction for Problem<'_, C> {
 }
 
 /// A problem over a sub-space: some coordinates held at given values (profile likelihood).
-pub struct Profiled<'a> {
+pub(crate) struct Profiled<'a> {
     /// The problem over every coordinate.
     pub inner: &'a Problem<'a>,
     /// Full θ; the free coordinates are overwritten by the optimizer's.
-    pub template: Vec<f64>,
+    pub(crate) template: Vec<f64>,
     /// Indices of the free coordinates.
     pub free: Vec<usize>,
     /// Optimize χ² instead of the weighted cost.
-    pub use_chi2: bool,
+    pub(crate) use_chi2: bool,
 }
 
 impl Profiled<'_> {

@@ -28,7 +28,7 @@ pub enum Restart {
     /// One simplex only.
     Never,
     /// When the simplex collapses or a stage gains nothing (relative 1e-9), a simplex shaped
-    /// by the curvature at the best point ([`curvature_simplex`]; an axis simplex of edge
+    /// by the curvature at the best point (`curvature_simplex`; an axis simplex of edge
     /// step·2⁻ʳ, at least 1e-3, if the curvature is unusable), until a restart gains at
     /// most `min_gain`·(1 + |f|) or after `max_restarts`. Ties of the best cost move the
     /// point.
@@ -95,7 +95,7 @@ fn solver(vertices: Vec<Vec<f64>>, sd_tolerance: f64, adaptive: bool) -> NelderM
 }
 
 /// A right-angled simplex at `x` with edge `step`, laid out as `layout` says.
-pub fn axis_simplex(x: &[f64], step: f64, layout: Layout) -> Vec<Vec<f64>> {
+fn axis_simplex(x: &[f64], step: f64, layout: Layout) -> Vec<Vec<f64>> {
     let mut simplex = vec![x.to_vec()];
     for i in 0..x.len() {
         let mut v = x.to_vec();
@@ -113,7 +113,7 @@ pub fn axis_simplex(x: &[f64], step: f64, layout: Layout) -> Vec<Vec<f64>> {
 /// `rise` (length √(2·rise/λ), at most 2). A simplex aligned with a long, narrow, tilted
 /// valley moves along it at once where a right-angled one crosses it in many small steps.
 /// `None` if H has no usable curvature.
-pub fn curvature_simplex(
+fn curvature_simplex(
     f: &dyn Fn(&[f64]) -> f64,
     x: &[f64],
     f0: f64,

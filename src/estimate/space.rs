@@ -159,7 +159,7 @@ impl ParamSpace {
 
     /// Estimates `dims` over `fixed`; every parameter once, effects' parameters only with
     /// their effect switched on, at least one.
-    pub fn from_dims(
+    pub(crate) fn from_dims(
         dims: Vec<Dimension>,
         fixed: MotorParams,
         effects: EffectSet,
@@ -221,7 +221,7 @@ impl ParamSpace {
     }
 
     /// Optimizer coordinates of a point of the unit cube of start ranges (for start designs).
-    pub fn theta_of_unit(&self, u: &[f64]) -> Vec<f64> {
+    pub(crate) fn theta_of_unit(&self, u: &[f64]) -> Vec<f64> {
         self.dims
             .iter()
             .zip(u)
@@ -233,7 +233,7 @@ impl ParamSpace {
     }
 
     /// Position in the unit cube of optimizer coordinates.
-    pub fn unit_of_theta(&self, theta: &[f64]) -> Vec<f64> {
+    pub(crate) fn unit_of_theta(&self, theta: &[f64]) -> Vec<f64> {
         theta.iter().map(|t| logistic(*t)).collect()
     }
 }

@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, DVector};
 
 /// Relative 1σ (of ln θ) up to which a parameter counts as pinned: 10 %, a 95 % interval of
 /// about ±20 %.
-pub const PINNED_RELATIVE_SD: f64 = 0.10;
+pub(crate) const PINNED_RELATIVE_SD: f64 = 0.10;
 
 /// Step of the central differences in ln θ.
 const LOG_STEP: f64 = 1e-3;
@@ -29,9 +29,9 @@ pub struct Pinning {
     pub name: String,
     /// Relative 1σ: jointly with the other chosen ones for a chosen parameter; for one left
     /// out, its σ if it were added to the chosen ones (∞ when the data do not see it).
-    pub relative_sd: f64,
+    pub(crate) relative_sd: f64,
     /// Whether the data pin it (it is estimated).
-    pub pinned: bool,
+    pub(crate) pinned: bool,
 }
 
 /// The columns ∂r/∂ln θ_j at `motor` for `names` (`None` if a simulation fails).
@@ -91,7 +91,11 @@ fn conditional_sd(jac: &DMatrix<f64>, chosen: &[usize], j: usize) -> f64 {
 
 /// The selection (see the module documentation) among `names` at `motor`, in the order of
 /// `names`; `None` if the nominal motor cannot be simulated.
-pub fn pinned_subset(data: &FitData, motor: &Motor, names: &[String]) -> Option<Vec<Pinning>> {
+pub(crate) fn pinned_subset(
+    data: &FitData,
+    motor: &Motor,
+    names: &[String],
+) -> Option<Vec<Pinning>> {
     let jac = sensitivities(data, motor, names)?;
     let mut chosen: Vec<usize> = Vec::new();
     loop {

@@ -56,7 +56,7 @@ pub struct Interval {
     pub method: Method,
     /// Another local optimum, as good within the threshold, puts the parameter here (SI),
     /// outside the interval.
-    pub other_optimum: Option<f64>,
+    pub(crate) other_optimum: Option<f64>,
     /// The profile's points in increasing value, the estimate (Δχ² = 0) among them; empty
     /// for a curvature interval.
     pub path: Vec<ProfilePoint>,
@@ -81,7 +81,7 @@ impl Interval {
     }
 
     /// Why the parameter is not identifiable, in words (`None` when it is).
-    pub fn why_not(&self) -> Option<String> {
+    pub(crate) fn why_not(&self) -> Option<String> {
         match (self.lo, self.hi, self.other_optimum) {
             (None, None, _) => Some("the data bound it on neither side".into()),
             (None, Some(_), _) => Some("the data do not bound it from below".into()),
@@ -360,15 +360,15 @@ pub fn profile_intervals(
 
 /// How [`profile_intervals_observed`] runs: the iteration cap of each side and a callback
 /// told how many of the 2k sides are done (progress of a long fit).
-pub struct ProfileSides<'a> {
+pub(crate) struct ProfileSides<'a> {
     /// Iteration cap of each profile's inner fits.
     pub max_iters: u64,
     /// Called with the number of finished sides after each side.
-    pub on_side: &'a (dyn Fn(usize) + Sync),
+    pub(crate) on_side: &'a (dyn Fn(usize) + Sync),
 }
 
 /// [`profile_intervals`], reporting each finished side to `sides.on_side`.
-pub fn profile_intervals_observed(
+pub(crate) fn profile_intervals_observed(
     engine: &Engine,
     problem: &Problem<'_>,
     theta_hat: &[f64],

@@ -110,7 +110,7 @@ pub struct PetabSummary {
 
 /// The file names, in the order they are written (the YAML last, so that a problem that
 /// names its tables only appears once they exist).
-pub const FILES: [&str; 7] = [
+const FILES: [&str; 7] = [
     "parameters.tsv",
     "observables.tsv",
     "measurements.tsv",
@@ -241,12 +241,12 @@ fn quantity(exp: &ExperimentData, c: &ChannelRows) -> Result<Quantity, PetabErro
 }
 
 /// The model's output symbol of a quantity, named with its SI unit (`torque_nm`).
-pub fn output_symbol(q: Quantity) -> String {
+fn output_symbol(q: Quantity) -> String {
     format!("{}_{}", q.prefix(), q.si_unit().suffix())
 }
 
 /// A PEtab identifier from free text: letters, digits and `_`, not starting with a digit.
-pub fn petab_id(text: &str) -> String {
+fn petab_id(text: &str) -> String {
     let mut id: String = text
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })

@@ -39,7 +39,7 @@ pub struct OutputLock {
     _file: File,
     path: PathBuf,
     /// The pid of a dead run whose lock file this run took over, if any.
-    pub took_over: Option<u32>,
+    pub(crate) took_over: Option<u32>,
 }
 
 impl OutputLock {

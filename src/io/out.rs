@@ -58,13 +58,13 @@ pub enum OutputError {
 }
 
 /// The lock file of a file output: `<path without extension>.lock` beside it.
-pub fn lock_path_of_file(path: &Path) -> PathBuf {
+fn lock_path_of_file(path: &Path) -> PathBuf {
     let stem = path.with_extension("");
     PathBuf::from(format!("{}.lock", stem.display()))
 }
 
 /// The lock file of a folder output: `.vanefit.lock` inside it.
-pub fn lock_path_of_dir(dir: &Path) -> PathBuf {
+fn lock_path_of_dir(dir: &Path) -> PathBuf {
     dir.join(".vanefit.lock")
 }
 

@@ -81,7 +81,7 @@ fn running(_pid: u32) -> bool {
 /// Removes the temporaries in `dir` whose writer is gone (see the module documentation);
 /// returns the files removed. Errors (an unreadable folder, a file removed meanwhile by
 /// another run) are not the caller's business: the write that follows reports its own.
-pub fn remove_stale(dir: &Path) -> Vec<PathBuf> {
+fn remove_stale(dir: &Path) -> Vec<PathBuf> {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Vec::new();
     };
@@ -105,7 +105,7 @@ pub fn remove_stale(dir: &Path) -> Vec<PathBuf> {
 
 /// [`remove_stale`] of `dir`, once per folder in this process (a run writes many files
 /// into one folder; one look is enough).
-pub fn remove_once(dir: &Path) {
+pub(crate) fn remove_once(dir: &Path) {
     static SEEN: OnceLock<Mutex<HashSet<PathBuf>>> = OnceLock::new();
     let seen = SEEN.get_or_init(Default::default);
     let first = seen

@@ -43,13 +43,13 @@ pub enum BalanceId {
 /// Where the four balances sit in the accumulator of [`Term::add_to_balances`].
 pub mod slot {
     /// The torque balance (a loss torque, N·m).
-    pub const TORQUE: usize = 0;
+    pub(crate) const TORQUE: usize = 0;
     /// Mass into V_1, kg/s.
-    pub const MASS1: usize = 1;
+    pub(crate) const MASS1: usize = 1;
     /// Mass into V_2, kg/s.
-    pub const MASS2: usize = 2;
+    pub(crate) const MASS2: usize = 2;
     /// Mass into V_e, kg/s.
-    pub const MASSE: usize = 3;
+    pub(crate) const MASSE: usize = 3;
 }
 
 impl BalanceId {
@@ -166,7 +166,7 @@ impl LeakPath {
 }
 
 /// Pressure below which the orifice law √Δp turns laminar (finite slope at Δp = 0), Pa.
-pub const ORIFICE_LAMINAR_PA: f64 = 1e3;
+const ORIFICE_LAMINAR_PA: f64 = 1e3;
 
 /// The pressure factor of a discovered term's feature (Pa, or 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -196,7 +196,7 @@ pub enum PressureFactor {
     /// Flow law of a leak path: Δp·|Δp|, Pa² (grows with the square of the difference).
     Quadratic,
     /// Flow law of a leak path: Δp·(Δp² + p_r²)^(−1/4) ≈ sign(Δp)·√|Δp|, √Pa (a sharp
-    /// orifice; laminar below p_r = [`ORIFICE_LAMINAR_PA`]).
+    /// orifice; laminar below p_r = `ORIFICE_LAMINAR_PA`).
     Orifice,
     /// Flow law of a leak path: ISO 6358 (b = 0.5) with the coefficient as sonic
     /// conductance: ρ0·p_u·ψ(p_d/p_u), kg/(s·m³/(s·Pa)), reverse flow by symmetry.
@@ -220,10 +220,10 @@ pub enum SpeedFactor {
 
 impl PressureFactor {
     /// The flow laws of a leak path.
-    pub const LAWS: [PressureFactor; 4] = [P::Laminar, P::Quadratic, P::Orifice, P::Iso6358];
+    pub(crate) const LAWS: [PressureFactor; 4] = [P::Laminar, P::Quadratic, P::Orifice, P::Iso6358];
 
     /// Whether this is a flow law of a leak path.
-    pub fn is_law(self) -> bool {
+    pub(crate) fn is_law(self) -> bool {
         Self::LAWS.contains(&self)
     }
 
@@ -312,7 +312,7 @@ impl ExtraTerm {
 }
 
 /// A flow law of Δp = `p_from` − `p_to` (see [`PressureFactor`]); 0 for any other factor.
-pub fn flow_law(law: PressureFactor, p_from: f64, p_to: f64) -> f64 {
+fn flow_law(law: PressureFactor, p_from: f64, p_to: f64) -> f64 {
     let dp = p_from - p_to;
     match law {
         P::Laminar => dp,

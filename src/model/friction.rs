@@ -6,18 +6,25 @@
 //! finite Jacobian at standstill; ω_reg = 0.2 rad/s is well below any speed of interest.
 
 /// Regularised Coulomb plus viscous friction, N·m.
-pub fn coulomb_viscous(omega: f64, t_coulomb_nm: f64, visc_nm_s_rad: f64, w_reg: f64) -> f64 {
+#[cfg(test)]
+fn coulomb_viscous(omega: f64, t_coulomb_nm: f64, visc_nm_s_rad: f64, w_reg: f64) -> f64 {
     t_coulomb_nm * (omega / w_reg).tanh() + visc_nm_s_rad * omega
 }
 
 /// Magnitude of the dry part of Stribeck friction, T_c + (T_s − T_c)·exp(−(ω/ω_s)²), N·m.
-pub fn stribeck_dry(omega: f64, t_coulomb_nm: f64, t_static_nm: f64, w_stribeck: f64) -> f64 {
+pub(crate) fn stribeck_dry(
+    omega: f64,
+    t_coulomb_nm: f64,
+    t_static_nm: f64,
+    w_stribeck: f64,
+) -> f64 {
     t_coulomb_nm + (t_static_nm - t_coulomb_nm) * (-(omega / w_stribeck).powi(2)).exp()
 }
 
 /// Stribeck breakaway friction (`breakaway_friction`; docs/model.md, "Missing-physics
 /// catalog"), N·m: T_f = (T_c + (T_s − T_c)·exp(−(ω/ω_s)²))·tanh(ω/ω_reg) + d·ω.
-pub fn stribeck(
+#[cfg(test)]
+fn stribeck(
     omega: f64,
     t_coulomb_nm: f64,
     t_static_nm: f64,

@@ -10,11 +10,11 @@ use std::f64::consts::PI;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VaneGeometry {
     /// Rotor length L, m.
-    pub length_m: f64,
+    pub(crate) length_m: f64,
     /// Stator (cylinder) radius R_S, m.
     pub r_stator_m: f64,
     /// Rotor radius R_R, m.
-    pub r_rotor_m: f64,
+    pub(crate) r_rotor_m: f64,
     /// Number of vanes z.
     pub vanes: u32,
 }
@@ -23,18 +23,18 @@ pub struct VaneGeometry {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PortTiming {
     /// Angle at which the compartment opens to the inlet (state a: dead volume).
-    pub alpha_dead_rad: f64,
+    pub(crate) alpha_dead_rad: f64,
     /// Angle at which the inlet cuts off (state b: filling volume).
-    pub alpha_fill_rad: f64,
+    pub(crate) alpha_fill_rad: f64,
     /// Angle at which the exhaust opens (state c: expanded volume).
-    pub alpha_exp_rad: f64,
+    pub(crate) alpha_exp_rad: f64,
 }
 
 /// Volumes derived from geometry and port timing (eqs. 5–7).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DerivedVolumes {
+pub(crate) struct DerivedVolumes {
     /// Dead volume per compartment V_0, m³ (eq. 5).
-    pub v_dead_m3: f64,
+    pub(crate) v_dead_m3: f64,
     /// Compartment volume at inlet cut-off V_fill, m³ (eq. 5).
     pub v_fill_m3: f64,
     /// Compartment volume at exhaust opening V_exp, m³ (eq. 5).
@@ -42,12 +42,13 @@ pub struct DerivedVolumes {
     /// ε = V_exp / V_fill (eq. 6).
     pub eps: f64,
     /// V_disp,nom = z·V_fill (eq. 7).
-    pub v_disp_m3: f64,
+    pub(crate) v_disp_m3: f64,
 }
 
 impl VaneGeometry {
     /// Motor AR034-11 of the paper's appendix.
-    pub fn ar034_11() -> Self {
+    #[cfg(test)]
+    pub(crate) fn ar034_11() -> Self {
         Self {
             length_m: 32e-3,
             r_stator_m: 9e-3,
@@ -57,12 +58,12 @@ impl VaneGeometry {
     }
 
     /// Vane angle γ = 2π/z (eq. 1), rad.
-    pub fn gamma(&self) -> f64 {
+    pub(crate) fn gamma(&self) -> f64 {
         2.0 * PI / f64::from(self.vanes)
     }
 
     /// Eccentricity ex = R_S − R_R (eq. 2), m.
-    pub fn eccentricity(&self) -> f64 {
+    fn eccentricity(&self) -> f64 {
         self.r_stator_m - self.r_rotor_m
     }
 
@@ -73,7 +74,7 @@ impl VaneGeometry {
 
     /// Volume swept from the sealing line up to angle α (eq. 4), m³:
     /// V_α = L/2 · (R_S²·β − R_R²·α − ex·R_S·sin β).
-    pub fn v_alpha(&self, alpha: f64) -> f64 {
+    fn v_alpha(&self, alpha: f64) -> f64 {
         let beta = self.beta(alpha);
         let (rs, rr) = (self.r_stator_m, self.r_rotor_m);
         0.5 * self.length_m
@@ -82,7 +83,7 @@ impl VaneGeometry {
 
     /// Working-compartment volume V_w(α) between the vane at α and the vane at α − γ (eq. 5), m³.
     /// Defined for 0 ≤ α ≤ 2π + γ.
-    pub fn v_working(&self, alpha: f64) -> f64 {
+    pub(crate) fn v_working(&self, alpha: f64) -> f64 {
         let gamma = self.gamma();
         let two_pi = 2.0 * PI;
         if alpha <= gamma {
@@ -95,13 +96,15 @@ impl VaneGeometry {
     }
 
     /// Angle of the largest compartment, α = π + γ/2 (by symmetry of V_w about it).
-    pub fn alpha_max_volume(&self) -> f64 {
+    #[cfg(test)]
+    fn alpha_max_volume(&self) -> f64 {
         PI + 0.5 * self.gamma()
     }
 
     /// Angle on the rising flank (γ ≤ α ≤ π + γ/2) at which V_w reaches `volume_m3`,
     /// found by bisection (V_w rises monotonically there). `None` if out of reach.
-    pub fn alpha_at_volume(&self, volume_m3: f64) -> Option<f64> {
+    #[cfg(test)]
+    pub(crate) fn alpha_at_volume(&self, volume_m3: f64) -> Option<f64> {
         let (mut lo, mut hi) = (self.gamma(), self.alpha_max_volume());
         if volume_m3 < self.v_working(lo) || volume_m3 > self.v_working(hi) {
             return None;
@@ -118,7 +121,7 @@ impl VaneGeometry {
     }
 
     /// V_fill, V_exp, V_d, ε and V_disp,nom from the port timing (eqs. 5–7).
-    pub fn derived_volumes(&self, timing: &PortTiming) -> DerivedVolumes {
+    pub(crate) fn derived_volumes(&self, timing: &PortTiming) -> DerivedVolumes {
         let v_dead_m3 = self.v_working(timing.alpha_dead_rad);
         let v_fill_m3 = self.v_working(timing.alpha_fill_rad);
         let v_exp_m3 = self.v_working(timing.alpha_exp_rad);

@@ -32,9 +32,9 @@ pub type Jacobian = [State; N_STATES];
 
 /// A mass flow and its slopes (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b), kg/s and kg/(s·Pa), as returned by
 /// [`Nozzle::flow_with_slopes`] for a flow from `p_a` to `p_b`.
-pub type SlopedFlow = (f64, f64, f64);
+pub(crate) type SlopedFlow = (f64, f64, f64);
 
-/// Flow through two restrictions in series from `p_a` to `p_b` (as [`series_flow`]) and its
+/// Flow through two restrictions in series from `p_a` to `p_b` (as `series_flow`) and its
 /// slopes (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b).
 ///
 /// The intermediate pressure p_m solves g = ṁ_1(p_a, p_m) − ṁ_2(p_m, p_b) = 0, so by the
@@ -60,7 +60,7 @@ pub fn series_flow_with_slopes(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f
 /// ṁ_2 = C_2·ρ0·p_m·ψ(p_b/p_m) is proportional to C_2, so ∂ṁ_2/∂ln C_2 = ṁ; at fixed
 /// p_a, p_b the balance g(p_m) = 0 gives dp_m/dln C_2 = −ṁ/D, and
 /// ∂ṁ/∂ln C_2 = ∂_m ṁ_1 · dp_m/dln C_2 = −∂_m ṁ_1 · ṁ / D (≥ 0: a wider throttle passes more).
-pub fn series_flow_sensitivities(
+fn series_flow_sensitivities(
     first: &Nozzle,
     second: &Nozzle,
     p_a: f64,
@@ -82,15 +82,15 @@ pub fn series_flow_sensitivities(
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BoundaryRate {
     /// dp_port1/dt, Pa/s (a supply-pressure ramp).
-    pub p_port1_pa_s: f64,
+    pub(crate) p_port1_pa_s: f64,
     /// d ln(C_port2)/dt, 1/s (an outlet throttle that opens or closes; 0 without one).
-    pub ln_c_port2_per_s: f64,
+    pub(crate) ln_c_port2_per_s: f64,
 }
 
 impl Load {
     /// dT_load/dω at speed ω, N·m·s/rad: c for the viscous brake, 0 for the free shaft and
     /// a constant torque (ω is taken for symmetry with [`Load::torque`]; no load uses it).
-    pub fn torque_slope(&self, _omega: f64) -> f64 {
+    fn torque_slope(&self, _omega: f64) -> f64 {
         match *self {
             Load::ViscousBrake { c_nm_s_rad } => c_nm_s_rad,
             Load::None | Load::Torque { .. } => 0.0,

@@ -10,4 +10,4 @@ pub mod jacobian;
 pub mod motor;
 pub mod nozzle;
 pub mod params;
-pub mod thermo;
+pub(crate) mod thermo;

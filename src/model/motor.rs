@@ -107,11 +107,11 @@ pub struct Balance {
     /// Mass flow out of the exhaust port, kg/s.
     pub flow_exhaust_kg_s: f64,
     /// Leakage V_1 → V_e, kg/s.
-    pub leak_1e_kg_s: f64,
+    pub(crate) leak_1e_kg_s: f64,
     /// Leakage V_2 → V_e, kg/s.
-    pub leak_2e_kg_s: f64,
+    pub(crate) leak_2e_kg_s: f64,
     /// Leakage V_1 → V_2, kg/s.
-    pub leak_12_kg_s: f64,
+    pub(crate) leak_12_kg_s: f64,
     /// Displacement flows of the ideal motor (paper eqs. 16–18).
     pub displacement: DisplacementFlows,
     /// Net mass flow into V_1, kg/s.
@@ -123,9 +123,9 @@ pub struct Balance {
     /// Torque of the ideal motor, N·m.
     pub torque_ideal_nm: f64,
     /// Friction torque (all friction terms), N·m.
-    pub torque_friction_nm: f64,
+    pub(crate) torque_friction_nm: f64,
     /// Load torque, N·m.
-    pub torque_load_nm: f64,
+    pub(crate) torque_load_nm: f64,
 }
 
 impl Balance {

@@ -69,7 +69,7 @@ impl Nozzle {
 /// g(p_m) = first.flow(p_a, p_m) − second.flow(p_m, p_b), unique because g falls strictly
 /// with p_m; it is bracketed by [min, max] of p_a and p_b and found by Newton's method with
 /// the analytic slope, falling back to bisection whenever a step leaves the bracket.
-pub fn series_flow(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64, f64) {
+pub(crate) fn series_flow(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64, f64) {
     let (closed, sign) = if p_a > p_b {
         (series_closed_form(first, second, p_a, p_b), 1.0)
     } else {
@@ -229,7 +229,7 @@ impl Nozzle {
 }
 
 /// dψ/dr for 0 ≤ r ≤ 1 (finite everywhere thanks to the laminar branch).
-pub fn psi_slope(r: f64, b_crit: f64) -> f64 {
+fn psi_slope(r: f64, b_crit: f64) -> f64 {
     if r <= b_crit {
         0.0
     } else if r <= R_LAMINAR {

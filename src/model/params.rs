@@ -10,7 +10,7 @@ use std::fmt;
 
 /// What values a parameter may take.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Domain {
+pub(crate) enum Domain {
     /// Strictly positive (searched in log space).
     Positive,
     /// Zero or positive (searched in log space between its bounds).
@@ -47,7 +47,7 @@ pub struct ParamSpec {
     /// Default value (motor AR034-11), SI.
     pub default: f64,
     /// Values the parameter may take.
-    pub domain: Domain,
+    pub(crate) domain: Domain,
     /// Search range for estimation (lo, hi) in SI; log-spaced for positive parameters.
     pub search: (f64, f64),
     /// The effect that adds this parameter, or `None` for the base model.
@@ -55,14 +55,14 @@ pub struct ParamSpec {
     /// The value that switches the effect off.
     pub off: OffValue,
     /// What the parameter is, in a few words for people (see [`ParamSpec::description`]).
-    pub meaning: &'static str,
+    pub(crate) meaning: &'static str,
 }
 
 /// The SI unit of a sonic conductance, as fit files write it.
-pub const CONDUCTANCE_UNIT: &str = "m3/(s*Pa)";
+pub(crate) const CONDUCTANCE_UNIT: &str = "m3/(s*Pa)";
 
 /// The unit in which catalogues and ISO 6358 give sonic conductances.
-pub const CATALOGUE_CONDUCTANCE_UNIT: &str = "dm3/(s*bar)";
+pub(crate) const CATALOGUE_CONDUCTANCE_UNIT: &str = "dm3/(s*bar)";
 
 impl ParamSpec {
     /// What the parameter is, in words, for every table and report that prints its id:
@@ -80,12 +80,12 @@ impl ParamSpec {
 
     /// Whether the parameter is a sonic conductance (unit [`CONDUCTANCE_UNIT`]), which
     /// reports give in [`CATALOGUE_CONDUCTANCE_UNIT`] too.
-    pub fn is_conductance(&self) -> bool {
+    pub(crate) fn is_conductance(&self) -> bool {
         self.unit == CONDUCTANCE_UNIT
     }
 
     /// The value that switches this parameter's effect off, given the base parameters.
-    pub fn off_value(&self, base: &MotorParams) -> f64 {
+    pub(crate) fn off_value(&self, base: &MotorParams) -> f64 {
         let (lo, hi) = self.search;
         match self.off {
             OffValue::NotAnEffect | OffValue::Default => self.default,
@@ -143,7 +143,7 @@ base_params! {
 }
 
 /// Number of parameters: the base model's and every catalog effect's.
-pub const N_PARAMS: usize = count_params();
+const N_PARAMS: usize = count_params();
 
 const fn count_params() -> usize {
     let mut n = BASE_PARAMS.len();
@@ -207,7 +207,7 @@ const fn default_values() -> [f64; N_PARAMS] {
     out
 }
 
-/// Checked motor parameters, SI units. The only way to build them is [`ParamSet::check`]
+/// Checked motor parameters, SI units. The only way to build them is `ParamSet::check`
 /// (or a default), so every value has passed its check; read them through the accessor of
 /// the same name (base parameters here, each effect's in its file) or [`MotorParams::get`].
 #[derive(Clone, PartialEq)]
@@ -277,14 +277,14 @@ pub fn label(name: &str) -> String {
 }
 
 /// Whether the named parameter is a sonic conductance (false for an unknown name).
-pub fn is_conductance(name: &str) -> bool {
+pub(crate) fn is_conductance(name: &str) -> bool {
     spec(name).is_some_and(ParamSpec::is_conductance)
 }
 
 /// A sonic conductance in dm³/(s·bar) (ISO 6358 catalogues) from m³/(s·Pa):
 /// 1 dm³/(s·bar) = 1e-3 m³/s per 1e5 Pa = 1e-8 m³/(s·Pa), so 6.76e-9 m³/(s·Pa) is
 /// 0.676 dm³/(s·bar).
-pub fn conductance_dm3_s_bar(c_m3_s_pa: f64) -> f64 {
+pub(crate) fn conductance_dm3_s_bar(c_m3_s_pa: f64) -> f64 {
     crate::units::Unit::Dm3SBar.from_si(c_m3_s_pa, 0.0)
 }
 
@@ -321,7 +321,7 @@ pub struct ParamError {
 
 /// Unchecked parameters: defaults overridden by whatever a file or the user gave.
 #[derive(Debug, Clone, Default)]
-pub struct ParamSet {
+pub(crate) struct ParamSet {
     values: MotorParams,
 }
 

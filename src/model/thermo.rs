@@ -16,7 +16,7 @@ pub struct Cycle {
     /// Filling volume V_fill = V_disp/z, m³.
     pub v_fill_m3: f64,
     /// Dead volume V_d, m³.
-    pub v_dead_m3: f64,
+    pub(crate) v_dead_m3: f64,
     /// Expansion ratio ε = V_exp/V_fill.
     pub eps: f64,
     /// Polytropic index n, 1 ≤ n ≤ 1.4.
@@ -30,7 +30,7 @@ pub struct Cycle {
 /// `(ε^(n−1) − 1)/(n−1)`, continuous through n = 1 where it equals ln ε.
 ///
 /// Written with `expm1` so that n → 1 loses no digits (no 0/0).
-pub fn compression_factor(eps: f64, n_poly: f64) -> f64 {
+fn compression_factor(eps: f64, n_poly: f64) -> f64 {
     let ln_eps = eps.ln();
     let x = (n_poly - 1.0) * ln_eps;
     if x.abs() < 1e-12 {
@@ -41,7 +41,7 @@ pub fn compression_factor(eps: f64, n_poly: f64) -> f64 {
 }
 
 /// `(1 − ε^(1−n))/(n−1)`, continuous through n = 1 where it equals ln ε.
-pub fn expansion_factor(eps: f64, n_poly: f64) -> f64 {
+fn expansion_factor(eps: f64, n_poly: f64) -> f64 {
     let ln_eps = eps.ln();
     let x = (n_poly - 1.0) * ln_eps;
     if x.abs() < 1e-12 {
@@ -71,7 +71,7 @@ impl Cycle {
     }
 
     /// Nominal displacement V_disp = z·V_fill (eq. 7), m³.
-    pub fn v_disp_m3(&self) -> f64 {
+    pub(crate) fn v_disp_m3(&self) -> f64 {
         self.vanes * self.v_fill_m3
     }
 
@@ -92,14 +92,14 @@ impl Cycle {
 
     /// Torque of the ideal motor turning forward, T = z·W/(2π) (eq. 13), N·m,
     /// filled from `p_fill`, discharging to `p_dis`, exhausting to `p_e`.
-    pub fn torque_one_way(&self, p_fill: f64, p_dis: f64, p_e: f64) -> f64 {
+    pub(crate) fn torque_one_way(&self, p_fill: f64, p_dis: f64, p_e: f64) -> f64 {
         self.vanes * self.work(p_fill, p_dis, p_e) / (2.0 * PI)
     }
 }
 
 /// Weight of the forward direction in the torque blend, ½(1 + tanh(ω/ω_b)) (docs/model.md,
 /// "Cycle work and torque").
-pub fn forward_weight(omega: f64) -> f64 {
+pub(crate) fn forward_weight(omega: f64) -> f64 {
     0.5 * (1.0 + (omega / OMEGA_BLEND_RAD_S).tanh())
 }
 
@@ -109,11 +109,11 @@ pub fn forward_weight(omega: f64) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct DisplacementFlows {
     /// Into V_1, kg/s.
-    pub into_1_kg_s: f64,
+    pub(crate) into_1_kg_s: f64,
     /// Into V_2, kg/s.
-    pub into_2_kg_s: f64,
+    pub(crate) into_2_kg_s: f64,
     /// Into V_e, kg/s.
-    pub into_e_kg_s: f64,
+    pub(crate) into_e_kg_s: f64,
 }
 
 /// Displacement flows (eqs. 16–18; docs/model.md, "Flows through the ideal motor") for
@@ -127,7 +127,7 @@ pub struct DisplacementFlows {
 /// `p_fill` is the filling pressure of the side that is the inlet for the sign of ω
 /// (p_1 forward, p_2 reverse, in the base model).
 /// The flows are ∝ |ω|, so they are continuous through ω = 0.
-pub fn displacement_flows(
+pub(crate) fn displacement_flows(
     cycle: &Cycle,
     omega: f64,
     p_fill: f64,

@@ -7,7 +7,7 @@ use super::ode::{State, N_STATES};
 /// matrix once per step and solves with it six times; the steady-state Newton factors one
 /// per iteration.
 #[derive(Debug, Clone, Copy)]
-pub struct Lu {
+pub(crate) struct Lu {
     /// L below the diagonal (unit diagonal implied), U on and above it.
     a: [State; N_STATES],
     /// Row of the original matrix that ended up in each position.

@@ -4,7 +4,7 @@
 pub mod lu;
 pub mod ode;
 pub mod rodas;
-pub mod scalar;
+pub(crate) mod scalar;
 
 /// The stiff solver every simulation uses unless it asks for another: Rodas4 (see
 /// [`rodas`] for why, and `examples/solver_accuracy.rs` for the measurements behind it).

@@ -21,7 +21,7 @@ pub type Rhs<'a> = dyn Fn(f64, &State) -> State + 'a;
 pub type Jacobian<'a> = dyn Fn(f64, &State) -> Option<Slopes> + 'a;
 
 /// How many kink indicators a model reports ([`Kinks`]).
-pub const N_KINKS: usize = 6;
+pub(crate) const N_KINKS: usize = 6;
 
 /// Where the right-hand side has kinks: indicators g_i(t, x) whose sign changes where f
 /// is continuous but its slope is not (a nozzle entering its laminar range). A step that
@@ -39,7 +39,7 @@ pub struct Slopes {
     pub jac: [State; N_STATES],
     /// ∂f/∂t (`None`: the solver takes a forward difference in time, one more evaluation
     /// of f).
-    pub f_t: Option<State>,
+    pub(crate) f_t: Option<State>,
 }
 
 /// Integration tolerances: |error_i| ≤ atol_i + rtol·|x_i|.

@@ -153,12 +153,12 @@ pub struct Step {
     /// k_6, the local error estimate of the embedded order-3 solution.
     pub err: State,
     /// g_1 and g_2 of the dense output.
-    pub dense: [State; 2],
+    pub(crate) dense: [State; 2],
 }
 
 impl Step {
     /// The state at t + θh, 0 ≤ θ ≤ 1, from the step's start y0.
-    pub fn interpolate(&self, y0: &State, theta: f64) -> State {
+    pub(crate) fn interpolate(&self, y0: &State, theta: f64) -> State {
         let [g1, g2] = &self.dense;
         std::array::from_fn(|i| {
             (1.0 - theta) * y0[i] + theta * (self.y1[i] + (1.0 - theta) * (g1[i] + theta * g2[i]))
@@ -175,7 +175,7 @@ pub struct Linearisation {
     /// ∂f/∂y, row-major: `jac[i][j]` = ∂f_i/∂y_j.
     pub jac: [State; N_STATES],
     /// ∂f/∂t.
-    pub f_t: State,
+    pub(crate) f_t: State,
 }
 
 impl Linearisation {

@@ -9,7 +9,7 @@
 /// An interval [a, b] on which f changes sign (f(a)·f(b) ≤ 0): only such a bracket can be
 /// searched, so a root is guaranteed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Bracket {
+pub(crate) struct Bracket {
     a: f64,
     fa: f64,
     b: f64,
@@ -28,7 +28,7 @@ impl Bracket {
 /// The root of f in a bracket, to within `rel_tol`·|x| (plus 4 ulps), by Brent's `zero`.
 /// Each evaluation may fail; the first failure is returned. Gives up after 200 evaluations
 /// with the best estimate so far (bisection alone would need ~60 for full precision).
-pub fn brent_root<E>(
+pub(crate) fn brent_root<E>(
     mut f: impl FnMut(f64) -> Result<f64, E>,
     bracket: Bracket,
     rel_tol: f64,
@@ -97,7 +97,7 @@ pub fn brent_root<E>(
 /// `localmin` (golden section with parabolic steps): returns (x, f(x)). A local minimum
 /// only: the caller brackets the global one. Each evaluation may fail; the first failure is
 /// returned.
-pub fn brent_minimize<E>(
+pub(crate) fn brent_minimize<E>(
     mut f: impl FnMut(f64) -> Result<f64, E>,
     mut a: f64,
     mut b: f64,

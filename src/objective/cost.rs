@@ -127,7 +127,7 @@ pub struct ChannelResiduals {
     /// Simulated values, SI, one per row.
     pub simulated: Vec<f64>,
     /// (simulated − measured)/σ.
-    pub normalized: Vec<f64>,
+    pub(crate) normalized: Vec<f64>,
     /// σ of the reference.
     pub sigma: f64,
     /// w_e·w_c.
@@ -153,7 +153,7 @@ struct ExperimentCost {
 
 /// The rows of a channel that the cost and the likelihood compare: those with a value
 /// (a catalogue's empty cells are NaN) whose abscissa the reference covers.
-pub fn compared_rows(abscissa: &[f64], reference: &Reference, values: &[f64]) -> Vec<usize> {
+pub(crate) fn compared_rows(abscissa: &[f64], reference: &Reference, values: &[f64]) -> Vec<usize> {
     (0..abscissa.len())
         .filter(|&i| values.get(i).is_some_and(|v| v.is_finite()))
         .filter(|&i| reference.eval(abscissa[i]).is_some())
@@ -356,7 +356,7 @@ impl CostModel {
 
     /// The simulated values at every channel's compared rows, SI, in channel order (the lean
     /// part of [`CostModel::residuals`], for likelihoods evaluated thousands of times).
-    pub fn simulated_rows(
+    pub(crate) fn simulated_rows(
         &self,
         motor: &Motor,
         solver: &dyn StiffSolver,
@@ -374,7 +374,7 @@ impl CostModel {
 
     /// The simulated values at given rows of every channel (`rows[c]` for channel c, in
     /// channel order; e.g. another cost model's rows of the same recordings), SI.
-    pub fn simulated_at_rows(
+    pub(crate) fn simulated_at_rows(
         &self,
         motor: &Motor,
         solver: &dyn StiffSolver,
@@ -430,7 +430,7 @@ impl CostModel {
     }
 
     /// Number of channels compared.
-    pub fn n_channels(&self) -> usize {
+    pub(crate) fn n_channels(&self) -> usize {
         self.experiments.iter().map(|e| e.channels.len()).sum()
     }
 

@@ -101,7 +101,7 @@ pub struct Target {
 }
 
 /// Noise standard deviation of samples in order (see the module documentation).
-pub fn noise_sigma(y: &[f64]) -> f64 {
+pub(crate) fn noise_sigma(y: &[f64]) -> f64 {
     let floor = (y.iter().fold(0.0f64, |m, v| m.max(v.abs())) / 4096.0).max(f64::MIN_POSITIVE);
     if y.len() < 5 {
         return floor;
@@ -120,7 +120,7 @@ pub fn noise_sigma(y: &[f64]) -> f64 {
     (ms / 6.0).sqrt().max(floor)
 }
 
-/// What [`smooth_inputs`] did to one recorded input column.
+/// What `smooth_inputs` did to one recorded input column.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InputSmoothing {
     /// The recording.
@@ -130,7 +130,7 @@ pub struct InputSmoothing {
     /// Noise of the recorded column (SI; relative for a conductance, whose log10 is smoothed).
     pub noise: f64,
     /// RMS of smooth − recorded (same scale as `noise`).
-    pub rms_change: f64,
+    pub(crate) rms_change: f64,
     /// Degree of the smooth (highest over its pieces); `None` when left as recorded.
     pub degree: Option<usize>,
 }
@@ -147,7 +147,7 @@ pub struct InputSmoothing {
 /// error is σ_in·√(p/n) and smooth, when that smooth describes the column to within its noise
 /// (its residual σ at most 1.2 times the second-difference noise of the column); otherwise the
 /// column is used as recorded. The conductance is smoothed as log10.
-pub fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
+pub(crate) fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
     let mut out = ds.clone();
     let mut notes = Vec::new();
     for ex in &mut out.experiments {
@@ -256,7 +256,7 @@ impl Target {
 
     /// The same target with a constant offset of each compared sensor as a nuisance, with
     /// the sensor's [`calibration_tolerance`] as prior σ (one per channel and recording).
-    pub fn with_offsets(self) -> Self {
+    pub(crate) fn with_offsets(self) -> Self {
         let n = self.n_points();
         let mut items = Vec::new();
         let mut start = 0;
@@ -277,7 +277,7 @@ impl Target {
 
     /// The same target with `more` nuisances added (shapes over every compared row, in
     /// channel order); unchanged if they do not fit the rows.
-    pub fn with_nuisances(mut self, more: Vec<Nuisance>) -> Self {
+    pub(crate) fn with_nuisances(mut self, more: Vec<Nuisance>) -> Self {
         let mut items: Vec<Nuisance> = self
             .nuisances
             .as_ref()
@@ -323,7 +323,7 @@ impl Target {
     /// The residual vector of simulated values (one list per channel, the compared rows):
     /// (simulated − recorded)/σ, corrected by the profiled nuisances, whose prior rows follow
     /// (see [`super::nuisance`]); its squares sum to χ².
-    pub fn residual_vector(&self, simulated: &[Vec<f64>]) -> Vec<f64> {
+    pub(crate) fn residual_vector(&self, simulated: &[Vec<f64>]) -> Vec<f64> {
         let mut u = Vec::with_capacity(self.n_points() + 16);
         for (t, s) in self.channels.iter().zip(simulated) {
             t.normalised(s, &mut u);
@@ -336,7 +336,7 @@ impl Target {
 
     /// The profiled nuisances β̂ for simulated values (label and value in the nuisance's unit,
     /// SI); empty without nuisances.
-    pub fn nuisance_estimates(&self, simulated: &[Vec<f64>]) -> Vec<(String, f64)> {
+    pub(crate) fn nuisance_estimates(&self, simulated: &[Vec<f64>]) -> Vec<(String, f64)> {
         let Some(n) = &self.nuisances else {
             return Vec::new();
         };
@@ -354,7 +354,7 @@ impl Target {
     /// Per channel χ² of simulated values at the compared rows (same channel order):
     /// Σ((sim − data)/σ)² after the nuisances' correction (their prior terms are not in any
     /// channel).
-    pub fn channel_chi2(&self, simulated: &[Vec<f64>]) -> Vec<f64> {
+    pub(crate) fn channel_chi2(&self, simulated: &[Vec<f64>]) -> Vec<f64> {
         let r = self.residual_vector(simulated);
         let mut start = 0;
         self.channels

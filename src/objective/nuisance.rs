@@ -28,7 +28,7 @@ pub struct Nuisance {
     /// Prior standard deviation τ, in the nuisance's unit (> 0).
     pub prior_sd: f64,
     /// a: the change of each compared row (all channels, concatenated) per unit nuisance, SI.
-    pub shape: Vec<f64>,
+    pub(crate) shape: Vec<f64>,
 }
 
 /// The nuisances of a target, ready to profile out.
@@ -82,7 +82,7 @@ impl Nuisances {
     }
 
     /// Turns `u` into the residual vector of eq. \[2\]: u + A·β̂, then Λ·β̂ appended.
-    pub fn apply(&self, u: &mut Vec<f64>) {
+    pub(crate) fn apply(&self, u: &mut Vec<f64>) {
         let beta = -(&self.gain * DVector::from_column_slice(u));
         let shift = &self.a * &beta;
         for (v, s) in u.iter_mut().zip(shift.iter()) {

@@ -26,12 +26,12 @@
 //!   infinite weight in the cost.
 //! * **Jumps.** A pressure ramp can hold the motor at standstill until it breaks away and
 //!   jumps to speed. One polynomial would smear that jump. With at least
-//!   [`MIN_POINTS_FOR_SPLIT`] points, a change-point search tries split positions on a
+//!   `MIN_POINTS_FOR_SPLIT` points, a change-point search tries split positions on a
 //!   grid of ≈100, then around the best a tenth of the grid step at a time down to single
 //!   points (so its time is linear in n), and fits both pieces with their own CV-chosen
 //!   degree; a segment longer than 4096 points is searched on every s-th point and the
 //!   split found is judged on all of them. A split is accepted only when it is clearly better than one piece:
-//!   PRESS must fall by at least the factor [`SPLIT_GAIN`] *and* by more than a BIC-like
+//!   PRESS must fall by at least the factor `SPLIT_GAIN` *and* by more than a BIC-like
 //!   penalty, n·ln(PRESS₁/PRESS₂) > (p₂ − p₁ + 1)·ln n. Splitting is repeated on the pieces
 //!   (binary segmentation) up to [`FitOptions::max_pieces`]. Points in the middle of the
 //!   jump (the rotor accelerating while the pressure barely moves) belong to neither curve:
@@ -46,14 +46,14 @@ use crate::units::{Quantity, Unit};
 use nalgebra::{DMatrix, DVector};
 
 /// Highest polynomial degree tried.
-pub const MAX_DEGREE: usize = 8;
+const MAX_DEGREE: usize = 8;
 /// Fewest points a reference (or one piece of it) is fitted to: degree 1 plus LOO needs 3,
 /// one more keeps the noise estimate meaningful.
-pub const MIN_POINTS: usize = crate::data::dataset::MIN_ROWS;
+const MIN_POINTS: usize = crate::data::dataset::MIN_ROWS;
 /// Fewest points on which a split into pieces is considered.
-pub const MIN_POINTS_FOR_SPLIT: usize = 40;
+const MIN_POINTS_FOR_SPLIT: usize = 40;
 /// Factor by which the LOO error (PRESS) must fall for a split to be accepted.
-pub const SPLIT_GAIN: f64 = 1.5;
+const SPLIT_GAIN: f64 = 1.5;
 /// Distance from the rest of its piece, in prediction standard deviations, beyond which a
 /// point next to a split is taken as part of the jump.
 const TRIM_SIGMAS: f64 = 4.0;
@@ -132,13 +132,13 @@ pub struct Piece {
     pub degree: usize,
     /// Chebyshev coefficients c_k of y(x) = Σ c_k·T_k(u), u = (2x − x_min − x_max)/(x_max − x_min);
     /// y in the channel's SI unit.
-    pub coeffs: Vec<f64>,
+    coeffs: Vec<f64>,
     /// Points fitted.
     pub n: usize,
     /// Residual sum of squares Σ(y − ŷ)², SI unit squared.
-    pub rss: f64,
+    rss: f64,
     /// Leave-one-out sum of squares Σ(e_i/(1 − h_ii))², SI unit squared.
-    pub press: f64,
+    press: f64,
 }
 
 impl Piece {
@@ -430,7 +430,7 @@ impl Reference {
 
     /// The reference of stated points (a catalogue's curve read off a printed page): σ is
     /// the reading tolerance, `tolerance`·max|y| (the curve's full scale), not a noise
-    /// estimate; with fewer than [`MIN_POINTS`] distinct abscissae the polynomial has degree
+    /// estimate; with fewer than `MIN_POINTS` distinct abscissae the polynomial has degree
     /// (distinct − 1) through them (a single point is a constant over a point-wide range),
     /// otherwise it is fitted as any reference is.
     pub fn stated(
@@ -785,7 +785,7 @@ impl Abscissa {
 }
 
 /// The measured output channels of an experiment kind, in the simulator's order.
-pub fn channels_of(kind: Kind) -> &'static [Quantity] {
+fn channels_of(kind: Kind) -> &'static [Quantity] {
     kind.model().channels()
 }
 

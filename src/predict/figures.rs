@@ -88,7 +88,7 @@ impl Outcome {
     }
 
     /// The flat vector of figures (see the module documentation), smooth or as shown.
-    pub fn flat(&self, smooth: bool) -> Vec<f64> {
+    pub(crate) fn flat(&self, smooth: bool) -> Vec<f64> {
         let mut out = Vec::new();
         for (row, curve) in self.rows.iter().zip(&self.curves) {
             out.extend(row_figures(row, smooth));

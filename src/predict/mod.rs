@@ -43,7 +43,7 @@ pub const ROW_FIGURES: [&str; 7] = [
     "air_at_free_speed",
 ];
 /// The correction factors, in the order of [`PressurePrediction::factors`].
-pub const FACTORS: [&str; 4] = ["power", "speed", "torque", "air"];
+pub(crate) const FACTORS: [&str; 4] = ["power", "speed", "torque", "air"];
 
 /// Why a prediction failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -114,7 +114,7 @@ pub struct PressurePrediction {
     pub row: CatalogueRow,
     /// The figures of [`ROW_FIGURES`], SI, with bands.
     pub figures: [Banded; 7],
-    /// The factors of [`FACTORS`] relative to the reference pressure, with bands.
+    /// The factors of `FACTORS` relative to the reference pressure, with bands.
     pub factors: [Banded; 4],
     /// Torque, power and air against speed, from 0 to the free speed.
     pub curve: Vec<CurvePoint>,

@@ -8,13 +8,13 @@ use crate::units::Unit;
 use std::f64::consts::PI;
 
 /// Supply pressures predicted unless others are asked for, bar gauge.
-pub const DEFAULT_PRESSURES_BAR_G: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 7.0];
+const DEFAULT_PRESSURES_BAR_G: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 7.0];
 /// The reference pressure of the correction factors unless another is asked for, bar gauge:
 /// 6.3 bar g, the nominal pressure of pneumatic catalogues (ISO 8778's 6.3 bar working
 /// pressure).
-pub const DEFAULT_REFERENCE_BAR_G: f64 = 6.3;
+const DEFAULT_REFERENCE_BAR_G: f64 = 6.3;
 /// Speed grid of the maximum power unless another is asked for: 1 rpm, in rad/s.
-pub const DEFAULT_SPEED_GRID_RAD_S: f64 = PI / 30.0;
+const DEFAULT_SPEED_GRID_RAD_S: f64 = PI / 30.0;
 /// Points of each curve from standstill to the free speed unless another number is asked.
 pub const DEFAULT_CURVE_POINTS: usize = 41;
 

@@ -39,7 +39,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
 /// The normal quantile of a two-sided 95 % band.
-pub const Z95: f64 = 1.959_963_984_540_054;
+const Z95: f64 = 1.959_963_984_540_054;
 
 /// What the bands stand on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

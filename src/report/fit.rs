@@ -35,7 +35,7 @@ pub struct ParamRow {
     /// A sonic conductance (also printed in dm³/(s·bar)).
     pub conductance: bool,
     /// Why the parameter is not identifiable, and which experiment would pin it down.
-    pub not_identifiable: Option<String>,
+    pub(crate) not_identifiable: Option<String>,
 }
 
 impl ParamRow {
@@ -309,7 +309,7 @@ fn parameter_section(md: &mut String, rows: &[ParamRow]) {
 
 /// Sorted final costs of every start (log scale): a flat floor reached by many starts is a
 /// well-found minimum; steps are distinct local minima.
-pub fn waterfall(results: &[StartResult], path: &Path) -> Result<(), PlotError> {
+pub(crate) fn waterfall(results: &[StartResult], path: &Path) -> Result<(), PlotError> {
     let mut costs: Vec<f64> = results.iter().map(|r| r.cost.max(1e-12)).collect();
     costs.sort_by(f64::total_cmp);
     let points = costs
@@ -384,7 +384,7 @@ fn profile_panel(iv: &Interval, threshold: Option<f64>) -> Chart {
 /// against its rank by final cost (best first), and the estimate. Starts that agree with
 /// the best on a parameter form a flat run at the left; a parameter that scatters among
 /// equally good starts is poorly determined (pyPESTO's parameters plot, one axis each).
-pub fn parameters_across_starts(
+pub(crate) fn parameters_across_starts(
     results: &[StartResult],
     space: &ParamSpace,
     estimate: &MotorParams,
@@ -431,7 +431,7 @@ pub fn parameters_across_starts(
 
 /// One figure per experiment: for each channel, the recorded data, the reference polynomial
 /// and one or more simulations, in the recording's units. Returns the files written.
-pub fn overlays(
+pub(crate) fn overlays(
     ds: &Dataset,
     cost: &CostModel,
     models: &[(&str, &Motor)],
@@ -606,7 +606,7 @@ fn axis_label(ax: &Abscissa) -> String {
 
 /// A recording's column as an axis title, quantity and unit as people write them
 /// (`p_port1_mpa` → `port 1 pressure [MPa]`); the column itself if it names no quantity.
-pub fn column_label(column: &str) -> String {
+fn column_label(column: &str) -> String {
     match crate::units::parse_column(column) {
         Ok((q, u)) => format!("{} [{}]", q.words(), u.symbol()),
         Err(_) => column.to_string(),

@@ -6,7 +6,7 @@
 //!
 //! Legends sit outside the plotting area, to its right or below it, so that they never hide
 //! data; the figure grows to hold them. A logarithmic axis is labelled at every power of ten
-//! (every second or third one when it spans more than [`MAX_LOG_LABELS`] decades), with light
+//! (every second or third one when it spans more than `MAX_LOG_LABELS` decades), with light
 //! grid lines at the multiples 2–9 between; an axis is widened to whole decades, so that
 //! both ends carry a label, where that adds at most half the data's span, and an axis with
 //! fewer than two powers of ten inside is labelled at 1, 2 and 5 times them as well.
@@ -62,7 +62,7 @@ impl Series {
     }
 
     /// Crosses at the points ([`Style::Marker`]).
-    pub fn marker(name: &str, points: Vec<(f64, f64)>) -> Self {
+    pub(crate) fn marker(name: &str, points: Vec<(f64, f64)>) -> Self {
         Self {
             name: name.to_string(),
             points,
@@ -112,26 +112,26 @@ impl Legend {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Chart {
     /// Title above the chart.
-    pub title: String,
+    pub(crate) title: String,
     /// Label of the x axis, with its unit.
-    pub x_label: String,
+    pub(crate) x_label: String,
     /// Label of the y axis, with its unit.
-    pub y_label: String,
+    pub(crate) y_label: String,
     /// Logarithmic x axis.
-    pub log_x: bool,
+    pub(crate) log_x: bool,
     /// Logarithmic y axis.
-    pub log_y: bool,
+    pub(crate) log_y: bool,
     /// Axis ranges; `None` fits the data (with a small margin on linear axes).
-    pub x_range: Option<(f64, f64)>,
+    pub(crate) x_range: Option<(f64, f64)>,
     /// Fixed y range (None: from the data).
-    pub y_range: Option<(f64, f64)>,
+    pub(crate) y_range: Option<(f64, f64)>,
     /// Where the legend goes.
-    pub legend: Legend,
+    pub(crate) legend: Legend,
     /// The curves.
-    pub series: Vec<Series>,
+    pub(crate) series: Vec<Series>,
     /// Names of the categories at x = 1, 2, … (a fleet's motors), written as the x tick
     /// labels instead of numbers; empty for a numeric x axis.
-    pub x_names: Vec<String>,
+    pub(crate) x_names: Vec<String>,
 }
 
 /// Why a chart could not be drawn.
@@ -170,7 +170,7 @@ const LEGEND_BELOW_W: i32 = PANEL_W as i32 - 100;
 
 /// The most decades a logarithmic axis labels one by one; beyond, every second (third, ...)
 /// power of ten is labelled and the others get grid lines.
-pub const MAX_LOG_LABELS: usize = 12;
+const MAX_LOG_LABELS: usize = 12;
 
 /// Line colours, in order (colour-blind-safe Tableau 10), for every chart.
 pub(crate) const COLOURS: [RGBColor; 8] = [
@@ -202,19 +202,19 @@ impl Chart {
     }
 
     /// With a logarithmic x axis.
-    pub fn log_x(mut self) -> Self {
+    pub(crate) fn log_x(mut self) -> Self {
         self.log_x = true;
         self
     }
 
     /// With a logarithmic y axis.
-    pub fn log_y(mut self) -> Self {
+    pub(crate) fn log_y(mut self) -> Self {
         self.log_y = true;
         self
     }
 
     /// With the legend at `at`.
-    pub fn legend(mut self, at: Legend) -> Self {
+    pub(crate) fn legend(mut self, at: Legend) -> Self {
         self.legend = at;
         self
     }

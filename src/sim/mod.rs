@@ -5,5 +5,5 @@
 pub mod experiment;
 pub mod operating_point;
 pub mod recording;
-pub mod schedule;
+pub(crate) mod schedule;
 pub mod steady;

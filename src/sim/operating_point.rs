@@ -9,7 +9,7 @@
 //! nozzle in series in front of port 1 or behind port 2 ([`Boundary::c_port1_m3_s_pa`],
 //! [`Boundary::c_port2_m3_s_pa`]). The shaft torque is T − T_f (docs/model.md, "Mechanics
 //! and friction"); at exactly ω = 0 it is the stall torque by the convention of
-//! docs/model.md, "Conventions" ([`shaft_torque`], shared with the datasheet experiment).
+//! docs/model.md, "Conventions" (`shaft_torque`, shared with the datasheet experiment).
 //! Power is P = T·ω (W); air consumption is the mass flow into port 1 (kg/s).
 
 use crate::model::motor::{idx, Balance, Boundary, Load, Motor, State};
@@ -24,9 +24,9 @@ pub struct Conditions {
     /// Atmosphere that port 2 and the exhaust discharge to, Pa absolute.
     pub p_atm_pa: f64,
     /// Extra nozzle in series in front of port 1 (inlet throttling), m³/(s·Pa).
-    pub c_inlet_m3_s_pa: Option<f64>,
+    pub(crate) c_inlet_m3_s_pa: Option<f64>,
     /// Extra nozzle in series behind port 2 (outlet throttling), m³/(s·Pa).
-    pub c_outlet_m3_s_pa: Option<f64>,
+    pub(crate) c_outlet_m3_s_pa: Option<f64>,
 }
 
 impl Conditions {
@@ -40,16 +40,8 @@ impl Conditions {
         }
     }
 
-    /// The same conditions at another supply pressure, Pa absolute.
-    pub fn at_pressure(self, p_supply_pa: f64) -> Self {
-        Self {
-            p_supply_pa,
-            ..self
-        }
-    }
-
     /// The motor's boundary: no load (the speed is imposed), nozzles as given.
-    pub fn boundary(&self) -> Boundary {
+    pub(crate) fn boundary(&self) -> Boundary {
         Boundary {
             c_port1_m3_s_pa: self.c_inlet_m3_s_pa,
             c_port2_m3_s_pa: self.c_outlet_m3_s_pa,
@@ -63,7 +55,7 @@ impl Conditions {
 pub struct OperatingPoint {
     /// Imposed speed ω, rad/s.
     pub speed_rad_s: f64,
-    /// Shaft torque T − T_f, N·m ([`shaft_torque`]).
+    /// Shaft torque T − T_f, N·m (`shaft_torque`).
     pub torque_nm: f64,
     /// Shaft power T·ω, W.
     pub power_w: f64,
@@ -79,7 +71,7 @@ pub struct OperatingPoint {
 /// stall torque against the breakaway friction, where the regularised T_c·tanh(ω/ω_reg)
 /// would be zero (docs/model.md, "Reference experiments", datasheet). The one place this
 /// rule lives: the datasheet experiment and the catalogue figures use it alike.
-pub fn shaft_torque(motor: &Motor, x: &State, b: &Balance) -> f64 {
+pub(crate) fn shaft_torque(motor: &Motor, x: &State, b: &Balance) -> f64 {
     if x[idx::OMEGA] == 0.0 {
         b.torque_ideal_nm - motor.friction_at_rest(x[idx::P1], x[idx::PE])
     } else {
@@ -90,7 +82,7 @@ pub fn shaft_torque(motor: &Motor, x: &State, b: &Balance) -> f64 {
 /// Steady states at several imposed speeds (rad/s), returned in the order given. They are
 /// solved in speed order, each from its neighbour's solution (as the datasheet experiment
 /// sweeps), falling back to a cold start where that fails.
-pub fn at_speeds(
+pub(crate) fn at_speeds(
     motor: &Motor,
     conditions: &Conditions,
     speeds_rad_s: &[f64],
@@ -196,22 +188,22 @@ pub struct CatalogueRow {
     pub speed_at_max_power_rad_s: f64,
     /// Shaft torque at that speed, N·m.
     pub torque_at_max_power_nm: f64,
-    /// Shaft torque at standstill ([`shaft_torque`] at ω = 0), N·m.
+    /// Shaft torque at standstill (`shaft_torque` at ω = 0), N·m.
     pub stall_torque_nm: f64,
     /// Mass flow into port 1 at the maximum power's grid speed, kg/s.
     pub air_at_max_power_kg_s: f64,
     /// Mass flow into port 1 at the free speed, kg/s.
     pub air_at_free_speed_kg_s: f64,
     /// The grid spacing Δ of the maximum power, rad/s.
-    pub speed_grid_rad_s: f64,
+    pub(crate) speed_grid_rad_s: f64,
     /// The maximum power off the grid (the continuous optimum of P(ω)): smooth in the
     /// parameters, where the grid point moves in steps of Δ.
-    pub optimum: OperatingPoint,
+    pub(crate) optimum: OperatingPoint,
 }
 
 /// The catalogue figures at one condition.
 ///
-/// * Stall torque: [`shaft_torque`] at ω = 0. A motor whose stall torque is ≤ 0 does not
+/// * Stall torque: `shaft_torque` at ω = 0. A motor whose stall torque is ≤ 0 does not
 ///   start: [`OperatingPointError::DoesNotStart`].
 /// * Free speed ω_0: the root of the shaft torque T(ω) = 0, bracketed by doubling an upper
 ///   speed from 64 rad/s until T < 0, then found by Brent's method to 1e-9 relative.

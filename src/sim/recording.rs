@@ -61,7 +61,7 @@ pub struct Cells {
 
 impl Cells {
     /// The most text a column may hold (bytes), since cell ends are kept in 32 bits.
-    pub const MAX_TEXT: usize = u32::MAX as usize;
+    pub(crate) const MAX_TEXT: usize = u32::MAX as usize;
 
     /// No cells yet.
     pub fn new() -> Self {
@@ -77,7 +77,7 @@ impl Cells {
         }
     }
 
-    /// Appends a cell. Panics if the column's text would pass [`Cells::MAX_TEXT`]: the
+    /// Appends a cell. Panics if the column's text would pass `Cells::MAX_TEXT`: the
     /// readers refuse larger files first, with a message naming the file.
     pub fn push(&mut self, cell: &str) {
         self.text.push_str(cell);
@@ -108,7 +108,8 @@ impl Cells {
     }
 
     /// The cells as owned strings (for callers that keep them apart from the recording).
-    pub fn to_strings(&self) -> Vec<String> {
+    #[cfg(test)]
+    pub(crate) fn to_strings(&self) -> Vec<String> {
         self.iter().map(str::to_owned).collect()
     }
 }
@@ -185,7 +186,7 @@ pub struct ExperimentData {
     /// Weight of the whole experiment in the cost (default 1).
     pub weight: f64,
     /// Weight per channel prefix (e.g. "flow1"), default 1.
-    pub channel_weights: std::collections::BTreeMap<String, f64>,
+    pub(crate) channel_weights: std::collections::BTreeMap<String, f64>,
     /// The recording, converted to SI (a catalogue's rows may leave cells empty: NaN).
     pub recording: Recording,
     /// Relative reading tolerance of stated (not recorded) data: each channel's σ is this

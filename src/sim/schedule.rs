@@ -13,11 +13,11 @@
 /// record, so 1 kPa of sensor noise leaves ≈0.15 kPa. Measured on the shipped dataset: one
 /// cost evaluation took 1.76 ms with 64 knots, 1.01 ms with 32 and 0.76 ms with 16 (noisy
 /// knots make the integrator follow wiggles that are not in the applied input).
-pub const MAX_KNOTS: usize = 16;
+const MAX_KNOTS: usize = 16;
 
 /// A C¹ monotone-cubic function of time.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Schedule {
+pub(crate) struct Schedule {
     t: Vec<f64>,
     v: Vec<f64>,
     slope: Vec<f64>,
@@ -102,7 +102,7 @@ impl Schedule {
 
     /// Time derivative at `time`, per second: the cubic's slope inside the knots, the end
     /// slopes outside (as [`Schedule::at`] extends), 0 for a constant.
-    pub fn slope_at(&self, time: f64) -> f64 {
+    pub(crate) fn slope_at(&self, time: f64) -> f64 {
         let n = self.t.len();
         if n == 1 {
             return 0.0;

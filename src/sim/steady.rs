@@ -30,7 +30,7 @@ pub fn at_speed(
 /// physical transient from 1 ms; if the residual grows, the continuation takes over as
 /// usual. Measured on the shipped 25-speed datasheet (callgrind): about a third fewer
 /// instructions for the sweep.
-pub fn at_speed_from_neighbour(
+pub(crate) fn at_speed_from_neighbour(
     motor: &Motor,
     bc: &Boundary,
     omega: f64,

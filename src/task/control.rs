@@ -189,24 +189,8 @@ mod tests {
     use super::*;
     use crate::control::study::step::StepOptions;
     use crate::control::study::throttle::ThrottleOptions;
-    use crate::control::study::{GainOptions, PiOptions, ValveOptions};
+    use crate::control::study::GainOptions;
     use crate::control::throttle::Port;
-
-    fn loop_options() -> LoopOptions {
-        LoopOptions {
-            valve: ValveOptions {
-                tau_s: None,
-                u_max_v: 10.0,
-                p_max_bar_g: 6.0,
-            },
-            pi: PiOptions {
-                ts_ms: 1.0,
-                speed_unit_rpm: 1000.0,
-                anti_windup: "conditional".into(),
-            },
-            gains: Some(GainOptions { kp: 0.85, ki: 4.0 }),
-        }
-    }
 
     fn message(study: Study) -> String {
         let s = ControlStudy {
@@ -239,10 +223,10 @@ mod tests {
             duration_s: 8.0,
         };
         assert_eq!(
-            message(Study::Step(loop_options(), step.clone())),
+            message(Study::Step(LoopOptions::default(), step.clone())),
             "StepOptions.t_step_s 9: must be before StepOptions.duration_s"
         );
-        let mut lp = loop_options();
+        let mut lp = LoopOptions::default();
         lp.pi.anti_windup = "back-calculation".into();
         lp.gains = Some(GainOptions { kp: 0.0, ki: 4.0 });
         let m = message(Study::Step(

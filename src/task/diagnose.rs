@@ -160,7 +160,7 @@ pub fn write_diagnosis(d: &Diagnosis, out: &Path) -> Result<(), DiagnoseTaskErro
 
 /// Diagnoses the dataset at `dataset` on `engine` and writes the results into `out` (a
 /// unit of a batch).
-pub fn diagnose_to(
+pub(crate) fn diagnose_to(
     engine: &Engine,
     dataset: &Path,
     settings: &DiagnoseSettings,

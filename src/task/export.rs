@@ -1,4 +1,4 @@
-//! `export-petab` as a task: the dataset a fit was made from ([`find_dataset`]) and the
+//! `export-petab` as a task: the dataset a fit was made from (`find_dataset`) and the
 //! fit as a PEtab v1 problem ([`petab_problem`]), written by `export::petab::write`.
 
 use crate::data::dataset::{DataError, Dataset};
@@ -35,7 +35,7 @@ pub enum ExportError {
 
 /// `measurements/<name>` beside the fit file's folder (fits/x.json → measurements/name),
 /// then in the current folder.
-pub fn find_dataset(fit: &Path, name: &str) -> Result<PathBuf, ExportError> {
+fn find_dataset(fit: &Path, name: &str) -> Result<PathBuf, ExportError> {
     let beside = fit
         .parent()
         .and_then(Path::parent)
@@ -69,7 +69,7 @@ pub struct PetabProblem {
 }
 
 /// Reads the fit file at `fit_path` and its dataset (`dataset`, or else found with
-/// [`find_dataset`]) and makes the PEtab tables.
+/// `find_dataset`) and makes the PEtab tables.
 pub fn petab_problem(fit_path: &Path, dataset: Option<&Path>) -> Result<PetabProblem, ExportError> {
     let fit = FitFile::read(fit_path)?;
     let dir = match dataset {

@@ -1,5 +1,5 @@
 //! `fit` as a task: [`FitOptions`] → [`FitOptions::check`] → [`FitSettings`], the fit itself
-//! ([`fit`], [`fit_dataset`]) giving a [`Fit`], and the files a fit leaves ([`write_fit`]:
+//! ([`fit`], `fit_dataset`) giving a [`Fit`], and the files a fit leaves ([`write_fit`]:
 //! fit file, plots, report), called by the command line for one dataset and by `batch` for
 //! a fleet, so both give the same fit for a seed.
 
@@ -195,7 +195,7 @@ pub enum FitError {
 
 /// The search space of a fit: estimated names (default set plus every parameter of the
 /// effects switched on), bounds and start ranges, around the dataset's nominal motor.
-pub fn search_space(ds: &Dataset, o: &FitOptions) -> Result<ParamSpace, FitError> {
+fn search_space(ds: &Dataset, o: &FitOptions) -> Result<ParamSpace, FitError> {
     let fixed = ds.nominal_params()?;
     let mut names: Vec<String> = match &o.estimate {
         Some(list) => list
@@ -261,13 +261,13 @@ pub struct Pinning {
     /// The parameter.
     pub name: String,
     /// Relative 1σ at the nominal motor (infinite: unseen).
-    pub relative_sd: f64,
+    pub(crate) relative_sd: f64,
     /// Estimated (pinned to within the limit).
-    pub pinned: bool,
+    pub(crate) pinned: bool,
     /// The value it stays fixed at when not pinned, SI.
     pub value: f64,
     /// The kind of experiment that would pin it (when not pinned).
-    pub pinned_by: Option<Kind>,
+    pinned_by: Option<Kind>,
 }
 
 /// The pinning as the command line prints it: a heading, then one line per parameter
@@ -419,7 +419,7 @@ pub fn fit<O: FitObserver>(
 
 /// [`fit`] of a loaded dataset on a thread pool the caller owns (`threads` is not looked
 /// at): a batch builds one pool and fits every unit on it.
-pub fn fit_dataset<O: FitObserver>(
+pub(crate) fn fit_dataset<O: FitObserver>(
     engine: &Engine,
     ds: Dataset,
     settings: &FitSettings,

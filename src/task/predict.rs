@@ -104,7 +104,7 @@ fn absolute(
 }
 
 /// A list of numbers as written in messages: comma-separated.
-pub fn list_text(values: &[f64]) -> String {
+fn list_text(values: &[f64]) -> String {
     values
         .iter()
         .map(|v| v.to_string())
@@ -317,7 +317,7 @@ pub struct Predicted {
 
 /// Reads the fit file at `fit_path`, checks the options at its atmosphere, predicts and
 /// writes the results into `out`; nothing is written when an input is bad.
-pub fn predict_to(
+pub(crate) fn predict_to(
     fit_path: &Path,
     options: &PredictOptions,
     out: &Path,

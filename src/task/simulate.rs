@@ -12,7 +12,8 @@ use crate::sim::experiment::{Experiment, SimError};
 use crate::units::Quantity;
 use std::path::{Path, PathBuf};
 
-/// Why a simulation failed.
+/// Why a simulation, or writing what it made, failed (`simulate`'s tables, `synth`'s
+/// dataset and truth file).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SimulateError {
@@ -22,10 +23,10 @@ pub enum SimulateError {
     /// An experiment cannot be simulated.
     #[error(transparent)]
     Sim(#[from] SimError),
-    /// A table cannot be written.
+    /// A file cannot be written.
     #[error("{}: {source}", path.display())]
     Write {
-        /// The file.
+        /// The file (for a truth file, its dataset folder).
         path: PathBuf,
         /// What went wrong.
         source: std::io::Error,
@@ -33,10 +34,7 @@ pub enum SimulateError {
 }
 
 /// Parameters for a dataset: the fit file's, or else the rig's nominal motor.
-pub fn params_for(
-    ds: &Dataset,
-    fit: Option<&FitFile>,
-) -> Result<(MotorParams, EffectSet), DataError> {
+fn params_for(ds: &Dataset, fit: Option<&FitFile>) -> Result<(MotorParams, EffectSet), DataError> {
     if let Some(f) = fit {
         return Ok((f.params.clone(), f.effects.clone()));
     }

@@ -1,8 +1,8 @@
 //! `synth` as a task: a synthetic dataset (rig recordings with sensor noise, or catalogue
 //! pages printed to 3 digits) written from a known motor, with its truth file.
 
+use super::simulate::SimulateError;
 use super::OptionError;
-use crate::data::dataset::DataError;
 use crate::data::fitfile::FitFile;
 use crate::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
 use crate::data::synth_catalogue::{write_catalogue, CataloguePlan};
@@ -10,8 +10,7 @@ use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
 use crate::numerics::DefaultSolver;
-use crate::sim::experiment::SimError;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// What a synthetic dataset is made of, as given (unchecked): see [`SynthOptions::check`].
 #[derive(Debug, Clone, PartialEq)]
@@ -93,26 +92,6 @@ impl SynthOptions {
     }
 }
 
-/// Why a synthetic dataset could not be made.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum SynthError {
-    /// The dataset cannot be simulated.
-    #[error(transparent)]
-    Sim(#[from] SimError),
-    /// The dataset cannot be written.
-    #[error(transparent)]
-    Data(#[from] DataError),
-    /// The truth file cannot be written.
-    #[error("{}: {source}", path.display())]
-    Truth {
-        /// The dataset folder.
-        path: PathBuf,
-        /// What went wrong.
-        source: std::io::Error,
-    },
-}
-
 /// The motor of a synthetic dataset named `name`: the fit file's (or the default motor),
 /// its effects overridden by the settings', and its truth file (not yet written).
 /// Discovered terms of the fit file act in the synthetic motor as in `simulate`.
@@ -151,7 +130,7 @@ pub fn write_synthetic(
     motor: &Motor,
     truth: &FitFile,
     settings: &SynthSettings,
-) -> Result<Synthesized, SynthError> {
+) -> Result<Synthesized, SimulateError> {
     let count = if settings.catalogue() {
         let plan = CataloguePlan {
             pressures_bar_g: settings.pressures_bar_g().to_vec(),
@@ -181,7 +160,7 @@ pub fn write_synthetic(
     };
     truth
         .write(&out.join("truth.json"))
-        .map_err(|source| SynthError::Truth {
+        .map_err(|source| SimulateError::Write {
             path: out.to_path_buf(),
             source,
         })?;

@@ -78,7 +78,7 @@ impl Quantity {
 
     /// Other prefixes a column name may start with: catalogues call the port-1 flow `air`
     /// (air consumption) and the port-1 pressure `p_supply`.
-    pub fn aliases(self) -> &'static [&'static str] {
+    fn aliases(self) -> &'static [&'static str] {
         match self {
             Quantity::Flow1 => &["air"],
             Quantity::PPort1 => &["p_supply"],

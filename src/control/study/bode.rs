@@ -86,7 +86,7 @@ impl BodeSettings {
     }
 
     /// The frequencies, Hz, log-spaced.
-    pub fn frequencies_hz(&self) -> Vec<f64> {
+    fn frequencies_hz(&self) -> Vec<f64> {
         log_grid(self.f_min_hz, self.f_max_hz, self.points)
     }
 
@@ -113,21 +113,25 @@ pub struct BodeStudy {
     /// Speed per supply pressure of the linear model, (rad/s)/Pa.
     pub motor: Vec<Complex<f64>>,
     /// Phase of `motor`, degrees.
-    pub motor_phase_deg: Vec<f64>,
+    pub(crate) motor_phase_deg: Vec<f64>,
     /// The two-lag fit of `motor`.
     pub fit: LagFit,
     /// The fitted K/((1+sT1)(1+sT2)), (rad/s)/Pa.
     pub fitted: Vec<Complex<f64>>,
     /// Phase of `fitted`, degrees.
-    pub fitted_phase_deg: Vec<f64>,
+    pub(crate) fitted_phase_deg: Vec<f64>,
     /// Valve + motor, speed unit per V (`design::plant`).
-    pub valve_motor: Vec<Complex<f64>>,
+    pub(crate) valve_motor: Vec<Complex<f64>>,
     /// Phase of `valve_motor`, degrees.
-    pub valve_motor_phase_deg: Vec<f64>,
+    pub(crate) valve_motor_phase_deg: Vec<f64>,
 }
 
 /// The linearised motor at supply `p_mean_pa` under `load`.
-pub fn linear_at(m: &Motor, load: Load, p_mean_pa: f64) -> Result<LinearModel, ControlError> {
+pub(crate) fn linear_at(
+    m: &Motor,
+    load: Load,
+    p_mean_pa: f64,
+) -> Result<LinearModel, ControlError> {
     let op = operating_point(m, &Boundary::supplied(p_mean_pa, P_ATM_PA, load))?;
     LinearModel::linearise(m, &op)
 }

@@ -82,7 +82,7 @@ impl DesignSettings {
     }
 
     /// Set-point step of the check simulation, rad/s.
-    pub fn step_rad_s(&self) -> f64 {
+    fn step_rad_s(&self) -> f64 {
         self.step_rpm * RAD_S_PER_RPM
     }
 
@@ -105,9 +105,9 @@ pub struct DesignRun {
     /// The step's figures of merit.
     pub metrics: StepMetrics,
     /// Open-loop response C·P at `DesignStudy::f_hz`.
-    pub open_loop: Vec<Complex<f64>>,
+    pub(crate) open_loop: Vec<Complex<f64>>,
     /// Its phase, degrees, unwrapped from the lowest frequency.
-    pub open_loop_phase_deg: Vec<f64>,
+    pub(crate) open_loop_phase_deg: Vec<f64>,
 }
 
 /// The results of `design`.

@@ -92,7 +92,7 @@ pub struct DisturbanceStudy {
     /// The controlled response.
     pub trace: Trace,
     /// The response at a constant command (the controller's gains set to zero).
-    pub open_trace: Trace,
+    pub(crate) open_trace: Trace,
     /// Figures of merit of the controlled response (band: 1 % of the set-point, at least
     /// 5 rpm).
     pub metrics: DisturbanceMetrics,

@@ -76,7 +76,7 @@ impl MinSpeedSettings {
     }
 
     /// Top of the pressure ramp, Pa absolute.
-    pub fn p_max_pa(&self) -> f64 {
+    pub(crate) fn p_max_pa(&self) -> f64 {
         self.p_max_mpa * 1e6
     }
 

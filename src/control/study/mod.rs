@@ -241,6 +241,28 @@ impl LoopOptions {
     }
 }
 
+impl Default for LoopOptions {
+    /// The paper's loop, as `vanefit control` takes it by default: a 10 V valve up to
+    /// 6 bar(g) with the motor's own time constant, a PI controller sampling every 1 ms on
+    /// the speed error in units of 1000 rpm with conditional anti-windup, and the paper's
+    /// gains kp 0.85, ki 4 (G(s) = (0.85 s + 4)/s).
+    fn default() -> Self {
+        LoopOptions {
+            valve: ValveOptions {
+                tau_s: None,
+                u_max_v: 10.0,
+                p_max_bar_g: 6.0,
+            },
+            pi: PiOptions {
+                ts_ms: 1.0,
+                speed_unit_rpm: 1000.0,
+                anti_windup: "conditional".into(),
+            },
+            gains: Some(GainOptions { kp: 0.85, ki: 4.0 }),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::throttle::{study, ThrottleOptions};

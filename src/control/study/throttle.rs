@@ -111,7 +111,7 @@ impl ThrottleSettings {
     }
 
     /// Conductances of the speed curve, m3/(s·Pa), log-spaced from the smallest.
-    pub fn conductances(&self) -> Vec<f64> {
+    pub(crate) fn conductances(&self) -> Vec<f64> {
         conductance_grid(self.c_min, self.c_max, self.points)
     }
 

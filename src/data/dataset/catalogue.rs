@@ -42,7 +42,7 @@ pub const FIGURES: [(&str, Quantity, &str); 8] = [
 
 /// Default reading tolerance of a catalogue point: 1σ = 2 % of its curve's full scale
 /// (points read off a printed curve, figures rounded to two or three digits).
-pub const DEFAULT_TOLERANCE: f64 = 0.02;
+pub(crate) const DEFAULT_TOLERANCE: f64 = 0.02;
 
 /// Where a catalogue experiment's text lives, for located errors.
 pub(super) struct Source<'a> {

@@ -74,7 +74,7 @@ pub struct SupplyValve {
     /// Time constant τ, s.
     pub tau_s: f64,
     /// Damping ratio ζ of a second-order valve (`None`: first order).
-    pub zeta: Option<f64>,
+    pub(crate) zeta: Option<f64>,
 }
 
 /// Where a term acts in the motor: hooks that the motor calls, for every effect switched
@@ -371,7 +371,7 @@ pub(crate) mod testing {
     use crate::numerics::ode::State;
 
     /// States forward, reverse and at standstill.
-    pub const STATES: [State; 4] = [
+    pub(crate) const STATES: [State; 4] = [
         [6e5, 1.5e5, 1.3e5, 800.0],
         [3e5, 4e5, 2e5, -300.0],
         [2e5, 1e5, 1e5, 0.0],
@@ -379,13 +379,13 @@ pub(crate) mod testing {
     ];
 
     /// The boundary of the checks.
-    pub fn boundary() -> Boundary {
+    pub(crate) fn boundary() -> Boundary {
         Boundary::supplied(7.3e5, 1.01325e5, Load::ViscousBrake { c_nm_s_rad: 2e-4 })
     }
 
     /// `effect` switched on with its parameters at their off values, then at `values`,
     /// gives the base model's derivatives to within `tol` relative (0: bit for bit).
-    pub fn reproduces_base(effect: super::Effect, values: &[(&str, f64)], tol: f64) {
+    pub(crate) fn reproduces_base(effect: super::Effect, values: &[(&str, f64)], tol: f64) {
         let base = MotorParams::default();
         let mut p = base.clone();
         for s in effect.specs() {

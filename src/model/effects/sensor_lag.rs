@@ -23,7 +23,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
 }];
 
 impl Term for SensorLag {
-    /// The channel through [`first_order_lag`] with τ.
+    /// The channel through `first_order_lag` with τ.
     fn measure(&self, own: &[f64], times: &[f64], y: Vec<f64>) -> Vec<f64> {
         first_order_lag(times, &y, own[TAU_SENSOR])
     }
@@ -59,7 +59,7 @@ impl MotorParams {
 
 /// A sensor's first-order lag y_m' = (y − y_m)/τ applied to samples of y, exact when y is
 /// linear between samples (first-order hold); the sensor starts settled at y(t_0).
-pub fn first_order_lag(times: &[f64], y: &[f64], tau: f64) -> Vec<f64> {
+fn first_order_lag(times: &[f64], y: &[f64], tau: f64) -> Vec<f64> {
     let mut out = Vec::with_capacity(y.len());
     let Some(&first) = y.first() else { return out };
     let mut ym = first;

@@ -8,7 +8,7 @@ use super::{Category, CatalogEffect, Effect, ShowsIn, SupplyValve, Term};
 use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
-pub struct ValveDynamics;
+pub(crate) struct ValveDynamics;
 
 const VALVE_TAU: usize = 0;
 const VALVE_ZETA: usize = 1;

@@ -38,7 +38,7 @@ pub enum ControlReportError {
 }
 
 /// The output folder of a study and who hears of each file written — or, made by
-/// [`Writer::in_memory`], a list that keeps the tables and summaries as text.
+/// `Writer::in_memory`, a list that keeps the tables and summaries as text.
 pub struct Writer<'a> {
     sink: Sink<'a>,
 }
@@ -63,7 +63,7 @@ impl<'a> Writer<'a> {
     /// Writes nothing: keeps each CSV table and JSON summary as (file name, text) in
     /// `files`, the same text a folder would get, and skips the figures (for callers that
     /// read the results in memory, such as the Python package).
-    pub fn in_memory(files: &'a mut Vec<(String, String)>) -> Self {
+    fn in_memory(files: &'a mut Vec<(String, String)>) -> Self {
         Self {
             sink: Sink::Memory(files),
         }

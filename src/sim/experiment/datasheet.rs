@@ -12,7 +12,7 @@ use crate::units::Quantity;
 use std::sync::Arc;
 
 /// The kind (see the module documentation).
-pub struct Datasheet;
+pub(crate) struct Datasheet;
 
 impl ExperimentKind for Datasheet {
     fn id(&self) -> &'static str {

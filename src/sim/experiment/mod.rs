@@ -172,7 +172,7 @@ impl Kind {
     }
 
     /// Whether the kind is a transient (time-driven) experiment.
-    pub fn is_transient(self) -> bool {
+    pub(crate) fn is_transient(self) -> bool {
         self.model().is_transient()
     }
 }

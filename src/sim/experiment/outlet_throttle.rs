@@ -10,7 +10,7 @@ use crate::units::Quantity;
 use std::sync::Arc;
 
 /// The kind (see the module documentation).
-pub struct OutletThrottle;
+pub(crate) struct OutletThrottle;
 
 impl ExperimentKind for OutletThrottle {
     fn id(&self) -> &'static str {

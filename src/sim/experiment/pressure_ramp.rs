@@ -9,7 +9,7 @@ use crate::units::Quantity;
 use std::sync::Arc;
 
 /// The kind (see the module documentation).
-pub struct PressureRamp;
+pub(crate) struct PressureRamp;
 
 impl ExperimentKind for PressureRamp {
     fn id(&self) -> &'static str {
