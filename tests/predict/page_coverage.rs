@@ -229,7 +229,7 @@ fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failu
 
 /// Every motor of `seeds`, in parallel (each motor's work depends on its seed only, so the
 /// results do not depend on the thread count).
-fn run(seeds: std::ops::Range<u64>, starts: Option<usize>) -> Vec<(u64, Result<Motor, Failure>)> {
+fn run(seeds: Vec<u64>, starts: Option<usize>) -> Vec<(u64, Result<Motor, Failure>)> {
     // PAGE_DIR keeps the pages, fits and predictions there (else a temporary folder).
     let tmp = tempfile::tempdir().unwrap();
     let root = std::env::var_os("PAGE_DIR").map_or(tmp.path().to_path_buf(), Into::into);
@@ -345,9 +345,10 @@ struct Study {
 }
 
 /// Runs `n` motors and prints the tables.
-fn study(n: u64, starts: Option<usize>) -> Study {
+fn study(seeds: Vec<u64>, starts: Option<usize>) -> Study {
     let t0 = std::time::Instant::now();
-    let results = run(0..n, starts);
+    let n = seeds.len();
+    let results = run(seeds, starts);
     let mut s = Study {
         ok: Vec::new(),
         refused: Vec::new(),
@@ -427,14 +428,19 @@ fn page_coverage_table_over_random_motors() {
     let starts = std::env::var("PAGE_STARTS")
         .ok()
         .and_then(|v| v.parse().ok());
-    let s = study(n, starts);
+    // PAGE_SEEDS (comma-separated) picks motors instead, e.g. to look at pages again with
+    // PAGE_DIR.
+    let seeds = std::env::var("PAGE_SEEDS").map_or((0..n).collect(), |v| {
+        v.split(',').map(|s| s.trim().parse().unwrap()).collect()
+    });
+    let s = study(seeds, starts);
     assert!(s.failed.is_empty(), "{:?}", s.failed);
 }
 
 #[test]
 fn pages_of_random_motors_fit_and_predict_end_to_end() {
     // Six motors (seeds 0–5: 1.5–15 cm³, mixed units, one supply each), 8 starts.
-    let s = study(6, Some(8));
+    let s = study((0..6).collect(), Some(8));
     // Every page the twin prints is in the documented format and true to one motor: vanefit
     // reads, fits and predicts it, or refuses it with a message at the page's file, line and
     // column (today: a power above torque·speed from linear interpolation on sparse torque
