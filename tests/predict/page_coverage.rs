@@ -392,12 +392,12 @@ fn study(seeds: Vec<u64>, starts: Option<usize>) -> Study {
             report(&without)
         );
     }
-    println!("per motor: seed, V_disp cm³, displacement printed, supply, figures held/35, factors held/20, worst figure error, noise not reached");
+    println!("per motor: seed, V_disp cm³, displacement printed, supply, figures held/35, factors held/20, worst figure error, noise not reached; the twin's free speed rpm, max power W, stall torque N·m at 6 bar g");
     for m in ok {
         let f = stats(m.figures.iter().flatten());
         let g = stats(m.factors.iter().flatten());
         println!(
-            "{} {:.2} {} {:?} {}/35 {}/20 {:+.1} % {}",
+            "{} {:.2} {} {:?} {}/35 {}/20 {:+.1} % {}; {:.0} {:.1} {:.3}",
             m.seed,
             m.v_disp_cm3,
             m.displacement_printed,
@@ -405,7 +405,10 @@ fn study(seeds: Vec<u64>, starts: Option<usize>) -> Study {
             f.held,
             g.held,
             100.0 * f.worst_error,
-            m.noise_not_reached
+            m.noise_not_reached,
+            m.figures[3][0].truth,
+            m.figures[3][1].truth,
+            m.figures[3][4].truth,
         );
     }
     s
