@@ -165,7 +165,9 @@ fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failu
         _ => Failure::Failed(e),
     })?;
     let pred = dir.join("predict");
-    vanefit(&[
+    // PAGE_PREDICT_ARGS adds options to predict (e.g. "--fixed-spread 1.5"); default none.
+    let extra = std::env::var("PAGE_PREDICT_ARGS").unwrap_or_default();
+    let mut args = vec![
         "predict",
         fit_s,
         "--pressures",
@@ -174,8 +176,9 @@ fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failu
         "bar_g",
         "--out",
         pred.to_str().unwrap(),
-    ])
-    .map_err(|(_, e)| Failure::Failed(e))?;
+    ];
+    args.extend(extra.split_whitespace());
+    vanefit(&args).map_err(|(_, e)| Failure::Failed(e))?;
     let (cat, fac) = (
         table(&pred.join("catalogue.csv"))?,
         table(&pred.join("factors.csv"))?,
@@ -431,7 +434,7 @@ fn page_coverage_table_over_random_motors() {
     let starts = std::env::var("PAGE_STARTS")
         .ok()
         .and_then(|v| v.parse().ok());
-    // PAGE_SEEDS (comma-separated) picks motors instead, e.g. to look at pages again with
+    // PAGE_PREDICT_ARGS adds predict options. PAGE_SEEDS (comma-separated) picks motors instead, e.g. to look at pages again with
     // PAGE_DIR.
     let seeds = std::env::var("PAGE_SEEDS").map_or((0..n).collect(), |v| {
         v.split(',').map(|s| s.trim().parse().unwrap()).collect()
