@@ -3,6 +3,7 @@
 //! independent twin ([`twin_catalogue`]).
 
 mod catalogue_predict;
+mod page_coverage;
 mod predict;
 #[path = "../twin/mod.rs"]
 mod twin;

@@ -27,6 +27,19 @@ pub struct TwinRow {
     pub air_at_free_speed_kg_s: f64,
 }
 
+/// (shaft torque N·m, port-1 flow kg/s) at an imposed speed `w_rad_s` under the conditions
+/// `c` (port 2 open, no load): a point of a catalogue page's curves.
+pub fn curve_point(m: &TwinMotor, c: &Conditions, w_rad_s: f64) -> Result<(f64, f64), String> {
+    let bc = Boundary {
+        p_port1_pa: c.p_supply_pa,
+        port2: Port2::Open,
+        p_atm_pa: c.p_atm_pa,
+        brake_nm_s_rad: 0.0,
+        throttle_b_crit: c.throttle_b_crit,
+    };
+    at_speed(m, &bc, w_rad_s)
+}
+
 /// (shaft torque N·m, port-1 flow kg/s) at an imposed speed.
 fn at_speed(m: &TwinMotor, bc: &Boundary, w: f64) -> Result<(f64, f64), String> {
     let y0 = [bc.p_port1_pa, bc.p_atm_pa, bc.p_atm_pa, w];

@@ -15,6 +15,7 @@ pub mod experiment;
 pub mod files;
 pub mod motor;
 pub mod ode;
+pub mod page;
 pub mod record;
 pub mod rig;
 pub mod steady;

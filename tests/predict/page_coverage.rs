@@ -1,0 +1,553 @@
+//! A new motor from its catalogue page, judged on pages vanefit did not make: the twin
+//! (tests/twin/page.rs) prints the page of a random motor of 1.5–15 cm³ as a maker would,
+//! `vanefit fit` (default options) then `vanefit predict --pressures 3,4,5,6,7 --unit bar_g`
+//! run on it, and the predicted figures, correction factors and their 95 % bands are compared
+//! with the twin's own figures at 3–7 bar g.
+//!
+//! Over many motors: how many bands hold the truth (per figure, per pressure, per factor),
+//! the median band half-width relative to the value, and the worst error of the point
+//! prediction. The long table is an ignored test; the CI version runs a few motors.
+
+use crate::twin;
+
+use rayon::prelude::*;
+use std::path::Path;
+use std::process::Command;
+use twin::page::{page_style, print_page, random_motor, row_values, truth, FIGURES, SPREAD};
+
+/// Pressures of the prediction, bar g.
+const BAR_G: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 7.0];
+/// Reference pressure of the correction factors, bar g (vanefit's default).
+const REFERENCE_BAR_G: f64 = 6.3;
+/// vanefit's catalogue.csv columns in [`FIGURES`] order, with their value per SI unit.
+const COLUMNS: [(&str, f64); 7] = [
+    ("free_speed_rpm", 30.0 / std::f64::consts::PI),
+    ("max_power_w", 1.0),
+    ("speed_at_max_power_rpm", 30.0 / std::f64::consts::PI),
+    ("torque_at_max_power_nm", 1.0),
+    ("stall_torque_nm", 1.0),
+    ("air_at_max_power_l_s_anr", 1.0 / (1e-3 * 1.185)),
+    ("air_at_free_speed_l_s_anr", 1.0 / (1e-3 * 1.185)),
+];
+/// vanefit's factors.csv columns.
+const FACTORS: [&str; 4] = ["power", "speed", "torque", "air"];
+
+/// A predicted value, its band (`None` where vanefit printed none) and the truth.
+#[derive(Debug, Clone, Copy)]
+struct Check {
+    value: f64,
+    band: Option<(f64, f64)>,
+    truth: f64,
+}
+
+impl Check {
+    fn holds(&self) -> bool {
+        self.band
+            .is_some_and(|(lo, hi)| lo <= self.truth && self.truth <= hi)
+    }
+    /// Half the band's width relative to the value (0 without a band).
+    fn half_width(&self) -> f64 {
+        self.band
+            .map_or(0.0, |(lo, hi)| 0.5 * (hi - lo) / self.value.abs())
+    }
+    /// Relative error of the point prediction.
+    fn error(&self) -> f64 {
+        self.value / self.truth - 1.0
+    }
+}
+
+/// One motor's evaluation.
+#[derive(Debug, Clone)]
+struct Motor {
+    seed: u64,
+    v_disp_cm3: f64,
+    displacement_printed: bool,
+    supply: &'static str,
+    /// `figures[p][k]`: pressure p of [`BAR_G`], figure k of [`FIGURES`].
+    figures: Vec<[Check; 7]>,
+    /// `factors[p][k]`: pressure p, factor k of [`FACTORS`].
+    factors: Vec<[Check; 4]>,
+    /// The fit said it did not reach the noise.
+    noise_not_reached: bool,
+}
+
+/// Why a motor was not evaluated.
+#[derive(Debug, Clone)]
+enum Failure {
+    /// vanefit refused the page (exit status 1 of `fit`: a message naming the page's file,
+    /// line and column).
+    Refused(String),
+    /// Anything else: the twin, a crash, `predict`, unreadable output.
+    Failed(String),
+}
+
+impl From<String> for Failure {
+    fn from(e: String) -> Self {
+        Failure::Failed(e)
+    }
+}
+
+/// Runs vanefit; Err((exit code, message)).
+fn vanefit(args: &[&str]) -> Result<String, (Option<i32>, String)> {
+    let out = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(args)
+        .output()
+        .map_err(|e| (None, e.to_string()))?;
+    if out.status.success() {
+        Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+    } else {
+        Err((
+            out.status.code(),
+            format!(
+                "vanefit {} exited {}: {}",
+                args[0],
+                out.status,
+                String::from_utf8_lossy(&out.stderr).trim()
+            ),
+        ))
+    }
+}
+
+/// A CSV as its rows of (column → cell).
+fn table(path: &Path) -> Result<Vec<std::collections::HashMap<String, String>>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().ok_or("empty csv")?.split(',').collect();
+    Ok(lines
+        .map(|l| {
+            header
+                .iter()
+                .zip(l.split(','))
+                .map(|(h, v)| (h.to_string(), v.to_string()))
+                .collect()
+        })
+        .collect())
+}
+
+/// (value, band) of `column` in a row: the band is `None` when its cells are empty.
+fn banded(
+    row: &std::collections::HashMap<String, String>,
+    column: &str,
+) -> Result<(f64, Option<(f64, f64)>), String> {
+    let num = |c: &str| row.get(c).and_then(|v| v.parse::<f64>().ok());
+    let value = num(column).ok_or(format!("no value in column {column}"))?;
+    let band = num(&format!("{column}_lo")).zip(num(&format!("{column}_hi")));
+    Ok((value, band))
+}
+
+/// Prints, fits and predicts the page of motor `seed` in `dir`; `starts` overrides the fit's
+/// number of starts (`None`: vanefit's default).
+fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failure> {
+    let motor = random_motor(seed, &SPREAD);
+    let style = page_style(seed);
+    let page_dir = dir.join("page");
+    std::fs::create_dir_all(&page_dir).map_err(|e| e.to_string())?;
+    let page = print_page(&page_dir, &motor, &style).map_err(|e| format!("twin: {e}"))?;
+    let (rows, factors) =
+        truth(&motor, &BAR_G, REFERENCE_BAR_G).map_err(|e| format!("twin: {e}"))?;
+    let fit = dir.join("fit.json");
+    let (fit_s, page_s) = (fit.to_str().unwrap(), page_dir.to_str().unwrap());
+    let starts_s = starts.map(|s| s.to_string());
+    let mut args = vec![
+        "fit",
+        page_s,
+        "--out",
+        fit_s,
+        "--no-plots",
+        "--threads",
+        "1",
+    ];
+    if let Some(s) = &starts_s {
+        args.extend(["--starts", s]);
+    }
+    let fit_out = vanefit(&args).map_err(|(code, e)| match code {
+        Some(1) => Failure::Refused(e),
+        _ => Failure::Failed(e),
+    })?;
+    let pred = dir.join("predict");
+    // PAGE_PREDICT_ARGS adds options to predict (e.g. "--fixed-spread 1.5"); default none.
+    let extra = std::env::var("PAGE_PREDICT_ARGS").unwrap_or_default();
+    let mut args = vec![
+        "predict",
+        fit_s,
+        "--pressures",
+        "3,4,5,6,7",
+        "--unit",
+        "bar_g",
+        "--out",
+        pred.to_str().unwrap(),
+    ];
+    args.extend(extra.split_whitespace());
+    vanefit(&args).map_err(|(_, e)| Failure::Failed(e))?;
+    let (cat, fac) = (
+        table(&pred.join("catalogue.csv"))?,
+        table(&pred.join("factors.csv"))?,
+    );
+    if cat.len() != BAR_G.len() || fac.len() != BAR_G.len() {
+        return Err(format!("{} catalogue rows, {} factor rows", cat.len(), fac.len()).into());
+    }
+    let mut figures = Vec::new();
+    let mut factor_checks = Vec::new();
+    for p in 0..BAR_G.len() {
+        let t = row_values(&rows[p]);
+        let mut f = [Check {
+            value: 0.0,
+            band: None,
+            truth: 0.0,
+        }; 7];
+        for (k, (col, per_si)) in COLUMNS.iter().enumerate() {
+            let (value, band) = banded(&cat[p], col)?;
+            f[k] = Check {
+                value,
+                band,
+                truth: t[k] * per_si,
+            };
+        }
+        figures.push(f);
+        let mut g = [Check {
+            value: 0.0,
+            band: None,
+            truth: 0.0,
+        }; 4];
+        for (k, col) in FACTORS.iter().enumerate() {
+            let (value, band) = banded(&fac[p], col)?;
+            g[k] = Check {
+                value,
+                band,
+                truth: factors[p][k],
+            };
+        }
+        factor_checks.push(g);
+    }
+    Ok(Motor {
+        seed,
+        v_disp_cm3: page.motor.v_disp * 1e6,
+        displacement_printed: style.displacement,
+        supply: style.supply.0,
+        figures,
+        factors: factor_checks,
+        noise_not_reached: fit_out.contains("NOT reach"),
+    })
+}
+
+/// Every motor of `seeds`, in parallel (each motor's work depends on its seed only, so the
+/// results do not depend on the thread count).
+fn run(seeds: Vec<u64>, starts: Option<usize>) -> Vec<(u64, Result<Motor, Failure>)> {
+    // PAGE_DIR keeps the pages, fits and predictions there (else a temporary folder).
+    let tmp = tempfile::tempdir().unwrap();
+    let root = std::env::var_os("PAGE_DIR").map_or(tmp.path().to_path_buf(), Into::into);
+    seeds
+        .into_par_iter()
+        .map(|seed| {
+            let dir = root.join(format!("m{seed}"));
+            (seed, evaluate(seed, &dir, starts))
+        })
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Summary of a set of checks.
+#[derive(Debug, Clone, Copy)]
+struct Stats {
+    held: usize,
+    total: usize,
+    no_band: usize,
+    median_half_width: f64,
+    median_abs_error: f64,
+    /// The error of largest magnitude, signed.
+    worst_error: f64,
+}
+
+fn stats<'a>(checks: impl Iterator<Item = &'a Check>) -> Stats {
+    let c: Vec<&Check> = checks.collect();
+    let worst = c.iter().map(|x| x.error()).fold(0.0f64, |a, e| {
+        if e.abs() > a.abs() || e.is_nan() {
+            e
+        } else {
+            a
+        }
+    });
+    Stats {
+        held: c.iter().filter(|x| x.holds()).count(),
+        total: c.len(),
+        no_band: c.iter().filter(|x| x.band.is_none()).count(),
+        median_half_width: median(c.iter().map(|x| x.half_width()).collect()),
+        median_abs_error: median(c.iter().map(|x| x.error().abs()).collect()),
+        worst_error: worst,
+    }
+}
+
+fn line(name: &str, s: &Stats) -> String {
+    format!(
+        "| {name} | {}/{} ({:.0} %) | {:.1} % | {:.1} % | {:+.1} % | {} |",
+        s.held,
+        s.total,
+        100.0 * s.held as f64 / s.total.max(1) as f64,
+        100.0 * s.median_half_width,
+        100.0 * s.median_abs_error,
+        100.0 * s.worst_error,
+        s.no_band
+    )
+}
+
+const HEAD: &str = "| | bands holding the truth | median half-width | median |error| | worst error | no band |\n|---|---|---|---|---|---|";
+
+/// The markdown tables of the figures and factors of `motors`.
+fn report(motors: &[&Motor]) -> String {
+    let figs = || motors.iter().flat_map(|m| m.figures.iter().flatten());
+    let facs = || motors.iter().flat_map(|m| m.factors.iter().flatten());
+    let mut out = format!(
+        "{HEAD}\n{}\n{}\n",
+        line("all figures", &stats(figs())),
+        line("all correction factors", &stats(facs()))
+    );
+    out += &format!("\nper figure (all pressures)\n\n{HEAD}\n");
+    for (k, name) in FIGURES.iter().enumerate() {
+        let s = stats(
+            motors
+                .iter()
+                .flat_map(|m| m.figures.iter().map(move |f| &f[k])),
+        );
+        out += &(line(name, &s) + "\n");
+    }
+    for (k, name) in FACTORS.iter().enumerate() {
+        let s = stats(
+            motors
+                .iter()
+                .flat_map(|m| m.factors.iter().map(move |f| &f[k])),
+        );
+        out += &(line(&format!("factor {name}"), &s) + "\n");
+    }
+    out += &format!("\nper pressure (figures; factors)\n\n{HEAD}\n");
+    for (p, bar) in BAR_G.iter().enumerate() {
+        let s = stats(motors.iter().flat_map(|m| m.figures[p].iter()));
+        out += &(line(&format!("figures at {bar} bar g"), &s) + "\n");
+        let s = stats(motors.iter().flat_map(|m| m.factors[p].iter()));
+        out += &(line(&format!("factors at {bar} bar g"), &s) + "\n");
+    }
+    out
+}
+
+/// What a study gives: the motors evaluated, the pages vanefit refused, the other failures.
+struct Study {
+    ok: Vec<Motor>,
+    refused: Vec<(u64, String)>,
+    failed: Vec<(u64, String)>,
+}
+
+/// Runs `n` motors and prints the tables.
+fn study(seeds: Vec<u64>, starts: Option<usize>) -> Study {
+    let t0 = std::time::Instant::now();
+    let n = seeds.len();
+    let results = run(seeds, starts);
+    let mut s = Study {
+        ok: Vec::new(),
+        refused: Vec::new(),
+        failed: Vec::new(),
+    };
+    for (seed, r) in results {
+        match r {
+            Ok(m) => s.ok.push(m),
+            Err(Failure::Refused(e)) => s.refused.push((seed, e)),
+            Err(Failure::Failed(e)) => s.failed.push((seed, e)),
+        }
+    }
+    println!(
+        "{n} motors: {} evaluated, {} pages refused by vanefit, {} failed; fit starts {}; {:.0} s wall\n",
+        s.ok.len(),
+        s.refused.len(),
+        s.failed.len(),
+        starts.map_or("default".to_string(), |s| s.to_string()),
+        t0.elapsed().as_secs_f64()
+    );
+    for (seed, e) in &s.refused {
+        println!("motor {seed} refused: {e}");
+    }
+    for (seed, e) in &s.failed {
+        println!("motor {seed} failed: {e}");
+    }
+    let ok = &s.ok;
+    let all: Vec<&Motor> = ok.iter().collect();
+    println!("\n## all pages\n\n{}", report(&all));
+    let with: Vec<&Motor> = ok.iter().filter(|m| m.displacement_printed).collect();
+    let without: Vec<&Motor> = ok.iter().filter(|m| !m.displacement_printed).collect();
+    println!(
+        "## pages that print the displacement ({})\n\n{}",
+        with.len(),
+        report(&with)
+    );
+    if !without.is_empty() {
+        println!(
+            "## pages without a displacement ({})\n\n{}",
+            without.len(),
+            report(&without)
+        );
+    }
+    println!("per motor: seed, V_disp cm³, displacement printed, supply, figures held/35, factors held/20, worst figure error, noise not reached; the twin's free speed rpm, max power W, stall torque N·m at 6 bar g");
+    for m in ok {
+        let f = stats(m.figures.iter().flatten());
+        let g = stats(m.factors.iter().flatten());
+        println!(
+            "{} {:.2} {} {:?} {}/35 {}/20 {:+.1} % {}; {:.0} {:.1} {:.3}",
+            m.seed,
+            m.v_disp_cm3,
+            m.displacement_printed,
+            m.supply,
+            f.held,
+            g.held,
+            100.0 * f.worst_error,
+            m.noise_not_reached,
+            m.figures[3][0].truth,
+            m.figures[3][1].truth,
+            m.figures[3][4].truth,
+        );
+    }
+    s
+}
+
+/// Number from the environment, else `default`.
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+#[test]
+#[ignore = "long: ≥ 50 motors through fit and predict; run with --ignored --nocapture"]
+fn page_coverage_table_over_random_motors() {
+    // PAGE_MOTORS (default 60, so that ≥ 50 remain after the pages vanefit refuses) and
+    // PAGE_STARTS (default: vanefit fit's own) size the run.
+    let n = env_or("PAGE_MOTORS", 60u64);
+    let starts = std::env::var("PAGE_STARTS")
+        .ok()
+        .and_then(|v| v.parse().ok());
+    // PAGE_PREDICT_ARGS adds predict options. PAGE_SEEDS (comma-separated) picks motors instead, e.g. to look at pages again with
+    // PAGE_DIR.
+    let seeds = std::env::var("PAGE_SEEDS").map_or((0..n).collect(), |v| {
+        v.split(',').map(|s| s.trim().parse().unwrap()).collect()
+    });
+    let s = study(seeds, starts);
+    assert!(s.failed.is_empty(), "{:?}", s.failed);
+}
+
+#[test]
+fn pages_of_random_motors_fit_and_predict_end_to_end() {
+    // Six motors (seeds 0–5: 1.5–15 cm³, mixed units, one supply each), 8 starts.
+    let s = study((0..6).collect(), Some(8));
+    // Every page the twin prints is in the documented format and true to one motor: vanefit
+    // reads, fits and predicts it, or refuses it with a message at the page's file, line and
+    // column (today: a power above torque·speed from linear interpolation on sparse torque
+    // points, where the true torque curve bows above the chord). Never a crash.
+    assert!(s.failed.is_empty(), "{:?}", s.failed);
+    for (_, e) in &s.refused {
+        assert!(e.contains("rig.toml:") || e.contains(".csv:"), "{e}");
+    }
+    assert!(s.ok.len() >= 4, "{} of 6 evaluated", s.ok.len());
+    for m in &s.ok {
+        for c in m.figures.iter().flatten().chain(m.factors.iter().flatten()) {
+            assert!(
+                c.value.is_finite() && c.value > 0.0,
+                "motor {}: {c:?}",
+                m.seed
+            );
+            assert!(
+                c.truth.is_finite() && c.truth > 0.0,
+                "motor {}: {c:?}",
+                m.seed
+            );
+        }
+    }
+    // A motor's results depend on its seed only: motor 0 alone gives what it gave among six
+    // running in parallel.
+    let again = study(vec![0], Some(8));
+    if let (Some(a), Some(b)) = (s.ok.iter().find(|m| m.seed == 0), again.ok.first()) {
+        let bits = |m: &Motor| -> Vec<u64> {
+            m.figures
+                .iter()
+                .flatten()
+                .chain(m.factors.iter().flatten())
+                .flat_map(|c| {
+                    let (lo, hi) = c.band.unwrap_or((f64::NAN, f64::NAN));
+                    [c.value, lo, hi].map(f64::to_bits)
+                })
+                .collect()
+        };
+        assert_eq!(bits(a), bits(b));
+    }
+    // Loose bound that holds before the page fixes (main measured a worst error of 19 %
+    // over these motors): a page that prints its displacement predicts every figure at
+    // 3–7 bar g within a factor 2. To be tightened to the targets (≥ 90 % coverage, ≤ 10 %
+    // median half-width, ≤ 10 % worst error) once priors and sample-based bands are in.
+    for m in s.ok.iter().filter(|m| m.displacement_printed) {
+        let e = stats(m.figures.iter().flatten()).worst_error;
+        assert!(e.abs() < 1.0, "motor {}: worst error {e}", m.seed);
+    }
+}
+
+#[test]
+fn page_units_read_back_as_the_twin_printed_them() {
+    // The twin converts to the page's units with its own constants; `vanefit check` reads
+    // them back to SI with vanefit's. Each key figure must come back as the twin's SI value
+    // within the 3-digit rounding (≤ 0.5 % relative), for pages of every unit drawn.
+    let names = [
+        ("free speed", 0),
+        ("max power", 1),
+        ("speed at max power", 2),
+        ("torque at max power", 3),
+        ("stall torque", 4),
+        ("air consumption at max power", 5),
+        ("air consumption at free speed", 6),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let mut units_seen = std::collections::BTreeSet::new();
+    let mut compared = 0;
+    for seed in 0..24u64 {
+        let page_dir = dir.path().join(format!("p{seed}"));
+        std::fs::create_dir_all(&page_dir).unwrap();
+        let style = page_style(seed);
+        let page = print_page(&page_dir, &random_motor(seed, &SPREAD), &style).unwrap();
+        units_seen.extend(style.units.map(|u| u.printed));
+        let out = match vanefit(&["check", page_dir.to_str().unwrap()]) {
+            Ok(out) => out,
+            // A page refused at its file, line and column (see the end-to-end test).
+            Err((Some(1), e)) if e.contains(".csv:") || e.contains("rig.toml:") => continue,
+            Err(e) => panic!("{e:?}"),
+        };
+        let truth = row_values(&page.row);
+        for line in out.lines().map(str::trim) {
+            // "free speed   10200 rpm   =   1068.1415 rad_s"
+            let Some((left, right)) = line.split_once(" = ") else {
+                continue;
+            };
+            let Some((name, k)) = names.iter().find(|(n, _)| {
+                left.starts_with(n) && left[n.len()..].starts_with(char::is_whitespace)
+            }) else {
+                continue;
+            };
+            let si: f64 = right.split_whitespace().next().unwrap().parse().unwrap();
+            let rel = si / truth[*k] - 1.0;
+            assert!(
+                rel.abs() <= 0.0051,
+                "seed {seed}, {name}: vanefit reads {si} SI, twin {}",
+                truth[*k]
+            );
+            compared += 1;
+        }
+    }
+    println!("{compared} figures compared, units {units_seen:?}");
+    assert!(compared >= 24 * 3, "{compared}");
+    assert!(units_seen.len() >= 12, "{units_seen:?}");
+}
