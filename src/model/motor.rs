@@ -299,6 +299,7 @@ impl Motor {
     }
 
     /// Evaluates every flow and torque at state `x` under boundary `bc`.
+    #[inline]
     pub fn balance(&self, x: &State, bc: &Boundary) -> Balance {
         let p = &self.params;
         let [p1, p2, pe, omega] = *x;
