@@ -155,7 +155,7 @@ fn displacement_with_slopes(cycle: &Cycle, x: &State) -> (DisplacementFlows, Sta
 fn ideal_torque_with_slopes(cycle: &Cycle, x: &State) -> (f64, State) {
     let [p1, p2, pe, omega] = *x;
     // w = forward_weight(ω), written out so that tanh is taken once for w and w'.
-    let th = (omega / OMEGA_BLEND_RAD_S).tanh();
+    let th = crate::numerics::scalar::tanh(omega / OMEGA_BLEND_RAD_S);
     let w = 0.5 * (1.0 + th);
     let t_fwd = cycle.torque_one_way(p1, p2, pe);
     let t_rev = -cycle.torque_one_way(p2, p1, pe);
@@ -353,7 +353,7 @@ impl Motor {
         let omega = x[idx::OMEGA];
         let (torque, mut grad) = ideal_torque_with_slopes(self.cycle(), x);
         b.torque_ideal_nm = torque;
-        let th = (omega / p.w_reg()).tanh();
+        let th = crate::numerics::scalar::tanh(omega / p.w_reg());
         // The base model's friction_torque(ω) = T_c·tanh(ω/ω_reg) + d·ω, with tanh taken once.
         b.torque_friction_nm = p.t_coulomb() * th + p.visc() * omega;
         b.torque_load_nm = bc.load.torque(omega);

@@ -99,36 +99,48 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
     );
     let (b1, b2) = (up.b_crit, down.b_crit);
     let (s1, s2) = (1.0 / (1.0 - b1).powi(2), 1.0 / (1.0 - b2).powi(2));
-    // ṁ² = a·p² + l·p + c as a polynomial in p = p_m, for each nozzle and regime.
-    let up_poly = |choked: bool| {
-        if choked {
-            (0.0, 0.0, k1 * p_u * p_u)
-        } else {
-            (
-                -k1 * s1,
-                2.0 * k1 * s1 * b1 * p_u,
-                k1 * p_u * p_u * (1.0 - b1 * b1 * s1),
-            )
-        }
-    };
-    let down_poly = |choked: bool| {
-        if choked {
-            (k2, 0.0, 0.0)
-        } else {
-            (
-                k2 * (1.0 - b2 * b2 * s2),
-                2.0 * k2 * s2 * b2 * p_d,
-                -k2 * s2 * p_d * p_d,
-            )
-        }
-    };
+    // ṁ² = a·p² + l·p + c as a polynomial in p = p_m, for each nozzle's subsonic regime; a
+    // choked nozzle passes k1·p_u² (the first) or k2·p² (the second). Each polynomial is
+    // formed once (formed per use, they were a third of this function's instructions).
+    let choked_up = k1 * p_u * p_u;
+    let sub_up = (
+        -k1 * s1,
+        2.0 * k1 * s1 * b1 * p_u,
+        choked_up * (1.0 - b1 * b1 * s1),
+    );
+    let sub_down = (
+        k2 * (1.0 - b2 * b2 * s2),
+        2.0 * k2 * s2 * b2 * p_d,
+        -k2 * s2 * p_d * p_d,
+    );
     let eval = |(a, l, c): (f64, f64, f64), p: f64| (a * p + l) * p + c;
     let (edge_up, edge_down) = (b1 * p_u, p_d / b2);
-    let balance_at = |p: f64| eval(up_poly(p <= edge_up), p) - eval(down_poly(p >= edge_down), p);
-    let up_choked = edge_up > p_d && balance_at(edge_up) <= 0.0;
-    let down_choked = edge_down < p_u && balance_at(edge_down) >= 0.0;
-    let (a1, l1, c1) = up_poly(up_choked);
-    let (a2, l2, c2) = down_poly(down_choked);
+    let up_at = |p: f64| {
+        if p <= edge_up {
+            choked_up
+        } else {
+            eval(sub_up, p)
+        }
+    };
+    let down_at = |p: f64| {
+        if p >= edge_down {
+            k2 * p * p
+        } else {
+            eval(sub_down, p)
+        }
+    };
+    let up_choked = edge_up > p_d && choked_up - down_at(edge_up) <= 0.0;
+    let down_choked = edge_down < p_u && up_at(edge_down) - k2 * edge_down * edge_down >= 0.0;
+    let (a1, l1, c1) = if up_choked {
+        (0.0, 0.0, choked_up)
+    } else {
+        sub_up
+    };
+    let (a2, l2, c2) = if down_choked {
+        (k2, 0.0, 0.0)
+    } else {
+        sub_down
+    };
     let in_regimes = |p: f64| {
         let up_ok = if up_choked {
             p <= edge_up
@@ -146,7 +158,12 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
         .into_iter()
         .flatten()
         .find(|p| in_regimes(*p))?;
-    Some((p_m, eval((a1, l1, c1), p_m)))
+    let flow_squared = if up_choked {
+        choked_up
+    } else {
+        eval(sub_up, p_m)
+    };
+    Some((p_m, flow_squared))
 }
 
 /// Real roots of a·x² + b·x + c = 0, computed without cancellation.

@@ -100,7 +100,7 @@ impl Cycle {
 /// Weight of the forward direction in the torque blend, ½(1 + tanh(ω/ω_b)) (docs/model.md,
 /// "Cycle work and torque").
 pub(crate) fn forward_weight(omega: f64) -> f64 {
-    0.5 * (1.0 + (omega / OMEGA_BLEND_RAD_S).tanh())
+    0.5 * (1.0 + crate::numerics::scalar::tanh(omega / OMEGA_BLEND_RAD_S))
 }
 
 /// Displacement mass flows of the ideal motor, kg/s, as net flows INTO each lumped volume.

@@ -9,6 +9,7 @@ use crate::sim::recording::{Column, ExperimentData};
 use crate::sim::schedule::Schedule;
 use crate::sim::steady;
 use crate::units::Quantity;
+use std::cell::Cell;
 
 /// Transient driven by supply pressure and port-2 conductance schedules.
 #[derive(Debug, Clone)]
@@ -100,9 +101,22 @@ impl Drive for Transient {
         let bc0 = self.boundary_at(setting, t0);
         let x0 = steady::free(motor, &bc0, &steady::initial_guess(&bc0))
             .map_err(|e| setting.fail(format!("initial state: {e}")))?;
-        let rhs = |t: f64, x: &State| motor.derivatives(x, &self.boundary_at(setting, t));
+        // The inputs at the last time asked for: a Rosenbrock step evaluates its last two
+        // stages at the same time, and the next step's linearisation there again (the
+        // schedules and the conductance's `exp` were ~6 % of an evaluation's instructions).
+        let last = Cell::new((f64::NAN, (0.0, None)));
+        let inputs = |t: f64| {
+            let (t_last, known) = last.get();
+            if t_last == t {
+                return known;
+            }
+            let now = inputs_at(&self.p_supply, self.log10_c_port2.as_ref(), t);
+            last.set((t, now));
+            now
+        };
+        let rhs = |t: f64, x: &State| motor.derivatives(x, &boundary(setting, inputs(t)));
         let jacobian = |t: f64, x: &State| {
-            let inputs = inputs_at(&self.p_supply, self.log10_c_port2.as_ref(), t);
+            let inputs = inputs(t);
             let bc = boundary(setting, inputs);
             let rate = self.rate_at(setting, t, inputs.0);
             let (f, jac, f_t) = motor.derivatives_jacobian_and_time_slope(x, &bc, &rate)?;
@@ -112,7 +126,7 @@ impl Drive for Transient {
                 f_t: Some(f_t),
             })
         };
-        let kinks = |t: f64, x: &State| motor.laminar_margins(x, &self.boundary_at(setting, t));
+        let kinks = |t: f64, x: &State| motor.laminar_margins(x, &boundary(setting, inputs(t)));
         let states = solver
             .solve_with_kinks(&rhs, &jacobian, &kinks, t0, x0, times)
             .map_err(|e| setting.fail(e.to_string()))?;
