@@ -4,6 +4,7 @@
 
 mod catalogue_predict;
 mod predict;
+mod sampled_bands;
 #[path = "../twin/mod.rs"]
 mod twin;
 mod twin_catalogue;
