@@ -42,8 +42,9 @@ def runs(posterior, starts):
     mine = posterior.sample(starts, STEPS, burn_in=BURN, seed=7)["chain"]
     sampler = emcee.EnsembleSampler(
         WALKERS, starts.shape[1], posterior.log_posterior,
-        moves=emcee.moves.StretchMove(a=2.0), seed=11,
+        moves=emcee.moves.StretchMove(a=2.0),
     )
+    sampler.random_state = np.random.RandomState(11).get_state()
     sampler.run_mcmc(starts, BURN + STEPS, progress=False)
     theirs = sampler.get_chain(discard=BURN)
     return mine, theirs

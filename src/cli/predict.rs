@@ -12,12 +12,12 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 use vanefit::data::fitfile::FitFile;
+use vanefit::predict::{BandChoice, SamplingOptions};
 use vanefit::report::predict::{notes, tables_markdown};
 use vanefit::task::predict::{
     fit_atmosphere_pa, predict_observed, pressure_unit, source_name, write_prediction,
     PredictOptions,
 };
-use vanefit::predict::{BandChoice, SamplingOptions};
 
 /// Progress of the posterior samples on stderr: a line per tenth of each stage.
 #[derive(Default)]

@@ -90,7 +90,9 @@ pub enum PredictError {
     #[error("sampling the posterior: {0}")]
     Sampling(#[from] crate::estimate::sample::SampleError),
     /// Too many posterior samples gave no figures.
-    #[error("{failed} of {total} posterior samples gave no figures (the motor fails at some pressure)")]
+    #[error(
+        "{failed} of {total} posterior samples gave no figures (the motor fails at some pressure)"
+    )]
     SampleFigures {
         /// Samples without figures.
         failed: usize,

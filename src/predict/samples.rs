@@ -28,8 +28,7 @@ use super::PredictError;
 use crate::data::fitfile::FitFile;
 use crate::estimate::fit_likelihood::FitLikelihood;
 use crate::estimate::sample::{
-    run_ensemble, summarise, EnsembleSettings, FitPosterior, LogDensity, LogPrior,
-    ParamDiagnostics,
+    run_ensemble, summarise, EnsembleSettings, FitPosterior, LogDensity, LogPrior, ParamDiagnostics,
 };
 use crate::model::motor::Motor;
 use crate::model::params::ParamSet;
@@ -110,7 +109,8 @@ impl Default for SamplingOptions {
 impl SamplingOptions {
     /// The walkers for `d` parameters: as asked, else max(16, 4·d) rounded up to even.
     pub fn walkers_for(&self, d: usize) -> usize {
-        self.walkers.unwrap_or_else(|| (4 * d).max(16).div_ceil(2) * 2)
+        self.walkers
+            .unwrap_or_else(|| (4 * d).max(16).div_ceil(2) * 2)
     }
 }
 

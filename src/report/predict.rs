@@ -442,9 +442,9 @@ pub fn band_notes(pr: &Prediction) -> Vec<String> {
     match (&b.sampling, &b.delta_unreliable) {
         (Some(s), _) => {
             let why = match &b.delta_unreliable {
-                Some(w) if b.choice == BandChoice::Auto => format!(
-                    " (--bands auto: the delta method is not to be trusted here: {w})"
-                ),
+                Some(w) if b.choice == BandChoice::Auto => {
+                    format!(" (--bands auto: the delta method is not to be trusted here: {w})")
+                }
                 _ => format!(" (--bands {})", b.choice.name()),
             };
             out.push(format!(

@@ -7,8 +7,8 @@
 //! names the file or field, before anything is written.
 
 use super::OptionError;
-use crate::data::fitfile::{FitFile, FitFileError};
 use crate::data::dataset::{DataError, Dataset};
+use crate::data::fitfile::{FitFile, FitFileError};
 use crate::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use crate::predict::Prediction;
 use crate::predict::{

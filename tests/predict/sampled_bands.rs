@@ -9,8 +9,8 @@ use vanefit::data::dataset::Dataset;
 use vanefit::data::fitfile::FitFile;
 use vanefit::estimate::fit_likelihood::FitLikelihood;
 use vanefit::predict::{
-    predict_with, BandChoice, BandMethod, BandRequest, PosteriorSource, PredictOptions,
-    Prediction, SamplingOptions,
+    predict_with, BandChoice, BandMethod, BandRequest, PosteriorSource, PredictOptions, Prediction,
+    SamplingOptions,
 };
 
 const CATALOGUE: &str = "measurements/ar034-synthetic-catalogue";
@@ -32,7 +32,13 @@ fn vanefit(args: &[&str]) -> String {
 /// A fit of the catalogue page (`extra`: more `fit` options) into `dir`.
 fn catalogue_fit(dir: &Path, extra: &[&str]) -> PathBuf {
     let fit = dir.join("fit.json");
-    let mut args = vec!["fit", CATALOGUE, "--no-plots", "--out", fit.to_str().unwrap()];
+    let mut args = vec![
+        "fit",
+        CATALOGUE,
+        "--no-plots",
+        "--out",
+        fit.to_str().unwrap(),
+    ];
     args.extend(extra);
     vanefit(&args);
     fit
@@ -73,7 +79,10 @@ fn auto_samples_where_the_fit_is_not_identifiable_and_says_which_method_made_the
     let md = std::fs::read_to_string(dir.path().join("auto/predict.md")).unwrap();
     assert!(md.contains("POSTERIOR SAMPLES"), "{md}");
     assert!(md.contains("c_out2 is not identifiable"), "{md}");
-    assert!(md.contains("## Posterior samples") && md.contains("R̂"), "{md}");
+    assert!(
+        md.contains("## Posterior samples") && md.contains("R̂"),
+        "{md}"
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("auto/bands.json")).unwrap())
             .unwrap();
@@ -152,6 +161,9 @@ fn where_the_posterior_is_close_to_gaussian_samples_and_delta_agree() {
     }
     ratios.sort_by(f64::total_cmp);
     let median = ratios[ratios.len() / 2];
-    assert!((0.8..1.25).contains(&median), "width ratios samples/delta: {ratios:?}");
+    assert!(
+        (0.8..1.25).contains(&median),
+        "width ratios samples/delta: {ratios:?}"
+    );
     assert!(ratios.iter().all(|r| (0.5..2.0).contains(r)), "{ratios:?}");
 }
