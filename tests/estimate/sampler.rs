@@ -52,8 +52,11 @@ fn mean_of(chains: &Chains, f: &dyn Fn(&[f64]) -> f64) -> f64 {
     all.iter().map(|x| f(x)).sum::<f64>() / all.len() as f64
 }
 
+/// Mean, covariance and log-density of a test Gaussian.
+type Gaussian<F> = (Vec<f64>, [[f64; 2]; 2], F);
+
 /// A correlated Gaussian: N(μ, Σ) with correlation 0.9 and unequal scales.
-fn gaussian() -> (Vec<f64>, [[f64; 2]; 2], impl Fn(&[f64]) -> f64 + Sync) {
+fn gaussian() -> Gaussian<impl Fn(&[f64]) -> f64 + Sync> {
     let mu = vec![1.0, -2.0];
     let (s1, s2, rho) = (1.0, 0.1, 0.9);
     let cov = [[s1 * s1, rho * s1 * s2], [rho * s1 * s2, s2 * s2]];
