@@ -9,6 +9,7 @@ mod control;
 mod errors;
 mod fitting;
 mod observe;
+mod sampling;
 mod tasks;
 
 use errors::{data_err, param_err, DataError, ParameterError, VanefitError};
@@ -311,6 +312,38 @@ impl PyLikelihood {
         py.detach(|| self.inner.chi2(&x))
     }
 
+    /// ln p at sampling coordinates `x` (ln θ of a log-scale parameter, θ otherwise):
+    /// −½·(χ² − χ²_min)/s² with a prior flat in `x` within the search bounds; −inf outside
+    /// them or where the simulation fails.
+    fn log_posterior(&self, py: Python<'_>, x: Vec<f64>) -> PyResult<f64> {
+        sampling::log_posterior(&self.inner, py, x)
+    }
+
+    /// The sampling coordinates of SI values.
+    fn to_coords(&self, values: Vec<f64>) -> Vec<f64> {
+        vanefit::estimate::sample::FitPosterior::new(&self.inner).to_coords(&values)
+    }
+
+    /// The SI values at sampling coordinates.
+    fn to_values(&self, x: Vec<f64>) -> Vec<f64> {
+        vanefit::estimate::sample::FitPosterior::new(&self.inner).to_values(&x)
+    }
+
+    /// Runs vanefit's ensemble sampler on the log-posterior from `starts` (one list of
+    /// coordinates per walker): (chains[walker][step][param], ln p[walker][step],
+    /// acceptance per walker).
+    #[pyo3(signature = (starts, steps, burn_in=0, seed=1))]
+    fn sample(
+        &self,
+        py: Python<'_>,
+        starts: Vec<Vec<f64>>,
+        steps: usize,
+        burn_in: usize,
+        seed: u64,
+    ) -> PyResult<sampling::Run> {
+        sampling::sample(&self.inner, py, starts, steps, burn_in, seed)
+    }
+
     /// χ² at `x` split into data and prior parts with every compared row, as JSON.
     fn breakdown(&self, py: Python<'_>, x: Vec<f64>) -> PyResult<String> {
         let b = py
@@ -356,6 +389,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tasks::export_petab, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::synth, m)?)?;
     m.add_function(wrap_pyfunction!(control::control, m)?)?;
+    m.add_function(wrap_pyfunction!(sampling::chain_diagnostics, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

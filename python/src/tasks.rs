@@ -52,6 +52,7 @@ pub fn predict(
         speed_grid_rpm,
         curve_points,
         fixed_spread,
+        ..PredictOptions::default()
     }
     .check(task::fit_atmosphere_pa(&file))
     .map_err(|e| option_err(&e))?;

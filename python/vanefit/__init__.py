@@ -50,6 +50,7 @@ __all__ = [
     "Prediction",
     "StudyResult",
     "Likelihood",
+    "chain_diagnostics",
     "DataError",
     "ParameterError",
     "VanefitError",
@@ -296,6 +297,46 @@ class Likelihood:
             for k in ("rows", "data", "simulated", "residuals"):
                 c[k] = np.asarray(c[k])
         return b
+
+    def log_posterior(self, x: Sequence[float]) -> float:
+        """ln p at sampling coordinates ``x`` (ln θ of a log-scale parameter, θ otherwise):
+        −½·(χ² − χ²_min)/s² (s² = ``threshold``/χ²₁(0.95)) with a prior flat in ``x`` within
+        the search bounds; −inf outside them or where the simulation fails. The density
+        ``vanefit predict --bands samples`` samples; a callable for emcee."""
+        return self._core.log_posterior([float(v) for v in x])
+
+    def to_coords(self, values: Sequence[float]) -> np.ndarray:
+        """Sampling coordinates of SI values."""
+        return np.asarray(self._core.to_coords([float(v) for v in values]))
+
+    def to_values(self, x: Sequence[float]) -> np.ndarray:
+        """SI values at sampling coordinates."""
+        return np.asarray(self._core.to_values([float(v) for v in x]))
+
+    def sample(
+        self, starts: Any, steps: int, burn_in: int = 0, seed: int = 1
+    ) -> Dict[str, np.ndarray]:
+        """Runs vanefit's affine-invariant ensemble sampler (the stretch move, as emcee) on
+        :meth:`log_posterior` from ``starts`` (walkers × parameters, sampling coordinates).
+        Returns ``chain`` (steps × walkers × parameters, emcee's ``get_chain()`` layout),
+        ``log_prob`` (steps × walkers) and ``acceptance`` (per walker). The same seed gives
+        the same chains whatever the thread count."""
+        x0 = [[float(v) for v in row] for row in np.asarray(starts, dtype=float)]
+        chains, lp, acc = self._core.sample(x0, int(steps), int(burn_in), int(seed))
+        return {
+            "chain": np.transpose(np.asarray(chains), (1, 0, 2)),
+            "log_prob": np.asarray(lp).T,
+            "acceptance": np.asarray(acc),
+        }
+
+
+def chain_diagnostics(chains: Any) -> Dict[str, np.ndarray]:
+    """vanefit's convergence diagnostics of ``chains`` (chain × draw × parameter): the
+    rank-normalised split-R̂, bulk and tail effective sample sizes (Vehtari et al. 2021), as
+    ``predict.md`` and ``bands.json`` report them. For an ensemble, each walker is a chain."""
+    a = np.asarray(chains, dtype=float)
+    d = np.asarray(_core.chain_diagnostics(a.tolist()))
+    return {"rhat": d[:, 0], "ess_bulk": d[:, 1], "ess_tail": d[:, 2]}
 
 
 def likelihood(ds: Dataset, fit: Union[Fit, PathLike]) -> Likelihood:

@@ -12,10 +12,34 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 use vanefit::data::fitfile::FitFile;
+use vanefit::predict::{BandChoice, SamplingOptions};
 use vanefit::report::predict::{notes, tables_markdown};
 use vanefit::task::predict::{
-    fit_atmosphere_pa, predict, pressure_unit, source_name, write_prediction, PredictOptions,
+    fit_atmosphere_pa, predict_observed, pressure_unit, source_name, write_prediction,
+    PredictOptions,
 };
+
+/// Progress of the posterior samples on stderr: a line per tenth of each stage.
+#[derive(Default)]
+struct Progress {
+    t0: std::sync::OnceLock<Instant>,
+    last: std::sync::Mutex<(String, usize)>,
+}
+
+impl Progress {
+    fn tell(&self, what: &str, done: usize, total: usize) {
+        let t0 = self.t0.get_or_init(Instant::now);
+        let tenth = (10 * done) / total.max(1);
+        let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
+        if last.0 != what || tenth > last.1 {
+            *last = (what.to_string(), tenth);
+            eprintln!(
+                "{what}: {done}/{total} ({:.1} s)",
+                t0.elapsed().as_secs_f64()
+            );
+        }
+    }
+}
 use vanefit::task::OptionError;
 
 /// `vanefit predict` arguments. Values may start with a minus sign (`-1e-9`), so that a
@@ -52,6 +76,32 @@ pub(crate) struct PredictArgs {
     /// catalogue fit's defaults).
     #[arg(long)]
     pub(crate) fixed_spread: Option<f64>,
+    /// How the 95 % bands are made: `delta` (linearised about the estimate with the fit's
+    /// covariance), `samples` (percentiles of the figures of posterior samples; needs
+    /// --data) or `auto`: samples when --data is given and the fit says the delta method
+    /// fails (a parameter not identifiable or without interval, or an interval lopsided
+    /// by more than 1.5:1 in its logarithm), else delta.
+    #[arg(long, default_value = "auto", value_parser = ["auto", "delta", "samples"])]
+    pub(crate) bands: String,
+    /// The dataset folder the fit was made from: lets the bands come from posterior
+    /// samples of its likelihood.
+    #[arg(long)]
+    pub(crate) data: Option<PathBuf>,
+    /// Walkers of the posterior sampler (even; default max(16, 4 × estimated parameters)).
+    #[arg(long)]
+    pub(crate) walkers: Option<usize>,
+    /// Kept steps per walker of the posterior sampler.
+    #[arg(long, default_value_t = vanefit::predict::samples::DEFAULT_STEPS)]
+    pub(crate) steps: usize,
+    /// Steps per walker run first and discarded.
+    #[arg(long, default_value_t = vanefit::predict::samples::DEFAULT_BURN_IN)]
+    pub(crate) burn_in: usize,
+    /// Posterior samples propagated through the figures.
+    #[arg(long, default_value_t = vanefit::predict::samples::DEFAULT_DRAWS)]
+    pub(crate) draws: usize,
+    /// Seed of the posterior sampler; a seed gives the same bands whatever the thread count.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
     /// Output folder (created).
     #[arg(long, default_value = "predict")]
     pub(crate) out: PathBuf,
@@ -94,6 +144,19 @@ impl PredictArgs {
             speed_grid_rpm: self.speed_grid_rpm,
             curve_points: self.curve_points,
             fixed_spread: self.fixed_spread,
+            bands: match self.bands.as_str() {
+                "delta" => BandChoice::Delta,
+                "samples" => BandChoice::Samples,
+                _ => BandChoice::Auto,
+            },
+            data: self.data.clone(),
+            sampling: SamplingOptions {
+                walkers: self.walkers,
+                steps: self.steps,
+                burn_in: self.burn_in,
+                draws: self.draws,
+                seed: self.seed,
+            },
         })
     }
 }
@@ -104,7 +167,10 @@ pub(crate) fn run(args: &PredictArgs) -> Result<(), Failure> {
     vanefit::io::out::check_dir(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
     let fit = FitFile::read(&args.fit)?;
     let settings = args.options()?.check(fit_atmosphere_pa(&fit))?;
-    let prediction = predict(&fit, &settings)?;
+    let bar = Progress::default();
+    let prediction = predict_observed(&fit, &settings, &|what, done, total| {
+        bar.tell(what, done, total)
+    })?;
     let source = source_name(&args.fit, &fit);
     let written = write_prediction(&prediction, &settings, &source, &args.out)?;
     let display = settings.display();

@@ -19,6 +19,7 @@ pub(crate) mod max_likelihood;
 pub mod multistart;
 pub mod objective;
 pub mod optimize;
+pub mod sample;
 pub mod settings;
 pub mod space;
 pub(crate) mod subset;

@@ -19,9 +19,14 @@
 
 mod figures;
 pub mod options;
+pub mod samples;
 pub mod uncertainty;
 
 pub use options::{Nozzle, NozzlePort, PredictOptions};
+pub use samples::{
+    BandChoice, BandMethod, BandRequest, BandsMade, PosteriorSource, PosteriorSummary,
+    SamplingOptions,
+};
 pub use uncertainty::{BandBasis, ParamUncertainty};
 
 use crate::data::fitfile::FitFile;
@@ -78,6 +83,22 @@ pub enum PredictError {
     /// A parameter set moved within the uncertainty is not a valid motor.
     #[error("perturbing the parameters: {0}")]
     Params(#[from] ParamError),
+    /// Bands from samples were asked without the fit's dataset.
+    #[error("bands from posterior samples need the dataset the fit was made from")]
+    NoPosterior,
+    /// The posterior sampler could not run.
+    #[error("sampling the posterior: {0}")]
+    Sampling(#[from] crate::estimate::sample::SampleError),
+    /// Too many posterior samples gave no figures.
+    #[error(
+        "{failed} of {total} posterior samples gave no figures (the motor fails at some pressure)"
+    )]
+    SampleFigures {
+        /// Samples without figures.
+        failed: usize,
+        /// Samples propagated.
+        total: usize,
+    },
 }
 
 /// A predicted figure, SI, with its 95 % band (`None`: no band, see
@@ -140,6 +161,8 @@ pub struct Prediction {
     pub range_tolerance_pa: f64,
     /// Discovered terms of the fit's model (their coefficients are taken as exact).
     pub discovered_terms: usize,
+    /// Which method made the bands, and why.
+    pub bands: BandsMade,
 }
 
 /// The fit's motor, discovered terms included.
@@ -162,14 +185,61 @@ fn centre_and_figures(
     Ok((centre, speeds))
 }
 
-/// Predicts the fitted motor under `options` with 95 % bands (see the module
+/// Predicts the fitted motor under `options` with 95 % delta-method bands (see the module
 /// documentation and [`uncertainty`]).
 pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, PredictError> {
+    let sampling = SamplingOptions::default();
+    let request = BandRequest {
+        choice: BandChoice::Delta,
+        posterior: None,
+        sampling: &sampling,
+        progress: &|_, _, _| {},
+    };
+    predict_with(fit, options, &request)
+}
+
+/// Predicts the fitted motor under `options` with 95 % bands made as `request` asks: the
+/// delta method, or percentiles of posterior samples ([`samples`]).
+pub fn predict_with(
+    fit: &FitFile,
+    options: &PredictOptions,
+    request: &BandRequest,
+) -> Result<Prediction, PredictError> {
     let (centre, speeds) = centre_and_figures(fit, options)?;
     let unc = ParamUncertainty::of(fit, options.fixed_spread);
     let shown = centre.flat(false);
     let figures = |m: &Motor| Outcome::of(m, options, Some(&speeds)).map(|o| o.flat(true));
-    let bands = unc.delta_bands(fit, &shown, &figures)?;
+    let unreliable = samples::delta_unreliable(fit);
+    let use_samples = match request.choice {
+        BandChoice::Delta => false,
+        BandChoice::Samples => true,
+        BandChoice::Auto => unreliable.is_some() && request.posterior.is_some(),
+    };
+    let (bands, sampling) = match (use_samples, request.posterior) {
+        (false, _) => (unc.delta_bands(fit, &shown, &figures)?, None),
+        (true, None) => return Err(PredictError::NoPosterior),
+        (true, Some(source)) => {
+            let (b, summary) = samples::sample_bands(
+                fit,
+                &unc,
+                source,
+                request.sampling,
+                &figures,
+                request.progress,
+            )?;
+            (Some(b), Some(summary))
+        }
+    };
+    let made = BandsMade {
+        method: if sampling.is_some() {
+            BandMethod::Samples
+        } else {
+            BandMethod::Delta
+        },
+        choice: request.choice,
+        delta_unreliable: unreliable,
+        sampling,
+    };
     let band = |i: usize| Banded {
         value: shown[i],
         band95: bands.as_ref().map(|b| b[i]),
@@ -218,6 +288,7 @@ pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, Pr
         uncertainty: unc,
         range_tolerance_pa: tolerance,
         discovered_terms: fit.extra.len(),
+        bands: made,
     })
 }
 

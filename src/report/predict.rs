@@ -10,7 +10,7 @@
 //! when the fit gives no band); `extrapolated` is `true` for a pressure outside those the
 //! fitted data covered (empty when the fit does not say which).
 
-use crate::predict::{Banded, Prediction, PressurePrediction};
+use crate::predict::{BandChoice, BandMethod, Banded, Prediction, PressurePrediction};
 use crate::report::plot::{PlotError, COLOURS};
 use crate::units::Unit;
 use plotters::prelude::*;
@@ -363,10 +363,13 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
             display.text(o.reference_pa),
             display.label()
         ),
-        format!("{}.", pr.uncertainty.basis.describe()),
     ];
+    notes.extend(band_notes(pr));
+    let sampled: &[String] = pr.bands.sampling.as_ref().map_or(&[], |s| &s.names);
     for (name, why) in &pr.uncertainty.uncovered {
-        notes.push(format!("The band does not cover {name}: {why}."));
+        if !sampled.contains(name) {
+            notes.push(format!("The band does not cover {name}: {why}."));
+        }
     }
     if let (Some(f), false) = (
         pr.uncertainty.spread_factor,
@@ -431,6 +434,161 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
     notes
 }
 
+/// The notes on which method made the bands (every band of a prediction is made by one
+/// method), why, and how well the samples converged.
+pub fn band_notes(pr: &Prediction) -> Vec<String> {
+    let b = &pr.bands;
+    let mut out = Vec::new();
+    match (&b.sampling, &b.delta_unreliable) {
+        (Some(s), _) => {
+            let why = match &b.delta_unreliable {
+                Some(w) if b.choice == BandChoice::Auto => {
+                    format!(" (--bands auto: the delta method is not to be trusted here: {w})")
+                }
+                _ => format!(" (--bands {})", b.choice.name()),
+            };
+            out.push(format!(
+                "EVERY band is made from POSTERIOR SAMPLES{why}: the 2.5 and 97.5 percentiles \
+                 of each figure over {} samples of {} ({} walkers × {} steps after {} burn-in, \
+                 affine-invariant ensemble, seed {}, acceptance {:.2}); the value is the \
+                 figure at the estimate.",
+                s.draws - s.failed_draws,
+                s.names.join(", "),
+                s.walkers,
+                s.steps,
+                s.burn_in,
+                s.seed,
+                s.acceptance
+            ));
+            let worst_rhat = s.diagnostics.iter().map(|d| d.rhat).fold(0.0, f64::max);
+            let least_ess = s
+                .diagnostics
+                .iter()
+                .map(|d| d.ess_bulk.min(d.ess_tail))
+                .fold(f64::INFINITY, f64::min);
+            out.push(if s.converged() {
+                format!(
+                    "The samples converged: largest R̂ {worst_rhat:.3} (< 1.01), smallest \
+                     effective sample size {least_ess:.0} (≥ 400)."
+                )
+            } else {
+                format!(
+                    "The samples did NOT converge by the usual rules (R̂ < 1.01, effective \
+                     sample size ≥ 400): largest R̂ {worst_rhat:.3}, smallest effective sample \
+                     size {least_ess:.0}; run longer (--steps) before trusting the bands."
+                )
+            });
+            let outside = outside_own_band(pr);
+            if outside > 0 {
+                out.push(format!(
+                    "{outside} figure(s) at the estimate lie OUTSIDE their own band: the \
+                     posterior's mass lies away from the best fit (a lopsided valley, or a \
+                     parameter the data do not pin and the prior does not hold)."
+                ));
+            }
+            if s.failed_draws > 0 {
+                out.push(format!(
+                    "{} of {} samples gave no figures (the motor fails at some pressure) and \
+                     are left out.",
+                    s.failed_draws, s.draws
+                ));
+            }
+            if !s.spread.is_empty() {
+                out.push(format!(
+                    "{} not sampled: drawn for each sample within the stated spread.",
+                    s.spread.join(", ")
+                ));
+            }
+        }
+        (None, Some(w)) => {
+            out.push(format!("{}.", pr.uncertainty.basis.describe()));
+            out.push(match b.choice {
+                BandChoice::Delta => format!(
+                    "The delta method is NOT to be trusted here ({w}); --bands samples (with \
+                     the fit's dataset, --data) bands from posterior samples instead."
+                ),
+                _ => format!(
+                    "The delta method is NOT to be trusted here ({w}), but the fit's dataset \
+                     was not given (--data): the bands above may be far off."
+                ),
+            });
+        }
+        (None, None) => out.push(format!(
+            "{} (--bands {}).",
+            pr.uncertainty.basis.describe(),
+            b.choice.name()
+        )),
+    }
+    out
+}
+
+/// Catalogue figures and factors (all pressures) whose value at the estimate lies outside
+/// their band.
+fn outside_own_band(pr: &Prediction) -> usize {
+    pr.pressures
+        .iter()
+        .flat_map(|p| p.figures.iter().chain(&p.factors))
+        .filter(|b| {
+            b.band95
+                .is_some_and(|[lo, hi]| b.value < lo.min(hi) || b.value > hi.max(lo))
+        })
+        .count()
+}
+
+/// The posterior samples' table in Markdown (empty when the bands are delta bands):
+/// each parameter's quantiles, R̂ and effective sample sizes.
+pub fn sampling_markdown(pr: &Prediction) -> String {
+    let Some(s) = &pr.bands.sampling else {
+        return String::new();
+    };
+    let mut t = String::from(
+        "## Posterior samples\n\n| parameter | 2.5 % | median | 97.5 % | R̂ | ESS bulk | ESS tail |\n\
+         |---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for ((n, q), d) in s.names.iter().zip(&s.quantiles).zip(&s.diagnostics) {
+        t.push_str(&format!(
+            "| {n} | {:.4e} | {:.4e} | {:.4e} | {:.3} | {:.0} | {:.0} |\n",
+            q[0], q[1], q[2], d.rhat, d.ess_bulk, d.ess_tail
+        ));
+    }
+    t.push('\n');
+    t
+}
+
+/// `sampling.json`: the samples' settings, quantiles and diagnostics (`null` for delta
+/// bands).
+pub fn sampling_json(pr: &Prediction) -> serde_json::Value {
+    let b = &pr.bands;
+    let sampling = b.sampling.as_ref().map(|s| {
+        let params: serde_json::Map<String, serde_json::Value> = s
+            .names
+            .iter()
+            .zip(&s.quantiles)
+            .zip(&s.diagnostics)
+            .map(|((n, q), d)| {
+                (
+                    n.clone(),
+                    serde_json::json!({
+                        "q025": q[0], "median": q[1], "q975": q[2],
+                        "rhat": d.rhat, "ess_bulk": d.ess_bulk, "ess_tail": d.ess_tail,
+                    }),
+                )
+            })
+            .collect();
+        serde_json::json!({
+            "walkers": s.walkers, "steps": s.steps, "burn_in": s.burn_in, "seed": s.seed,
+            "acceptance": s.acceptance, "draws": s.draws, "failed_draws": s.failed_draws,
+            "converged": s.converged(), "spread": s.spread, "parameters": params,
+        })
+    });
+    serde_json::json!({
+        "method": match b.method { BandMethod::Delta => "delta", BandMethod::Samples => "samples" },
+        "asked": b.choice.name(),
+        "delta_unreliable": b.delta_unreliable,
+        "sampling": sampling,
+    })
+}
+
 /// `predict.md`: a title, the tables, the notes and the figures' names.
 pub fn markdown(pr: &Prediction, display: &PressureDisplay, source: &str) -> String {
     let mut text = format!(
@@ -440,6 +598,11 @@ pub fn markdown(pr: &Prediction, display: &PressureDisplay, source: &str) -> Str
     );
     for n in notes(pr, display) {
         text.push_str(&format!("- {n}\n"));
+    }
+    let sampled = sampling_markdown(pr);
+    if !sampled.is_empty() {
+        text.push('\n');
+        text.push_str(&sampled);
     }
     text.push_str(
         "\nFigures: `torque.svg`, `power.svg`, `air.svg` (against speed, one curve per \
@@ -471,6 +634,8 @@ pub fn write(
     put("factors.csv", &factors_csv(pr, display))?;
     put("curves.csv", &curves_csv(pr, display))?;
     put("predict.md", &markdown(pr, display, source))?;
+    let bands = serde_json::to_string_pretty(&sampling_json(pr)).unwrap_or_default();
+    put("bands.json", &bands)?;
     for (k, c) in CURVE.iter().enumerate() {
         let series = pr
             .pressures

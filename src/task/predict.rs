@@ -7,9 +7,13 @@
 //! names the file or field, before anything is written.
 
 use super::OptionError;
+use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
+use crate::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use crate::predict::Prediction;
-use crate::predict::{Nozzle, NozzlePort, PredictError};
+use crate::predict::{
+    BandChoice, BandRequest, Nozzle, NozzlePort, PosteriorSource, PredictError, SamplingOptions,
+};
 use crate::report::predict::{write, PredictReportError, PressureDisplay};
 use crate::units::constants::P_ATM_PA;
 use crate::units::{Quantity, Unit};
@@ -37,11 +41,19 @@ pub struct PredictOptions {
     /// Parameters a fit could estimate but held fixed or could not identify are taken as
     /// uncertain within this factor (> 1, 95 %), so that the bands include them.
     pub fixed_spread: Option<f64>,
+    /// Which method makes the bands: the delta method, posterior samples, or `auto`
+    /// (samples where the fit says the delta method fails and `data` is given;
+    /// [`crate::predict::samples`]).
+    pub bands: BandChoice,
+    /// The dataset folder the fit was made from (needed to sample the posterior).
+    pub data: Option<PathBuf>,
+    /// Walkers, steps, burn-in, propagated draws and seed of the posterior samples.
+    pub sampling: SamplingOptions,
 }
 
 impl Default for PredictOptions {
     /// The command line's defaults: bar g, 3 to 7 bar g, reference 6.3 bar g, no nozzle,
-    /// a 1 rpm grid, 41 curve points.
+    /// a 1 rpm grid, 41 curve points, `auto` bands without a dataset, the default sampling.
     fn default() -> Self {
         Self {
             unit: Unit::BarG,
@@ -52,6 +64,9 @@ impl Default for PredictOptions {
             speed_grid_rpm: 1.0,
             curve_points: crate::predict::options::DEFAULT_CURVE_POINTS,
             fixed_spread: None,
+            bands: BandChoice::Auto,
+            data: None,
+            sampling: SamplingOptions::default(),
         }
     }
 }
@@ -166,10 +181,47 @@ impl PredictOptions {
             }
         }
         o.fixed_spread = self.fixed_spread;
+        self.check_sampling()?;
         Ok(PredictSettings {
             options: o,
             display: PressureDisplay { unit, p_atm_pa },
+            bands: self.bands,
+            data: self.data.clone(),
+            sampling: self.sampling.clone(),
         })
+    }
+
+    /// Samples asked need the dataset; the sampler's counts must be usable.
+    fn check_sampling(&self) -> Result<(), OptionError> {
+        if self.bands == BandChoice::Samples && self.data.is_none() {
+            return Err(OptionError::new(
+                "PredictOptions.data",
+                ": bands from posterior samples need the dataset the fit was made from",
+            ));
+        }
+        let s = &self.sampling;
+        if let Some(w) = s.walkers.filter(|w| *w < 4 || w % 2 == 1) {
+            return Err(OptionError::new(
+                "PredictOptions.sampling.walkers",
+                format!(" {w}: give an even number ≥ 2·(estimated parameters + 1)"),
+            ));
+        }
+        if s.steps < 20 {
+            return Err(OptionError::new(
+                "PredictOptions.sampling.steps",
+                format!(" {}: give at least 20 kept steps", s.steps),
+            ));
+        }
+        if s.draws < 40 {
+            return Err(OptionError::new(
+                "PredictOptions.sampling.draws",
+                format!(
+                    " {}: give at least 40 draws for a 95 % band's percentiles",
+                    s.draws
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// The extra nozzle: at most one, with a positive conductance.
@@ -208,6 +260,9 @@ impl PredictOptions {
 pub struct PredictSettings {
     options: crate::predict::PredictOptions,
     display: PressureDisplay,
+    bands: BandChoice,
+    data: Option<PathBuf>,
+    sampling: SamplingOptions,
 }
 
 impl PredictSettings {
@@ -234,6 +289,12 @@ pub enum PredictTaskError {
     /// The prediction failed.
     #[error("{0}")]
     Predict(String),
+    /// The fit's dataset cannot be read.
+    #[error("PredictOptions.data: {0}")]
+    Data(#[from] DataError),
+    /// The fit's likelihood cannot be rebuilt on the dataset.
+    #[error("PredictOptions.data: {0}")]
+    Likelihood(#[from] FitLikelihoodError),
     /// The output folder cannot be made.
     #[error("{}: cannot create: {source}", path.display())]
     CreateDir {
@@ -255,8 +316,37 @@ pub fn fit_atmosphere_pa(fit: &FitFile) -> f64 {
 /// The prediction of the fitted motor `fit` under `settings` (a failure at a pressure is
 /// reported in the table's unit, naming the reference when it is the one that failed).
 pub fn predict(fit: &FitFile, settings: &PredictSettings) -> Result<Prediction, PredictTaskError> {
+    predict_observed(fit, settings, &|_, _, _| {})
+}
+
+/// [`predict`], telling `progress` (what, done, total) how long work goes (sampling the
+/// posterior and propagating its samples).
+pub fn predict_observed(
+    fit: &FitFile,
+    settings: &PredictSettings,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Prediction, PredictTaskError> {
     let o = &settings.options;
-    crate::predict::predict(fit, o).map_err(|e| failed(e, &settings.display, o.reference_pa))
+    // The dataset is read (and the likelihood rebuilt) only where samples may be used.
+    let likelihood = match (&settings.data, settings.bands) {
+        (Some(dir), BandChoice::Samples | BandChoice::Auto) => {
+            let ds = Dataset::load(dir)?;
+            Some(FitLikelihood::from_fit(&ds, fit)?)
+        }
+        _ => None,
+    };
+    let request = BandRequest {
+        choice: settings.bands,
+        // With priors in the fit, `prior` is the fit's log-prior of the estimated parameters.
+        posterior: likelihood.as_ref().map(|l| PosteriorSource {
+            likelihood: l,
+            prior: None,
+        }),
+        sampling: &settings.sampling,
+        progress,
+    };
+    crate::predict::predict_with(fit, o, &request)
+        .map_err(|e| failed(e, &settings.display, o.reference_pa))
 }
 
 /// A prediction's failure in the asked unit (naming the reference when the reference

@@ -11,6 +11,7 @@ mod export_petab;
 mod fit_likelihood;
 mod multistart;
 mod recovery;
+mod sampler;
 #[allow(clippy::type_complexity)] // the twin generator is another engineer's code
 #[path = "../twin/mod.rs"]
 mod twin;

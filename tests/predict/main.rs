@@ -5,6 +5,7 @@
 mod catalogue_predict;
 mod page_coverage;
 mod predict;
+mod sampled_bands;
 #[path = "../twin/mod.rs"]
 mod twin;
 mod twin_catalogue;

@@ -1,0 +1,116 @@
+"""vanefit's ensemble sampler against emcee, and its diagnostics against arviz, on the same
+log-posterior: the likelihood of a fit of the catalogue dataset (one supply pressure; a
+curved valley between c_out2 and c_ext that the delta method cannot follow).
+
+Both samplers start from the same walkers; their means and 2.5/50/97.5 % quantiles must
+agree within the Monte-Carlo error the effective sample sizes give. vanefit's R̂ and ESS
+must equal arviz's on the same chains (vanefit's and emcee's) to rounding."""
+
+import json
+
+import numpy as np
+import pytest
+
+import vanefit
+from conftest import ROOT, run_cli
+
+CATALOGUE = ROOT / "measurements" / "ar034-synthetic-catalogue"
+WALKERS, STEPS, BURN = 16, 3000, 1000
+
+
+@pytest.fixture(scope="module")
+def posterior(tmp_path_factory):
+    out = tmp_path_factory.mktemp("catalogue") / "fit.json"
+    run_cli("fit", CATALOGUE, "--no-plots", "--out", out)
+    assert len(json.loads(out.read_text())["statistics"]) > 0
+    ds = vanefit.load_dataset(CATALOGUE)
+    return vanefit.likelihood(ds, out)
+
+
+@pytest.fixture(scope="module")
+def starts(posterior):
+    rng = np.random.default_rng(3)
+    centre = posterior.to_coords(posterior.x_hat)
+    x0 = centre + 0.01 * rng.standard_normal((WALKERS, len(centre)))
+    assert all(np.isfinite(posterior.log_posterior(x)) for x in x0)
+    return x0
+
+
+@pytest.fixture(scope="module")
+def runs(posterior, starts):
+    emcee = pytest.importorskip("emcee")
+    mine = posterior.sample(starts, STEPS, burn_in=BURN, seed=7)["chain"]
+    sampler = emcee.EnsembleSampler(
+        WALKERS, starts.shape[1], posterior.log_posterior,
+        moves=emcee.moves.StretchMove(a=2.0),
+    )
+    sampler.random_state = np.random.RandomState(11).get_state()
+    sampler.run_mcmc(starts, BURN + STEPS, progress=False)
+    theirs = sampler.get_chain(discard=BURN)
+    return mine, theirs
+
+
+def _by_chain(chain):
+    """steps × walkers × parameters → walkers × steps × parameters."""
+    return np.transpose(chain, (1, 0, 2))
+
+
+def test_the_log_posterior_is_zero_at_the_estimate_and_minus_inf_outside_the_bounds(posterior):
+    x = posterior.to_coords(posterior.x_hat)
+    assert abs(posterior.log_posterior(x)) < 1e-6 * max(1.0, posterior.chi2_min)
+    outside = x.copy()
+    outside[0] = np.log(posterior.upper[0]) + 1.0
+    assert posterior.log_posterior(outside) == -np.inf
+    np.testing.assert_allclose(posterior.to_values(x), posterior.x_hat, rtol=1e-12)
+
+
+def test_vanefit_s_sampler_agrees_with_emcee_within_monte_carlo_error(runs):
+    mine, theirs = runs
+    d_mine = vanefit.chain_diagnostics(_by_chain(mine))
+    d_theirs = vanefit.chain_diagnostics(_by_chain(theirs))
+    flat_m = mine.reshape(-1, mine.shape[2])
+    flat_t = theirs.reshape(-1, theirs.shape[2])
+    lines = []
+    for j in range(flat_m.shape[1]):
+        sd = 0.5 * (flat_m[:, j].std() + flat_t[:, j].std())
+        ess_b = np.array([d_mine["ess_bulk"][j], d_theirs["ess_bulk"][j]])
+        ess_t = np.array([d_mine["ess_tail"][j], d_theirs["ess_tail"][j]])
+        se_mean = sd * np.sqrt(np.sum(1.0 / ess_b))
+        diff = flat_m[:, j].mean() - flat_t[:, j].mean()
+        lines.append(f"param {j}: mean {flat_m[:, j].mean():.4f} vs {flat_t[:, j].mean():.4f} "
+                     f"(± {se_mean:.4f})")
+        assert abs(diff) < 4 * se_mean, lines[-1]
+        for q, ess in ((0.025, ess_t), (0.5, ess_b), (0.975, ess_t)):
+            qm, qt = np.quantile(flat_m[:, j], q), np.quantile(flat_t[:, j], q)
+            # Standard error of a quantile from the ESS: the spread of the q ± se_p
+            # quantiles of the pooled draws, se_p = √(q(1 − q)/ESS).
+            pooled = np.concatenate([flat_m[:, j], flat_t[:, j]])
+            se = sum(
+                (np.quantile(pooled, min(q + np.sqrt(q * (1 - q) / e), 1.0))
+                 - np.quantile(pooled, max(q - np.sqrt(q * (1 - q) / e), 0.0))) / 2
+                for e in ess
+            ) / np.sqrt(2)
+            lines.append(f"param {j}: q{q} {qm:.4f} vs {qt:.4f} (± {se:.4f})")
+            assert abs(qm - qt) < 4 * se + 1e-12, lines[-1]
+    print("\n".join(lines))
+
+
+@pytest.mark.parametrize("which", [0, 1], ids=["vanefit chains", "emcee chains"])
+def test_diagnostics_equal_arviz_s_on_the_same_chains(runs, which):
+    az = pytest.importorskip("arviz")
+    chains = _by_chain(runs[which])
+    mine = vanefit.chain_diagnostics(chains)
+    for j in range(chains.shape[2]):
+        x = chains[:, :, j]
+        assert mine["rhat"][j] == pytest.approx(float(az.rhat(x, method="rank")), rel=1e-6)
+        assert mine["ess_bulk"][j] == pytest.approx(float(az.ess(x, method="bulk")), rel=1e-6)
+        assert mine["ess_tail"][j] == pytest.approx(float(az.ess(x, method="tail")), rel=1e-6)
+
+
+def test_the_sampler_is_deterministic_for_a_seed(posterior, starts):
+    a = posterior.sample(starts, 20, seed=3)
+    b = posterior.sample(starts, 20, seed=3)
+    c = posterior.sample(starts, 20, seed=4)
+    np.testing.assert_array_equal(a["chain"], b["chain"])
+    assert not np.array_equal(a["chain"], c["chain"])
+    assert a["chain"].shape == (20, WALKERS, starts.shape[1])

@@ -1,0 +1,291 @@
+//! Convergence diagnostics of a set of chains, as Vehtari, Gelman, Simpson, Carpenter &
+//! Bürkner (2021, "Rank-normalization, folding, and localization: an improved R̂ for
+//! assessing convergence of MCMC", Bayesian Analysis 16(2)) define them and arviz computes
+//! them:
+//!
+//! * split chains: each chain's first and last ⌊n/2⌋ draws as two chains;
+//! * rank normalisation: z = Φ⁻¹((r − 3/8)/(S + 1/4)), r the draw's average rank among all
+//!   S draws;
+//! * R̂ = √((B/W + n − 1)/n) on the split chains (B = n·var of the chain means, W = mean
+//!   within-chain variance); the rank R̂ is the larger of the bulk R̂ (rank-normalised draws)
+//!   and the tail R̂ (rank-normalised |x − median|). Below 1.01 is converged (their advice);
+//! * ESS = M·n/τ, τ = −1 + 2·Σ ρ̂_t summed by Geyer's initial monotone sequence over the
+//!   split chains (ρ̂_t = 1 − (W − mean autocovariance at lag t)/var⁺); bulk ESS on the
+//!   rank-normalised draws, tail ESS the smaller of those of the indicators x ≤ q₀.₀₅ and
+//!   x ≤ q₀.₉₅. At least 100 per parameter (400 over all chains) is their advice for
+//!   reliable 95 % intervals.
+//!
+//! For an ensemble sampler each walker is one chain (as arviz reads emcee's chains); the
+//! walkers are not independent, so the ESS is a guide, not exact.
+
+/// The diagnostics of one parameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamDiagnostics {
+    /// Rank-normalised split-R̂ (larger of bulk and tail).
+    pub rhat: f64,
+    /// Bulk effective sample size.
+    pub ess_bulk: f64,
+    /// Tail effective sample size (5 % and 95 % quantiles).
+    pub ess_tail: f64,
+}
+
+/// R̂ below which chains count as converged (Vehtari et al. 2021).
+pub const RHAT_LIMIT: f64 = 1.01;
+/// Effective sample size per 95 % band end above which the band counts as reliable
+/// (Vehtari et al. 2021: 100 per chain for 4 chains).
+pub const ESS_LIMIT: f64 = 400.0;
+
+/// The diagnostics of every parameter of `chains[walker][step][param]`.
+pub fn summarise(chains: &[Vec<Vec<f64>>]) -> Vec<ParamDiagnostics> {
+    let d = chains.first().and_then(|c| c.first()).map_or(0, Vec::len);
+    (0..d)
+        .map(|i| {
+            let x: Vec<Vec<f64>> = chains
+                .iter()
+                .map(|c| c.iter().map(|v| v[i]).collect())
+                .collect();
+            ParamDiagnostics {
+                rhat: rhat_rank(&x),
+                ess_bulk: ess_bulk(&x),
+                ess_tail: ess_tail(&x),
+            }
+        })
+        .collect()
+}
+
+/// Each chain's first and last ⌊n/2⌋ draws as two chains (the middle draw of an odd n is
+/// left out).
+pub fn split_chains(x: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut out = Vec::with_capacity(2 * x.len());
+    for c in x {
+        let half = c.len() / 2;
+        out.push(c[..half].to_vec());
+    }
+    for c in x {
+        let half = c.len() / 2;
+        out.push(c[c.len() - half..].to_vec());
+    }
+    out
+}
+
+/// Rank-normalised draws: Φ⁻¹((r − 3/8)/(S + 1/4)), r the average rank over all chains.
+pub fn z_scale(x: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let flat: Vec<f64> = x.iter().flatten().copied().collect();
+    let s = flat.len();
+    let mut order: Vec<usize> = (0..s).collect();
+    order.sort_by(|a, b| flat[*a].total_cmp(&flat[*b]));
+    let mut rank = vec![0.0; s];
+    let mut i = 0;
+    while i < s {
+        let mut j = i;
+        while j + 1 < s && flat[order[j + 1]] == flat[order[i]] {
+            j += 1;
+        }
+        let average = (i + j) as f64 / 2.0 + 1.0;
+        for o in &order[i..=j] {
+            rank[*o] = average;
+        }
+        i = j + 1;
+    }
+    let mut k = 0;
+    x.iter()
+        .map(|c| {
+            c.iter()
+                .map(|_| {
+                    let r = rank[k];
+                    k += 1;
+                    normal_quantile((r - 0.375) / (s as f64 + 0.25))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Mean and unbiased variance (ddof 1).
+fn mean_var(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+    (m, var)
+}
+
+/// Plain R̂ of equal-length chains, √((B/W + n − 1)/n).
+pub fn rhat(x: &[Vec<f64>]) -> f64 {
+    let n = x.first().map_or(0, Vec::len) as f64;
+    let (means, vars): (Vec<f64>, Vec<f64>) = x.iter().map(|c| mean_var(c)).unzip();
+    let b = n * mean_var(&means).1;
+    let w = vars.iter().sum::<f64>() / vars.len() as f64;
+    ((b / w + n - 1.0) / n).sqrt()
+}
+
+/// The rank-normalised split-R̂: the larger of the bulk and the tail (folded) R̂.
+pub fn rhat_rank(x: &[Vec<f64>]) -> f64 {
+    let split = split_chains(x);
+    let bulk = rhat(&z_scale(&split));
+    let mut all: Vec<f64> = split.iter().flatten().copied().collect();
+    let med = quantile(&mut all, 0.5);
+    let folded: Vec<Vec<f64>> = split
+        .iter()
+        .map(|c| c.iter().map(|v| (v - med).abs()).collect())
+        .collect();
+    let tail = rhat(&z_scale(&folded));
+    bulk.max(tail)
+}
+
+/// Bulk effective sample size: ESS of the rank-normalised split chains.
+pub fn ess_bulk(x: &[Vec<f64>]) -> f64 {
+    ess(&z_scale(&split_chains(x)))
+}
+
+/// Tail effective sample size: the smaller ESS of the indicators x ≤ q₀.₀₅, x ≤ q₀.₉₅ on the
+/// split chains.
+pub fn ess_tail(x: &[Vec<f64>]) -> f64 {
+    let mut all: Vec<f64> = x.iter().flatten().copied().collect();
+    let q05 = quantile(&mut all, 0.05);
+    let q95 = quantile(&mut all, 0.95);
+    let indicator = |q: f64| -> Vec<Vec<f64>> {
+        x.iter()
+            .map(|c| c.iter().map(|v| f64::from(u8::from(*v <= q))).collect())
+            .collect()
+    };
+    ess(&split_chains(&indicator(q05))).min(ess(&split_chains(&indicator(q95))))
+}
+
+/// The q-quantile with linear interpolation between order statistics (numpy's default).
+pub fn quantile(values: &mut [f64], q: f64) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let x = q * (values.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x - x.floor());
+    let next = values[(i + 1).min(values.len() - 1)];
+    values[i] + f * (next - values[i])
+}
+
+/// Biased autocovariance of a chain at lag t, (1/n)·Σ (x_i − x̄)(x_{i+t} − x̄).
+fn autocov(c: &[f64], mean: f64, t: usize) -> f64 {
+    let n = c.len();
+    (0..n - t)
+        .map(|i| (c[i] - mean) * (c[i + t] - mean))
+        .sum::<f64>()
+        / n as f64
+}
+
+/// Effective sample size of equal-length chains by Geyer's initial monotone sequence.
+pub fn ess(x: &[Vec<f64>]) -> f64 {
+    let m = x.len();
+    let n = x.first().map_or(0, Vec::len);
+    let flat = x.iter().flatten();
+    let (lo, hi) = flat.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(*v), b.max(*v))
+    });
+    if n < 4 || !(lo.is_finite() && hi.is_finite()) {
+        return f64::NAN;
+    }
+    if hi - lo < 1e-15 {
+        return (m * n) as f64;
+    }
+    let nf = n as f64;
+    let means: Vec<f64> = x.iter().map(|c| c.iter().sum::<f64>() / nf).collect();
+    let mean_acov = |t: usize| -> f64 {
+        x.iter()
+            .zip(&means)
+            .map(|(c, mu)| autocov(c, *mu, t))
+            .sum::<f64>()
+            / m as f64
+    };
+    let mean_var = mean_acov(0) * nf / (nf - 1.0);
+    let mut var_plus = mean_var * (nf - 1.0) / nf;
+    if m > 1 {
+        var_plus += mean_var_of(&means);
+    }
+    let rho = |t: usize| 1.0 - (mean_var - mean_acov(t)) / var_plus;
+    let mut rho_hat = vec![0.0; n];
+    rho_hat[0] = 1.0;
+    let mut even = 1.0;
+    let mut odd = rho(1);
+    rho_hat[1] = odd;
+    let mut t = 1;
+    while t < n - 3 && even + odd > 0.0 {
+        even = rho(t + 1);
+        odd = rho(t + 2);
+        if even + odd >= 0.0 {
+            rho_hat[t + 1] = even;
+            rho_hat[t + 2] = odd;
+        }
+        t += 2;
+    }
+    let max_t = t.saturating_sub(2);
+    if even > 0.0 {
+        rho_hat[max_t + 1] = even;
+    }
+    let mut t = 1;
+    while t + 2 <= max_t {
+        if rho_hat[t + 1] + rho_hat[t + 2] > rho_hat[t - 1] + rho_hat[t] {
+            rho_hat[t + 1] = (rho_hat[t - 1] + rho_hat[t]) / 2.0;
+            rho_hat[t + 2] = rho_hat[t + 1];
+        }
+        t += 2;
+    }
+    let total = (m * n) as f64;
+    let tau = -1.0 + 2.0 * rho_hat[..=max_t].iter().sum::<f64>() + rho_hat[max_t + 1];
+    total / tau.max(1.0 / total.log10())
+}
+
+/// Unbiased variance of values (ddof 1).
+fn mean_var_of(v: &[f64]) -> f64 {
+    mean_var(v).1
+}
+
+/// Φ⁻¹(p), the standard normal quantile: Acklam's rational approximation (relative error
+/// below 1.2e-9), ±∞ at 0 and 1.
+pub fn normal_quantile(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969_683_028_665_376e1,
+        2.209_460_984_245_205e2,
+        -2.759_285_104_469_687e2,
+        1.383_577_518_672_69e2,
+        -3.066_479_806_614_716e1,
+        2.506_628_277_459_239,
+    ];
+    const B: [f64; 5] = [
+        -5.447_609_879_822_406e1,
+        1.615_858_368_580_409e2,
+        -1.556_989_798_598_866e2,
+        6.680_131_188_771_972e1,
+        -1.328_068_155_288_572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784_894_002_430_293e-3,
+        -3.223_964_580_411_365e-1,
+        -2.400_758_277_161_838,
+        -2.549_732_539_343_734,
+        4.374_664_141_464_968,
+        2.938_163_982_698_783,
+    ];
+    const D: [f64; 4] = [
+        7.784_695_709_041_462e-3,
+        3.224_671_290_700_398e-1,
+        2.445_134_137_142_996,
+        3.754_408_661_907_416,
+    ];
+    if p <= 0.0 {
+        return f64::NEG_INFINITY;
+    }
+    if p >= 1.0 {
+        return f64::INFINITY;
+    }
+    let low = 0.02425;
+    let tail = |q: f64| {
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    if p < low {
+        tail((-2.0 * p.ln()).sqrt())
+    } else if p > 1.0 - low {
+        -tail((-2.0 * (1.0 - p).ln()).sqrt())
+    } else {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    }
+}

@@ -1,0 +1,128 @@
+//! The posterior of a fit's estimated parameters, as the ensemble sampler sees it.
+//!
+//! Coordinates x: ln θ for a parameter searched on a log scale (every positive one), θ
+//! itself otherwise, in the fit file's order. The density is
+//!
+//! ```text
+//!     ln p(x) = −½·(χ²(θ) − χ²_min)/s² + ln π(θ),     θ inside the search bounds
+//! ```
+//!
+//! with χ² the fit's likelihood rebuilt from its file ([`FitLikelihood`]), χ²_min its value
+//! at the estimate and s² = `profile_threshold`/χ²₁(0.95) the widened likelihood's interval
+//! scale, so that the posterior's 95 % marginals agree with the fit's profile intervals
+//! where the likelihood is Gaussian. The prior π is flat in x within the search bounds
+//! unless a [`LogPrior`] is given ([`FitPosterior::with_prior`]); a failed simulation has
+//! zero density.
+
+use super::LogDensity;
+use crate::estimate::fit_likelihood::FitLikelihood;
+use crate::estimate::uncertainty::CHI2_95;
+
+/// A log-prior density of the estimated parameters' values (SI, the fit file's order), up
+/// to a constant; −∞ where the prior is zero.
+pub trait LogPrior: Sync {
+    /// ln π(θ) + const.
+    fn log_prior(&self, values: &[f64]) -> f64;
+}
+
+impl<F: Fn(&[f64]) -> f64 + Sync> LogPrior for F {
+    fn log_prior(&self, values: &[f64]) -> f64 {
+        self(values)
+    }
+}
+
+/// The posterior of a fit (see the module documentation).
+pub struct FitPosterior<'a> {
+    likelihood: &'a FitLikelihood,
+    prior: Option<&'a dyn LogPrior>,
+    log_scale: Vec<bool>,
+    bounds: Vec<(f64, f64)>,
+    scale2: f64,
+}
+
+impl<'a> FitPosterior<'a> {
+    /// The posterior with the likelihood of `likelihood` and a prior flat in the sampling
+    /// coordinates within the search bounds.
+    pub fn new(likelihood: &'a FitLikelihood) -> Self {
+        let scale2 = (likelihood.threshold() / CHI2_95).max(1.0);
+        Self {
+            likelihood,
+            prior: None,
+            log_scale: likelihood.log_scale(),
+            bounds: likelihood.bounds(),
+            scale2,
+        }
+    }
+
+    /// The same with the prior `prior` added to the flat one.
+    pub fn with_prior(mut self, prior: &'a dyn LogPrior) -> Self {
+        self.prior = Some(prior);
+        self
+    }
+
+    /// The sampling coordinates of SI values.
+    pub fn to_coords(&self, values: &[f64]) -> Vec<f64> {
+        values
+            .iter()
+            .zip(&self.log_scale)
+            .map(|(v, log)| if *log { v.ln() } else { *v })
+            .collect()
+    }
+
+    /// The SI values at sampling coordinates.
+    pub fn to_values(&self, x: &[f64]) -> Vec<f64> {
+        x.iter()
+            .zip(&self.log_scale)
+            .map(|(v, log)| if *log { v.exp() } else { *v })
+            .collect()
+    }
+
+    /// The search bounds in sampling coordinates.
+    pub fn coord_bounds(&self) -> Vec<(f64, f64)> {
+        self.bounds
+            .iter()
+            .zip(&self.log_scale)
+            .map(|((lo, hi), log)| if *log { (lo.ln(), hi.ln()) } else { (*lo, *hi) })
+            .collect()
+    }
+
+    /// The names of the parameters, in the coordinates' order.
+    pub fn names(&self) -> Vec<String> {
+        self.likelihood.names()
+    }
+
+    /// ln L at SI `values`: −½·(χ² − χ²_min)/s² (−∞ where the simulation fails).
+    pub fn log_likelihood(&self, values: &[f64]) -> f64 {
+        match self.likelihood.try_chi2(values) {
+            Ok(c) if c.is_finite() => -0.5 * (c - self.likelihood.chi2_min()) / self.scale2,
+            _ => f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl LogDensity for FitPosterior<'_> {
+    fn dim(&self) -> usize {
+        self.log_scale.len()
+    }
+
+    fn log_density(&self, x: &[f64]) -> f64 {
+        let inside = x
+            .iter()
+            .zip(self.coord_bounds())
+            .all(|(v, (lo, hi))| v.is_finite() && *v >= lo && *v <= hi);
+        if !inside {
+            return f64::NEG_INFINITY;
+        }
+        let values = self.to_values(x);
+        let prior = self.prior.map_or(0.0, |p| p.log_prior(&values));
+        if !prior.is_finite() {
+            return f64::NEG_INFINITY;
+        }
+        let lp = self.log_likelihood(&values) + prior;
+        if lp.is_nan() {
+            f64::NEG_INFINITY
+        } else {
+            lp
+        }
+    }
+}

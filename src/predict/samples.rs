@@ -1,0 +1,373 @@
+//! Bands from posterior samples, where the delta method fails: a curved valley, an
+//! interval that is lopsided, a parameter the data do not pin (two optima that fit equally).
+//!
+//! The ensemble sampler ([`crate::estimate::sample`]) draws the fit's estimated parameters
+//! from their posterior (the fit's likelihood, with a prior if one is given, flat within the
+//! search bounds otherwise), starting from a small ball about the estimate. `draws` of the
+//! kept samples, spread evenly over walkers and steps, are each propagated through every
+//! figure; a figure's 95 % band is the 2.5 and 97.5 percentiles of its values (linear
+//! interpolation between order statistics). Parameters covered by a stated spread
+//! (`--fixed-spread`) and not sampled are drawn independently for each propagated sample,
+//! ln θ ~ N(ln θ̂, (ln F/1.96)²), as the delta method takes them.
+//!
+//! # When the bands come from samples (`auto`)
+//!
+//! The delta method linearises each figure about the estimate with the fit's covariance; it
+//! is trusted unless the fit file itself says the posterior is not close to Gaussian:
+//!
+//! * an estimated parameter is not identifiable (its profile does not close, or another
+//!   optimum fits as well), or has no 95 % interval;
+//! * a profile interval is lopsided: its two sides in ln θ differ by more than a factor
+//!   [`LOPSIDED`] (a Gaussian posterior in ln θ gives equal sides).
+//!
+//! Sampling needs the dataset the fit was made from (to evaluate the likelihood); without
+//! it the bands stay delta bands and the notes say the delta method is not to be trusted.
+
+use super::uncertainty::ParamUncertainty;
+use super::PredictError;
+use crate::data::fitfile::FitFile;
+use crate::estimate::fit_likelihood::FitLikelihood;
+use crate::estimate::sample::{
+    run_ensemble, summarise, EnsembleSettings, FitPosterior, LogDensity, LogPrior, ParamDiagnostics,
+};
+use crate::model::motor::Motor;
+use crate::model::params::ParamSet;
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rayon::prelude::*;
+
+/// Ratio of a profile interval's two sides in ln θ above which `auto` samples.
+pub const LOPSIDED: f64 = 1.5;
+
+/// Which method is asked to make the bands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BandChoice {
+    /// The delta method always.
+    Delta,
+    /// Posterior samples always (needs the dataset).
+    Samples,
+    /// Samples where the fit says the delta method fails (see the module documentation),
+    /// else the delta method.
+    Auto,
+}
+
+impl BandChoice {
+    /// `delta`, `samples` or `auto`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BandChoice::Delta => "delta",
+            BandChoice::Samples => "samples",
+            BandChoice::Auto => "auto",
+        }
+    }
+}
+
+/// The method that made the bands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BandMethod {
+    /// The delta method from the fit's covariance.
+    Delta,
+    /// Percentiles of the figures of posterior samples.
+    Samples,
+}
+
+/// How to sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SamplingOptions {
+    /// Walkers (`None`: max(16, 4·d) for d estimated parameters).
+    pub walkers: Option<usize>,
+    /// Kept steps per walker.
+    pub steps: usize,
+    /// Steps run first and discarded.
+    pub burn_in: usize,
+    /// Kept samples propagated through the figures.
+    pub draws: usize,
+    /// Seed of the walkers' streams and of the spread parameters' draws.
+    pub seed: u64,
+}
+
+/// Kept steps per walker unless others are asked.
+pub const DEFAULT_STEPS: usize = 4000;
+/// Burn-in steps unless others are asked.
+pub const DEFAULT_BURN_IN: usize = 1000;
+/// Samples propagated through the figures unless another number is asked.
+pub const DEFAULT_DRAWS: usize = 400;
+
+impl Default for SamplingOptions {
+    fn default() -> Self {
+        Self {
+            walkers: None,
+            steps: DEFAULT_STEPS,
+            burn_in: DEFAULT_BURN_IN,
+            draws: DEFAULT_DRAWS,
+            seed: 1,
+        }
+    }
+}
+
+impl SamplingOptions {
+    /// The walkers for `d` parameters: as asked, else max(16, 4·d) rounded up to even.
+    pub fn walkers_for(&self, d: usize) -> usize {
+        self.walkers
+            .unwrap_or_else(|| (4 * d).max(16).div_ceil(2) * 2)
+    }
+}
+
+/// The posterior the samples are drawn from: the fit's likelihood and an optional prior.
+#[derive(Clone, Copy)]
+pub struct PosteriorSource<'a> {
+    /// The fit's likelihood, rebuilt from its file and dataset.
+    pub likelihood: &'a FitLikelihood,
+    /// A log-prior of the estimated parameters (`None`: flat within the search bounds).
+    pub prior: Option<&'a dyn LogPrior>,
+}
+
+/// What the bands of a prediction should stand on.
+#[derive(Clone, Copy)]
+pub struct BandRequest<'a> {
+    /// The method asked.
+    pub choice: BandChoice,
+    /// The posterior, when the dataset is at hand.
+    pub posterior: Option<PosteriorSource<'a>>,
+    /// How to sample.
+    pub sampling: &'a SamplingOptions,
+    /// Progress of long work: (what, done, total).
+    pub progress: &'a (dyn Fn(&str, usize, usize) + Sync),
+}
+
+/// What the samples were and how well they converged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PosteriorSummary {
+    /// The sampled parameters.
+    pub names: Vec<String>,
+    /// Each one's R̂ and effective sample sizes.
+    pub diagnostics: Vec<ParamDiagnostics>,
+    /// Each one's 2.5, 50 and 97.5 % posterior quantiles, SI.
+    pub quantiles: Vec<[f64; 3]>,
+    /// Walkers, kept steps, burn-in steps, seed.
+    pub walkers: usize,
+    /// Kept steps per walker.
+    pub steps: usize,
+    /// Burn-in steps per walker.
+    pub burn_in: usize,
+    /// Seed.
+    pub seed: u64,
+    /// Mean acceptance fraction.
+    pub acceptance: f64,
+    /// Samples propagated through the figures.
+    pub draws: usize,
+    /// Of those, how many gave no figures (the motor failed at some pressure): left out.
+    pub failed_draws: usize,
+    /// Parameters drawn from the stated spread for each sample (not sampled).
+    pub spread: Vec<String>,
+}
+
+impl PosteriorSummary {
+    /// Converged by Vehtari et al.'s rules: every R̂ < 1.01 and every ESS ≥ 400.
+    pub fn converged(&self) -> bool {
+        use crate::estimate::sample::diagnostics::{ESS_LIMIT, RHAT_LIMIT};
+        self.diagnostics
+            .iter()
+            .all(|d| d.rhat < RHAT_LIMIT && d.ess_bulk >= ESS_LIMIT && d.ess_tail >= ESS_LIMIT)
+    }
+}
+
+/// Which method made a prediction's bands, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BandsMade {
+    /// The method.
+    pub method: BandMethod,
+    /// The method asked.
+    pub choice: BandChoice,
+    /// Why the delta method is not to be trusted for this fit (`None`: nothing says so).
+    pub delta_unreliable: Option<String>,
+    /// The samples, when they made the bands.
+    pub sampling: Option<PosteriorSummary>,
+}
+
+/// Why the delta method is not to be trusted for `fit` (see the module documentation), or
+/// `None`.
+pub fn delta_unreliable(fit: &FitFile) -> Option<String> {
+    let mut why = Vec::new();
+    for n in &fit.estimated {
+        if fit.verdicts.iter().any(|v| &v.name == n && !v.identifiable) {
+            why.push(format!("{n} is not identifiable"));
+            continue;
+        }
+        let ci = fit.ci95.iter().find(|(m, _)| m == n).map(|(_, c)| *c);
+        let value = fit.params.get(n).unwrap_or(f64::NAN);
+        match ci {
+            Some([lo, hi]) if lo > 0.0 && value > lo && hi > value => {
+                let (down, up) = ((value / lo).ln(), (hi / value).ln());
+                let ratio = down.max(up) / down.min(up);
+                if ratio > LOPSIDED {
+                    why.push(format!(
+                        "the interval of {n} is lopsided ({ratio:.1}:1 in ln {n})"
+                    ));
+                }
+            }
+            _ => why.push(format!("{n} has no two-sided 95 % interval")),
+        }
+    }
+    (!why.is_empty()).then(|| why.join("; "))
+}
+
+/// Starts of the walkers: a ball about the estimate, half the delta method's σ wide where
+/// known (2 % in ln θ otherwise), each redrawn (narrower each time) until its density is
+/// positive.
+fn starts(
+    post: &FitPosterior,
+    unc: &ParamUncertainty,
+    estimate: &[f64],
+    walkers: usize,
+    seed: u64,
+) -> Vec<Vec<f64>> {
+    let centre = post.to_coords(estimate);
+    let width: Vec<f64> = post
+        .names()
+        .iter()
+        .map(|n| {
+            let sd = unc.names.iter().position(|m| m == n).map(|j| unc.sd[j]);
+            sd.filter(|s| *s > 0.0).map_or(0.02, |s| 0.5 * s)
+        })
+        .collect();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5157_4152_5453);
+    (0..walkers)
+        .map(|_| {
+            for attempt in 0..60 {
+                let shrink = 0.5_f64.powi(attempt / 10);
+                let x: Vec<f64> = centre
+                    .iter()
+                    .zip(&width)
+                    .map(|(c, w)| {
+                        let z: f64 = StandardNormal.sample(&mut rng);
+                        c + shrink * w * z
+                    })
+                    .collect();
+                if post.log_density(&x).is_finite() {
+                    return x;
+                }
+            }
+            centre.clone()
+        })
+        .collect()
+}
+
+/// The fit's motor with the parameters `names` at SI `values`.
+fn motor_with(fit: &FitFile, names: &[String], values: &[f64]) -> Result<Motor, PredictError> {
+    let mut set = ParamSet::from(fit.params.clone());
+    for (n, v) in names.iter().zip(values) {
+        set.set(n, *v)?;
+    }
+    Ok(Motor::new(set.check()?, fit.effects.clone()).with_extra(&fit.extra))
+}
+
+/// The q-quantile of sorted values, interpolating linearly between order statistics.
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    let x = q * (sorted.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x - x.floor());
+    let next = sorted[(i + 1).min(sorted.len() - 1)];
+    sorted[i] + f * (next - sorted[i])
+}
+
+/// The 95 % bands of `figures` from posterior samples, and what the samples were.
+pub(super) fn sample_bands(
+    fit: &FitFile,
+    unc: &ParamUncertainty,
+    source: PosteriorSource,
+    sampling: &SamplingOptions,
+    figures: &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync),
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<(Vec<[f64; 2]>, PosteriorSummary), PredictError> {
+    let mut post = FitPosterior::new(source.likelihood);
+    if let Some(p) = source.prior {
+        post = post.with_prior(p);
+    }
+    let names = post.names();
+    let estimate = source.likelihood.estimate();
+    let walkers = sampling.walkers_for(names.len());
+    let settings = EnsembleSettings {
+        walkers,
+        steps: sampling.steps,
+        burn_in: sampling.burn_in,
+        seed: sampling.seed,
+    };
+    let x0 = starts(&post, unc, &estimate, walkers, sampling.seed);
+    let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+    let chains = run_ensemble(&post, &x0, &settings, &step_progress)?;
+    let diagnostics = summarise(&chains.draws);
+    let values: Vec<Vec<f64>> = chains
+        .thinned(sampling.draws)
+        .iter()
+        .map(|x| post.to_values(x))
+        .collect();
+    let quantiles = (0..names.len())
+        .map(|i| {
+            let mut v: Vec<f64> = chains.flat().iter().map(|x| post.to_values(x)[i]).collect();
+            v.sort_by(f64::total_cmp);
+            [0.025, 0.5, 0.975].map(|q| percentile(&v, q))
+        })
+        .collect();
+    // The spread's parameters that are not sampled, drawn per sample from one stream.
+    let spread: Vec<(usize, String)> = unc
+        .names
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| unc.spread.contains(n) && !names.contains(n))
+        .map(|(j, n)| (j, n.clone()))
+        .collect();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(sampling.seed.wrapping_add(0x9e37_79b9));
+    let jobs: Vec<(Vec<String>, Vec<f64>)> = values
+        .into_iter()
+        .map(|v| {
+            let mut n = names.clone();
+            let mut v = v;
+            for (j, name) in &spread {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                n.push(name.clone());
+                v.push((unc.log_values[*j] + unc.sd[*j] * z).exp());
+            }
+            (n, v)
+        })
+        .collect();
+    let total = jobs.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<Option<Vec<f64>>> = jobs
+        .par_iter()
+        .map(|(n, v)| {
+            let r = motor_with(fit, n, v).and_then(|m| figures(&m)).ok();
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("propagating", k, total);
+            r.filter(|f| f.iter().all(|y| y.is_finite()))
+        })
+        .collect();
+    let ok: Vec<&Vec<f64>> = results.iter().flatten().collect();
+    let failed = total - ok.len();
+    if ok.len() < 2 || failed * 10 > total {
+        return Err(PredictError::SampleFigures { failed, total });
+    }
+    let bands = (0..ok[0].len())
+        .map(|i| {
+            let mut v: Vec<f64> = ok.iter().map(|d| d[i]).collect();
+            v.sort_by(f64::total_cmp);
+            [percentile(&v, 0.025), percentile(&v, 0.975)]
+        })
+        .collect();
+    Ok((
+        bands,
+        PosteriorSummary {
+            names,
+            diagnostics,
+            quantiles,
+            walkers,
+            steps: sampling.steps,
+            burn_in: sampling.burn_in,
+            seed: sampling.seed,
+            acceptance: chains.mean_acceptance(),
+            draws: total,
+            failed_draws: failed,
+            spread: spread.into_iter().map(|(_, n)| n).collect(),
+        },
+    ))
+}

@@ -1,0 +1,169 @@
+//! Bands from posterior samples (`predict --bands`): on a catalogue fit whose c_out2 is not
+//! identifiable `auto` samples and says so, `delta` warns instead, a seed gives the same
+//! bands whatever the thread count, and where the posterior is close to Gaussian the
+//! samples' bands agree with the delta method's.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use vanefit::data::dataset::Dataset;
+use vanefit::data::fitfile::FitFile;
+use vanefit::estimate::fit_likelihood::FitLikelihood;
+use vanefit::predict::{
+    predict_with, BandChoice, BandMethod, BandRequest, PosteriorSource, PredictOptions, Prediction,
+    SamplingOptions,
+};
+
+const CATALOGUE: &str = "measurements/ar034-synthetic-catalogue";
+
+fn vanefit(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "vanefit {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// A fit of the catalogue page (`extra`: more `fit` options) into `dir`.
+fn catalogue_fit(dir: &Path, extra: &[&str]) -> PathBuf {
+    let fit = dir.join("fit.json");
+    let mut args = vec![
+        "fit",
+        CATALOGUE,
+        "--no-plots",
+        "--out",
+        fit.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    vanefit(&args);
+    fit
+}
+
+fn sampled(fit: &FitFile, choice: BandChoice, sampling: &SamplingOptions) -> Prediction {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let ds = Dataset::load(&root.join(CATALOGUE)).unwrap();
+    let likelihood = FitLikelihood::from_fit(&ds, fit).unwrap();
+    let options = PredictOptions {
+        curve_points: 3,
+        ..PredictOptions::new(fit.conditions.unwrap().p_atm_pa)
+    };
+    let request = BandRequest {
+        choice,
+        posterior: Some(PosteriorSource {
+            likelihood: &likelihood,
+            prior: None,
+        }),
+        sampling,
+        progress: &|_, _, _| {},
+    };
+    predict_with(fit, &options, &request).unwrap()
+}
+
+#[test]
+fn auto_samples_where_the_fit_is_not_identifiable_and_says_which_method_made_the_bands() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = catalogue_fit(dir.path(), &[]);
+    let f = fit.to_str().unwrap();
+    let out = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let short = ["--steps", "200", "--burn-in", "100", "--draws", "60"];
+    let mut args = vec!["predict", f, "--data", CATALOGUE, "--out"];
+    let o1 = out("auto");
+    args.push(&o1);
+    args.extend(short);
+    vanefit(&args);
+    let md = std::fs::read_to_string(dir.path().join("auto/predict.md")).unwrap();
+    assert!(md.contains("POSTERIOR SAMPLES"), "{md}");
+    assert!(md.contains("c_out2 is not identifiable"), "{md}");
+    assert!(
+        md.contains("## Posterior samples") && md.contains("R̂"),
+        "{md}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("auto/bands.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["method"], "samples");
+    let p = &json["sampling"]["parameters"]["c_out2"];
+    assert!(p["rhat"].as_f64().unwrap() >= 1.0 && p["ess_bulk"].as_f64().unwrap() > 1.0);
+    assert!(p["q025"].as_f64().unwrap() < p["q975"].as_f64().unwrap());
+
+    let o2 = out("delta");
+    vanefit(&["predict", f, "--bands", "delta", "--out", &o2]);
+    let md = std::fs::read_to_string(dir.path().join("delta/predict.md")).unwrap();
+    assert!(md.contains("delta method is NOT to be trusted"), "{md}");
+    assert!(!md.contains("POSTERIOR SAMPLES"));
+    let o3 = out("nodata");
+    vanefit(&["predict", f, "--out", &o3]);
+    let md = std::fs::read_to_string(dir.path().join("nodata/predict.md")).unwrap();
+    assert!(md.contains("dataset was not given (--data)"), "{md}");
+
+    // Samples without the dataset are refused, naming the option.
+    let bad = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(["predict", f, "--bands", "samples", "--out", &out("bad")])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--data"));
+}
+
+#[test]
+fn sampled_bands_for_a_seed_do_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = FitFile::read(&catalogue_fit(dir.path(), &[])).unwrap();
+    let s = SamplingOptions {
+        steps: 60,
+        burn_in: 20,
+        draws: 40,
+        ..SamplingOptions::default()
+    };
+    let with = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| sampled(&fit, BandChoice::Samples, &s))
+    };
+    let one = with(1);
+    assert_eq!(one.bands.method, BandMethod::Samples);
+    assert_eq!(one, with(2));
+    let other = sampled(&fit, BandChoice::Samples, &SamplingOptions { seed: 2, ..s });
+    assert_ne!(one.pressures[0].figures, other.pressures[0].figures);
+}
+
+#[test]
+fn where_the_posterior_is_close_to_gaussian_samples_and_delta_agree() {
+    // c_in1 and c_1e alone are pinned by the page: a near-Gaussian posterior, on which the
+    // delta method is right and the samples' percentiles must give the same widths.
+    let dir = tempfile::tempdir().unwrap();
+    let fit = catalogue_fit(dir.path(), &["--estimate", "c_in1,c_1e"]);
+    let fit = FitFile::read(&fit).unwrap();
+    assert!(vanefit::predict::samples::delta_unreliable(&fit).is_none());
+    let s = SamplingOptions {
+        steps: 1500,
+        burn_in: 300,
+        draws: 400,
+        ..SamplingOptions::default()
+    };
+    let auto = sampled(&fit, BandChoice::Auto, &s);
+    assert_eq!(auto.bands.method, BandMethod::Delta);
+    let samples = sampled(&fit, BandChoice::Samples, &s);
+    let mut ratios = Vec::new();
+    for (a, b) in auto.pressures.iter().zip(&samples.pressures) {
+        for (x, y) in a.figures.iter().zip(&b.figures) {
+            let (d, m) = (x.band95.unwrap(), y.band95.unwrap());
+            ratios.push((m[1] - m[0]) / (d[1] - d[0]));
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    assert!(
+        (0.8..1.25).contains(&median),
+        "width ratios samples/delta: {ratios:?}"
+    );
+    assert!(ratios.iter().all(|r| (0.5..2.0).contains(r)), "{ratios:?}");
+}
