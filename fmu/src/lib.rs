@@ -617,15 +617,28 @@ pub extern "C" fn fmi2GetEventIndicators(c: *mut c_void, _g: *mut f64, n: usize)
 
 // --- Co-simulation ----------------------------------------------------------------------
 
+/// First derivatives of inputs for the next step (`canInterpolateInputs`): the step then
+/// moves the inputs along them. Higher orders are refused.
 #[no_mangle]
-pub extern "C" fn fmi2SetRealInputDerivatives(
+pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     c: *mut c_void,
-    _r: *const c_uint,
-    _n: usize,
-    _order: *const c_int,
-    _v: *const f64,
+    refs: *const c_uint,
+    n: usize,
+    order: *const c_int,
+    values: *const f64,
 ) -> Status {
-    unsupported(c, "fmi2SetRealInputDerivatives")
+    let (refs, order, values) = (slice(refs, n), slice(order, n), slice(values, n));
+    with(c, |i| {
+        for ((r, k), v) in refs.iter().zip(order).zip(values) {
+            if *k != 1 {
+                return Err(format!(
+                    "input derivatives of order {k}: only order 1 is supported"
+                ));
+            }
+            i.model.set_input_slope(*r, *v).map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    })
 }
 
 #[no_mangle]

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import read_model_description, simulate_fmu
+from fmpy import extract, instantiate_fmu, read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 from conftest import DATASET, ROOT, run_cli
@@ -66,25 +67,28 @@ def read_csv(path):
 
 
 def inputs_of(experiment):
-    """The FMU's input table for a ramp of the shipped dataset, as vanefit drives it: the
-    ramp's supply is its recorded port-1 pressure smoothed (held at least at half the
-    atmosphere); the throttle's is rig.toml's 0.73 MPa, its port-2 conductance the recorded
-    one smoothed in log10."""
+    """The FMU's inputs for a ramp of the shipped dataset as functions of time, as vanefit
+    drives it: the ramp's supply is its recorded port-1 pressure smoothed (held at least at
+    half the atmosphere); the throttle's is rig.toml's 0.73 MPa, its port-2 conductance the
+    recorded one smoothed in log10. Returns the recorded times and {input name: f(t)}."""
     rec = read_csv(DATASET / f"{experiment}.csv")
     t = rec["t_s"]
-    grid = np.arange(t[0], t[-1] + DT_S / 2, DT_S)
     if experiment == "ramp":
-        p = np.maximum(schedule(t, rec["p_port1_mpa"] * 1e6)(grid), 0.5 * P_ATM_PA)
-        columns = {"p_supply": p}
-    else:
-        c = 10 ** schedule(t, np.log10(rec["c_port2_m3_s_pa"]))(grid)
-        columns = {"p_supply": np.full_like(grid, 0.73e6), "c_throttle2": c}
-    names = ["time", *columns]
-    table = np.zeros(len(grid), dtype=[(n, np.float64) for n in names])
+        s = schedule(t, rec["p_port1_mpa"] * 1e6)
+        return t, {"p_supply": lambda x: np.maximum(s(x), 0.5 * P_ATM_PA)}
+    s = schedule(t, np.log10(rec["c_port2_m3_s_pa"]))
+    return t, {"p_supply": lambda x: np.full_like(np.asarray(x, dtype=float), 0.73e6),
+               "c_throttle2": lambda x: 10 ** s(x)}
+
+
+def input_table(t, inputs):
+    """The inputs sampled every DT_S for FMPy's input table (linear in between)."""
+    grid = np.arange(t[0], t[-1] + DT_S / 2, DT_S)
+    table = np.zeros(len(grid), dtype=[(n, np.float64) for n in ["time", *inputs]])
     table["time"] = grid
-    for n, col in columns.items():
-        table[n] = col
-    return t, table
+    for n, f in inputs.items():
+        table[n] = f(grid)
+    return table
 
 
 OUTPUTS = ["speed", "flow_port1", "flow_port2", "torque_shaft",
@@ -94,14 +98,71 @@ CHANNELS = {"flow1_g_s": ("flow_port1", 1e3), "flow2_g_s": ("flow_port2", 1e3),
             "speed_rpm": ("speed", 1 / RAD_S_PER_RPM)}
 
 
+def co_simulate(fmu, t, inputs, start):
+    """FMPy's co-simulation interface (`fmpy.fmi2.FMU2Slave`) stepped every DT_S, each
+    step given its inputs' values and slopes (`fmi2SetRealInputDerivatives`: the FMU moves
+    the inputs along them within the step). FMPy's `simulate_fmu` has the same loop, but
+    its `set_input_derivatives` fails for any number of inputs but nine (FMPy 0.3.32 sizes
+    the derivatives' buffer 9)."""
+    unzipdir = extract(str(fmu))
+    md = read_model_description(unzipdir)
+    refs = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="motor")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=t[0])
+    fmu.enterInitializationMode()
+    fmu.setReal([refs[n] for n in start], list(start.values()))
+    in_vrs = [refs[n] for n in inputs]
+    fmu.setReal(in_vrs, [float(f(t[0])) for f in inputs.values()])
+    fmu.exitInitializationMode()
+    out_vrs = [refs[n] for n in OUTPUTS]
+    grid = np.arange(t[0], t[-1] + DT_S / 2, DT_S)
+    rows = [fmu.getReal(out_vrs)]
+    for a, b in zip(grid[:-1], grid[1:]):
+        now = [float(f(a)) for f in inputs.values()]
+        slopes = [(float(f(b)) - u) / (b - a) for f, u in zip(inputs.values(), now)]
+        fmu.setReal(in_vrs, now)
+        fmu.setRealInputDerivatives(in_vrs, [1] * len(in_vrs), slopes)
+        fmu.doStep(currentCommunicationPoint=a, communicationStepSize=b - a)
+        rows.append(fmu.getReal(out_vrs))
+    fmu.terminate()
+    fmu.freeInstance()
+    res = {"time": grid}
+    res.update(zip(OUTPUTS, np.array(rows).T))
+    return res
+
+
 def fmpy_run(fmu, experiment, fmi_type):
-    t, table = inputs_of(experiment)
-    kw = dict(solver="CVode", relative_tolerance=1e-8) if fmi_type == "ModelExchange" else {}
+    """FMPy's simulation of the FMU through a ramp. Co-simulation: [`co_simulate`].
+    Model exchange: FMPy's `simulate_fmu` with its CVode, the inputs set to their value at
+    every time FMPy sets (each right-hand side), as a tool that connects the FMU's inputs to
+    continuous signals does."""
+    t, inputs = inputs_of(experiment)
+    start = {"c_brake": BRAKE_NM_S_RAD, "p_atm": P_ATM_PA}
     t0 = time.perf_counter()
-    res = simulate_fmu(str(fmu), start_time=t[0], stop_time=t[-1], fmi_type=fmi_type,
-                       output_interval=DT_S, input=table, output=OUTPUTS,
-                       start_values={"c_brake": BRAKE_NM_S_RAD, "p_atm": P_ATM_PA}, **kw)
+    if fmi_type == "CoSimulation":
+        res = co_simulate(fmu, t, inputs, start)
+        return t, res, time.perf_counter() - t0
+    unzipdir = extract(str(fmu))
+    md = read_model_description(unzipdir)
+    inst = instantiate_fmu(unzipdir, md, fmi_type="ModelExchange")
+    refs = {v.name: v.valueReference for v in md.modelVariables}
+    vrs = [refs[n] for n in inputs]
+    set_time = inst.setTime
+
+    def set_time_and_inputs(time_s):
+        set_time(time_s)
+        inst.setReal(vrs, [float(f(time_s)) for f in inputs.values()])
+
+    inst.setTime = set_time_and_inputs
+    start.update({n: float(f(t[0])) for n, f in inputs.items()})
+    res = simulate_fmu(unzipdir, start_time=t[0], stop_time=t[-1], fmi_type=fmi_type,
+                       solver="CVode", relative_tolerance=1e-8, output_interval=DT_S,
+                       output=OUTPUTS, start_values=start, fmu_instance=inst,
+                       model_description=md)
     wall = time.perf_counter() - t0
+    inst.freeInstance()
     return t, res, wall
 
 

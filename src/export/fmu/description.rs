@@ -134,7 +134,7 @@ pub fn model_description(fit: &FitFile, guid: &str) -> Result<String, FmuError> 
     );
     let _ = writeln!(
         x,
-        "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canNotUseMemoryManagementFunctions=\"true\"/>"
+        "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"true\" canNotUseMemoryManagementFunctions=\"true\"/>"
     );
     x.push_str(&unit_definitions(&vars));
     x.push_str("  <DefaultExperiment startTime=\"0\" stopTime=\"1\" tolerance=\"1e-6\"/>\n");

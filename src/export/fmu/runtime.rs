@@ -57,6 +57,15 @@ pub struct Inputs {
     pub c_throttle2_m3_s_pa: f64,
 }
 
+/// The inputs' value references in the order of [`Inputs`].
+pub const INPUTS: [u32; 5] = [
+    vr::P_SUPPLY,
+    vr::P_BACK,
+    vr::T_LOAD,
+    vr::C_THROTTLE1,
+    vr::C_THROTTLE2,
+];
+
 /// The motor of a fit as the FMU runs it.
 #[derive(Debug, Clone)]
 pub struct MotorFmu {
@@ -72,6 +81,10 @@ pub struct MotorFmu {
     pub c_brake_nm_s_rad: f64,
     /// Start from the steady state at the initial inputs.
     pub start_steady: bool,
+    /// First time derivatives of the inputs for the next co-simulation step (FMI
+    /// `fmi2SetRealInputDerivatives`), per second, in the order of [`Inputs`]; cleared by
+    /// a step and by setting the input.
+    pub input_slopes: [f64; 5],
     /// Simulation time, s.
     pub time_s: f64,
     /// The state [p_1, p_2, p_e (Pa), ω (rad/s)].
@@ -105,6 +118,7 @@ impl MotorFmu {
             p_atm_pa: p_atm,
             c_brake_nm_s_rad: 0.0,
             start_steady: true,
+            input_slopes: [0.0; 5],
             time_s: 0.0,
             x: [p_atm, p_atm, p_atm, 0.0],
         })
@@ -175,6 +189,9 @@ impl MotorFmu {
                 Err(Self::bad(name, value, "must be zero or positive"))
             }
         };
+        if let Some(k) = INPUTS.iter().position(|i| *i == r) {
+            self.input_slopes[k] = 0.0;
+        }
         match r {
             vr::P_SUPPLY => self.inputs.p_supply_pa = pressure("p_supply")?,
             vr::P_BACK => self.inputs.p_back_pa = pressure("p_back")?,
@@ -206,18 +223,54 @@ impl MotorFmu {
 
     /// The boundary conditions of the current inputs.
     pub fn boundary(&self) -> Boundary {
+        self.boundary_of(&self.inputs)
+    }
+
+    fn boundary_of(&self, i: &Inputs) -> Boundary {
         let throttle = |c: f64| (c > 0.0).then_some(c);
         Boundary {
-            p_port1_pa: self.inputs.p_supply_pa,
-            p_port2_pa: self.inputs.p_back_pa,
+            p_port1_pa: i.p_supply_pa,
+            p_port2_pa: i.p_back_pa,
             p_atm_pa: self.p_atm_pa,
-            c_port1_m3_s_pa: throttle(self.inputs.c_throttle1_m3_s_pa),
-            c_port2_m3_s_pa: throttle(self.inputs.c_throttle2_m3_s_pa),
+            c_port1_m3_s_pa: throttle(i.c_throttle1_m3_s_pa),
+            c_port2_m3_s_pa: throttle(i.c_throttle2_m3_s_pa),
             load: Load::BrakeAndTorque {
                 c_nm_s_rad: self.c_brake_nm_s_rad,
-                t_nm: self.inputs.t_load_nm,
+                t_nm: i.t_load_nm,
             },
         }
+    }
+
+    /// The inputs `dt` seconds into a step, moved along their slopes (pressures kept
+    /// positive and conductances non-negative where a slope would cross zero).
+    fn inputs_at(&self, dt: f64) -> Inputs {
+        let i = &self.inputs;
+        let d = &self.input_slopes;
+        Inputs {
+            p_supply_pa: (i.p_supply_pa + d[0] * dt).max(1.0),
+            p_back_pa: (i.p_back_pa + d[1] * dt).max(1.0),
+            t_load_nm: i.t_load_nm + d[2] * dt,
+            c_throttle1_m3_s_pa: (i.c_throttle1_m3_s_pa + d[3] * dt).max(0.0),
+            c_throttle2_m3_s_pa: (i.c_throttle2_m3_s_pa + d[4] * dt).max(0.0),
+        }
+    }
+
+    /// How fast the boundary moves when the inputs follow their slopes: the supply and
+    /// the port-2 throttle have closed-form time slopes in the model; `None` when another
+    /// input moves (the integrator then takes ∂f/∂t by a difference).
+    fn boundary_rate(&self) -> Option<BoundaryRate> {
+        let d = &self.input_slopes;
+        if d[1] != 0.0 || d[2] != 0.0 || d[3] != 0.0 {
+            return None;
+        }
+        let c2 = self.inputs.c_throttle2_m3_s_pa;
+        if d[4] != 0.0 && c2 <= 0.0 {
+            return None;
+        }
+        Some(BoundaryRate {
+            p_port1_pa_s: d[0],
+            ln_c_port2_per_s: if d[4] != 0.0 { d[4] / c2 } else { 0.0 },
+        })
     }
 
     /// dx/dt at the current state and inputs.
@@ -274,28 +327,34 @@ impl MotorFmu {
         Ok(())
     }
 
-    /// One co-simulation step of `h_s` seconds with the inputs held: Rodas4 with the
-    /// model's analytic Jacobian and kink indicators, at its default tolerances (those of
-    /// `vanefit simulate`).
+    /// One co-simulation step of `h_s` seconds: Rodas4 with the model's analytic Jacobian
+    /// and kink indicators, at its default tolerances (those of `vanefit simulate`). The
+    /// inputs are held, or follow their slopes where the importer set them
+    /// (`fmi2SetRealInputDerivatives`); the step ends with the inputs where they arrived,
+    /// so that the outputs at its end belong to its end, and the slopes cleared.
     pub fn do_step(&mut self, h_s: f64) -> Result<(), RuntimeError> {
         let t0 = self.time_s;
         if !(h_s.is_finite() && h_s >= 0.0) {
             return Err(Self::bad("communicationStepSize", h_s, "must be ≥ 0 s"));
         }
         if h_s > 0.0 {
-            let bc = self.boundary();
             let motor = &self.motor;
-            let rhs = |_t: f64, x: &State| motor.derivatives(x, &bc);
-            let jacobian = |_t: f64, x: &State| {
-                let rate = BoundaryRate::default();
-                let (f, jac, f_t) = motor.derivatives_jacobian_and_time_slope(x, &bc, &rate)?;
-                Some(Slopes {
-                    f,
-                    jac,
-                    f_t: Some(f_t),
-                })
+            let rate = self.boundary_rate();
+            let bc_at = |t: f64| self.boundary_of(&self.inputs_at(t - t0));
+            let rhs = |t: f64, x: &State| motor.derivatives(x, &bc_at(t));
+            let jacobian = |t: f64, x: &State| {
+                let bc = bc_at(t);
+                let slopes = |(f, jac, f_t)| Slopes { f, jac, f_t };
+                match &rate {
+                    Some(r) => motor
+                        .derivatives_jacobian_and_time_slope(x, &bc, r)
+                        .map(|(f, jac, f_t)| slopes((f, jac, Some(f_t)))),
+                    None => motor
+                        .derivatives_and_jacobian(x, &bc)
+                        .map(|(f, jac)| slopes((f, jac, None))),
+                }
             };
-            let kinks = |_t: f64, x: &State| motor.laminar_margins(x, &bc);
+            let kinks = |t: f64, x: &State| motor.laminar_margins(x, &bc_at(t));
             let out = Rodas4::default()
                 .solve_with_kinks(&rhs, &jacobian, &kinks, t0, self.x, &[t0 + h_s])
                 .map_err(|e| RuntimeError::Step {
@@ -303,8 +362,23 @@ impl MotorFmu {
                     message: e.to_string(),
                 })?;
             self.x = out[0];
+            self.inputs = self.inputs_at(h_s);
         }
+        self.input_slopes = [0.0; 5];
         self.time_s = t0 + h_s;
+        Ok(())
+    }
+
+    /// Sets the first time derivative of input `r`, per second (co-simulation).
+    pub fn set_input_slope(&mut self, r: u32, slope: f64) -> Result<(), RuntimeError> {
+        let k = INPUTS
+            .iter()
+            .position(|i| *i == r)
+            .ok_or(RuntimeError::UnknownReference(r))?;
+        if !slope.is_finite() {
+            return Err(Self::bad("input derivative", slope, "not a finite number"));
+        }
+        self.input_slopes[k] = slope;
         Ok(())
     }
 }
@@ -337,6 +411,34 @@ mod tests {
         let t_shaft = m.get_real(vr::TORQUE_SHAFT).unwrap();
         let load = 1e-4 * m.x[idx::OMEGA] + 0.05;
         assert!((t_shaft - load).abs() < 1e-6, "{t_shaft} vs {load}");
+    }
+
+    #[test]
+    fn a_step_with_input_slopes_is_the_step_of_the_moving_input() {
+        // One 0.2 s step along a supply ramp against forty 5 ms steps of held inputs
+        // re-set at each step's middle: the two agree, and both end at the ramp's end.
+        let mut a = fmu();
+        a.initialize().unwrap();
+        let mut b = a.clone();
+        let slope = -5e5;
+        a.set_input_slope(vr::P_SUPPLY, slope).unwrap();
+        a.do_step(0.2).unwrap();
+        let p0 = b.inputs.p_supply_pa;
+        for k in 0..40 {
+            b.set_real(vr::P_SUPPLY, p0 + slope * 0.005 * (f64::from(k) + 0.5))
+                .unwrap();
+            b.do_step(0.005).unwrap();
+        }
+        assert!((a.inputs.p_supply_pa - (p0 + 0.2 * slope)).abs() < 1e-6);
+        assert_eq!(a.input_slopes, [0.0; 5]);
+        let (wa, wb) = (a.x[idx::OMEGA], b.x[idx::OMEGA]);
+        assert!((wa - wb).abs() < 1e-3 * wa, "{wa} vs {wb}");
+        let mut start = fmu();
+        start.initialize().unwrap();
+        assert!(
+            wa < start.x[idx::OMEGA],
+            "the falling supply slows the motor"
+        );
     }
 
     #[test]
