@@ -188,12 +188,12 @@ fn with_start(mut v: Variable, start: f64) -> Variable {
     v
 }
 
-/// Every variable of the FMU of `fit`, in the order of `modelDescription.xml`.
-pub fn variables(fit: &FitFile) -> Result<Vec<Variable>, FmuError> {
-    use Role::{Derivative, Input, Output, Parameter, State};
+/// The inputs and outputs.
+fn inputs_and_outputs(fit: &FitFile) -> Vec<Variable> {
+    use Role::{Input, Output};
     const C: &str = "m3/(s*Pa)";
     let p_atm = p_atm_start(fit);
-    let mut v = vec![
+    vec![
         with_start(
             var(
                 "p_supply",
@@ -287,7 +287,13 @@ pub fn variables(fit: &FitFile) -> Result<Vec<Variable>, FmuError> {
             "Pa",
             "absolute pressure in the exhaust chamber",
         ),
-    ];
+    ]
+}
+
+/// The states, their derivatives and the fixed parameters.
+fn states_and_fixed_parameters(p_atm: f64) -> Vec<Variable> {
+    use Role::{Derivative, Parameter, State};
+    let mut v = Vec::new();
     let states = [
         ("p1", "Pa", "state: pressure in chamber 1", p_atm),
         ("p2", "Pa", "state: pressure in chamber 2", p_atm),
@@ -344,12 +350,19 @@ pub fn variables(fit: &FitFile) -> Result<Vec<Variable>, FmuError> {
     steady.start = Some(1.0);
     steady.boolean = true;
     v.push(steady);
+    v
+}
+
+/// Every variable of the FMU of `fit`, in the order of `modelDescription.xml`.
+pub fn variables(fit: &FitFile) -> Result<Vec<Variable>, FmuError> {
+    let mut v = inputs_and_outputs(fit);
+    v.extend(states_and_fixed_parameters(p_atm_start(fit)));
     for (k, p) in model_parameters(fit)?.into_iter().enumerate() {
         v.push(with_start(
             var(
                 &p.name,
                 vr::FIRST_MODEL_PARAMETER + k as u32,
-                Parameter,
+                Role::Parameter,
                 &p.unit,
                 &p.description,
             ),
