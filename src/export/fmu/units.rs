@@ -169,7 +169,8 @@ mod tests {
         assert_eq!(base_unit("N*m/Pa"), b(0, 3, 0, 0));
         assert_eq!(base_unit("kg/s"), b(1, 0, -1, 0));
         assert_eq!(base_unit("rad/s"), b(0, 0, -1, 1));
-        assert_eq!(base_unit("kg/(s*Pa*rad/s)"), b(0, 1, 1, -1));
+        // Left to right inside the parentheses: s·Pa·rad/s = kg·m⁻¹·s⁻²·rad.
+        assert_eq!(base_unit("kg/(s*Pa*rad/s)"), b(0, 1, 2, -1));
         assert_eq!(base_unit("1"), b(0, 0, 0, 0));
         assert_eq!(base_unit("K"), None);
         assert_eq!(base_unit("m3/(s"), None);
