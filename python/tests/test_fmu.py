@@ -8,6 +8,8 @@ import csv
 import json
 import math
 import os
+import shutil
+import tempfile
 import time
 import zipfile
 from pathlib import Path
@@ -104,7 +106,7 @@ def co_simulate(fmu, t, inputs, start):
     the inputs along them within the step). FMPy's `simulate_fmu` has the same loop, but
     its `set_input_derivatives` fails for any number of inputs but nine (FMPy 0.3.32 sizes
     the derivatives' buffer 9)."""
-    unzipdir = extract(str(fmu))
+    unzipdir = extract(str(fmu), unzipdir=tempfile.mkdtemp())
     md = read_model_description(unzipdir)
     refs = {v.name: v.valueReference for v in md.modelVariables}
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
@@ -128,6 +130,7 @@ def co_simulate(fmu, t, inputs, start):
         rows.append(fmu.getReal(out_vrs))
     fmu.terminate()
     fmu.freeInstance()
+    shutil.rmtree(unzipdir)
     res = {"time": grid}
     res.update(zip(OUTPUTS, np.array(rows).T))
     return res
@@ -144,7 +147,7 @@ def fmpy_run(fmu, experiment, fmi_type):
     if fmi_type == "CoSimulation":
         res = co_simulate(fmu, t, inputs, start)
         return t, res, time.perf_counter() - t0
-    unzipdir = extract(str(fmu))
+    unzipdir = extract(str(fmu), unzipdir=tempfile.mkdtemp())
     md = read_model_description(unzipdir)
     inst = instantiate_fmu(unzipdir, md, fmi_type="ModelExchange")
     refs = {v.name: v.valueReference for v in md.modelVariables}
@@ -163,6 +166,7 @@ def fmpy_run(fmu, experiment, fmi_type):
                        model_description=md)
     wall = time.perf_counter() - t0
     inst.freeInstance()
+    shutil.rmtree(unzipdir)
     return t, res, wall
 
 

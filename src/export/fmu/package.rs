@@ -29,9 +29,10 @@ pub struct FmuSummary {
     pub guid: String,
 }
 
-/// The shared library: `$VANEFIT_FMU_BINARY` when set (it must exist), else
-/// `libvanefit_fmu.so` beside the running executable or one folder up (a test binary runs
-/// from `target/release/deps/`).
+/// The shared library: `$VANEFIT_FMU_BINARY` when set (it must exist), else the newest
+/// `libvanefit_fmu.so` beside the running executable, in its `deps/` folder (where `cargo
+/// test` leaves it) or one folder up (a test binary runs from `target/release/deps/`).
+/// The newest, because `cargo build` and `cargo test` each update only their own copy.
 pub fn find_binary(env_value: Option<PathBuf>, exe: Option<&Path>) -> Result<PathBuf, FmuError> {
     let candidates: Vec<PathBuf> = match env_value {
         Some(p) => vec![p],
@@ -39,13 +40,18 @@ pub fn find_binary(env_value: Option<PathBuf>, exe: Option<&Path>) -> Result<Pat
             .and_then(Path::parent)
             .map(|dir| {
                 let up = dir.parent().map(|d| d.join(BINARY_FILE));
-                std::iter::once(dir.join(BINARY_FILE)).chain(up).collect()
+                [dir.join(BINARY_FILE), dir.join("deps").join(BINARY_FILE)]
+                    .into_iter()
+                    .chain(up)
+                    .collect()
             })
             .unwrap_or_default(),
     };
+    let modified = |p: &PathBuf| std::fs::metadata(p).and_then(|m| m.modified()).ok();
     candidates
         .iter()
-        .find(|p| p.is_file())
+        .filter(|p| p.is_file())
+        .max_by_key(|p| modified(p))
         .cloned()
         .ok_or_else(|| FmuError::NoBinary {
             name: BINARY_FILE.into(),
