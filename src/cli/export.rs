@@ -53,3 +53,44 @@ pub(crate) fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
     say!("wrote {}", args.out.join("problem.yaml").display());
     Ok(())
 }
+
+/// Options of `vanefit export-fmu`.
+#[derive(Args, Debug)]
+pub(crate) struct ExportFmuArgs {
+    /// Fit file written by `vanefit fit` or `vanefit diagnose` (vanefit.fit/1).
+    pub(crate) fit: PathBuf,
+    /// The FMU to write (FMI 2.0, model exchange and co-simulation, linux64).
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+    /// The FMU's shared library (libvanefit_fmu.so); omitted: $VANEFIT_FMU_BINARY, else
+    /// beside the vanefit executable.
+    #[arg(long)]
+    pub(crate) binary: Option<PathBuf>,
+}
+
+/// Runs `vanefit export-fmu`.
+pub(crate) fn run_fmu(args: &ExportFmuArgs) -> Result<(), Failure> {
+    if args.out.is_dir() {
+        return Err(Failure(format!(
+            "--out {}: is a folder, not a file",
+            args.out.display()
+        )));
+    }
+    let done = vanefit::task::export::export_fmu(&vanefit::task::export::FmuOptions {
+        fit: args.fit.clone(),
+        out: args.out.clone(),
+        binary: args.binary.clone(),
+    })?;
+    let s = &done.summary;
+    say!(
+        "FMU (FMI 2.0, model exchange and co-simulation) of {}: {} variables, {} tunable model parameters, {} bytes, GUID {}",
+        args.fit.display(),
+        s.variables,
+        s.model_parameters,
+        s.bytes,
+        s.guid
+    );
+    say!("binary {}", done.binary.display());
+    say!("wrote {}", args.out.display());
+    Ok(())
+}

@@ -102,6 +102,9 @@ pub(crate) enum Command {
     /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
     /// tables, an SBML document declaring the model's symbols, and the problem YAML.
     ExportPetab(crate::cli::export::ExportPetabArgs),
+    /// Export a fit as an FMU (FMI 2.0, model exchange and co-simulation) for system
+    /// simulators: OpenModelica, Dymola, Simulink, FMPy.
+    ExportFmu(crate::cli::export::ExportFmuArgs),
     /// Run a manifest's fleet of datasets (fit, diagnose, predict) in resumable shards,
     /// here or on Slurm.
     Batch(crate::cli::batch::BatchArgs),
@@ -238,6 +241,7 @@ pub(crate) fn run(cli: Cli) -> Result<(), Failure> {
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
         Command::Predict(args) => crate::cli::predict::run(&args),
         Command::ExportPetab(args) => crate::cli::export::run(&args),
+        Command::ExportFmu(args) => crate::cli::export::run_fmu(&args),
         Command::Batch(args) => crate::cli::batch::run(&args),
         Command::Merge(args) => crate::cli::batch::merge(&args),
     }

@@ -339,6 +339,13 @@ pub fn write_dataset(
             Load::Torque { t_nm } => {
                 let _ = writeln!(rig, "load = {{ kind = \"torque\", t_nm = {t_nm:e} }}");
             }
+            // rig.toml has no combined load (only an FMU's user sets one): brake, then torque.
+            Load::BrakeAndTorque { c_nm_s_rad, t_nm } => {
+                let _ = writeln!(
+                    rig,
+                    "load = {{ kind = \"viscous_brake\", c_nm_s_rad = {c_nm_s_rad:e} }}\n# and a constant torque of {t_nm:e} N*m, which rig.toml cannot state"
+                );
+            }
         }
         crate::io::write_atomic(&dir.join(&ex.file), recording_csv(&ex.recording).as_bytes())
             .map_err(io)?;

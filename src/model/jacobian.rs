@@ -92,7 +92,9 @@ impl Load {
     /// a constant torque (ω is taken for symmetry with [`Load::torque`]; no load uses it).
     fn torque_slope(&self, _omega: f64) -> f64 {
         match *self {
-            Load::ViscousBrake { c_nm_s_rad } => c_nm_s_rad,
+            Load::ViscousBrake { c_nm_s_rad } | Load::BrakeAndTorque { c_nm_s_rad, .. } => {
+                c_nm_s_rad
+            }
             Load::None | Load::Torque { .. } => 0.0,
         }
     }

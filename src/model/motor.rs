@@ -53,6 +53,14 @@ pub enum Load {
         /// The torque, N·m.
         t_nm: f64,
     },
+    /// Eddy-current brake and a constant torque together: T_load = c·ω + t (the load of
+    /// an exported FMU, whose user sets both).
+    BrakeAndTorque {
+        /// Brake coefficient c, N·m·s/rad.
+        c_nm_s_rad: f64,
+        /// The constant torque t, N·m.
+        t_nm: f64,
+    },
 }
 
 impl Load {
@@ -62,6 +70,7 @@ impl Load {
             Load::None => 0.0,
             Load::ViscousBrake { c_nm_s_rad } => c_nm_s_rad * omega,
             Load::Torque { t_nm } => t_nm,
+            Load::BrakeAndTorque { c_nm_s_rad, t_nm } => c_nm_s_rad * omega + t_nm,
         }
     }
 }

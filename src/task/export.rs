@@ -1,5 +1,6 @@
 //! `export-petab` as a task: the dataset a fit was made from (`find_dataset`) and the
-//! fit as a PEtab v1 problem ([`petab_problem`]), written by `export::petab::write`.
+//! fit as a PEtab v1 problem ([`petab_problem`]), written by `export::petab::write`; the
+//! fit as an FMU ([`export_fmu`]).
 
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
@@ -83,4 +84,45 @@ pub fn petab_problem(fit_path: &Path, dataset: Option<&Path>) -> Result<PetabPro
         tables,
         summary,
     })
+}
+
+/// Options of `export-fmu`: the fit file, the FMU to write, and where the FMU's shared
+/// library is (`None`: `$VANEFIT_FMU_BINARY`, else beside the running executable).
+#[derive(Debug, Clone)]
+pub struct FmuOptions {
+    /// The fit file (vanefit.fit/1).
+    pub fit: PathBuf,
+    /// The FMU to write.
+    pub out: PathBuf,
+    /// The shared library built from the `fmu/` crate.
+    pub binary: Option<PathBuf>,
+}
+
+/// What `export-fmu` wrote.
+#[derive(Debug, Clone)]
+pub struct FmuExport {
+    /// The shared library packed.
+    pub binary: PathBuf,
+    /// Sizes, counts and GUID.
+    pub summary: crate::export::fmu::package::FmuSummary,
+}
+
+/// Writes the FMU of a fit (docs/fmu.md): refuses an effect it cannot represent, finds the
+/// shared library, packs description, library and fit (temporary file, then rename).
+pub fn export_fmu(opts: &FmuOptions) -> Result<FmuExport, crate::export::fmu::FmuError> {
+    use crate::export::fmu::package::{find_binary, write_fmu, BINARY_ENV};
+    // The fit is read and checked before the library is looked for: a fit the FMU cannot
+    // represent is the more useful message.
+    let fit = FitFile::read(&opts.fit)?;
+    crate::export::fmu::variables::model_parameters(&fit)?;
+    let binary = match &opts.binary {
+        Some(b) => find_binary(Some(b.clone()), None)?,
+        None => {
+            let env = std::env::var_os(BINARY_ENV).map(PathBuf::from);
+            let exe = std::env::current_exe().ok();
+            find_binary(env, exe.as_deref())?
+        }
+    };
+    let summary = write_fmu(&opts.fit, &binary, &opts.out)?;
+    Ok(FmuExport { binary, summary })
 }

@@ -174,6 +174,9 @@ pub fn describe_load(l: &Load) -> String {
         Load::None => "no load".into(),
         Load::ViscousBrake { c_nm_s_rad } => format!("brake {c_nm_s_rad:e} N*m*s/rad"),
         Load::Torque { t_nm } => format!("torque {t_nm} N*m"),
+        Load::BrakeAndTorque { c_nm_s_rad, t_nm } => {
+            format!("brake {c_nm_s_rad:e} N*m*s/rad and torque {t_nm} N*m")
+        }
     }
 }
 
