@@ -170,6 +170,14 @@ impl MotorSection {
                 self.dead_volume_m3,
             ],
         };
+        // The size-scaled defaults first, so that a value the table gives (the dead volume)
+        // overrides its default.
+        if let Some(v_disp) = volumes[0] {
+            let size = v_disp / crate::model::params::MotorParams::default().v_disp();
+            for (name, value) in scaled_defaults(size) {
+                set.set(name, value)?;
+            }
+        }
         let given = [
             ("z", self.vanes.map(f64::from)),
             ("v_disp", volumes[0]),
@@ -181,23 +189,20 @@ impl MotorSection {
                 set.set(name, v)?;
             }
         }
-        if let Some(v_disp) = volumes[0] {
-            let size = v_disp / crate::model::params::MotorParams::default().v_disp();
-            for (name, value) in scaled_defaults(size) {
-                set.set(name, value)?;
-            }
-        }
         Ok(set.check()?)
     }
 }
 
 /// How the defaults of the parameters a rig file does not give grow with the motor:
-/// geometric similarity with s = V_disp/V_disp,AR034 (lengths ∝ s^⅓). Sonic conductances
-/// are areas (∝ s^⅔); lumped volumes ∝ s; Coulomb friction is a force from the pressure on
-/// vane and seal areas times a radius (∝ s); viscous friction is a sheared area times a
-/// radius squared over an unchanged clearance (∝ s^{4/3}); inertia is a mass times a radius
-/// squared (∝ s^{5/3}).
-pub const SIZE_EXPONENTS: [(&str, f64); 12] = [
+/// geometric similarity with s = V_disp/V_disp,AR034 (lengths ∝ s^⅓; docs/model.md,
+/// "Defaults that follow the motor's size"). Sonic conductances are areas (∝ s^⅔); lumped
+/// volumes and the dead volume per compartment ∝ s; Coulomb friction is a force from the
+/// pressure on vane and seal areas times a radius (∝ s); viscous friction is a sheared area
+/// times a radius squared over an unchanged clearance (∝ s^{4/3}); inertia is a mass times a
+/// radius squared (∝ s^{5/3}). Dimensionless parameters (z, ε, b_crit, n_poly) do not
+/// change with size; `w_reg` is a numerical regularisation speed and is kept.
+pub const SIZE_EXPONENTS: [(&str, f64); 13] = [
+    ("v_dead", 1.0),
     ("c_in1", 2.0 / 3.0),
     ("c_out2", 2.0 / 3.0),
     ("c_ext", 2.0 / 3.0),
@@ -313,6 +318,87 @@ mod tests {
         assert_eq!(
             MotorSection::default().nominal_params().unwrap(),
             MotorParams::default()
+        );
+    }
+
+    /// The motor of a `[motor]` table that gives only a displacement `size` times AR034's.
+    fn scaled_motor(size: f64) -> MotorParams {
+        MotorSection {
+            displacement_m3: Some(3.8e-6 * size),
+            ..MotorSection::default()
+        }
+        .nominal_params()
+        .unwrap()
+    }
+
+    /// Each default with a physical size, by name, against the exponent geometric similarity
+    /// gives it (written out here, not read from [`SIZE_EXPONENTS`]): a default that stays at
+    /// AR034's value whatever the displacement fails its own line.
+    #[test]
+    fn every_dimensional_default_follows_the_displacement() {
+        let expected: [(&str, f64); 13] = [
+            ("v_dead", 1.0),
+            ("vol1", 1.0),
+            ("vol2", 1.0),
+            ("vole", 1.0),
+            ("c_in1", 2.0 / 3.0),
+            ("c_out2", 2.0 / 3.0),
+            ("c_ext", 2.0 / 3.0),
+            ("c_1e", 2.0 / 3.0),
+            ("c_2e", 2.0 / 3.0),
+            ("c_12", 2.0 / 3.0),
+            ("t_coulomb", 1.0),
+            ("visc", 4.0 / 3.0),
+            ("inertia", 5.0 / 3.0),
+        ];
+        let base = MotorParams::default();
+        for size in [0.4, 2.5] {
+            let p = scaled_motor(size);
+            for (name, k) in expected {
+                let (b, v) = (base.get(name).unwrap(), p.get(name).unwrap());
+                let want = b * size.powf(k);
+                assert!(
+                    (v - want).abs() <= 1e-12 * want,
+                    "{name} at {size}× the displacement: {v:e}, want {want:e} (∝ s^{k:.3})"
+                );
+            }
+            for name in ["z", "eps", "b_crit", "n_poly"] {
+                assert_eq!(p.get(name), base.get(name), "{name} is dimensionless");
+            }
+        }
+    }
+
+    /// No default with a unit of length, area, volume, mass or force is left unscaled: a
+    /// parameter added later with such a unit must be added to [`SIZE_EXPONENTS`].
+    #[test]
+    fn no_dimensional_base_default_is_left_out() {
+        let kept = ["v_disp", "w_reg"];
+        for s in crate::model::params::BASE_PARAMS {
+            let dimensional = ["m3", "kg", "N*m"].iter().any(|u| s.unit.contains(u));
+            if dimensional && !kept.contains(&s.name) {
+                assert!(
+                    SIZE_EXPONENTS.iter().any(|(n, _)| *n == s.name),
+                    "{} ({}) does not follow the motor's size",
+                    s.name,
+                    s.unit
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_given_dead_volume_is_kept_and_a_missing_one_scales() {
+        let m = MotorSection {
+            displacement_m3: Some(2.1e-6),
+            dead_volume_m3: Some(0.03e-6),
+            ..MotorSection::default()
+        };
+        assert_eq!(m.nominal_params().unwrap().v_dead(), 0.03e-6);
+        let p = scaled_motor(2.1 / 3.8);
+        assert!(
+            (p.v_dead() - 0.1e-6 * 2.1 / 3.8).abs() < 1e-18,
+            "{}",
+            p.v_dead()
         );
     }
 
