@@ -299,6 +299,12 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     let _lock =
         vanefit::io::out::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
     let settings = args.options()?.check()?;
+    // A page's reading errors are said before the search, not found in its residuals.
+    if let Ok(ds) = vanefit::data::dataset::Dataset::load(&args.dataset) {
+        for ex in &ds.experiments {
+            crate::cli::print_page_warnings(&ds, ex);
+        }
+    }
     let progress = progress();
     let fitted = fit(
         &args.dataset,

@@ -193,6 +193,70 @@ impl MotorSection {
     }
 }
 
+impl MotorSection {
+    /// The motor a fit of this table will use, one line per key a page or rig file should
+    /// give (displacement, vanes, expansion ratio, dead volume): its value and where it came
+    /// from (given, derived from the geometry, or a default and which), for `vanefit check`.
+    pub fn assumed(&self) -> Result<Vec<String>, MotorSpecError> {
+        let p = self.nominal_params()?;
+        let geometry = self.geometry()?.is_some();
+        let reference = MotorParams::default();
+        let size = p.v_disp() / reference.v_disp();
+        let from = |given: bool, default: &str| -> String {
+            if geometry {
+                "derived from the geometry (paper eqs. 5–7)".to_string()
+            } else if given {
+                "given".to_string()
+            } else {
+                format!("DEFAULT: {default}")
+            }
+        };
+        let mut lines = vec![
+            format!(
+                "displacement    {:.4} cm³  {}",
+                p.v_disp() * 1e6,
+                from(
+                    self.displacement_m3.is_some(),
+                    "the reference motor AR034-11's; give displacement_m3, or every size-scaled default is AR034-11's"
+                )
+            ),
+            format!(
+                "vanes           {}  {}",
+                p.z(),
+                if self.vanes.is_some() {
+                    "given".to_string()
+                } else {
+                    "DEFAULT: AR034-11's (5); give vanes".to_string()
+                }
+            ),
+            format!(
+                "expansion ratio {:.4}  {}",
+                p.eps(),
+                from(
+                    self.expansion_ratio.is_some(),
+                    "AR034-11's; give expansion_ratio"
+                )
+            ),
+            format!(
+                "dead volume     {:.4} cm³  {}",
+                p.v_dead() * 1e6,
+                from(
+                    self.dead_volume_m3.is_some(),
+                    &format!(
+                        "AR034-11's 0.1 cm³ × {size:.3} (the displacement's ratio; docs/model.md, \"Defaults that follow the motor's size\")"
+                    )
+                )
+            ),
+        ];
+        if size != 1.0 {
+            lines.push(format!(
+                "conductances, friction, volumes and inertia: AR034-11's scaled to {size:.3}× its displacement (geometric similarity)"
+            ));
+        }
+        Ok(lines)
+    }
+}
+
 /// How the defaults of the parameters a rig file does not give grow with the motor:
 /// geometric similarity with s = V_disp/V_disp,AR034 (lengths ∝ s^⅓; docs/model.md,
 /// "Defaults that follow the motor's size"). Sonic conductances are areas (∝ s^⅔); lumped
@@ -400,6 +464,30 @@ mod tests {
             "{}",
             p.v_dead()
         );
+    }
+
+    #[test]
+    fn the_assumed_motor_marks_every_default() {
+        let lines = MotorSection::default().assumed().unwrap();
+        assert_eq!(lines.len(), 4, "{lines:?}");
+        assert!(lines.iter().all(|l| l.contains("DEFAULT")), "{lines:?}");
+        let m = MotorSection {
+            displacement_m3: Some(7.6e-6),
+            vanes: Some(4),
+            ..MotorSection::default()
+        };
+        let lines = m.assumed().unwrap();
+        assert!(lines[0].contains("7.6000 cm³  given"), "{}", lines[0]);
+        assert!(lines[1].contains("given"), "{}", lines[1]);
+        assert!(lines[2].contains("DEFAULT"), "{}", lines[2]);
+        assert!(
+            lines[3].contains("0.2000 cm³  DEFAULT") && lines[3].contains("2.000"),
+            "{}",
+            lines[3]
+        );
+        assert!(lines[4].contains("2.000×"), "{}", lines[4]);
+        let lines = ar034_by_geometry().assumed().unwrap();
+        assert!(lines[0].contains("geometry"), "{}", lines[0]);
     }
 
     #[test]

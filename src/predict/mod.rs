@@ -140,6 +140,38 @@ pub struct Prediction {
     pub range_tolerance_pa: f64,
     /// Discovered terms of the fit's model (their coefficients are taken as exact).
     pub discovered_terms: usize,
+    /// What the fit itself warned of, repeated with every prediction made from it
+    /// ([`fit_warnings`]).
+    pub fit_warnings: Vec<String>,
+}
+
+/// The fit's own warnings that a prediction from it inherits: a fit that does not reach
+/// the noise (its model misses the data, so bands from its curvature are too narrow where
+/// it misses), parameters it could not identify, and a fit without the motor prior whose
+/// parameters are not all estimated.
+pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(st) = &fit.statistics {
+        if !st.noise_reached {
+            out.push(format!(
+                "WARNING: the fit does NOT reach the noise (noise ratio {:.2} > limit {:.2}):                  its model misses the data, the bands are widened by {:.2} but may still not                  hold where the model misses.",
+                st.noise_ratio, st.noise_ratio_limit, st.interval_scale
+            ));
+        }
+    }
+    let open: Vec<&str> = fit
+        .verdicts
+        .iter()
+        .filter(|v| !v.identifiable)
+        .map(|v| v.name.as_str())
+        .collect();
+    if !open.is_empty() {
+        out.push(format!(
+            "WARNING: the fit could not identify {}: predictions that depend on them rest              on one of several equally good fits.",
+            open.join(", ")
+        ));
+    }
+    out
 }
 
 /// The fit's motor, discovered terms included.
@@ -218,6 +250,7 @@ pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, Pr
         uncertainty: unc,
         range_tolerance_pa: tolerance,
         discovered_terms: fit.extra.len(),
+        fit_warnings: fit_warnings(fit),
     })
 }
 

@@ -365,6 +365,13 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
         ),
         format!("{}.", pr.uncertainty.basis.describe()),
     ];
+    if pr.uncertainty.basis == crate::predict::uncertainty::BandBasis::Independent {
+        notes.push(
+            "WARNING: the parameters are treated as INDEPENDENT (no covariance in the fit              file): where they trade off, the bands are wrong, too wide or too narrow."
+                .into(),
+        );
+    }
+    notes.extend(pr.fit_warnings.iter().cloned());
     for (name, why) in &pr.uncertainty.uncovered {
         notes.push(format!("The band does not cover {name}: {why}."));
     }
