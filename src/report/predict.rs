@@ -367,7 +367,7 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
     ];
     if pr.uncertainty.basis == crate::predict::uncertainty::BandBasis::Independent {
         notes.push(
-            "WARNING: the parameters are treated as INDEPENDENT (no covariance in the fit              file): where they trade off, the bands are wrong, too wide or too narrow."
+            "WARNING: the parameters are treated as INDEPENDENT (no covariance in the fit file): where they trade off, the bands are wrong, too wide or too narrow."
                 .into(),
         );
     }
