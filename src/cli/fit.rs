@@ -67,9 +67,22 @@ pub(crate) struct FitArgs {
     /// Skip the plots.
     #[arg(long)]
     pub(crate) no_plots: bool,
+    /// The prior of the motor's parameters: `size` (log-normal around the defaults scaled
+    /// to the displacement; docs/estimation.md, "Priors") or `none` (the likelihood alone).
+    #[arg(long, value_enum, default_value_t = Priors::Size)]
+    pub(crate) priors: Priors,
     /// Fit file to write (vanefit.fit/1); results and plots go next to it.
     #[arg(long)]
     pub(crate) out: PathBuf,
+}
+
+/// `--priors`: which prior the fit adds to the likelihood.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Priors {
+    /// Log-normal around the defaults scaled to the motor's displacement.
+    Size,
+    /// None: maximum likelihood.
+    None,
 }
 
 /// `--uncertainty`: how 95% intervals are computed.
@@ -110,6 +123,7 @@ impl FitArgs {
             },
             resume: self.resume,
             trace: self.trace,
+            priors: self.priors == Priors::Size,
         })
     }
 }
@@ -285,6 +299,12 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     let _lock =
         vanefit::io::out::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
     let settings = args.options()?.check()?;
+    // A page's reading errors are said before the search, not found in its residuals.
+    if let Ok(ds) = vanefit::data::dataset::Dataset::load(&args.dataset) {
+        for ex in &ds.experiments {
+            crate::cli::print_page_warnings(&ds, ex);
+        }
+    }
     let progress = progress();
     let fitted = fit(
         &args.dataset,

@@ -285,6 +285,12 @@ fn check(dir: &Path) -> Result<(), Failure> {
         ds.p_atm_pa,
         ds.experiments.len()
     );
+    if let Ok(lines) = ds.motor.assumed() {
+        say!("  the motor a fit will use ([motor] in rig.toml):");
+        for l in lines {
+            say!("    {l}");
+        }
+    }
     for (ex, refs) in ds.experiments.iter().zip(&references) {
         say!(
             "  {} {} ({} rows)",
@@ -308,6 +314,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
             );
         }
         catalogue::print(ex, ds.p_atm_pa);
+        print_page_warnings(&ds, ex);
         for r in refs {
             print_reference(r, ds.p_atm_pa);
         }
@@ -495,5 +502,19 @@ mod tests {
                 assert!(text.contains(e.id()), "{path:?} --help lacks {}", e.id());
             }
         }
+    }
+}
+
+/// The warnings of a catalogue page (maker rules, figures against the page's own curves),
+/// each at its rig.toml line, on stderr (`check` and `fit`).
+pub(crate) fn print_page_warnings(ds: &Dataset, ex: &vanefit::sim::recording::ExperimentData) {
+    for w in vanefit::data::dataset::page_rules::page_warnings(ex) {
+        let at = w.line.map_or(String::new(), |l| format!(":{l}"));
+        eprintln!(
+            "warning: {}{at} (key '{}'): {}",
+            ds.dir.join("rig.toml").display(),
+            w.key,
+            w.message
+        );
     }
 }

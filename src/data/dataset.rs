@@ -11,6 +11,7 @@ pub use crate::sim::recording::{
 };
 
 pub mod catalogue;
+pub mod page_rules;
 mod plausible;
 use crate::units::constants::P_ATM_PA;
 use crate::units::{parse_column, ColumnNameError, Quantity};

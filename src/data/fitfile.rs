@@ -109,6 +109,27 @@ pub struct FitStatistics {
     /// exactly (`estimate::fit_likelihood`). Empty in files written before it existed.
     #[serde(default)]
     pub linearised_at: serde_json::Map<String, Value>,
+    /// The motor prior of the estimated parameters (docs/estimation.md, "Priors"): the
+    /// estimate minimises `likelihood_chi2` + `prior_chi2`, and the covariance and the
+    /// profiles hold the prior's precision. Empty without a prior (`--priors none`, and
+    /// files written before priors existed).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub prior: Vec<PriorEntry>,
+    /// χ²_prior = Σ ((ln v − ln median)/sd_ln)² at the estimate (`None` without a prior).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior_chi2: Option<f64>,
+}
+
+/// One estimated parameter's log-normal prior as the fit file states it:
+/// ln v ~ N(ln median, sd_ln²).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PriorEntry {
+    /// The parameter.
+    pub parameter: String,
+    /// The median, SI (its default scaled to the motor's displacement).
+    pub median: f64,
+    /// Standard deviation of ln v.
+    pub sd_ln: f64,
 }
 
 /// Number of starts and how many converged.

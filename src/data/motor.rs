@@ -170,6 +170,14 @@ impl MotorSection {
                 self.dead_volume_m3,
             ],
         };
+        // The size-scaled defaults first, so that a value the table gives (the dead volume)
+        // overrides its default.
+        if let Some(v_disp) = volumes[0] {
+            let size = v_disp / crate::model::params::MotorParams::default().v_disp();
+            for (name, value) in scaled_defaults(size) {
+                set.set(name, value)?;
+            }
+        }
         let given = [
             ("z", self.vanes.map(f64::from)),
             ("v_disp", volumes[0]),
@@ -181,23 +189,84 @@ impl MotorSection {
                 set.set(name, v)?;
             }
         }
-        if let Some(v_disp) = volumes[0] {
-            let size = v_disp / crate::model::params::MotorParams::default().v_disp();
-            for (name, value) in scaled_defaults(size) {
-                set.set(name, value)?;
-            }
-        }
         Ok(set.check()?)
     }
 }
 
+impl MotorSection {
+    /// The motor a fit of this table will use, one line per key a page or rig file should
+    /// give (displacement, vanes, expansion ratio, dead volume): its value and where it came
+    /// from (given, derived from the geometry, or a default and which), for `vanefit check`.
+    pub fn assumed(&self) -> Result<Vec<String>, MotorSpecError> {
+        let p = self.nominal_params()?;
+        let geometry = self.geometry()?.is_some();
+        let reference = MotorParams::default();
+        let size = p.v_disp() / reference.v_disp();
+        let from = |given: bool, default: &str| -> String {
+            if geometry {
+                "derived from the geometry (paper eqs. 5–7)".to_string()
+            } else if given {
+                "given".to_string()
+            } else {
+                format!("DEFAULT: {default}")
+            }
+        };
+        let mut lines = vec![
+            format!(
+                "displacement    {:.4} cm³  {}",
+                p.v_disp() * 1e6,
+                from(
+                    self.displacement_m3.is_some(),
+                    "the reference motor AR034-11's; give displacement_m3, or every size-scaled default is AR034-11's"
+                )
+            ),
+            format!(
+                "vanes           {}  {}",
+                p.z(),
+                if self.vanes.is_some() {
+                    "given".to_string()
+                } else {
+                    "DEFAULT: AR034-11's (5); give vanes".to_string()
+                }
+            ),
+            format!(
+                "expansion ratio {:.4}  {}",
+                p.eps(),
+                from(
+                    self.expansion_ratio.is_some(),
+                    "AR034-11's; give expansion_ratio"
+                )
+            ),
+            format!(
+                "dead volume     {:.4} cm³  {}",
+                p.v_dead() * 1e6,
+                from(
+                    self.dead_volume_m3.is_some(),
+                    &format!(
+                        "AR034-11's 0.1 cm³ × {size:.3} (the displacement's ratio; docs/model.md, \"Defaults that follow the motor's size\")"
+                    )
+                )
+            ),
+        ];
+        if size != 1.0 {
+            lines.push(format!(
+                "conductances, friction, volumes and inertia: AR034-11's scaled to {size:.3}× its displacement (geometric similarity)"
+            ));
+        }
+        Ok(lines)
+    }
+}
+
 /// How the defaults of the parameters a rig file does not give grow with the motor:
-/// geometric similarity with s = V_disp/V_disp,AR034 (lengths ∝ s^⅓). Sonic conductances
-/// are areas (∝ s^⅔); lumped volumes ∝ s; Coulomb friction is a force from the pressure on
-/// vane and seal areas times a radius (∝ s); viscous friction is a sheared area times a
-/// radius squared over an unchanged clearance (∝ s^{4/3}); inertia is a mass times a radius
-/// squared (∝ s^{5/3}).
-const SIZE_EXPONENTS: [(&str, f64); 12] = [
+/// geometric similarity with s = V_disp/V_disp,AR034 (lengths ∝ s^⅓; docs/model.md,
+/// "Defaults that follow the motor's size"). Sonic conductances are areas (∝ s^⅔); lumped
+/// volumes and the dead volume per compartment ∝ s; Coulomb friction is a force from the
+/// pressure on vane and seal areas times a radius (∝ s); viscous friction is a sheared area
+/// times a radius squared over an unchanged clearance (∝ s^{4/3}); inertia is a mass times a
+/// radius squared (∝ s^{5/3}). Dimensionless parameters (z, ε, b_crit, n_poly) do not
+/// change with size; `w_reg` is a numerical regularisation speed and is kept.
+pub const SIZE_EXPONENTS: [(&str, f64); 13] = [
+    ("v_dead", 1.0),
     ("c_in1", 2.0 / 3.0),
     ("c_out2", 2.0 / 3.0),
     ("c_ext", 2.0 / 3.0),
@@ -314,6 +383,111 @@ mod tests {
             MotorSection::default().nominal_params().unwrap(),
             MotorParams::default()
         );
+    }
+
+    /// The motor of a `[motor]` table that gives only a displacement `size` times AR034's.
+    fn scaled_motor(size: f64) -> MotorParams {
+        MotorSection {
+            displacement_m3: Some(3.8e-6 * size),
+            ..MotorSection::default()
+        }
+        .nominal_params()
+        .unwrap()
+    }
+
+    /// Each default with a physical size, by name, against the exponent geometric similarity
+    /// gives it (written out here, not read from [`SIZE_EXPONENTS`]): a default that stays at
+    /// AR034's value whatever the displacement fails its own line.
+    #[test]
+    fn every_dimensional_default_follows_the_displacement() {
+        let expected: [(&str, f64); 13] = [
+            ("v_dead", 1.0),
+            ("vol1", 1.0),
+            ("vol2", 1.0),
+            ("vole", 1.0),
+            ("c_in1", 2.0 / 3.0),
+            ("c_out2", 2.0 / 3.0),
+            ("c_ext", 2.0 / 3.0),
+            ("c_1e", 2.0 / 3.0),
+            ("c_2e", 2.0 / 3.0),
+            ("c_12", 2.0 / 3.0),
+            ("t_coulomb", 1.0),
+            ("visc", 4.0 / 3.0),
+            ("inertia", 5.0 / 3.0),
+        ];
+        let base = MotorParams::default();
+        for size in [0.4, 2.5] {
+            let p = scaled_motor(size);
+            for (name, k) in expected {
+                let (b, v) = (base.get(name).unwrap(), p.get(name).unwrap());
+                let want = b * size.powf(k);
+                assert!(
+                    (v - want).abs() <= 1e-12 * want,
+                    "{name} at {size}× the displacement: {v:e}, want {want:e} (∝ s^{k:.3})"
+                );
+            }
+            for name in ["z", "eps", "b_crit", "n_poly"] {
+                assert_eq!(p.get(name), base.get(name), "{name} is dimensionless");
+            }
+        }
+    }
+
+    /// No default with a unit of length, area, volume, mass or force is left unscaled: a
+    /// parameter added later with such a unit must be added to [`SIZE_EXPONENTS`].
+    #[test]
+    fn no_dimensional_base_default_is_left_out() {
+        let kept = ["v_disp", "w_reg"];
+        for s in crate::model::params::BASE_PARAMS {
+            let dimensional = ["m3", "kg", "N*m"].iter().any(|u| s.unit.contains(u));
+            if dimensional && !kept.contains(&s.name) {
+                assert!(
+                    SIZE_EXPONENTS.iter().any(|(n, _)| *n == s.name),
+                    "{} ({}) does not follow the motor's size",
+                    s.name,
+                    s.unit
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_given_dead_volume_is_kept_and_a_missing_one_scales() {
+        let m = MotorSection {
+            displacement_m3: Some(2.1e-6),
+            dead_volume_m3: Some(0.03e-6),
+            ..MotorSection::default()
+        };
+        assert_eq!(m.nominal_params().unwrap().v_dead(), 0.03e-6);
+        let p = scaled_motor(2.1 / 3.8);
+        assert!(
+            (p.v_dead() - 0.1e-6 * 2.1 / 3.8).abs() < 1e-18,
+            "{}",
+            p.v_dead()
+        );
+    }
+
+    #[test]
+    fn the_assumed_motor_marks_every_default() {
+        let lines = MotorSection::default().assumed().unwrap();
+        assert_eq!(lines.len(), 4, "{lines:?}");
+        assert!(lines.iter().all(|l| l.contains("DEFAULT")), "{lines:?}");
+        let m = MotorSection {
+            displacement_m3: Some(7.6e-6),
+            vanes: Some(4),
+            ..MotorSection::default()
+        };
+        let lines = m.assumed().unwrap();
+        assert!(lines[0].contains("7.6000 cm³  given"), "{}", lines[0]);
+        assert!(lines[1].contains("given"), "{}", lines[1]);
+        assert!(lines[2].contains("DEFAULT"), "{}", lines[2]);
+        assert!(
+            lines[3].contains("0.2000 cm³  DEFAULT") && lines[3].contains("2.000"),
+            "{}",
+            lines[3]
+        );
+        assert!(lines[4].contains("2.000×"), "{}", lines[4]);
+        let lines = ar034_by_geometry().assumed().unwrap();
+        assert!(lines[0].contains("geometry"), "{}", lines[0]);
     }
 
     #[test]

@@ -31,8 +31,8 @@ use super::space::ParamSpace;
 use super::uncertainty::{self, Interval};
 use crate::data::dataset::Kind;
 use crate::data::fitfile::{
-    FitConditions, FitFile, FitStatistics, LogCovariance, ParamVerdict, ProfilePath, RunInfo,
-    Starts,
+    FitConditions, FitFile, FitStatistics, LogCovariance, ParamVerdict, PriorEntry, ProfilePath,
+    RunInfo, Starts,
 };
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
@@ -117,10 +117,12 @@ pub struct FitOutcome {
     pub cost: f64,
     /// J of the best start (the multi-start's optimum, before the likelihood's polish).
     pub best_start_cost: f64,
-    /// The likelihood's χ² at the estimate: the function the estimate minimises and the
-    /// intervals are profiled on (σ widened per `FitOutcome::widening`, the nuisances'
-    /// prior terms included).
+    /// The likelihood's χ² at the estimate (σ widened per [`FitOutcome::widening`], the
+    /// nuisances' prior terms included); the estimate minimises, and the intervals are
+    /// profiled on, this plus [`FitOutcome::prior_chi2`].
     pub chi2: f64,
+    /// The motor prior's χ²_prior at the estimate (`estimate::prior`; 0 without a prior).
+    pub prior_chi2: f64,
     /// Rise of that χ² that bounds a 95 % profile interval (`None` without a simulation).
     pub threshold: Option<f64>,
     /// Data points behind χ².
@@ -256,8 +258,10 @@ pub fn fit(
     };
     let ml = Problem::new(&likelihood, &setup.space, false);
     let best_i = lowest(&polished);
-    let (theta, chi2) = polished.swap_remove(best_i);
+    let (theta, posterior_chi2) = polished.swap_remove(best_i);
     let params = setup.space.params(&theta)?;
+    let prior_chi2 = setup.space.prior.chi2(&setup.space, &params);
+    let chi2 = posterior_chi2 - prior_chi2;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
     let k = theta.len();
     let simulated = data.simulate(&motor);
@@ -272,7 +276,16 @@ pub fn fit(
         .map(|sim| target.nuisance_estimates(sim))
         .unwrap_or_default();
     let (intervals, covariance) = match &scored {
-        Some(g) => intervals(engine, &ml, &theta, chi2, g, &polished, setup, observer),
+        Some(g) => intervals(
+            engine,
+            &ml,
+            &theta,
+            posterior_chi2,
+            g,
+            &polished,
+            setup,
+            observer,
+        ),
         None => (Vec::new(), None),
     };
     let at = problem.evaluate(&theta);
@@ -281,6 +294,7 @@ pub fn fit(
         cost: at.cost,
         best_start_cost: best.cost,
         chi2,
+        prior_chi2,
         threshold: scored.as_ref().map(GoodnessOfFit::threshold),
         n_points: data.target.n_points(),
         goodness,
@@ -497,6 +511,19 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
                 .map(|(k, v)| (k.clone(), (*v).into()))
                 .collect(),
             likelihood_chi2: Some(out.chi2),
+            prior: setup
+                .space
+                .prior
+                .terms
+                .iter()
+                .filter(|t| setup.space.dims.iter().any(|d| d.name == t.name))
+                .map(|t| PriorEntry {
+                    parameter: t.name.clone(),
+                    median: t.median,
+                    sd_ln: t.sd_ln,
+                })
+                .collect(),
+            prior_chi2: (!setup.space.prior.is_empty()).then_some(out.prior_chi2),
             profile_threshold: out.threshold,
             linearised_at: out
                 .linearised_at

@@ -50,6 +50,13 @@ pub trait Objective: Sync {
 pub trait Coordinates: Sync {
     /// The motor at `x`.
     fn motor(&self, x: &[f64]) -> Option<Motor>;
+
+    /// The prior's residuals of the motor at `x` (`estimate::prior`): their squares are
+    /// added to χ² (and divided by the number of points, to the cost). None by default.
+    fn prior_residuals(&self, motor: &Motor) -> Vec<f64> {
+        let _ = motor;
+        Vec::new()
+    }
 }
 
 impl Coordinates for ParamSpace {
@@ -57,6 +64,13 @@ impl Coordinates for ParamSpace {
         self.params(theta)
             .ok()
             .map(|p| Motor::new(p, self.effects.clone()))
+    }
+
+    fn prior_residuals(&self, motor: &Motor) -> Vec<f64> {
+        if self.prior.is_empty() {
+            return Vec::new();
+        }
+        self.prior.residuals(self, &motor.params)
     }
 }
 
@@ -86,7 +100,20 @@ impl<'a, C: Coordinates + ?Sized> Problem<'a, C> {
     pub fn evaluate(&self, theta: &[f64]) -> Evaluation {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let e = match self.space.motor(theta) {
-            Some(m) => self.objective.evaluate(&m),
+            Some(m) => {
+                let e = self.objective.evaluate(&m);
+                let prior: f64 = self.space.prior_residuals(&m).iter().map(|r| r * r).sum();
+                if e.failed || prior == 0.0 {
+                    e
+                } else {
+                    // The posterior: χ² + χ²_prior; the cost (≈ χ²/n) gains χ²_prior/n.
+                    Evaluation {
+                        cost: e.cost + prior / e.n_points.max(1) as f64,
+                        chi2: e.chi2 + prior,
+                        ..e
+                    }
+                }
+            }
             None => Evaluation {
                 cost: INVALID_PARAMS_COST,
                 chi2: INVALID_PARAMS_COST,
@@ -109,7 +136,10 @@ impl<'a, C: Coordinates + ?Sized> Problem<'a, C> {
     /// breaks a model constraint, the simulation fails, or the objective has none.
     pub fn residuals(&self, theta: &[f64]) -> Option<Vec<f64>> {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
-        self.objective.residuals(&self.space.motor(theta)?)
+        let motor = self.space.motor(theta)?;
+        let mut r = self.objective.residuals(&motor)?;
+        r.extend(self.space.prior_residuals(&motor));
+        Some(r)
     }
 
     /// Evaluations so far.

@@ -6,6 +6,7 @@
 //! The optimizer's coordinate is θ = logit(u) = ln(u/(1 − u)), so any θ ∈ ℝ is a value
 //! strictly inside the bounds (log for positive parameters, logistic for boxed ones).
 
+use super::prior::Prior;
 use crate::model::effects::EffectSet;
 use crate::model::params::{spec, Domain, MotorParams, ParamSet};
 
@@ -35,6 +36,9 @@ pub struct ParamSpace {
     pub fixed: MotorParams,
     /// Effects switched on.
     pub effects: EffectSet,
+    /// The prior of the estimated parameters (empty: none), added to every cost the space
+    /// is searched on (`estimate::prior`).
+    pub prior: Prior,
 }
 
 /// An error in the estimation set-up (unknown name, bad bounds).
@@ -184,7 +188,14 @@ impl ParamSpace {
             dims,
             fixed,
             effects,
+            prior: Prior::none(),
         })
+    }
+
+    /// The same space with a prior on its parameters (MAP instead of maximum likelihood).
+    pub fn with_prior(mut self, prior: Prior) -> Self {
+        self.prior = prior;
+        self
     }
 
     /// Number of estimated parameters.

@@ -163,6 +163,66 @@ pub struct Prediction {
     pub discovered_terms: usize,
     /// Which method made the bands, and why.
     pub bands: BandsMade,
+    /// What the fit itself warned of, repeated with every prediction made from it
+    /// ([`fit_warnings`]).
+    pub fit_warnings: Vec<String>,
+}
+
+/// The fit's own warnings that a prediction from it inherits: a fit that does not reach
+/// the noise (its model misses the data, so bands from its curvature are too narrow where
+/// it misses), parameters it could not identify, and parameters that rest on the motor
+/// prior rather than on the data ([`prior_shares`]).
+pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(st) = &fit.statistics {
+        if !st.noise_reached {
+            out.push(format!(
+                "WARNING: the fit does NOT reach the noise (noise ratio {:.2} > limit {:.2}): its model misses the data, the bands are widened by {:.2} but may still not hold where the model misses.",
+                st.noise_ratio, st.noise_ratio_limit, st.interval_scale
+            ));
+        }
+    }
+    let open: Vec<&str> = fit
+        .verdicts
+        .iter()
+        .filter(|v| !v.identifiable)
+        .map(|v| v.name.as_str())
+        .collect();
+    if !open.is_empty() {
+        out.push(format!(
+            "WARNING: the fit could not identify {}: predictions that depend on them rest on one of several equally good fits.",
+            open.join(", ")
+        ));
+    }
+    let on_prior: Vec<String> = prior_shares(fit)
+        .into_iter()
+        .filter(|(_, r)| *r >= 0.5)
+        .map(|(n, r)| format!("{n} ({:.0} %)", 100.0 * r))
+        .collect();
+    if !on_prior.is_empty() {
+        out.push(format!(
+            "Resting on the motor prior, not on the data (posterior σ of ln v as a share of the prior's): {}. Figures that depend on them carry the prior's spread; a second supply pressure, the air flow at stall or a rig experiment would pin them.",
+            on_prior.join(", ")
+        ));
+    }
+    out
+}
+
+/// For each estimated parameter with a prior (`statistics.prior`) and in the covariance:
+/// its posterior standard deviation of ln v over the prior's, √C_jj/σ_prior. Near 1 the
+/// parameter rests on the prior (the data add nothing); near 0 on the data.
+pub fn prior_shares(fit: &FitFile) -> Vec<(String, f64)> {
+    let (Some(st), Some(cov)) = (&fit.statistics, &fit.covariance) else {
+        return Vec::new();
+    };
+    st.prior
+        .iter()
+        .filter_map(|p| {
+            let j = cov.parameters.iter().position(|n| *n == p.parameter)?;
+            let sd = cov.matrix[j][j].max(0.0).sqrt();
+            (p.sd_ln > 0.0).then(|| (p.parameter.clone(), sd / p.sd_ln))
+        })
+        .collect()
 }
 
 /// The fit's motor, discovered terms included.
@@ -289,6 +349,7 @@ pub fn predict_with(
         range_tolerance_pa: tolerance,
         discovered_terms: fit.extra.len(),
         bands: made,
+        fit_warnings: fit_warnings(fit),
     })
 }
 

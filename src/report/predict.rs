@@ -364,6 +364,13 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
             display.label()
         ),
     ];
+    if pr.uncertainty.basis == crate::predict::uncertainty::BandBasis::Independent {
+        notes.push(
+            "WARNING: the parameters are treated as INDEPENDENT (no covariance in the fit file): where they trade off, the bands are wrong, too wide or too narrow."
+                .into(),
+        );
+    }
+    notes.extend(pr.fit_warnings.iter().cloned());
     notes.extend(band_notes(pr));
     let sampled: &[String] = pr.bands.sampling.as_ref().map_or(&[], |s| &s.names);
     for (name, why) in &pr.uncertainty.uncovered {

@@ -13,6 +13,7 @@ use crate::estimate::fit::{
     UncertaintyMethod,
 };
 use crate::estimate::multistart::RunObserver;
+use crate::estimate::prior::Prior;
 use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
 use crate::model::effects::EffectSet;
@@ -89,6 +90,10 @@ pub struct FitOptions {
     pub resume: bool,
     /// Keep every start's cost trace in the results file.
     pub trace: bool,
+    /// Fit with the motor prior (docs/estimation.md, "Priors": each parameter log-normal
+    /// around its default scaled to the displacement): the estimate is the posterior's mode,
+    /// and what the data cannot pin rests on the prior. `false`: the likelihood alone.
+    pub priors: bool,
 }
 
 impl Default for FitOptions {
@@ -107,6 +112,7 @@ impl Default for FitOptions {
             uncertainty: UncertaintyMethod::Profile,
             resume: false,
             trace: false,
+            priors: true,
         }
     }
 }
@@ -245,7 +251,12 @@ fn search_space(ds: &Dataset, o: &FitOptions) -> Result<ParamSpace, FitError> {
         .map_err(|e| {
             OptionError::new("FitOptions.estimate/bounds/start_ranges", format!(": {e}"))
         })?;
-    Ok(ParamSpace::from_dims(dims, fixed, o.effects.clone())?)
+    let prior = if o.priors {
+        Prior::for_motor(&fixed)
+    } else {
+        Prior::none()
+    };
+    Ok(ParamSpace::from_dims(dims, fixed, o.effects.clone())?.with_prior(prior))
 }
 
 /// Where the run's side files go: `<out without .json>.<suffix>`.
@@ -267,7 +278,10 @@ pub struct Pinning {
     /// The value it stays fixed at when not pinned, SI.
     pub value: f64,
     /// The kind of experiment that would pin it (when not pinned).
-    pinned_by: Option<Kind>,
+    pub pinned_by: Option<Kind>,
+    /// When not pinned and the fit has a prior: the prior's 95 % factor F, on which the
+    /// parameter then rests (it is estimated, and its interval is the prior's ×/÷ F).
+    pub prior_factor: Option<f64>,
 }
 
 /// The pinning as the command line prints it: a heading, then one line per parameter
@@ -289,10 +303,16 @@ pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
                 Some(k) => format!("; the {} experiment would pin it", k.id()),
                 None => String::new(),
             };
-            format!(
-                "fixed at {:.4e} (default scaled to the displacement){hint}",
-                p.value
-            )
+            match p.prior_factor {
+                Some(f) => format!(
+                    "rests on its prior: {:.4e} ×/÷ {f:.1} (default scaled to the displacement){hint}",
+                    p.value
+                ),
+                None => format!(
+                    "fixed at {:.4e} (default scaled to the displacement){hint}",
+                    p.value
+                ),
+            }
         };
         lines.push(format!("  {:<10} {:>9}  {verdict}", p.name, sd));
     }
@@ -313,6 +333,11 @@ fn catalogue_estimates(
         return Ok(o.clone());
     }
     let motor = Motor::new(ds.nominal_params()?, EffectSet::empty());
+    let prior = if o.priors {
+        Prior::for_motor(&motor.params)
+    } else {
+        Prior::none()
+    };
     let names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
     let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
     let nothing = || {
@@ -333,12 +358,17 @@ fn catalogue_estimates(
             pinned: p.pinned,
             value: motor.params.get(&p.name).unwrap_or(f64::NAN),
             pinned_by: most_sensitive_experiment(&motor, &p.name),
+            prior_factor: (!p.pinned)
+                .then(|| prior.term(&p.name).map(|t| t.factor95()))
+                .flatten(),
         })
         .collect();
     observer.pinning(limit, &rows);
+    // With a prior every parameter is estimated: what the pages leave open rests on its
+    // prior, and the covariance (and so predict's bands) carries it.
     let chosen: Vec<String> = rows
         .iter()
-        .filter(|p| p.pinned)
+        .filter(|p| p.pinned || p.prior_factor.is_some())
         .map(|p| p.name.clone())
         .collect();
     if chosen.is_empty() {

@@ -26,7 +26,7 @@ use std::fmt::Write as _;
 use vanefit::data::dataset::Dataset;
 use vanefit::estimate::fit::{fit, fit_file, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::multistart::Silent;
-use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, DEFAULT_ESTIMATED};
+use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, Prior, DEFAULT_ESTIMATED};
 use vanefit::model::effects::EffectSet;
 use vanefit::objective::cost::CostOptions;
 use vanefit::predict::{predict, PredictOptions, ROW_FIGURES};
@@ -154,12 +154,14 @@ fn run_case(seed: u64, starts: usize, engine: &Engine) -> Case {
     twin::write_dataset(dir.path(), &motor, &cfg, seed).unwrap();
     let ds = Dataset::load(dir.path()).unwrap();
     let data = FitData::new(&ds, CostOptions::default()).unwrap();
+    // As `vanefit fit` does: the motor prior around the size-scaled defaults.
     let space = ParamSpace::new(
         &DEFAULT_ESTIMATED,
         ds.nominal_params().unwrap(),
         EffectSet::empty(),
     )
-    .unwrap();
+    .unwrap()
+    .with_prior(Prior::for_motor(&ds.nominal_params().unwrap()));
     let setup = FitSetup {
         multistart: MultiStartConfig {
             starts,

@@ -309,7 +309,7 @@ type Cell<'a> = Option<(f64, Option<&'a Figure>)>;
 /// The figures as rows of the curves: cells (speed, torque, power, air), `None` where not
 /// given, with the rig.toml line of the row's first figure. Torque at max power is compared
 /// only when no max power is given (power = torque·speed there: the same information twice).
-fn figure_rows(figures: &[Figure]) -> Vec<([Cell<'_>; 4], u64)> {
+pub(super) fn figure_rows(figures: &[Figure]) -> Vec<([Cell<'_>; 4], u64)> {
     let get = |k: &str| figures.iter().find(|f| f.key == k).map(|f| (f.si, Some(f)));
     let line = |k: &str| figures.iter().find(|f| f.key == k).and_then(|f| f.line);
     let mut rows = Vec::new();
@@ -488,7 +488,7 @@ fn check_curves(rec: &Recording, tolerance: f64) -> Result<(), DataError> {
 }
 
 /// Linear interpolation on points sorted by x; `None` outside their range.
-fn interpolate(points: &[(f64, f64)], x: f64) -> Option<f64> {
+pub(super) fn interpolate(points: &[(f64, f64)], x: f64) -> Option<f64> {
     let k = points.iter().position(|p| p.0 >= x)?;
     let (x1, y1) = points[k];
     if x1 == x {

@@ -1,0 +1,208 @@
+//! A catalogue page against what makers state as rules and against itself: warnings, not
+//! refusals (a real motor may break a rule of thumb), each at the figure's rig.toml line.
+//!
+//! Rules of thumb of vane-motor makers (Atlas Copco's and Chicago Pneumatic's technical
+//! guides to air motors): the stall torque is about twice the torque at max power, and
+//! max power lies near half the free speed (both follow from a torque that falls about
+//! linearly with speed). A page far from them more likely holds a reading error (a unit
+//! slip, a digit, a figure of another pressure) than an unusual motor. And a key figure
+//! that disagrees with the page's own curve at the same speed is a reading error of one of
+//! the two; where the ratio is close to a unit conversion, the warning names it.
+
+use super::catalogue::{figure_rows, interpolate};
+use crate::sim::recording::{ExperimentData, Figure};
+use crate::units::Quantity;
+
+/// Stall torque over torque at max power outside this range breaks the makers' "about 2".
+pub const STALL_OVER_MAX_POWER_TORQUE: (f64, f64) = (1.4, 3.0);
+/// Speed at max power over free speed outside this range breaks the makers' "about ½".
+pub const MAX_POWER_SPEED_OVER_FREE: (f64, f64) = (0.35, 0.65);
+/// A figure and the page's curve at its speed disagree when they differ by more than this
+/// fraction (or five reading tolerances, whichever is larger).
+pub const FIGURE_VS_CURVE: f64 = 0.25;
+
+/// One warning about a page: the figure's key and rig.toml line, and what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PageWarning {
+    /// The figure's key (`stall_torque`, …).
+    pub key: String,
+    /// Its line in rig.toml, where known.
+    pub line: Option<u64>,
+    /// What is wrong, in words.
+    pub message: String,
+}
+
+/// Unit conversions that a misread unit multiplies a value by (a ratio near one of them,
+/// or its inverse, names the likely slip).
+const SLIPS: [(f64, &str); 7] = [
+    (
+        8.850_746,
+        "N·m printed where lbf·in was meant (or the reverse)",
+    ),
+    (
+        1.355_818,
+        "lbf·ft printed where N·m was meant (or the reverse)",
+    ),
+    (
+        12.0,
+        "lbf·ft printed where lbf·in was meant (or the reverse)",
+    ),
+    (1000.0, "kW printed where W was meant (or the reverse)"),
+    (1.341_022, "hp and kW confused"),
+    (60.0, "l/min and l/s confused"),
+    (2.118_88, "cfm and l/s confused"),
+];
+
+fn slip(ratio: f64) -> Option<&'static str> {
+    let r = if ratio < 1.0 { 1.0 / ratio } else { ratio };
+    SLIPS
+        .iter()
+        .find(|(f, _)| (r / f - 1.0).abs() < 0.05)
+        .map(|(_, what)| *what)
+}
+
+/// The warnings of one catalogue experiment (none for other kinds).
+pub fn page_warnings(ex: &ExperimentData) -> Vec<PageWarning> {
+    let mut out = Vec::new();
+    let fig = |k: &str| ex.figures.iter().find(|f| f.key == k);
+    let warn = |f: &Figure, message: String| PageWarning {
+        key: f.key.clone(),
+        line: f.line,
+        message,
+    };
+    if let (Some(stall), Some(t)) = (fig("stall_torque"), fig("torque_at_max_power")) {
+        let r = stall.si / t.si;
+        let (lo, hi) = STALL_OVER_MAX_POWER_TORQUE;
+        if !(lo..=hi).contains(&r) {
+            out.push(warn(
+                stall,
+                format!(
+                    "stall torque is {r:.2} × the torque at max power; makers state about 2 (expected {lo}–{hi}){}",
+                    slip(r / 2.0).map_or(String::new(), |s| format!(": {s}?"))
+                ),
+            ));
+        }
+    }
+    if let (Some(w), Some(free)) = (fig("speed_at_max_power"), fig("free_speed")) {
+        let r = w.si / free.si;
+        let (lo, hi) = MAX_POWER_SPEED_OVER_FREE;
+        if !(lo..=hi).contains(&r) {
+            out.push(warn(
+                w,
+                format!(
+                    "max power at {:.0} % of the free speed; makers state about half (expected {:.0}–{:.0} %)",
+                    100.0 * r,
+                    100.0 * lo,
+                    100.0 * hi
+                ),
+            ));
+        }
+    }
+    out.extend(figures_against_curves(ex));
+    out
+}
+
+/// Each figure against the page's own curve at its speed (the curve rows are the
+/// recording's rows before the figures' rows).
+fn figures_against_curves(ex: &ExperimentData) -> Vec<PageWarning> {
+    let rec = &ex.recording;
+    let n_curve = rec.rows().saturating_sub(figure_rows(&ex.figures).len());
+    let Some(speed) = rec.column(Quantity::Speed) else {
+        return Vec::new();
+    };
+    let curve = |q: Quantity| -> Vec<(f64, f64)> {
+        let Some(col) = rec.column(q) else {
+            return Vec::new();
+        };
+        let mut pts: Vec<(f64, f64)> = (0..n_curve)
+            .map(|i| (speed.si[i], col.si[i]))
+            .filter(|(w, y)| w.is_finite() && y.is_finite())
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        pts
+    };
+    let tolerance = ex.tolerance.unwrap_or(0.02);
+    let limit = FIGURE_VS_CURVE.max(5.0 * tolerance);
+    let fig = |k: &str| ex.figures.iter().find(|f| f.key == k);
+    let w_max = fig("speed_at_max_power").map(|f| f.si);
+    let checks: [(&str, Quantity, Option<f64>); 4] = [
+        ("stall_torque", Quantity::Torque, Some(0.0)),
+        ("torque_at_max_power", Quantity::Torque, w_max),
+        ("max_power", Quantity::Power, w_max),
+        ("air_at_max_power", Quantity::Flow1, w_max),
+    ];
+    let mut out = Vec::new();
+    for (key, q, at) in checks {
+        let (Some(f), Some(w)) = (fig(key), at) else {
+            continue;
+        };
+        let Some(on_curve) = interpolate(&curve(q), w) else {
+            continue;
+        };
+        if !(on_curve > 0.0) {
+            continue;
+        }
+        let ratio = f.si / on_curve;
+        if (ratio - 1.0).abs() > limit {
+            let unit = rec.column(q).map(|c| c.unit).unwrap_or(f.unit);
+            out.push(PageWarning {
+                key: f.key.clone(),
+                line: f.line,
+                message: format!(
+                    "{key} = {} {} is {ratio:.3} × the page's own curve at {:.0} rpm ({:.4} {}){}",
+                    f.written,
+                    f.unit.suffix(),
+                    w * 30.0 / std::f64::consts::PI,
+                    unit.from_si(on_curve, 0.0),
+                    unit.suffix(),
+                    slip(ratio).map_or(String::new(), |s| format!(": {s}?"))
+                ),
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::data::dataset::Dataset;
+
+    /// A page as a user typed it: its warnings by key.
+    fn warnings(figures: &str, curve: &str) -> Vec<(String, String)> {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("curves.csv"), curve).unwrap();
+        let rig = format!(
+            "[motor]\ndisplacement_m3 = 3.8e-6\n\n[[experiment]]\nkind = \"catalogue\"\nfile = \"curves.csv\"\np_supply = \"6.3 bar(g)\"\n\n[experiment.figures]\n{figures}"
+        );
+        std::fs::write(dir.path().join("rig.toml"), rig).unwrap();
+        let ds = Dataset::load(dir.path()).unwrap();
+        ds.experiments
+            .iter()
+            .flat_map(super::page_warnings)
+            .map(|w| (w.key, w.message))
+            .collect()
+    }
+
+    const CURVE: &str = "speed_rpm,torque_lbf_in\n0,13.1\n3000,9.8\n6000,6.5\n9000,3.3\n";
+
+    #[test]
+    fn a_figure_in_the_wrong_unit_is_named_at_its_key() {
+        let w = warnings("stall_torque = \"13.1 N·m\"\n", CURVE);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].0, "stall_torque");
+        assert!(w[0].1.contains("lbf·in"), "{}", w[0].1);
+        // The same figure in the curve's unit agrees with it.
+        assert!(warnings("stall_torque = \"13.1 lbf·in\"\n", CURVE).is_empty());
+    }
+
+    #[test]
+    fn the_makers_rules_of_thumb_are_checked() {
+        let ok = "free_speed = \"12000 rpm\"\nspeed_at_max_power = \"6000 rpm\"\ntorque_at_max_power = \"6.5 lbf·in\"\nstall_torque = \"13.1 lbf·in\"\n";
+        assert!(warnings(ok, CURVE).is_empty(), "{:?}", warnings(ok, CURVE));
+        let bad = "free_speed = \"20000 rpm\"\nspeed_at_max_power = \"6000 rpm\"\ntorque_at_max_power = \"6.5 lbf·in\"\nstall_torque = \"13.1 lbf·in\"\n";
+        let w = warnings(bad, CURVE);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].0, "speed_at_max_power");
+        assert!(w[0].1.contains("30 %"), "{}", w[0].1);
+    }
+}

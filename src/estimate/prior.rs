@@ -1,0 +1,269 @@
+//! The prior of a motor's parameters: what is known of a vane motor of a given size before
+//! any of its data are seen (docs/estimation.md, "Priors").
+//!
+//! Each parameter with a prior is log-normal around its default scaled to the motor's
+//! displacement (`data::motor::scaled_defaults`, geometric similarity):
+//!
+//! ```text
+//!     ln v ~ N(ln v₀(V_disp), σ²),    σ = ln F / 1.96
+//! ```
+//!
+//! with F the factor within which 95 % of real motors of that size lie ([`PRIOR_SPREADS`];
+//! where each F comes from is in docs/estimation.md). A fit minimises the likelihood's χ²
+//! plus the prior's `χ²_prior = Σ ((ln v − ln v₀)/σ)²` (maximum a posteriori, the mode in
+//! ln v), so its curvature (the Laplace covariance the fit file stores) holds the prior's
+//! precision 1/σ² beside the data's. Where data pin a parameter to a few per cent, the
+//! prior's pull moves it by a fraction (σ_data/σ)² of its distance from v₀: nothing; where
+//! they do not (a catalogue page), the posterior is the prior and the bands carry it.
+//!
+//! A sampler of the estimator's coordinates θ (`estimate::space`) adds [`Prior::ln_prior`]
+//! to the log-likelihood −χ²/2: the log-density of θ, the Jacobian of θ → ln v included.
+
+use super::space::ParamSpace;
+use crate::model::params::MotorParams;
+
+/// The normal quantile of a two-sided 95 % range.
+const Z95: f64 = 1.959_963_984_540_054;
+
+/// For each parameter with a prior: F, the factor (95 %, either way) within which real
+/// vane motors of the same displacement lie around the size-scaled default. Where the
+/// numbers come from: docs/estimation.md, "Priors".
+pub const PRIOR_SPREADS: [(&str, f64); 14] = [
+    ("c_in1", 2.0),
+    ("c_out2", 2.0),
+    ("c_ext", 2.0),
+    ("c_1e", 4.0),
+    ("c_2e", 4.0),
+    ("c_12", 4.0),
+    ("t_coulomb", 3.0),
+    ("visc", 3.0),
+    ("v_dead", 2.0),
+    ("vol1", 3.0),
+    ("vol2", 3.0),
+    ("vole", 3.0),
+    ("inertia", 2.0),
+    ("b_crit", 1.6),
+];
+
+/// One parameter's log-normal prior.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PriorTerm {
+    /// The parameter (docs/model.md, "Parameters").
+    pub name: String,
+    /// The median v₀, SI (the default scaled to the motor's displacement).
+    pub median: f64,
+    /// σ of ln v.
+    pub sd_ln: f64,
+}
+
+impl PriorTerm {
+    /// The 95 % factor F = exp(1.96·σ).
+    pub fn factor95(&self) -> f64 {
+        (Z95 * self.sd_ln).exp()
+    }
+
+    /// (ln v − ln v₀)/σ; a value ≤ 0 or not finite (no logarithm) gives a large finite
+    /// residual, so that a cost built on it stays finite.
+    pub fn residual(&self, v: f64) -> f64 {
+        if v > 0.0 && v.is_finite() {
+            (v.ln() - self.median.ln()) / self.sd_ln
+        } else {
+            1e6
+        }
+    }
+}
+
+/// The prior of the parameters of one motor (empty: no prior, the likelihood alone).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Prior {
+    /// One term per parameter with a prior.
+    pub terms: Vec<PriorTerm>,
+}
+
+impl Prior {
+    /// No prior: the fit is the likelihood's alone (`--priors none`).
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// The prior of a motor whose nominal parameters (defaults scaled to its displacement,
+    /// and whatever its rig file gives) are `nominal`: a term for every parameter of
+    /// [`PRIOR_SPREADS`] with a positive nominal value.
+    pub fn for_motor(nominal: &MotorParams) -> Self {
+        let terms = PRIOR_SPREADS
+            .iter()
+            .filter_map(|(name, f)| {
+                let median = nominal.get(name).filter(|v| *v > 0.0 && v.is_finite())?;
+                Some(PriorTerm {
+                    name: name.to_string(),
+                    median,
+                    sd_ln: f.ln() / Z95,
+                })
+            })
+            .collect();
+        Self { terms }
+    }
+
+    /// Whether there is no prior.
+    pub fn is_empty(&self) -> bool {
+        self.terms.is_empty()
+    }
+
+    /// The term of a parameter.
+    pub fn term(&self, name: &str) -> Option<&PriorTerm> {
+        self.terms.iter().find(|t| t.name == name)
+    }
+
+    /// The prior's residuals of the space's estimated parameters that have a term, in θ
+    /// order: their squares sum to χ²_prior. Parameters held fixed add nothing (they do not
+    /// move).
+    pub fn residuals(&self, space: &ParamSpace, params: &MotorParams) -> Vec<f64> {
+        space
+            .dims
+            .iter()
+            .filter_map(|d| {
+                let t = self.term(&d.name)?;
+                Some(t.residual(params.get(&d.name).unwrap_or(f64::NAN)))
+            })
+            .collect()
+    }
+
+    /// χ²_prior = Σ ((ln v − ln v₀)/σ)² over the space's estimated parameters with a term:
+    /// −2 ln p(ln v) up to a constant.
+    pub fn chi2(&self, space: &ParamSpace, params: &MotorParams) -> f64 {
+        self.residuals(space, params).iter().map(|r| r * r).sum()
+    }
+
+    /// ln p(θ), the log-density of the estimator's coordinates θ (normalised, up to the prior's mass that the search bounds cut off): for a
+    /// parameter with a term, the normal density of ln v times |d ln v/dθ|; for one
+    /// without, uniform over its bounds in the space's own scale (log for positive
+    /// parameters), i.e. the logistic density of θ. −∞ where θ is not finite. A sampler
+    /// adds this to the log-likelihood −χ²/2.
+    pub fn ln_prior(&self, space: &ParamSpace, theta: &[f64]) -> f64 {
+        if theta.len() != space.len() || theta.iter().any(|t| !t.is_finite()) {
+            return f64::NEG_INFINITY;
+        }
+        let mut lp = 0.0;
+        for (d, t) in space.dims.iter().zip(theta) {
+            let u = 1.0 / (1.0 + (-t).exp());
+            let du_dtheta = u * (1.0 - u);
+            // ln of the logistic density; written via softplus to stay finite for large |θ|.
+            let ln_logistic = -t.abs() - 2.0 * (-t.abs()).exp().ln_1p();
+            match self.term(&d.name) {
+                None => lp += ln_logistic,
+                Some(term) => {
+                    let v = d.value(*t);
+                    if !(v > 0.0) {
+                        return f64::NEG_INFINITY;
+                    }
+                    let dlnv_du = if d.log_scale {
+                        d.hi.ln() - d.lo.ln()
+                    } else {
+                        (d.hi - d.lo) / v
+                    };
+                    let z = term.residual(v);
+                    lp += -0.5 * z * z - (term.sd_ln * (2.0 * std::f64::consts::PI).sqrt()).ln()
+                        + (dlnv_du * du_dtheta.max(f64::MIN_POSITIVE)).ln();
+                }
+            }
+        }
+        lp
+    }
+
+    /// The prior's precision in θ (diagonal): 1/σ² · (d ln v/dθ)² for each estimated
+    /// parameter with a term, 0 for the others; the Gauss–Newton curvature of χ²_prior/2.
+    pub fn precision_theta(&self, space: &ParamSpace, theta: &[f64]) -> Vec<f64> {
+        space
+            .dims
+            .iter()
+            .zip(theta)
+            .map(|(d, t)| {
+                let Some(term) = self.term(&d.name) else {
+                    return 0.0;
+                };
+                let u = 1.0 / (1.0 + (-t).exp());
+                let v = d.value(*t);
+                let slope = if d.log_scale {
+                    (d.hi.ln() - d.lo.ln()) * u * (1.0 - u)
+                } else {
+                    (d.hi - d.lo) * u * (1.0 - u) / v
+                };
+                (slope / term.sd_ln).powi(2)
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::effects::EffectSet;
+
+    fn space() -> ParamSpace {
+        ParamSpace::new(
+            &["c_in1", "b_crit", "n_poly"],
+            MotorParams::default(),
+            EffectSet::empty(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn the_prior_is_centred_on_the_nominal_motor_with_its_stated_spread() {
+        let p = MotorParams::default().with("c_in1", 2e-8).unwrap();
+        let prior = Prior::for_motor(&p);
+        let t = prior.term("c_in1").unwrap();
+        assert_eq!(t.median, 2e-8);
+        assert!((t.factor95() - 2.0).abs() < 1e-12);
+        // One F above the median is 1.96 σ: χ² = 1.96².
+        let s = space();
+        let at = MotorParams::default().with("c_in1", 4e-8).unwrap();
+        let chi2 = prior.chi2(&s, &at);
+        // b_crit sits at its median; n_poly has no term.
+        assert!((chi2 - Z95 * Z95).abs() < 1e-9, "{chi2}");
+        assert_eq!(prior.residuals(&s, &at).len(), 2);
+        assert!(Prior::none().chi2(&s, &at) == 0.0);
+    }
+
+    /// ln p(θ) is a density of θ: its integral is 1 for a parameter whose bounds hold the
+    /// whole prior (c_in1: ±7σ) and for one without a term (n_poly, uniform in its bounds).
+    #[test]
+    fn ln_prior_is_a_normalised_density_of_theta() {
+        let prior = Prior::for_motor(&MotorParams::default());
+        for name in ["c_in1", "n_poly"] {
+            let single =
+                ParamSpace::new(&[name], MotorParams::default(), EffectSet::empty()).unwrap();
+            let (a, b, n) = (-40.0, 40.0, 80_000);
+            let h = (b - a) / n as f64;
+            let integral: f64 = (0..=n)
+                .map(|i| {
+                    let w = if i == 0 || i == n { 0.5 } else { 1.0 };
+                    w * prior.ln_prior(&single, &[a + h * i as f64]).exp()
+                })
+                .sum::<f64>()
+                * h;
+            assert!((integral - 1.0).abs() < 1e-4, "{name}: {integral}");
+        }
+        let s = space();
+        assert_eq!(prior.ln_prior(&s, &[f64::NAN, 0.0, 0.0]), f64::NEG_INFINITY);
+    }
+
+    #[test]
+    fn precision_is_the_curvature_of_half_the_prior_chi2() {
+        let s = space();
+        let prior = Prior::for_motor(&MotorParams::default());
+        let th = vec![0.3, -0.2, 0.1];
+        let prec = prior.precision_theta(&s, &th);
+        let h = 1e-4;
+        for j in 0..2 {
+            let f = |d: f64| {
+                let mut t = th.clone();
+                t[j] += d;
+                prior.residuals(&s, &s.params(&t).unwrap())[j]
+            };
+            let slope = (f(h) - f(-h)) / (2.0 * h);
+            assert!((prec[j] - slope * slope).abs() < 1e-6 * prec[j], "{j}");
+        }
+        assert_eq!(prec[2], 0.0);
+    }
+}
