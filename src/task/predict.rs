@@ -10,6 +10,7 @@ use super::OptionError;
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
 use crate::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
+use crate::estimate::sample::posterior::LogPrior;
 use crate::predict::Prediction;
 use crate::predict::{
     BandChoice, BandRequest, Nozzle, NozzlePort, PosteriorSource, PredictError, SamplingOptions,
@@ -335,18 +336,53 @@ pub fn predict_observed(
         }
         _ => None,
     };
+    // The fit's motor prior (fit files of fits made with priors list it per parameter): the
+    // posterior the samples come from is the one the fit's estimate is the mode of.
+    let prior = likelihood
+        .as_ref()
+        .and_then(|l| motor_log_prior(fit, &l.names()));
     let request = BandRequest {
         choice: settings.bands,
-        // With priors in the fit, `prior` is the fit's log-prior of the estimated parameters.
         posterior: likelihood.as_ref().map(|l| PosteriorSource {
             likelihood: l,
-            prior: None,
+            prior: prior.as_ref().map(|p| p as &dyn LogPrior),
         }),
         sampling: &settings.sampling,
         progress,
     };
     crate::predict::predict_with(fit, o, &request)
         .map_err(|e| failed(e, &settings.display, o.reference_pa))
+}
+
+/// The motor prior of a fit file as a log-density of the estimated parameters' values (in
+/// `names`' order): Σ −½ ((ln v − ln v₀)/σ)² over the parameters the file has a prior for
+/// (docs/estimation.md, "Priors"). The sampler works in ln v, where this log-normal prior is
+/// a Gaussian with no Jacobian term. `None` for a fit made without priors.
+fn motor_log_prior(fit: &FitFile, names: &[String]) -> Option<impl Fn(&[f64]) -> f64 + Sync> {
+    let entries = &fit.statistics.as_ref()?.prior;
+    let terms: Vec<(usize, f64, f64)> = names
+        .iter()
+        .enumerate()
+        .filter_map(|(i, n)| {
+            let e = entries.iter().find(|e| e.parameter == *n)?;
+            (e.median > 0.0 && e.sd_ln > 0.0).then(|| (i, e.median.ln(), e.sd_ln))
+        })
+        .collect();
+    (!terms.is_empty()).then(move || {
+        move |values: &[f64]| {
+            terms
+                .iter()
+                .map(|&(i, mu, sd)| {
+                    let v = values[i];
+                    if v > 0.0 {
+                        -0.5 * ((v.ln() - mu) / sd).powi(2)
+                    } else {
+                        f64::NEG_INFINITY
+                    }
+                })
+                .sum()
+        }
+    })
 }
 
 /// A prediction's failure in the asked unit (naming the reference when the reference
