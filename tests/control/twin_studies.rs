@@ -239,8 +239,13 @@ fn frequency_response_and_design_margins_agree_with_the_twins_linearisation() {
     assert!(rel(wc_t, mv.crossover_rad_s) < 0.01);
     assert!((pm_t - mv.phase_margin_deg).abs() < 1.0);
     // The design helper: gains for 60° phase margin, checked on the twin's loop.
-    let pi: PiController = design_pi(&lin, &lp.valve, &lp.pi, Target::PhaseMargin { pm_deg: 60.0 })
-        .expect("design");
+    let pi: PiController = design_pi(
+        &lin,
+        &lp.valve,
+        &lp.pi,
+        Target::PhaseMargin { pm_deg: 60.0 },
+    )
+    .expect("design");
     let md = margins(&lin, &lp.valve, &pi);
     let designed = SpeedLoop {
         kp: pi.kp,
@@ -296,8 +301,15 @@ fn closed_loop_step_and_load_step_agree_with_the_twin() {
     };
     let t = tc::simulate_loop(&m, &rig, &SpeedLoop::default(), &sc).expect("twin loop");
     let gap = trace_gap(&v.trace, &t) / ((to - from) * rpm);
-    println!("set-point step {from}→{to} rpm: max |Δω| = {:.2e} of the step", gap);
-    assert!(gap < 0.01, "step response off by {:.3} % of the step", 100.0 * gap);
+    println!(
+        "set-point step {from}→{to} rpm: max |Δω| = {:.2e} of the step",
+        gap
+    );
+    assert!(
+        gap < 0.01,
+        "step response off by {:.3} % of the step",
+        100.0 * gap
+    );
 
     let (w, load) = (4000.0, 0.03);
     let v = match run(
@@ -331,7 +343,11 @@ fn closed_loop_step_and_load_step_agree_with_the_twin() {
         gap
     );
     assert!(dip > 10.0 * rpm, "the load step barely moves the speed");
-    assert!(gap < 0.01, "disturbance response off by {:.3} % of the dip", 100.0 * gap);
+    assert!(
+        gap < 0.01,
+        "disturbance response off by {:.3} % of the dip",
+        100.0 * gap
+    );
 }
 
 #[test]
@@ -365,16 +381,17 @@ fn start_up_on_a_pressure_ramp_agrees_with_the_twin() {
     assert!(rel(v.p_breakaway_pa, p_b) < 1e-3);
     let mut worst = 0.0f64;
     for &(w, p_eq) in v.curve.iter().step_by(15) {
-        let (p, _) = tc::supply_for_speed(&m, &rig, w, (101_325.0 * 1.01, 1.5 * p_max))
-            .expect("twin p_eq");
+        let (p, _) =
+            tc::supply_for_speed(&m, &rig, w, (101_325.0 * 1.01, 1.5 * p_max)).expect("twin p_eq");
         worst = worst.max(rel(p_eq, p));
     }
     println!("p_eq(ω): max |Δ|/p = {worst:.2e}");
     assert!(worst < 1e-3, "p_eq off by {:.3} %", 100.0 * worst);
     // The landing speed: the lowest speed whose p_eq equals the breakaway pressure.
     if let Some(j) = v.jump {
-        let (p_land, _) = tc::supply_for_speed(&m, &rig, j.to_rad_s, (101_325.0 * 1.01, 1.5 * p_max))
-            .expect("twin p_eq at landing");
+        let (p_land, _) =
+            tc::supply_for_speed(&m, &rig, j.to_rad_s, (101_325.0 * 1.01, 1.5 * p_max))
+                .expect("twin p_eq at landing");
         println!(
             "landing at {:.0} rpm: twin p_eq there {:.5} MPa vs breakaway {:.5} MPa",
             j.to_rad_s / tc::RAD_S_PER_RPM,
@@ -397,7 +414,11 @@ fn predict_with_an_inlet_nozzle_agrees_with_the_twin() {
         .arg(&out)
         .output()
         .expect("run vanefit");
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let text = std::fs::read_to_string(out.join("catalogue.csv")).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

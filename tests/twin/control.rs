@@ -283,8 +283,8 @@ impl SpeedLoop {
     pub fn open_loop(&self, lin: &Linearised, w_rad_s: f64) -> Complex<f64> {
         let jw = Complex::new(0.0, w_rad_s);
         let pi = Complex::new(self.kp, 0.0) + Complex::new(self.ki, 0.0) / jw;
-        let valve = Complex::new(self.p_max_gauge_pa / self.u_max_v, 0.0)
-            / (jw * self.valve_tau_s + 1.0);
+        let valve =
+            Complex::new(self.p_max_gauge_pa / self.u_max_v, 0.0) / (jw * self.valve_tau_s + 1.0);
         let hold = Complex::from_polar(1.0, -w_rad_s * self.ts_s / 2.0);
         pi * valve * lin.speed_per_supply(w_rad_s) * hold / KRPM_RAD_S
     }
@@ -296,7 +296,10 @@ impl SpeedLoop {
 pub fn crossover(lp: &SpeedLoop, lin: &Linearised, w_lo: f64, w_hi: f64) -> (f64, f64) {
     let mag = |w: f64| lp.open_loop(lin, w).norm();
     let (mut lo, mut hi) = (w_lo.ln(), w_hi.ln());
-    assert!(mag(w_lo) > 1.0 && mag(w_hi) < 1.0, "no gain crossover in the band");
+    assert!(
+        mag(w_lo) > 1.0 && mag(w_hi) < 1.0,
+        "no gain crossover in the band"
+    );
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
         if mag(mid.exp()) > 1.0 {
@@ -451,7 +454,11 @@ fn breakaway_margin_nm(m: &TwinMotor, rig: &Rig, p_supply_pa: f64) -> Result<f64
         ..*rig
     };
     let y = steady_at_speed(m, &r, 0.0, &[p_supply_pa, r.p_atm_pa, r.p_atm_pa, 0.0])?;
-    Ok(motor::cycle_torque_nm(m, y[0], y[1], y[2]) - motor::static_friction_nm(m) - r.extra_load_nm)
+    Ok(
+        motor::cycle_torque_nm(m, y[0], y[1], y[2])
+            - motor::static_friction_nm(m)
+            - r.extra_load_nm,
+    )
 }
 
 /// Supply pressure at which the standing motor breaks away (forward torque at standstill =
