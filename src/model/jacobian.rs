@@ -21,6 +21,7 @@
 //! Units: row i of the Jacobian is in (unit of dx_i/dt) per (unit of x_k), e.g. 1/s for
 //! ∂ṗ/∂p, Pa/rad for ∂ṗ/∂ω, rad/(s²·Pa) for ∂ω̇/∂p.
 
+use crate::model::motor::ThrottleSide::{self, AtA, AtB};
 use crate::model::motor::{idx, Balance, Boundary, Load, Motor, State, N_STATES};
 use crate::model::nozzle::{series_flow, Nozzle};
 use crate::model::thermo::{displacement_flows, Cycle, DisplacementFlows};
@@ -75,6 +76,29 @@ fn series_flow_sensitivities(
         return (m, 0.0, 0.0, 0.0);
     }
     (m, d1_a * d2_m / den, -d1_m * d2_b / den, -d1_m * m / den)
+}
+
+/// As [`series_flow_sensitivities`], but the last slope is the one in the logarithm of the
+/// FIRST nozzle's conductance, kg/s (a throttle in front of port 1: supply → throttle →
+/// duct).
+///
+/// ṁ_1 ∝ C_1, so ∂ṁ_1/∂ln C_1 = ṁ; at fixed p_a, p_b the balance gives
+/// dp_m/dln C_1 = ṁ/D, and ∂ṁ/∂ln C_1 = ∂_m ṁ_2 · dp_m/dln C_1 = ∂_m ṁ_2 · ṁ / D (≥ 0 for a
+/// forward flow: a wider throttle passes more).
+pub fn series_flow_sensitivities_first(
+    first: &Nozzle,
+    second: &Nozzle,
+    p_a: f64,
+    p_b: f64,
+) -> (f64, f64, f64, f64) {
+    let (m, p_m) = series_flow(first, second, p_a, p_b);
+    let (_, d1_a, d1_m) = first.flow_with_slopes(p_a, p_m);
+    let (_, d2_m, d2_b) = second.flow_with_slopes(p_m, p_b);
+    let den = d2_m - d1_m;
+    if den.is_nan() || den <= 0.0 {
+        return (m, 0.0, 0.0, 0.0);
+    }
+    (m, d1_a * d2_m / den, -d1_m * d2_b / den, d2_m * m / den)
 }
 
 /// How fast the boundary of a transient moves: the time derivatives of the inputs that
@@ -251,10 +275,20 @@ impl Motor {
             return None;
         }
         let p = &self.params;
-        let (_, d_supply, _, _) =
-            self.port_flow_with_slopes(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, x[idx::P1]);
-        let (_, _, _, d_ln_c) =
-            self.port_flow_with_slopes(p.c_out2(), bc.c_port2_m3_s_pa, x[idx::P2], bc.p_port2_pa);
+        let (_, d_supply, _, _) = self.port_flow_with_slopes(
+            p.c_in1(),
+            bc.c_port1_m3_s_pa,
+            AtA,
+            bc.p_port1_pa,
+            x[idx::P1],
+        );
+        let (_, _, _, d_ln_c) = self.port_flow_with_slopes(
+            p.c_out2(),
+            bc.c_port2_m3_s_pa,
+            AtB,
+            x[idx::P2],
+            bc.p_port2_pa,
+        );
         Some(self.time_slope_from(&[d_supply, d_ln_c], rate))
     }
 
@@ -273,23 +307,28 @@ impl Motor {
         Nozzle::new(c, self.params.b_crit())
     }
 
-    /// Flow through a duct with an optional throttle in series from `p_a` to `p_b`, with its
-    /// slopes (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b, ∂ṁ/∂ln C_throttle; the last 0 without a throttle); the
-    /// same nozzles in the same order as the motor's port flow.
+    /// [`Motor::port_flow`] with its slopes (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b, ∂ṁ/∂ln C_throttle; the
+    /// last 0 without a throttle): the same nozzles in the same order.
     fn port_flow_with_slopes(
         &self,
         c_duct: f64,
         c_thr: Option<f64>,
+        side: ThrottleSide,
         p_a: f64,
         p_b: f64,
     ) -> (f64, f64, f64, f64) {
         let duct = self.sloped_nozzle(c_duct);
-        match c_thr {
-            None => {
+        match (c_thr, side) {
+            (None, _) => {
                 let (m, d_a, d_b) = duct.flow_with_slopes(p_a, p_b);
                 (m, d_a, d_b, 0.0)
             }
-            Some(c) => series_flow_sensitivities(&duct, &self.sloped_nozzle(c), p_a, p_b),
+            (Some(c), ThrottleSide::AtA) => {
+                series_flow_sensitivities_first(&self.sloped_nozzle(c), &duct, p_a, p_b)
+            }
+            (Some(c), ThrottleSide::AtB) => {
+                series_flow_sensitivities(&duct, &self.sloped_nozzle(c), p_a, p_b)
+            }
         }
     }
 
@@ -301,8 +340,10 @@ impl Motor {
         use idx::{P1, P2, PE};
         let p = &self.params;
         let [p1, p2, pe, _] = *x;
-        let port1 = self.port_flow_with_slopes(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, p1);
-        let port2 = self.port_flow_with_slopes(p.c_out2(), bc.c_port2_m3_s_pa, p2, bc.p_port2_pa);
+        let port1 =
+            self.port_flow_with_slopes(p.c_in1(), bc.c_port1_m3_s_pa, AtA, bc.p_port1_pa, p1);
+        let port2 =
+            self.port_flow_with_slopes(p.c_out2(), bc.c_port2_m3_s_pa, AtB, p2, bc.p_port2_pa);
         let exhaust = self
             .sloped_nozzle(p.c_ext())
             .flow_with_slopes(pe, bc.p_atm_pa);
@@ -467,6 +508,16 @@ mod tests {
                 c_port2_m3_s_pa: Some(c),
                 ..rev
             });
+            // A throttle in front of port 1: supply side forward, exhaust side reversed.
+            out.push(Boundary {
+                c_port1_m3_s_pa: Some(c),
+                load: brake,
+                ..fwd
+            });
+            out.push(Boundary {
+                c_port1_m3_s_pa: Some(c),
+                ..rev
+            });
         }
         out.push(Boundary {
             c_port1_m3_s_pa: Some(3e-9),
@@ -523,31 +574,54 @@ mod tests {
 
     #[test]
     fn series_slopes_match_central_differences() {
-        let duct = Nozzle::new(6.758e-9, 0.5);
+        // Both orders (duct then throttle behind port 2, throttle then duct in front of
+        // port 1), both flow directions, and the slopes in ln C of either nozzle.
+        let duct_c = 6.758e-9;
         for c in [1e-9, 5e-9, 3e-8, 1e-7] {
-            let thr = Nozzle::new(c, 0.5);
-            for (pa, pb) in [
-                (7e5, 1.0e5),
-                (3e5, 2.5e5),
-                (2e5, 1.9995e5),
-                (1.2e5, 6e5),
-                (1.0e5, 1.00005e5),
-            ] {
-                let (m, da, db) = series_flow_with_slopes(&duct, &thr, pa, pb);
-                assert_eq!(m, series_flow(&duct, &thr, pa, pb).0);
-                let h = 1e-6 * pa.max(pb);
-                let f = |a: f64, b: f64| series_flow(&duct, &thr, a, b).0;
-                let fd_a = (f(pa + h, pb) - f(pa - h, pb)) / (2.0 * h);
-                let fd_b = (f(pa, pb + h) - f(pa, pb - h)) / (2.0 * h);
-                let scale = fd_a.abs().max(fd_b.abs());
-                assert!(
-                    (da - fd_a).abs() <= 1e-5 * scale,
-                    "{c:e} {pa} {pb}: {da} vs {fd_a}"
-                );
-                assert!(
-                    (db - fd_b).abs() <= 1e-5 * scale,
-                    "{c:e} {pa} {pb}: {db} vs {fd_b}"
-                );
+            for throttle_first in [false, true] {
+                let pair = |c_thr: f64, c_duct: f64| {
+                    let (thr, duct) = (Nozzle::new(c_thr, 0.5), Nozzle::new(c_duct, 0.5));
+                    if throttle_first {
+                        (thr, duct)
+                    } else {
+                        (duct, thr)
+                    }
+                };
+                let (first, second) = pair(c, duct_c);
+                for (pa, pb) in [
+                    (7e5, 1.0e5),
+                    (3e5, 2.5e5),
+                    (2e5, 1.9995e5),
+                    (1.2e5, 6e5),
+                    (1.0e5, 1.00005e5),
+                ] {
+                    let (m, da, db) = series_flow_with_slopes(&first, &second, pa, pb);
+                    assert_eq!(m, series_flow(&first, &second, pa, pb).0);
+                    let h = 1e-6 * pa.max(pb);
+                    let f = |a: f64, b: f64| series_flow(&first, &second, a, b).0;
+                    let fd_a = (f(pa + h, pb) - f(pa - h, pb)) / (2.0 * h);
+                    let fd_b = (f(pa, pb + h) - f(pa, pb - h)) / (2.0 * h);
+                    let scale = fd_a.abs().max(fd_b.abs());
+                    let at = format!("{c:e} first {throttle_first} {pa} {pb}");
+                    assert!((da - fd_a).abs() <= 1e-5 * scale, "{at}: {da} vs {fd_a}");
+                    assert!((db - fd_b).abs() <= 1e-5 * scale, "{at}: {db} vs {fd_b}");
+                    // ∂ṁ/∂ln C of the throttle, wherever it sits.
+                    let k: f64 = 1e-6;
+                    let moved = |s: f64| {
+                        let (f1, f2) = pair(c * s, duct_c);
+                        series_flow(&f1, &f2, pa, pb).0
+                    };
+                    let fd_c = (moved(k.exp()) - moved((-k).exp())) / (2.0 * k);
+                    let d_c = if throttle_first {
+                        series_flow_sensitivities_first(&first, &second, pa, pb).3
+                    } else {
+                        series_flow_sensitivities(&first, &second, pa, pb).3
+                    };
+                    assert!(
+                        (d_c - fd_c).abs() <= 1e-5 * m.abs().max(fd_c.abs()),
+                        "{at}: d/dlnC {d_c} vs {fd_c}"
+                    );
+                }
             }
         }
     }

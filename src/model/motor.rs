@@ -106,6 +106,19 @@ impl Boundary {
     }
 }
 
+/// At which end of a port's line its throttle sits, for a flow counted from `p_a` to `p_b`
+/// ([`Motor::port_flow`]). A throttle is fitted outside the motor, so in front of port 1
+/// (supply → throttle → in_1 → V_1, port 1's flow counted from the supply) it is at the `p_a`
+/// end, and behind port 2 (V_2 → out_2 → throttle → atmosphere, counted from V_2) at the
+/// `p_b` end. The order is physical: a reversed flow passes the same elements backwards.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ThrottleSide {
+    /// p_a → throttle → duct → p_b.
+    AtA,
+    /// p_a → duct → throttle → p_b.
+    AtB,
+}
+
 /// Every flow and torque at one state: the balances behind the derivatives.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Balance {
@@ -312,8 +325,7 @@ impl Motor {
     pub fn balance(&self, x: &State, bc: &Boundary) -> Balance {
         let p = &self.params;
         let [p1, p2, pe, omega] = *x;
-        let flow_port1_kg_s = self.port_flow(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, p1);
-        let flow_port2_kg_s = self.port_flow(p.c_out2(), bc.c_port2_m3_s_pa, p2, bc.p_port2_pa);
+        let (flow_port1_kg_s, flow_port2_kg_s) = self.port_flows(x, bc);
         let flow_exhaust_kg_s = self.nozzle(p.c_ext()).flow(pe, bc.p_atm_pa);
         let leak = self.leak_factor(omega);
         let leak_1e_kg_s = self.nozzle(p.c_1e() * leak).flow(p1, pe);
@@ -391,17 +403,45 @@ impl Motor {
     pub fn port_flows(&self, x: &State, bc: &Boundary) -> (f64, f64) {
         let p = &self.params;
         (
-            self.port_flow(p.c_in1(), bc.c_port1_m3_s_pa, bc.p_port1_pa, x[idx::P1]),
-            self.port_flow(p.c_out2(), bc.c_port2_m3_s_pa, x[idx::P2], bc.p_port2_pa),
+            self.port_flow(
+                p.c_in1(),
+                bc.c_port1_m3_s_pa,
+                ThrottleSide::AtA,
+                bc.p_port1_pa,
+                x[idx::P1],
+            ),
+            self.port_flow(
+                p.c_out2(),
+                bc.c_port2_m3_s_pa,
+                ThrottleSide::AtB,
+                x[idx::P2],
+                bc.p_port2_pa,
+            ),
         )
     }
 
-    /// Flow through a duct with an optional throttle in series, from `p_a` to `p_b`, kg/s.
-    fn port_flow(&self, c_duct: f64, c_throttle: Option<f64>, p_a: f64, p_b: f64) -> f64 {
+    /// Flow through a port's duct (conductance `c_duct`, m³/(s·Pa)) with an optional
+    /// throttle (`c_throttle`) in series, from `p_a` to `p_b` (Pa absolute), kg/s; negative
+    /// when the air flows from `p_b` to `p_a`. The two are ISO 6358 nozzles with the motor's
+    /// critical ratio and no volume between them ([`series_flow`]); `side` says at which end
+    /// of the line the throttle sits, which the flow's direction does not change (reversed,
+    /// the downstream element becomes the upstream one). The motor's ports call it as
+    /// port 1: (`c_in1`, `Boundary::c_port1_m3_s_pa`, [`ThrottleSide::AtA`], p_port1, p_1)
+    /// and port 2: (`c_out2`, `Boundary::c_port2_m3_s_pa`, [`ThrottleSide::AtB`], p_2,
+    /// p_port2) (docs/model.md, "Reference experiments").
+    pub fn port_flow(
+        &self,
+        c_duct: f64,
+        c_throttle: Option<f64>,
+        side: ThrottleSide,
+        p_a: f64,
+        p_b: f64,
+    ) -> f64 {
         let duct = self.nozzle(c_duct);
-        match c_throttle {
-            None => duct.flow(p_a, p_b),
-            Some(c) => series_flow(&duct, &self.nozzle(c), p_a, p_b).0,
+        match (c_throttle, side) {
+            (None, _) => duct.flow(p_a, p_b),
+            (Some(c), ThrottleSide::AtA) => series_flow(&self.nozzle(c), &duct, p_a, p_b).0,
+            (Some(c), ThrottleSide::AtB) => series_flow(&duct, &self.nozzle(c), p_a, p_b).0,
         }
     }
 
@@ -448,6 +488,90 @@ mod tests {
                 (stored - exchanged).abs() < 1e-15,
                 "{stored} vs {exchanged}"
             );
+        }
+    }
+    /// A throttle in front of port 1 passes supply → throttle → in_1 → V_1. With a choked
+    /// throttle smaller than the duct the flow is the throttle's own, C_th·ρ0·p_s; in the
+    /// other order (duct first) the throttle sees only the pressure p_m behind the duct,
+    /// which for b = 0.5 solves √(1 − (2·p_m/p_s − 1)²) = k·p_m/p_s, k = C_th/C_duct, i.e.
+    /// p_m/p_s = 1/(1 + k²/4): the order changes the flow by that factor.
+    #[test]
+    fn an_inlet_throttle_sits_in_front_of_the_duct() {
+        use crate::units::constants::RHO0_KG_M3;
+        let m = Motor::default_motor();
+        assert_eq!(m.params.b_crit(), 0.5);
+        let (c_duct, c_thr) = (m.params.c_in1(), 2e-9);
+        let (p_s, p_1) = (7e5, 1e5);
+        let bc = Boundary {
+            c_port1_m3_s_pa: Some(c_thr),
+            ..Boundary::supplied(p_s, 101_325.0, Load::None)
+        };
+        let (flow, _) = m.port_flows(&[p_1, 1.1e5, 1.1e5, 0.0], &bc);
+        let throttle_first = c_thr * RHO0_KG_M3 * p_s;
+        assert!(
+            (flow / throttle_first - 1.0).abs() < 1e-12,
+            "{flow} vs {throttle_first}"
+        );
+        let k = c_thr / c_duct;
+        let duct_first = throttle_first / (1.0 + k * k / 4.0);
+        let other = m.port_flow(c_duct, Some(c_thr), ThrottleSide::AtB, p_s, p_1);
+        assert!(
+            (other / duct_first - 1.0).abs() < 1e-9,
+            "{other} vs {duct_first}"
+        );
+        assert!(
+            flow / other - 1.0 > 0.01,
+            "the order must matter: {flow} vs {other}"
+        );
+        // Reversed (port 1 as exhaust), the throttle stays on the line's outer end.
+        let back = m.port_flow(c_duct, Some(c_thr), ThrottleSide::AtA, p_1, p_s);
+        assert_eq!(
+            back,
+            -m.port_flow(c_duct, Some(c_thr), ThrottleSide::AtB, p_s, p_1)
+        );
+    }
+
+    /// A symmetric motor run backwards (supply at port 2, port 1 to atmosphere) with the
+    /// throttle moved to port 2 is the forward run mirrored: ports swapped, ω negated.
+    #[test]
+    fn a_reversed_motor_with_the_throttle_moved_is_the_mirror_image() {
+        let m = Motor::default_motor();
+        let p = &m.params;
+        assert_eq!(
+            (p.c_in1(), p.vol1(), p.c_1e()),
+            (p.c_out2(), p.vol2(), p.c_2e())
+        );
+        let load = Load::ViscousBrake { c_nm_s_rad: 1e-4 };
+        for c in [1e-9, 2.8e-9, 1e-8] {
+            let fwd = Boundary {
+                c_port1_m3_s_pa: Some(c),
+                ..Boundary::supplied(7.3e5, 101_325.0, load)
+            };
+            let rev = Boundary {
+                p_port1_pa: 101_325.0,
+                p_port2_pa: 7.3e5,
+                c_port1_m3_s_pa: None,
+                c_port2_m3_s_pa: Some(c),
+                ..fwd
+            };
+            for [p1, p2, pe, w] in [
+                [4e5, 1.6e5, 1.2e5, 500.0],
+                [6.9e5, 1.05e5, 1.02e5, 20.0],
+                [7.5e5, 2e5, 1.3e5, 900.0],
+            ] {
+                let f = m.derivatives(&[p1, p2, pe, w], &fwd);
+                let g = m.derivatives(&[p2, p1, pe, -w], &rev);
+                let mirrored = [g[1], g[0], g[2], -g[3]];
+                for i in 0..N_STATES {
+                    let scale = f[i].abs().max(1.0);
+                    assert!(
+                        (f[i] - mirrored[i]).abs() <= 1e-12 * scale,
+                        "C = {c:e}, row {i}: {} vs {}",
+                        f[i],
+                        mirrored[i]
+                    );
+                }
+            }
         }
     }
 }

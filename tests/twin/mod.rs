@@ -11,6 +11,7 @@
 
 pub mod cases;
 pub mod catalogue;
+pub mod control;
 pub mod experiment;
 pub mod files;
 pub mod motor;
