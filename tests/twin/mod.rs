@@ -13,6 +13,7 @@ pub mod cases;
 pub mod catalogue;
 pub mod experiment;
 pub mod files;
+pub mod laws;
 pub mod motor;
 pub mod ode;
 pub mod record;
