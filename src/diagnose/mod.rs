@@ -281,6 +281,28 @@ mod tests {
     }
 
     #[test]
+    fn models_within_ten_of_the_chosen_are_also_consistent() {
+        use super::alternatives::{also_consistent, separating_experiment};
+        use ModelKind::*;
+        let mut chosen = candidate("a", Single, -100.0);
+        chosen.fitted.effects = EffectSet::empty().with(Effect::BreakawayFriction);
+        let mut near = candidate("b", Single, -95.0);
+        near.fitted.effects = EffectSet::empty().with(Effect::VaneFrictionSpeedSquared);
+        let mut superset = candidate("a+b", Pair, -99.0);
+        superset.fitted.effects = chosen.fitted.effects.clone().with(Effect::SensorLag);
+        let far = candidate("c", Single, -80.0);
+        let all = [chosen.clone(), near, superset, far];
+        let also = also_consistent(&chosen, &all);
+        assert_eq!(also.len(), 1, "{also:?}");
+        assert_eq!(also[0].label, "b");
+        assert_eq!(also[0].delta_bic, 5.0);
+        // Two friction laws: a brake sweep separates them.
+        let e = separating_experiment(&chosen, &also).unwrap();
+        assert!(e.contains("brake"), "{e}");
+        assert!(separating_experiment(&chosen, &[]).is_none());
+    }
+
+    #[test]
     fn valve_dynamics_is_never_a_candidate_and_sensor_lag_needs_a_transient() {
         let ds = Dataset::load(Path::new(concat!(
             env!("CARGO_MANIFEST_DIR"),
