@@ -47,7 +47,8 @@ fn nearest_law(l: LeakLaw) -> &'static [PressureFactor] {
         LeakLaw::Quadratic => &[PressureFactor::Quadratic],
         LeakLaw::GasOrifice => &[PressureFactor::Orifice],
         LeakLaw::SaintVenant | LeakLaw::Iso6358 { .. } => &[PressureFactor::Iso6358],
-        LeakLaw::CompressibleLaminar | LeakLaw::Turbulent => &[],
+        LeakLaw::CompressibleLaminar => &[PressureFactor::CompressibleLaminar],
+        LeakLaw::Turbulent => &[PressureFactor::Turbulent],
     }
 }
 
