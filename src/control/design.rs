@@ -122,7 +122,7 @@ const PI_LAG_DEG: f64 = 15.0;
 
 /// PI gains for `target` on the loop of `lin` and `valve`; `base` gives the sample time,
 /// speed unit, limits and anti-windup that are kept.
-pub(crate) fn design_pi(
+pub fn design_pi(
     lin: &LinearModel,
     valve: &Valve,
     base: &PiController,

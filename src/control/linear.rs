@@ -123,7 +123,7 @@ impl LinearModel {
     }
 
     /// Speed per supply pressure at angular frequency w (rad/s): G(jw), (rad/s)/Pa.
-    pub(crate) fn speed_per_supply(&self, w_rad_s: f64) -> Complex<f64> {
+    pub fn speed_per_supply(&self, w_rad_s: f64) -> Complex<f64> {
         self.response(w_rad_s, &self.b)
     }
 

@@ -28,16 +28,18 @@
 //!
 //! Torque (a loss torque): p·ω for p ∈ {p_1, p_2, p_e} and the differences p_1 − p_e,
 //! p_2 − p_e, p_1 − p_2 times ω, and pressure-dependent Coulomb-like terms (p_2 − p_e,
-//! p_1 − p_2, gauge pressures)·tanh(ω/ω_reg). Terms the model already has are left out:
+//! p_1 − p_2, gauge pressures)·tanh(ω/ω_reg), a power-law viscous loss ω·|ω|^(1/2) and the
+//! exponential Stribeck excess exp(−|ω|/ω_s)·tanh(ω/ω_reg). Terms the model already has are left out:
 //! tanh and ω alone are the base model's `t_coulomb` and `visc`, ω·|ω| is
 //! `vane_friction_speed_squared`, (p_1 − p_e)·tanh is `pressure_dependent_friction`.
 //! Leak paths ([`crate::model::extra::LeakPath`]: V_1→V_e, V_2→V_e, V_1→V_2 and each
 //! volume to atmosphere; the mass one balance loses the other gains) with each flow law
-//! (laminar Δp, Δp·|Δp|, orifice √Δp, ISO 6358), constant or times |ω|. Mass into one of
+//! (docs/diagnosis.md, "Term library": laminar Δp, compressible laminar p_a² − p_b²,
+//! turbulent Δp^(4/7), Δp·|Δp|, orifice √Δp, ISO 6358), constant or times |ω|. Mass into one of
 //! V_1, V_2, V_e alone: gauge pressures and pressure differences (a volume's own gauge
 //! pressure is the laminar path to atmosphere and is left to the paths); ω, absolute
 //! pressures times ω and pressure differences times ω (speed-driven flows: pumping,
-//! carry-over). 95 terms in all. A one-balance mass term gives way to a path that explains
+//! carry-over). 121 terms in all. A one-balance mass term gives way to a path that explains
 //! the misfit within `PATH_PREFERENCE` as well (mass conservation is physics).
 
 use super::fitting::Fitted;
@@ -101,6 +103,10 @@ pub fn library() -> Vec<ExtraTerm> {
     ] {
         out.push(term(BalanceId::Torque, p, W::Sign));
     }
+    // Friction laws beyond Coulomb and viscous: a power-law viscous loss and the exponential
+    // Stribeck curve (the Gaussian one is `breakaway_friction`):
+    out.push(term(BalanceId::Torque, P::One, W::OmegaPow15));
+    out.push(term(BalanceId::Torque, P::One, W::StribeckExp));
     // Leak paths (mass leaves one balance and enters the other): every path, every flow
     // law, constant or scaled by the speed's magnitude.
     for path in LeakPath::ALL {
@@ -514,5 +520,21 @@ mod tests {
             assert_eq!(term_from_json(&term_to_json(&t)).unwrap(), t);
         }
         assert!(term_from_json(&serde_json::json!({"balance": "torque"})).is_err());
+    }
+
+    #[test]
+    fn the_literature_laws_grow_as_their_sources_say() {
+        use crate::model::extra::flow_law;
+        // Compressible laminar: p_a² − p_b², odd under exchange of the ends.
+        assert_eq!(flow_law(P::CompressibleLaminar, 3e5, 1e5), 8e10);
+        assert_eq!(flow_law(P::CompressibleLaminar, 1e5, 3e5), -8e10);
+        // Turbulent: 128 times the pressure difference gives 128^(4/7) = 16 times the flow.
+        let ratio = flow_law(P::Turbulent, 1.28e6 + 1e5, 1e5) / flow_law(P::Turbulent, 1.1e5, 1e5);
+        assert!((ratio - 16.0).abs() < 1e-9, "{ratio}");
+        // Linear (finite slope) at Δp → 0, continuous at the switch.
+        let below = flow_law(P::Turbulent, 1e5 + 999.999, 1e5);
+        let above = flow_law(P::Turbulent, 1e5 + 1000.001, 1e5);
+        assert!((below - above).abs() < 1e-4 * above);
+        assert!(flow_law(P::Turbulent, 1e5 + 1.0, 1e5) > 0.0);
     }
 }

@@ -72,6 +72,7 @@
 //! `concealment.rs` (3). The types are in `types.rs`, the outputs in `json.rs` and
 //! `summary.rs`. Progress goes to a [`DiagnoseObserver`]: the library prints nothing.
 
+mod alternatives;
 mod baseline;
 mod candidates;
 mod concealment;
@@ -91,6 +92,7 @@ pub mod discover;
 pub mod fitting;
 pub mod stats;
 
+pub use alternatives::ALSO_CONSISTENT_DELTA_BIC;
 pub use error::DiagnoseError;
 pub use json::{extended_fit_file, to_json};
 pub use locate::noise_ratio_limit;
@@ -99,8 +101,8 @@ pub use observe::{ChowTest, DiagnoseObserver, Progress, Proposal, Silent};
 pub(crate) use summary::num;
 pub use summary::summary;
 pub use types::{
-    Candidate, Concealment, DiagnoseOptions, Diagnosis, ExperimentCheck, ModelKind, Selected,
-    Skipped,
+    AlsoConsistent, Candidate, Concealment, DiagnoseOptions, Diagnosis, ExperimentCheck, ModelKind,
+    Selected, Skipped,
 };
 
 use crate::data::dataset::Dataset;
@@ -144,15 +146,24 @@ pub(crate) fn diagnose_observed(
     candidates::rank_singles(&cx, &mut models, refits.singles)?;
     candidates::pairs(&cx, base.limit, &mut models)?;
     cx.end_phase("pairs");
-    let regression = uncatalogued::search(&cx, &base.fitted, &mut models)?;
+    let regression = uncatalogued::search(&cx, &base.fitted, base.limit, &mut models)?;
     candidates::similar_pairs(&cx, &mut models)?;
     cx.end_phase("uncatalogued search");
     let chosen = select::eliminate(&cx, &mut models)?;
+    let chosen =
+        alternatives::one_explanation(&cx, regression.as_ref(), &base.fitted, &mut models, chosen)?;
     let mut baseline_c = base.candidate();
     let concealment = concealment::test(&cx, &base, &mut baseline_c, &mut models, chosen.as_ref())?;
     cx.end_phase("concealment and held-out prediction");
     let extended = select::extend(&cx, chosen, &models.all, &baseline_c)?;
     cx.end_phase("selection");
+    let (also_consistent, separating_experiment) = if extended.selected.is_empty() {
+        (Vec::new(), None)
+    } else {
+        let also = alternatives::also_consistent(&extended.model, &models.all);
+        let experiment = alternatives::separating_experiment(&extended.model, &also);
+        (also, experiment)
+    };
     let d = Diagnosis {
         dataset: smoothed.name.clone(),
         p_atm_pa: smoothed.p_atm_pa,
@@ -166,6 +177,8 @@ pub(crate) fn diagnose_observed(
         extended: extended.model,
         extended_channels: extended.channels,
         extended_locations: extended.locations,
+        also_consistent,
+        separating_experiment,
         concealment,
         regression,
         noise_ratio_limit: base.limit,
@@ -265,6 +278,28 @@ mod tests {
             )
         );
         assert_eq!(label_of(&EffectSet::empty(), 2).1, Uncatalogued);
+    }
+
+    #[test]
+    fn models_within_ten_of_the_chosen_are_also_consistent() {
+        use super::alternatives::{also_consistent, separating_experiment};
+        use ModelKind::*;
+        let mut chosen = candidate("a", Single, -100.0);
+        chosen.fitted.effects = EffectSet::empty().with(Effect::BreakawayFriction);
+        let mut near = candidate("b", Single, -95.0);
+        near.fitted.effects = EffectSet::empty().with(Effect::VaneFrictionSpeedSquared);
+        let mut superset = candidate("a+b", Pair, -99.0);
+        superset.fitted.effects = chosen.fitted.effects.clone().with(Effect::SensorLag);
+        let far = candidate("c", Single, -80.0);
+        let all = [chosen.clone(), near, superset, far];
+        let also = also_consistent(&chosen, &all);
+        assert_eq!(also.len(), 1, "{also:?}");
+        assert_eq!(also[0].label, "b");
+        assert_eq!(also[0].delta_bic, 5.0);
+        // Two friction laws: a brake sweep separates them.
+        let e = separating_experiment(&chosen, &also).unwrap();
+        assert!(e.contains("brake"), "{e}");
+        assert!(separating_experiment(&chosen, &[]).is_none());
     }
 
     #[test]

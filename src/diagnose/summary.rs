@@ -96,6 +96,22 @@ pub fn summary(d: &Diagnosis) -> String {
             names.join(" + "),
             d.extended.delta_bic
         );
+        if !d.also_consistent.is_empty() {
+            let also: Vec<String> = d
+                .also_consistent
+                .iter()
+                .map(|a| format!("{} (dBIC {:+.1})", a.label, a.delta_bic))
+                .collect();
+            s += &format!(
+                "Also consistent (within dBIC {:.0} of it): {}; these data cannot separate them",
+                super::ALSO_CONSISTENT_DELTA_BIC,
+                also.join(", ")
+            );
+            match &d.separating_experiment {
+                Some(e) => s += &format!(", {e} would. "),
+                None => s += ". ",
+            }
+        }
     }
     s += &format!(
         "Noise ratio {:.2} -> {:.2}.",

@@ -158,6 +158,20 @@ pub struct Selected {
     pub term: Option<ExtraTerm>,
 }
 
+/// Another model that explains the data nearly as well as the chosen one (within
+/// [`super::ALSO_CONSISTENT_DELTA_BIC`]).
+#[derive(Debug, Clone)]
+pub struct AlsoConsistent {
+    /// Its label (as in the candidates).
+    pub label: String,
+    /// Its parts in words.
+    pub description: String,
+    /// Its BIC minus the chosen model's (positive: worse).
+    pub delta_bic: f64,
+    /// The categories of its parts.
+    pub categories: Vec<Category>,
+}
+
 /// A catalog effect that was not tried, and why.
 #[derive(Debug, Clone)]
 pub struct Skipped {
@@ -194,6 +208,11 @@ pub struct Diagnosis {
     pub extended_channels: Vec<ChannelData>,
     /// Locations left after the extension.
     pub extended_locations: Vec<Location>,
+    /// Other models within [`super::ALSO_CONSISTENT_DELTA_BIC`] of the chosen one, best
+    /// first: the data cannot separate them from it.
+    pub also_consistent: Vec<AlsoConsistent>,
+    /// An experiment that would separate the chosen model from those also consistent.
+    pub separating_experiment: Option<String>,
     /// The concealment test, when run.
     pub concealment: Option<Concealment>,
     /// Regression of the baseline's misfit over the term library.

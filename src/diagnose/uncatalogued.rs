@@ -11,10 +11,12 @@ use super::observe::{Progress, Proposal};
 use super::{ModelKind, SELECT_DELTA_BIC};
 
 /// Regresses the baseline's misfit, refits the proposed models into `models` and returns the
-/// baseline's regression (None when discovery is off).
+/// baseline's regression (None when discovery is off). `limit` is the noise ratio that noise
+/// alone stays below ([`super::noise_ratio_limit`] of the baseline's channels).
 pub(crate) fn search(
     cx: &Context,
     baseline: &Fitted,
+    limit: f64,
     models: &mut Models,
 ) -> Result<Option<Regression>, DiagnoseError> {
     if !cx.opts.discover {
@@ -23,7 +25,7 @@ pub(crate) fn search(
     cx.say(Progress::RegressionStart);
     let reg = discover::regress(&cx.cost, &cx.target, baseline, &cx.base_names, cx.threads())?;
     let mut jobs = on_the_baseline(cx, baseline, &reg);
-    jobs.extend(on_the_best_catalog_model(cx, models)?);
+    jobs.extend(on_the_best_catalog_model(cx, limit, models)?);
     if !jobs.is_empty() {
         cx.say(Progress::DiscoveredStart(jobs.len()));
     }
@@ -69,9 +71,13 @@ fn on_the_baseline(cx: &Context, baseline: &Fitted, reg: &Regression) -> Vec<(Mo
     jobs
 }
 
-/// The best catalog model, when significant, with the first term its own misfit proposes.
+/// The best catalog model, when significant, with the first term its own misfit proposes;
+/// nothing when that model alone reaches the noise (noise ratio within `limit`, no location
+/// left): a term on top of it would be a patchwork, and its regression and refit the
+/// costliest part of the search.
 fn on_the_best_catalog_model(
     cx: &Context,
+    limit: f64,
     models: &Models,
 ) -> Result<Option<(ModelKind, FitJob)>, DiagnoseError> {
     let Some(bc) = models
@@ -83,6 +89,12 @@ fn on_the_best_catalog_model(
     else {
         return Ok(None);
     };
+    if bc.noise_ratio <= limit {
+        let channels = cx.channels(&bc.fitted)?;
+        if super::analysis::locate(&channels, cx.ds.p_atm_pa).is_empty() {
+            return Ok(None);
+        }
+    }
     let names = names_for(&bc.fitted.effects);
     let reg = discover::regress(&cx.cost, &cx.target, &bc.fitted, &names, cx.threads())?;
     let Some(first) = reg.selected.first() else {

@@ -10,8 +10,10 @@
 //! A term whose balance is [`BalanceId::Path`] is a mass flow, kg/s, from the path's
 //! `from` chamber to its `to` chamber: it leaves `from`'s mass balance and enters `to`'s
 //! (atmosphere has none), so mass stays conserved. Its pressure factor is then a flow law of
-//! Δp = p_from − p_to ([`PressureFactor::Laminar`], [`PressureFactor::Quadratic`],
-//! [`PressureFactor::Orifice`], [`PressureFactor::Iso6358`]); any other pressure factor
+//! Δp = p_from − p_to ([`PressureFactor::Laminar`], [`PressureFactor::CompressibleLaminar`],
+//! [`PressureFactor::Turbulent`], [`PressureFactor::Quadratic`], [`PressureFactor::Orifice`],
+//! [`PressureFactor::Iso6358`]; formulas and sources in docs/diagnosis.md, "Term library");
+//! any other pressure factor
 //! is taken as is (the flow from→to is coefficient·factor·speed). A flow law on a
 //! one-balance term has no Δp and contributes nothing; fit files refuse it.
 
@@ -165,6 +167,10 @@ impl LeakPath {
     }
 }
 
+/// Stribeck speed of [`SpeedFactor::StribeckExp`], rad/s (a start-up in a ramp shows
+/// Stribeck speeds of 1–200 rad/s; the catalog's `breakaway_friction` fits its own).
+pub const STRIBECK_EXP_RAD_S: f64 = 10.0;
+
 /// Pressure below which the orifice law √Δp turns laminar (finite slope at Δp = 0), Pa.
 const ORIFICE_LAMINAR_PA: f64 = 1e3;
 
@@ -195,6 +201,12 @@ pub enum PressureFactor {
     Laminar,
     /// Flow law of a leak path: Δp·|Δp|, Pa² (grows with the square of the difference).
     Quadratic,
+    /// Flow law of a leak path: p_from² − p_to², Pa² (isothermal compressible laminar gap
+    /// flow, ṁ = h³·w·(p_a² − p_b²)/(24·μ·L·R·T): Poiseuille flow at the mean density).
+    CompressibleLaminar,
+    /// Flow law of a leak path: sign(Δp)·|Δp|^(4/7), Pa^(4/7) (turbulent gap flow with
+    /// Blasius's friction factor λ ∝ Re^(−1/4); linear below p_r = [`ORIFICE_LAMINAR_PA`]).
+    Turbulent,
     /// Flow law of a leak path: Δp·(Δp² + p_r²)^(−1/4) ≈ sign(Δp)·√|Δp|, √Pa (a sharp
     /// orifice; laminar below p_r = `ORIFICE_LAMINAR_PA`).
     Orifice,
@@ -216,11 +228,23 @@ pub enum SpeedFactor {
     OmegaAbsOmega,
     /// tanh(ω/ω_reg), 1: a Coulomb-like sign with the friction's regularisation.
     Sign,
+    /// ω·|ω|^(1/2), (rad/s)^1.5: a viscous loss growing faster than ω (mixed lubrication).
+    OmegaPow15,
+    /// exp(−|ω|/ω_s)·tanh(ω/ω_reg), 1, ω_s = [`STRIBECK_EXP_RAD_S`]: the exponential
+    /// Stribeck curve's excess over Coulomb friction.
+    StribeckExp,
 }
 
 impl PressureFactor {
     /// The flow laws of a leak path.
-    pub(crate) const LAWS: [PressureFactor; 4] = [P::Laminar, P::Quadratic, P::Orifice, P::Iso6358];
+    pub const LAWS: [PressureFactor; 6] = [
+        P::Laminar,
+        P::CompressibleLaminar,
+        P::Turbulent,
+        P::Quadratic,
+        P::Orifice,
+        P::Iso6358,
+    ];
 
     /// Whether this is a flow law of a leak path.
     pub(crate) fn is_law(self) -> bool {
@@ -228,7 +252,7 @@ impl PressureFactor {
     }
 
     /// Every pressure factor.
-    pub const ALL: [PressureFactor; 14] = [
+    pub const ALL: [PressureFactor; 16] = [
         P::One,
         P::P1,
         P::P2,
@@ -243,12 +267,22 @@ impl PressureFactor {
         P::Quadratic,
         P::Orifice,
         P::Iso6358,
+        P::CompressibleLaminar,
+        P::Turbulent,
     ];
 }
 
 impl SpeedFactor {
     /// Every speed factor.
-    pub const ALL: [SpeedFactor; 5] = [W::One, W::Omega, W::AbsOmega, W::OmegaAbsOmega, W::Sign];
+    pub const ALL: [SpeedFactor; 7] = [
+        W::One,
+        W::Omega,
+        W::AbsOmega,
+        W::OmegaAbsOmega,
+        W::Sign,
+        W::OmegaPow15,
+        W::StribeckExp,
+    ];
 }
 
 /// A term outside the catalog: `coefficient · pressure(x) · speed(ω)` added to one balance.
@@ -296,6 +330,10 @@ impl ExtraTerm {
             SpeedFactor::AbsOmega => omega.abs(),
             SpeedFactor::OmegaAbsOmega => omega * omega.abs(),
             SpeedFactor::Sign => (omega / w_reg).tanh(),
+            SpeedFactor::OmegaPow15 => omega * omega.abs().sqrt(),
+            SpeedFactor::StribeckExp => {
+                (-omega.abs() / STRIBECK_EXP_RAD_S).exp() * (omega / w_reg).tanh()
+            }
         };
         self.coefficient * p * w
     }
@@ -312,11 +350,17 @@ impl ExtraTerm {
 }
 
 /// A flow law of Δp = `p_from` − `p_to` (see [`PressureFactor`]); 0 for any other factor.
-fn flow_law(law: PressureFactor, p_from: f64, p_to: f64) -> f64 {
+pub(crate) fn flow_law(law: PressureFactor, p_from: f64, p_to: f64) -> f64 {
     let dp = p_from - p_to;
     match law {
         P::Laminar => dp,
         P::Quadratic => dp * dp.abs(),
+        P::CompressibleLaminar => p_from * p_from - p_to * p_to,
+        P::Turbulent => {
+            // |Δp|^(4/7), continued linearly below p_r (the gap turns laminar).
+            let a = dp.abs().max(ORIFICE_LAMINAR_PA);
+            dp * a.powf(4.0 / 7.0 - 1.0)
+        }
         P::Orifice => dp * (dp * dp + ORIFICE_LAMINAR_PA * ORIFICE_LAMINAR_PA).powf(-0.25),
         P::Iso6358 => {
             let (pu, pd, sign) = if dp >= 0.0 {
@@ -384,12 +428,20 @@ pub fn describe(t: &ExtraTerm) -> String {
         W::AbsOmega => ", proportional to the speed's magnitude",
         W::OmegaAbsOmega => ", growing with the square of the speed",
         W::Sign => ", of constant size while turning (Coulomb-like)",
+        W::OmegaPow15 => ", growing with the speed to the power 1.5",
+        W::StribeckExp => ", largest at start-up and decaying with the speed (Stribeck)",
     };
     match t.balance {
         BalanceId::Path(path) => {
             let law = match t.pressure {
                 P::Laminar => "that grows in proportion to the pressure difference (laminar)",
                 P::Quadratic => "that grows with the square of the pressure difference",
+                P::CompressibleLaminar => {
+                    "that grows with the difference of the squared pressures (compressible laminar)"
+                }
+                P::Turbulent => {
+                    "that grows with the pressure difference to the power 4/7 (turbulent)"
+                }
                 P::Orifice => {
                     "that grows with the square root of the pressure difference (orifice)"
                 }
@@ -427,6 +479,8 @@ fn law_symbol(law: P, path: LeakPath) -> (String, &'static str) {
     match law {
         P::Laminar => (dp, "Pa"),
         P::Quadratic => (format!("{dp}*|{dp}|"), "Pa2"),
+        P::CompressibleLaminar => (format!("({a}^2 - {b}^2)"), "Pa2"),
+        P::Turbulent => (format!("{dp}^(4/7)"), "Pa^(4/7)"),
         P::Orifice => (format!("sqrt{dp}"), "Pa^0.5"),
         P::Iso6358 => (format!("iso6358({a}, {b})"), "kg/m3*Pa"),
         _ => (String::new(), ""),
@@ -447,6 +501,8 @@ fn pressure_symbol(p: P) -> (&'static str, &'static str) {
         P::P1MinusP2 => ("(p1 - p2)", "Pa"),
         P::Laminar => ("dp", "Pa"),
         P::Quadratic => ("dp*|dp|", "Pa2"),
+        P::CompressibleLaminar => ("(pa^2 - pb^2)", "Pa2"),
+        P::Turbulent => ("dp^(4/7)", "Pa^(4/7)"),
         P::Orifice => ("sqrt(dp)", "Pa^0.5"),
         P::Iso6358 => ("iso6358", "kg/m3*Pa"),
     }
@@ -459,6 +515,8 @@ fn speed_symbol(w: W) -> (&'static str, &'static str) {
         W::AbsOmega => ("|omega|", "rad/s"),
         W::OmegaAbsOmega => ("omega*|omega|", "rad2/s2"),
         W::Sign => ("tanh(omega/w_reg)", ""),
+        W::OmegaPow15 => ("omega*|omega|^0.5", "(rad/s)^1.5"),
+        W::StribeckExp => ("exp(-|omega|/10)*tanh(omega/w_reg)", ""),
     }
 }
 
@@ -477,6 +535,8 @@ pub fn pressure_id(p: P) -> &'static str {
         P::P1MinusP2 => "p1_minus_p2",
         P::Laminar => "laminar",
         P::Quadratic => "quadratic",
+        P::CompressibleLaminar => "compressible_laminar",
+        P::Turbulent => "turbulent",
         P::Orifice => "orifice",
         P::Iso6358 => "iso6358",
     }
@@ -490,6 +550,8 @@ pub fn speed_id(w: W) -> &'static str {
         W::AbsOmega => "abs_omega",
         W::OmegaAbsOmega => "omega_abs_omega",
         W::Sign => "sign",
+        W::OmegaPow15 => "omega_pow_1_5",
+        W::StribeckExp => "stribeck_exp",
     }
 }
 

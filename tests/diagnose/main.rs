@@ -4,6 +4,7 @@
 
 mod cases;
 mod own_data;
+mod random_effects;
 mod support;
 #[allow(clippy::type_complexity)] // the twin generator is another engineer's code
 #[path = "../twin/mod.rs"]

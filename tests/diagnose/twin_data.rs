@@ -11,7 +11,7 @@ use vanefit::model::motor::{Chamber, LeakPath, Motor, PressureFactor};
 
 /// A test rig's recording: 20 Hz, flows 0.03 g/s, speed 15 rpm, torques 4 mN·m, recorded
 /// supply pressure 2 kPa, no calibration offsets.
-fn twin_rig_config() -> twin::RecordConfig {
+pub(crate) fn twin_rig_config() -> twin::RecordConfig {
     let mut cfg = twin::RecordConfig {
         noise: twin::NoiseSigmas {
             flow1_g_s: 0.03,
@@ -29,7 +29,11 @@ fn twin_rig_config() -> twin::RecordConfig {
 }
 
 /// A twin dataset written to a temporary folder and loaded as vanefit reads any rig.
-fn twin_dataset(motor: &twin::TwinMotor, cfg: &twin::RecordConfig, seed: u64) -> Dataset {
+pub(crate) fn twin_dataset(
+    motor: &twin::TwinMotor,
+    cfg: &twin::RecordConfig,
+    seed: u64,
+) -> Dataset {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(format!("twin-{seed}"));
     twin::write_dataset(&path, motor, cfg, seed).unwrap();

@@ -45,7 +45,9 @@ fn at_speed(m: &TwinMotor, bc: &Boundary, w: f64) -> Result<(f64, f64), String> 
     let y0 = [bc.p_port1_pa, bc.p_atm_pa, bc.p_atm_pa, w];
     let y = steady_state(|x| rig::rhs(m, bc, x, true), &y0, true)?;
     let torque = if w == 0.0 {
-        motor::air_torque_nm(m, [y[0], y[1], y[2]], 0.0) - motor::static_friction_nm(m)
+        motor::air_torque_nm(m, [y[0], y[1], y[2]], 0.0)
+            - motor::static_friction_nm(m)
+            - motor::law_static_nm(m, [y[0], y[1], y[2]])
     } else {
         rig::shaft_torque_nm(m, &y)
     };

@@ -113,7 +113,9 @@ pub fn datasheet(m: &TwinMotor, c: &Conditions) -> Result<DatasheetRows, String>
         y[3] = w_free * i as f64 / (n - 1) as f64;
         y = steady_state(|x| rig::rhs(m, &bc, x, true), &y, true)?;
         let torque = if i == 0 {
-            motor::air_torque_nm(m, [y[0], y[1], y[2]], 0.0) - motor::static_friction_nm(m)
+            motor::air_torque_nm(m, [y[0], y[1], y[2]], 0.0)
+                - motor::static_friction_nm(m)
+                - motor::law_static_nm(m, [y[0], y[1], y[2]])
         } else {
             rig::shaft_torque_nm(m, &y)
         };

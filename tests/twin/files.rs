@@ -159,6 +159,7 @@ pub fn truth_json(
             "generator": "tests/twin",
             "seed": seed,
             "leak_1e_dp2_kg_s_pa2": m.leak_1e_dp2_kg_s_pa2,
+            "laws": m.laws.iter().map(|l| l.describe()).collect::<Vec<_>>(),
             "rate_hz": cfg.conditions.rate_hz,
             "throttle_b_crit": cfg.conditions.throttle_b_crit,
             "brake_torque_channel": cfg.brake_torque,

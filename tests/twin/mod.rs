@@ -14,6 +14,7 @@ pub mod catalogue;
 pub mod control;
 pub mod experiment;
 pub mod files;
+pub mod laws;
 pub mod motor;
 pub mod ode;
 pub mod page;

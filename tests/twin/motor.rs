@@ -92,6 +92,9 @@ pub struct TwinMotor {
     /// Worn vane tips: internal leak V_1 → V_e, ṁ = k·(p_1 − p_e)·|p_1 − p_e| with k in
     /// kg/(s·Pa²). Not in vanefit's catalogue.
     pub leak_1e_dp2_kg_s_pa2: Option<f64>,
+    /// Leakage and friction laws of the literature (docs/diagnosis.md, "Term library"),
+    /// most of them not in vanefit's catalogue ([`super::laws`]).
+    pub laws: Vec<super::laws::Drawn>,
 }
 
 impl Default for TwinMotor {
@@ -122,6 +125,7 @@ impl Default for TwinMotor {
             vane_friction_speed_squared: None,
             speed_dependent_leakage: None,
             leak_1e_dp2_kg_s_pa2: None,
+            laws: Vec::new(),
         }
     }
 }
@@ -134,6 +138,7 @@ impl TwinMotor {
             vane_friction_speed_squared: other.vane_friction_speed_squared,
             speed_dependent_leakage: other.speed_dependent_leakage,
             leak_1e_dp2_kg_s_pa2: other.leak_1e_dp2_kg_s_pa2,
+            laws: other.laws.clone(),
             ..self
         }
     }
@@ -279,7 +284,44 @@ pub fn internal_flows_kg_s(m: &TwinMotor, p_pa: [f64; 3], w_rad_s: f64, p_atm_pa
     q1 -= leak_1e + leak_12;
     q2 += leak_12 - leak_2e;
     qe += leak_1e + leak_2e - ext;
-    [q1, q2, qe]
+    let mut q = [q1, q2, qe];
+    for law in &m.laws {
+        if let super::laws::Drawn::Leak(l) = law {
+            // What leaves one volume enters the other (atmosphere has no balance).
+            let f = l.flow_kg_s(p_pa, p_atm_pa);
+            if let Some(i) = l.from.index() {
+                q[i] -= f;
+            }
+            if let Some(i) = l.to.index() {
+                q[i] += f;
+            }
+        }
+    }
+    q
+}
+
+/// Loss torque of the motor's friction laws ([`TwinMotor::laws`]), N·m.
+pub fn law_friction_nm(m: &TwinMotor, p_pa: [f64; 3], w_rad_s: f64) -> f64 {
+    let t_air = air_torque_nm(m, p_pa, w_rad_s);
+    m.laws
+        .iter()
+        .map(|law| match law {
+            super::laws::Drawn::Friction(f) => f.torque_nm(p_pa, w_rad_s, t_air, m.w_reg),
+            super::laws::Drawn::Leak(_) => 0.0,
+        })
+        .sum()
+}
+
+/// The dry part at rest of the motor's friction laws, N·m.
+pub fn law_static_nm(m: &TwinMotor, p_pa: [f64; 3]) -> f64 {
+    let t_air = air_torque_nm(m, p_pa, 0.0);
+    m.laws
+        .iter()
+        .map(|law| match law {
+            super::laws::Drawn::Friction(f) => f.static_nm(p_pa, t_air),
+            super::laws::Drawn::Leak(_) => 0.0,
+        })
+        .sum()
 }
 
 /// Exhaust mass flow V_e → atmosphere through EXT, kg/s.

@@ -85,7 +85,10 @@ pub fn volume_flows_kg_s(m: &TwinMotor, bc: &Boundary, y: &[f64; 4]) -> [f64; 3]
 
 /// Shaft torque delivered to the load, T_air − T_f(ω), N·m.
 pub fn shaft_torque_nm(m: &TwinMotor, y: &[f64; 4]) -> f64 {
-    motor::air_torque_nm(m, [y[0], y[1], y[2]], y[3]) - motor::friction_torque_nm(m, y[3])
+    let p = [y[0], y[1], y[2]];
+    motor::air_torque_nm(m, p, y[3])
+        - motor::friction_torque_nm(m, y[3])
+        - motor::law_friction_nm(m, p, y[3])
 }
 
 /// dy/dt. With `speed_imposed` the speed is held (dω/dt = 0), as on a datasheet's brake.

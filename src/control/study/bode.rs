@@ -127,11 +127,7 @@ pub struct BodeStudy {
 }
 
 /// The linearised motor at supply `p_mean_pa` under `load`.
-pub(crate) fn linear_at(
-    m: &Motor,
-    load: Load,
-    p_mean_pa: f64,
-) -> Result<LinearModel, ControlError> {
+pub fn linear_at(m: &Motor, load: Load, p_mean_pa: f64) -> Result<LinearModel, ControlError> {
     let op = operating_point(m, &Boundary::supplied(p_mean_pa, P_ATM_PA, load))?;
     LinearModel::linearise(m, &op)
 }
