@@ -175,6 +175,8 @@ fn normalise_unit(unit: &str) -> String {
     for c in unit.trim().to_lowercase().chars() {
         match c {
             '³' => s.push('3'),
+            // "min⁻¹": the superscript minus separates, the superscript one is a 1.
+            '¹' => s.push('1'),
             '(' | ')' => {}
             c if c.is_alphanumeric() => s.push(c),
             _ => {
@@ -597,6 +599,21 @@ mod tests {
             Unit::PsiG
         );
         assert_eq!(parse_value("1e3 rpm", Quantity::Speed, p).unwrap().2, 1e3);
+        for (text, q, u) in [
+            ("9000 min-1", Quantity::Speed, Unit::Rpm),
+            ("9000 min⁻¹", Quantity::Speed, Unit::Rpm),
+            ("9000 1/min", Quantity::Speed, Unit::Rpm),
+            ("9000 r.p.m.", Quantity::Speed, Unit::Rpm),
+            ("12 in·lbf", Quantity::Torque, Unit::LbfIn),
+            ("12 in-lb", Quantity::Torque, Unit::LbfIn),
+            ("12 lb-in", Quantity::Torque, Unit::LbfIn),
+            ("12 in.lbs", Quantity::Torque, Unit::LbfIn),
+            ("120 watts", Quantity::Power, Unit::W),
+            ("7.4 ft³/min", Quantity::Flow1, Unit::Cfm),
+            ("180 Nl/min ANR", Quantity::Flow1, Unit::LMinAnr),
+        ] {
+            assert_eq!(parse_value(text, q, p).map(|r| r.1), Ok(u), "{text}");
+        }
         let e = parse_value("0.12 N·m", Quantity::Power, p).unwrap_err();
         let e = e.to_string();
         assert!(e.contains("not a unit of power") && e.contains("kw"), "{e}");
