@@ -250,11 +250,18 @@ impl Unit {
     pub fn aliases(self) -> &'static [&'static str] {
         match self {
             Unit::BarAbs => &["bar_a"],
-            Unit::Rpm => &["r_min"],
+            // Makers' spellings of a page: "min-1", "min⁻¹", "1/min", "r.p.m.".
+            Unit::Rpm => &["r_min", "min_1", "min-1", "1_min", "r_p_m", "rev_min"],
             Unit::PsiG => &["psig"],
             Unit::PsiA => &["psia", "psi_abs"],
-            Unit::LMinAnr => &["anr_l_min"],
+            // "Nl/min ANR": litres counted at ANR, whatever the N says.
+            Unit::LMinAnr => &["anr_l_min", "nl_min_anr"],
             Unit::Nm => &["n_m"],
+            // "in·lbf", "in-lb", "lb-in", "in.lbs": all the inch-pound.
+            Unit::LbfIn => &["in_lbf", "in_lb", "lb_in", "in_lbs", "lbs_in"],
+            Unit::W => &["watt", "watts"],
+            // "ft³/min" is cfm.
+            Unit::Cfm => &["ft3_min"],
             _ => &[],
         }
     }
@@ -487,6 +494,29 @@ mod tests {
                 assert!((u.from_si(si, 101_325.0) - 3.7).abs() < 1e-12);
             }
         }
+    }
+
+    #[test]
+    fn makers_spellings_are_aliases() {
+        for (q, text, u) in [
+            (Quantity::Speed, "min-1", Unit::Rpm),
+            (Quantity::Speed, "min_1", Unit::Rpm),
+            (Quantity::Speed, "1_min", Unit::Rpm),
+            (Quantity::Speed, "r_p_m", Unit::Rpm),
+            (Quantity::Torque, "in_lbf", Unit::LbfIn),
+            (Quantity::Torque, "lb_in", Unit::LbfIn),
+            (Quantity::Torque, "in_lbs", Unit::LbfIn),
+            (Quantity::Power, "watts", Unit::W),
+            (Quantity::Flow1, "ft3_min", Unit::Cfm),
+            (Quantity::Flow1, "nl_min_anr", Unit::LMinAnr),
+        ] {
+            assert_eq!(unit_of(q, text), Ok(u), "{text}");
+        }
+        // A curve file's header with a maker's unit.
+        assert_eq!(
+            parse_column("speed_min-1"),
+            Ok((Quantity::Speed, Unit::Rpm))
+        );
     }
 
     #[test]

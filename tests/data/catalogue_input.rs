@@ -183,3 +183,44 @@ fn bad_catalogue_input_is_located() {
         &["catalogue\" only"],
     );
 }
+
+/// A true page passes the power check: torque T = 0.3 N·m·(1 − (n/10000 rpm)²) bows 50 %
+/// above the straight line from stall to free speed at 5000 rpm (0.225 against 0.15 N·m),
+/// so the printed power there (117.8 W) lies above the line's torque·speed (78.5 W) and
+/// below the stall torque's (157 W), which bounds it (the torque falls with speed).
+#[test]
+fn a_curve_bowing_above_its_straight_line_is_not_refused() {
+    let rig = "[[experiment]]\nkind = \"catalogue\"\nfile = \"c.csv\"\np_supply = \"6.3 bar_g\"\n";
+    let curves = "speed_rpm,torque_nm,power_w\n0,0.3,\n5000,,117.8\n10000,0,\n";
+    let dir = dataset(rig, &[("c.csv", curves)]);
+    let (code, _, err) = check(dir.path());
+    assert_eq!(code, 0, "{err}");
+    // Above the bound it is refused, and the message says which torque bounds it.
+    let curves = "speed_rpm,torque_nm,power_w\n0,0.3,\n5000,,170\n10000,0,\n";
+    refused(
+        rig,
+        &[("c.csv", curves)],
+        &[
+            "c.csv:3:3",
+            "printed at 0 rpm, which bounds it above as the torque falls",
+        ],
+    );
+}
+
+/// A figure of rig.toml refused by the power check is located at its key, called a key.
+#[test]
+fn a_figure_above_torque_speed_names_its_key() {
+    let rig = "[[experiment]]\nkind = \"catalogue\"\np_supply = \"6.3 bar_g\"\n[experiment.figures]\nstall_torque = \"0.1 N·m\"\nspeed_at_max_power = \"5000 rpm\"\nmax_power = \"100 W\"\n";
+    refused(
+        rig,
+        &[],
+        &["rig.toml:13:1 (key 'max_power')", "above torque·speed"],
+    );
+    // The same with a curve file beside the figures: still rig.toml, not the CSV.
+    let rig = "[[experiment]]\nkind = \"catalogue\"\nfile = \"c.csv\"\np_supply = \"6.3 bar_g\"\n[experiment.figures]\nspeed_at_max_power = \"5000 rpm\"\nmax_power = \"100 W\"\n";
+    refused(
+        rig,
+        &[("c.csv", "speed_rpm,torque_nm\n0,0.1\n")],
+        &["rig.toml:13:1 (key 'max_power')", "above torque·speed"],
+    );
+}

@@ -175,6 +175,8 @@ fn normalise_unit(unit: &str) -> String {
     for c in unit.trim().to_lowercase().chars() {
         match c {
             '³' => s.push('3'),
+            // "min⁻¹": the superscript minus separates, the superscript one is a 1.
+            '¹' => s.push('1'),
             '(' | ')' => {}
             c if c.is_alphanumeric() => s.push(c),
             _ => {
@@ -371,6 +373,12 @@ pub(super) fn recording(
         .col(c, &name));
     }
     let rows = figure_rows(figures);
+    // Rows from here on are the figures of rig.toml: their errors name the key.
+    let n_curve_rows = rec.rows();
+    let figure_keys: Vec<[Option<String>; 4]> = rows
+        .iter()
+        .map(|(r, _)| r.map(|c| c.and_then(|(_, f)| f.map(|f| f.key.clone()))))
+        .collect();
     for (k, &q) in quantities.iter().enumerate() {
         let n_before = rec.rows();
         if rec.column(q).is_none() && rows.iter().any(|(r, _)| r[k].is_some()) {
@@ -406,24 +414,47 @@ pub(super) fn recording(
         }
         rec.lines.push(line);
     }
-    check_curves(&rec, src.tolerance)?;
+    let locate = |q: Quantity, row: usize, message: String| {
+        let k = quantities.iter().position(|x| *x == q).unwrap_or(0);
+        match row
+            .checked_sub(n_curve_rows)
+            .and_then(|f| figure_keys.get(f))
+        {
+            // A figure row: at the figure's key of rig.toml (the first of the row if
+            // the quantity was not a figure).
+            Some(keys) => match keys[k].as_ref().or(keys.iter().flatten().next()) {
+                Some(key) => src.at(key, message),
+                None => DataError::new(src.rig.0, message),
+            },
+            None => {
+                let c = rec
+                    .columns
+                    .iter()
+                    .position(|c| c.quantity == q)
+                    .unwrap_or(0);
+                DataError::new(&rec.file, message)
+                    .at(rec.lines[row])
+                    .col(c, &rec.columns[c].name)
+            }
+        }
+    };
+    check_curves(&rec, src.tolerance, locate)?;
     Ok(rec)
 }
 
 /// Every row has a speed ≥ 0; torque, power and air are ≥ 0; power is not above
-/// torque·speed (torque taken from the same row, or interpolated on the torque points
-/// around that speed) by more than three reading tolerances of the power's full scale.
-fn check_curves(rec: &Recording, tolerance: f64) -> Result<(), DataError> {
-    let locate = |q: Quantity, row: usize, message: String| {
-        let c = rec
-            .columns
-            .iter()
-            .position(|c| c.quantity == q)
-            .unwrap_or(0);
-        DataError::new(&rec.file, message)
-            .at(rec.lines[row])
-            .col(c, &rec.columns[c].name)
-    };
+/// torque·speed by more than three reading tolerances of the power's full scale, with the
+/// torque taken from the same row or, where the row prints none, bounded by the torque
+/// printed at the nearest lower speed. Why not interpolated: at a fixed supply the torque
+/// falls with speed, so the torque printed at a lower speed bounds it from above, while a
+/// straight line between two sparse points (or between the stall torque and the free speed)
+/// lies below a real curve, which bows 8–15 % above it (docs/formats.md, "Catalogue data"),
+/// and refused true pages. `locate` places a message at a row's cell of a quantity.
+fn check_curves(
+    rec: &Recording,
+    tolerance: f64,
+    locate: impl Fn(Quantity, usize, String) -> DataError,
+) -> Result<(), DataError> {
     let speed = rec.values(Quantity::Speed)?;
     for q in [
         Quantity::Speed,
@@ -469,17 +500,27 @@ fn check_curves(rec: &Recording, tolerance: f64) -> Result<(), DataError> {
         .collect();
     torque_points.sort_by(|a, b| a.0.total_cmp(&b.0));
     for (i, (&w, &p)) in speed.iter().zip(&power.si).enumerate() {
-        let t = if torque.si[i].is_finite() {
-            Some(torque.si[i])
+        let (t, at) = if torque.si[i].is_finite() {
+            (torque.si[i], w)
         } else {
-            interpolate(&torque_points, w)
+            match torque_below(&torque_points, w) {
+                Some(p) => (p.1, p.0),
+                None => continue,
+            }
         };
-        let Some(t) = t else { continue };
         if p.is_finite() && p > t * w + 3.0 * tolerance * p_max {
             let rpm = Unit::Rpm.from_si(w, 0.0);
+            let bound = if at == w {
+                format!("torque·speed = {t:.4} N·m × {rpm:.0} rpm = {:.1} W", t * w)
+            } else {
+                format!(
+                    "torque·speed = {:.1} W with the torque {t:.4} N·m printed at {:.0} rpm, which bounds it above as the torque falls with speed",
+                    t * w,
+                    Unit::Rpm.from_si(at, 0.0)
+                )
+            };
             let message = format!(
-                "power {p:.1} W at {rpm:.0} rpm is above torque·speed = {t:.4} N·m × {rpm:.0} rpm = {:.1} W (shaft power is torque times speed)",
-                t * w
+                "power {p:.1} W at {rpm:.0} rpm is above {bound} (shaft power is torque times speed)"
             );
             return Err(locate(Quantity::Power, i, message));
         }
@@ -496,6 +537,11 @@ pub(super) fn interpolate(points: &[(f64, f64)], x: f64) -> Option<f64> {
     }
     let (x0, y0) = *points.get(k.checked_sub(1)?)?;
     Some(y0 + (y1 - y0) * (x - x0) / (x1 - x0))
+}
+
+/// The point of the largest x ≤ `x` of points sorted by x; `None` if all lie above `x`.
+fn torque_below(points: &[(f64, f64)], x: f64) -> Option<(f64, f64)> {
+    points.iter().rev().find(|p| p.0 <= x).copied()
 }
 
 #[cfg(test)]
@@ -564,6 +610,21 @@ mod tests {
             Unit::PsiG
         );
         assert_eq!(parse_value("1e3 rpm", Quantity::Speed, p).unwrap().2, 1e3);
+        for (text, q, u) in [
+            ("9000 min-1", Quantity::Speed, Unit::Rpm),
+            ("9000 min⁻¹", Quantity::Speed, Unit::Rpm),
+            ("9000 1/min", Quantity::Speed, Unit::Rpm),
+            ("9000 r.p.m.", Quantity::Speed, Unit::Rpm),
+            ("12 in·lbf", Quantity::Torque, Unit::LbfIn),
+            ("12 in-lb", Quantity::Torque, Unit::LbfIn),
+            ("12 lb-in", Quantity::Torque, Unit::LbfIn),
+            ("12 in.lbs", Quantity::Torque, Unit::LbfIn),
+            ("120 watts", Quantity::Power, Unit::W),
+            ("7.4 ft³/min", Quantity::Flow1, Unit::Cfm),
+            ("180 Nl/min ANR", Quantity::Flow1, Unit::LMinAnr),
+        ] {
+            assert_eq!(parse_value(text, q, p).map(|r| r.1), Ok(u), "{text}");
+        }
         let e = parse_value("0.12 N·m", Quantity::Power, p).unwrap_err();
         let e = e.to_string();
         assert!(e.contains("not a unit of power") && e.contains("kw"), "{e}");
@@ -586,10 +647,10 @@ mod tests {
     }
 
     #[test]
-    fn interpolation_stays_inside_the_points() {
+    fn the_torque_bound_is_the_point_at_or_below_the_speed() {
         let pts = [(0.0, 1.0), (10.0, 0.0)];
-        assert_eq!(interpolate(&pts, 5.0), Some(0.5));
-        assert_eq!(interpolate(&pts, 0.0), Some(1.0));
-        assert_eq!(interpolate(&pts, 11.0), None);
+        assert_eq!(torque_below(&pts, 5.0), Some((0.0, 1.0)));
+        assert_eq!(torque_below(&pts, 10.0), Some((10.0, 0.0)));
+        assert_eq!(torque_below(&[(2.0, 1.0)], 1.0), None);
     }
 }
