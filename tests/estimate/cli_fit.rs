@@ -216,7 +216,7 @@ fn datasheet_only(dir: &Path) -> std::path::PathBuf {
     ds
 }
 
-fn fit_json(dataset: &Path, out: &Path, uncertainty: &str) -> serde_json::Value {
+fn fit_json(dataset: &Path, out: &Path, uncertainty: &str, priors: &str) -> serde_json::Value {
     let o = vanefit(&[
         "fit",
         dataset.to_str().unwrap(),
@@ -224,6 +224,8 @@ fn fit_json(dataset: &Path, out: &Path, uncertainty: &str) -> serde_json::Value 
         "8",
         "--uncertainty",
         uncertainty,
+        "--priors",
+        priors,
         "--no-plots",
         "--out",
         out.to_str().unwrap(),
@@ -232,15 +234,16 @@ fn fit_json(dataset: &Path, out: &Path, uncertainty: &str) -> serde_json::Value 
     serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap()
 }
 
-/// 25 datasheet points cannot pin eight parameters. The fit says so parameter by
-/// parameter, in the file (`identifiable: false` with a reason, distinct from the `null` of
-/// "not computed"), and the estimate is the same whether intervals are computed or not.
+/// 25 datasheet points cannot pin eight parameters. Without the motor prior the fit says so
+/// parameter by parameter, in the file (`identifiable: false` with a reason, distinct from
+/// the `null` of "not computed"), and the estimate is the same whether intervals are
+/// computed or not.
 #[test]
 fn a_datasheet_only_fit_says_what_it_cannot_pin_and_one_estimate_is_exported() {
     let dir = tempfile::tempdir().unwrap();
     let ds = datasheet_only(dir.path());
-    let with = fit_json(&ds, &dir.path().join("profile.json"), "profile");
-    let without = fit_json(&ds, &dir.path().join("none.json"), "none");
+    let with = fit_json(&ds, &dir.path().join("profile.json"), "profile", "none");
+    let without = fit_json(&ds, &dir.path().join("none.json"), "none", "none");
     let names = vanefit::estimate::DEFAULT_ESTIMATED;
     let open: Vec<&str> = names
         .iter()
@@ -264,4 +267,40 @@ fn a_datasheet_only_fit_says_what_it_cannot_pin_and_one_estimate_is_exported() {
     assert_eq!(with["statistics"]["estimate"], "maximum_likelihood");
     assert_eq!(without["statistics"]["uncertainty"], "none");
     assert!(with["statistics"]["noise_reached"].is_boolean());
+}
+
+/// With the motor prior (the default) the same datasheet-only fit rests what the data cannot
+/// pin on the prior: every interval it reports lies within the prior's own 95 % range
+/// around the estimate (the data can only narrow it), and the file lists the prior.
+#[test]
+fn a_datasheet_only_fit_with_the_prior_is_never_less_certain_than_the_prior() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = datasheet_only(dir.path());
+    let fit = fit_json(&ds, &dir.path().join("prior.json"), "profile", "size");
+    let prior = fit["statistics"]["prior"]
+        .as_array()
+        .expect("statistics.prior");
+    assert!(!prior.is_empty(), "{fit:#}");
+    let mut bounded = 0;
+    for entry in prior {
+        let name = entry["parameter"].as_str().unwrap();
+        let sd_ln = entry["sd_ln"].as_f64().unwrap();
+        let p = &fit["parameters"][name];
+        let Some(ci) = p["ci95"].as_array() else {
+            continue;
+        };
+        let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+        // Half-width in ln v against the prior's 1.96 σ (5 % slack for the profile's grid).
+        let half = 0.5 * (hi / lo).ln();
+        assert!(
+            half <= 1.05 * 1.96 * sd_ln,
+            "{name}: ±{half} in ln v, prior ±{}",
+            1.96 * sd_ln
+        );
+        bounded += 1;
+    }
+    assert!(
+        bounded >= 6,
+        "only {bounded} parameters with intervals: {fit:#}"
+    );
 }
