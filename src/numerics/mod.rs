@@ -2,6 +2,7 @@
 //! and the steady-state Newton, and roots and minima of functions of one variable.
 
 pub mod lu;
+pub mod normal;
 pub mod ode;
 pub mod rodas;
 pub(crate) mod scalar;
