@@ -416,6 +416,20 @@ fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<()
     Ok(())
 }
 
+/// The warnings of a catalogue page (maker rules, figures against the page's own curves),
+/// each at its rig.toml line, on stderr (`check` and `fit`).
+pub(crate) fn print_page_warnings(ds: &Dataset, ex: &vanefit::sim::recording::ExperimentData) {
+    for w in vanefit::data::dataset::page_rules::page_warnings(ex) {
+        let at = w.line.map_or(String::new(), |l| format!(":{l}"));
+        eprintln!(
+            "warning: {}{at} (key '{}'): {}",
+            ds.dir.join("rig.toml").display(),
+            w.key,
+            w.message
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::Cli;
@@ -502,19 +516,5 @@ mod tests {
                 assert!(text.contains(e.id()), "{path:?} --help lacks {}", e.id());
             }
         }
-    }
-}
-
-/// The warnings of a catalogue page (maker rules, figures against the page's own curves),
-/// each at its rig.toml line, on stderr (`check` and `fit`).
-pub(crate) fn print_page_warnings(ds: &Dataset, ex: &vanefit::sim::recording::ExperimentData) {
-    for w in vanefit::data::dataset::page_rules::page_warnings(ex) {
-        let at = w.line.map_or(String::new(), |l| format!(":{l}"));
-        eprintln!(
-            "warning: {}{at} (key '{}'): {}",
-            ds.dir.join("rig.toml").display(),
-            w.key,
-            w.message
-        );
     }
 }

@@ -173,7 +173,7 @@ fn breakaway_pressure(
 }
 
 /// Open-loop start-up on a slow pressure ramp from atmosphere to `p_max_pa` (see module
-/// doc), on `n` log-spaced speeds from [`lowest_running_speed_rad_s`] up to the speed
+/// doc), on `n` log-spaced speeds from `lowest_running_speed_rad_s` up to the speed
 /// `p_max_pa` can hold.
 pub fn open_loop_start(
     motor: &Motor,

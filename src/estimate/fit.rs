@@ -117,7 +117,7 @@ pub struct FitOutcome {
     pub cost: f64,
     /// J of the best start (the multi-start's optimum, before the likelihood's polish).
     pub best_start_cost: f64,
-    /// The likelihood's χ² at the estimate (σ widened per [`FitOutcome::widening`], the
+    /// The likelihood's χ² at the estimate (σ widened per `FitOutcome::widening`, the
     /// nuisances' prior terms included); the estimate minimises, and the intervals are
     /// profiled on, this plus [`FitOutcome::prior_chi2`].
     pub chi2: f64,

@@ -153,7 +153,7 @@ impl Prior {
                 None => lp += ln_logistic,
                 Some(term) => {
                     let v = d.value(*t);
-                    if !(v > 0.0) {
+                    if v.is_nan() || v <= 0.0 {
                         return f64::NEG_INFINITY;
                     }
                     let dlnv_du = if d.log_scale {

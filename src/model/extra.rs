@@ -205,7 +205,7 @@ pub enum PressureFactor {
     /// flow, ṁ = h³·w·(p_a² − p_b²)/(24·μ·L·R·T): Poiseuille flow at the mean density).
     CompressibleLaminar,
     /// Flow law of a leak path: sign(Δp)·|Δp|^(4/7), Pa^(4/7) (turbulent gap flow with
-    /// Blasius's friction factor λ ∝ Re^(−1/4); linear below p_r = [`ORIFICE_LAMINAR_PA`]).
+    /// Blasius's friction factor λ ∝ Re^(−1/4); linear below p_r = `ORIFICE_LAMINAR_PA`).
     Turbulent,
     /// Flow law of a leak path: Δp·(Δp² + p_r²)^(−1/4) ≈ sign(Δp)·√|Δp|, √Pa (a sharp
     /// orifice; laminar below p_r = `ORIFICE_LAMINAR_PA`).

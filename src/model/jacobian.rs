@@ -78,7 +78,7 @@ fn series_flow_sensitivities(
     (m, d1_a * d2_m / den, -d1_m * d2_b / den, -d1_m * m / den)
 }
 
-/// As [`series_flow_sensitivities`], but the last slope is the one in the logarithm of the
+/// As `series_flow_sensitivities`, but the last slope is the one in the logarithm of the
 /// FIRST nozzle's conductance, kg/s (a throttle in front of port 1: supply → throttle →
 /// duct).
 ///

@@ -423,7 +423,7 @@ impl Motor {
     /// Flow through a port's duct (conductance `c_duct`, m³/(s·Pa)) with an optional
     /// throttle (`c_throttle`) in series, from `p_a` to `p_b` (Pa absolute), kg/s; negative
     /// when the air flows from `p_b` to `p_a`. The two are ISO 6358 nozzles with the motor's
-    /// critical ratio and no volume between them ([`series_flow`]); `side` says at which end
+    /// critical ratio and no volume between them (`nozzle::series_flow`); `side` says at which end
     /// of the line the throttle sits, which the flow's direction does not change (reversed,
     /// the downstream element becomes the upstream one). The motor's ports call it as
     /// port 1: (`c_in1`, `Boundary::c_port1_m3_s_pa`, [`ThrottleSide::AtA`], p_port1, p_1)

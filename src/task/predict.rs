@@ -368,20 +368,18 @@ fn motor_log_prior(fit: &FitFile, names: &[String]) -> Option<impl Fn(&[f64]) ->
             (e.median > 0.0 && e.sd_ln > 0.0).then(|| (i, e.median.ln(), e.sd_ln))
         })
         .collect();
-    (!terms.is_empty()).then(move || {
-        move |values: &[f64]| {
-            terms
-                .iter()
-                .map(|&(i, mu, sd)| {
-                    let v = values[i];
-                    if v > 0.0 {
-                        -0.5 * ((v.ln() - mu) / sd).powi(2)
-                    } else {
-                        f64::NEG_INFINITY
-                    }
-                })
-                .sum()
-        }
+    (!terms.is_empty()).then_some(move |values: &[f64]| {
+        terms
+            .iter()
+            .map(|&(i, mu, sd)| {
+                let v = values[i];
+                if v > 0.0 {
+                    -0.5 * ((v.ln() - mu) / sd).powi(2)
+                } else {
+                    f64::NEG_INFINITY
+                }
+            })
+            .sum()
     })
 }
 

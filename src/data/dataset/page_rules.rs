@@ -139,7 +139,7 @@ fn figures_against_curves(ex: &ExperimentData) -> Vec<PageWarning> {
         let Some(on_curve) = interpolate(&curve(q), w) else {
             continue;
         };
-        if !(on_curve > 0.0) {
+        if on_curve.is_nan() || on_curve <= 0.0 {
             continue;
         }
         let ratio = f.si / on_curve;
