@@ -34,7 +34,18 @@ def test_dataset_reads_as_written(ds):
         ds.recording("nope.csv")
 
 
-def test_cost_equals_the_cli_fit_files_cost(ds, cli_fit):
+@pytest.fixture(scope="module")
+def cli_fit_without_prior(tmp_path_factory):
+    """The short CLI fit of the `cli_fit` fixture without the motor prior: its file's cost is
+    then J alone (with the prior it adds χ²_prior/n, which `vanefit.cost` does not)."""
+    out = tmp_path_factory.mktemp("cli_no_prior") / "fit.json"
+    run_cli("fit", DATASET, "--starts", 3, "--seed", 5, "--max-iters", 150, "--priors", "none",
+            "--uncertainty", "curvature", "--no-plots", "--out", out)
+    return out
+
+
+def test_cost_equals_the_cli_fit_files_cost(ds, cli_fit_without_prior):
+    cli_fit = cli_fit_without_prior
     doc = json.loads(cli_fit.read_text())
     c = vanefit.cost(ds, cli_fit)
     assert rel(c["cost"], doc["cost"]) < 1e-12, (c["cost"], doc["cost"])

@@ -89,7 +89,9 @@ def test_notebook_runs_headless(path, capsys, tmp_path, monkeypatch):
     errors = [o for c in nb.cells for o in c.get("outputs", []) if o.get("output_type") == "error"]
     assert not errors, errors
     figures = sum("image/png" in o.get("data", {}) for c in nb.cells for o in c.get("outputs", []))
-    assert figures >= 3, f"{path.name} drew {figures} figures"
+    # The three tutorials draw at least three figures each; the FMU notebook its one loop.
+    least = 3 if path.name[:3] in ("01_", "02_", "03_") else 1
+    assert figures >= least, f"{path.name} drew {figures} figures"
     with capsys.disabled():
         print(f"\n{path.name}: {wall:.1f} s, {figures} figures")
 
