@@ -67,15 +67,8 @@ fn series_flow_sensitivities(
     p_a: f64,
     p_b: f64,
 ) -> (f64, f64, f64, f64) {
-    let (m, p_m) = series_flow(first, second, p_a, p_b);
-    let (_, d1_a, d1_m) = first.flow_with_slopes(p_a, p_m);
-    let (_, d2_m, d2_b) = second.flow_with_slopes(p_m, p_b);
-    let den = d2_m - d1_m;
-    if den.is_nan() || den <= 0.0 {
-        // Only with non-positive pressures, where both nozzles pass nothing.
-        return (m, 0.0, 0.0, 0.0);
-    }
-    (m, d1_a * d2_m / den, -d1_m * d2_b / den, -d1_m * m / den)
+    let (m, d_a, d_b, _, d_ln_c2) = series_slopes(first, second, p_a, p_b);
+    (m, d_a, d_b, d_ln_c2)
 }
 
 /// As `series_flow_sensitivities`, but the last slope is the one in the logarithm of the
@@ -91,14 +84,28 @@ pub fn series_flow_sensitivities_first(
     p_a: f64,
     p_b: f64,
 ) -> (f64, f64, f64, f64) {
+    let (m, d_a, d_b, d_ln_c1, _) = series_slopes(first, second, p_a, p_b);
+    (m, d_a, d_b, d_ln_c1)
+}
+
+/// The series flow ṁ with every slope the two functions above hand out: ∂ṁ/∂p_a, ∂ṁ/∂p_b,
+/// ∂ṁ/∂ln C_1, ∂ṁ/∂ln C_2 (D = ∂_m ṁ_2 − ∂_m ṁ_1, the balance's slope in p_m).
+fn series_slopes(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> (f64, f64, f64, f64, f64) {
     let (m, p_m) = series_flow(first, second, p_a, p_b);
     let (_, d1_a, d1_m) = first.flow_with_slopes(p_a, p_m);
     let (_, d2_m, d2_b) = second.flow_with_slopes(p_m, p_b);
     let den = d2_m - d1_m;
     if den.is_nan() || den <= 0.0 {
-        return (m, 0.0, 0.0, 0.0);
+        // Only with non-positive pressures, where both nozzles pass nothing.
+        return (m, 0.0, 0.0, 0.0, 0.0);
     }
-    (m, d1_a * d2_m / den, -d1_m * d2_b / den, d2_m * m / den)
+    (
+        m,
+        d1_a * d2_m / den,
+        -d1_m * d2_b / den,
+        d2_m * m / den,
+        -d1_m * m / den,
+    )
 }
 
 /// How fast the boundary of a transient moves: the time derivatives of the inputs that

@@ -7,7 +7,8 @@
 use std::path::Path;
 use std::process::Command;
 
-fn vanefit(args: &[&str]) -> String {
+/// Runs the built binary (in the package root, where cargo runs its tests); its stdout.
+pub(crate) fn vanefit(args: &[&str]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_vanefit"))
         .args(args)
         .output()

@@ -15,19 +15,7 @@ use vanefit::predict::{
 
 const CATALOGUE: &str = "measurements/ar034-synthetic-catalogue";
 
-fn vanefit(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_vanefit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "vanefit {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
+use super::catalogue_predict::vanefit;
 
 /// A fit of the catalogue page (`extra`: more `fit` options) into `dir`.
 fn catalogue_fit(dir: &Path, extra: &[&str]) -> PathBuf {
