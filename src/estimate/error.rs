@@ -35,6 +35,9 @@ pub enum EstimateError {
     /// See [`EstimateError::KillFactor`].
     #[error("kill margin {0}: must not be NaN")]
     KillMargin(f64),
+    /// The hand-over's convergence test needs a finite gain ≥ 0.
+    #[error("hand-over gain {0}: must be a finite number >= 0")]
+    HandoffGain(f64),
     /// A given start point has the wrong number of coordinates.
     #[error("given start {index}: {got} coordinates, the space has {want}")]
     GivenStart {

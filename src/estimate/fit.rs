@@ -64,6 +64,26 @@ impl Objective for DataObjective<'_> {
             failed: v.failed.is_some(),
         }
     }
+
+    /// Each channel's normalised residuals (y − ŷ)/σ scaled by √(w/N): their squares sum
+    /// to J (docs/model.md, "Cost J", eq. 1).
+    fn cost_residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
+        let channels = self.cost.residuals(motor, self.solver.as_ref()).ok()?;
+        let mut out = Vec::with_capacity(channels.iter().map(|c| c.normalized.len()).sum());
+        for ch in &channels {
+            let n = ch.normalized.len();
+            if n == 0 {
+                continue;
+            }
+            let scale = (ch.weight / n as f64).sqrt();
+            out.extend(ch.normalized.iter().map(|r| r * scale));
+        }
+        Some(out)
+    }
+
+    fn has_cost_residuals(&self) -> bool {
+        true
+    }
 }
 
 /// Local optima of the multi-start, besides the best, polished on the likelihood: candidates

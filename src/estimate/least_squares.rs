@@ -26,8 +26,14 @@ const H: f64 = 1e-3;
 pub(crate) struct LmSettings {
     /// Most iterations (each costs k + 1 residual evaluations, plus refused steps).
     pub max_iters: usize,
-    /// Stop when an accepted step lowers χ² by less than this.
+    /// Stop when an accepted step lowers χ² by less than this plus `rel_tol`·χ².
     pub tol: f64,
+    /// See `tol` (0: an absolute tolerance).
+    pub rel_tol: f64,
+    /// Largest change of any coordinate in one step: a longer step is shortened along its
+    /// direction (∞: never). θ is logistic at the bounds, where a step of hundreds lands on
+    /// a plateau whose zero gradient looks like convergence.
+    pub max_step: f64,
 }
 
 impl Default for LmSettings {
@@ -35,6 +41,8 @@ impl Default for LmSettings {
         Self {
             max_iters: 30,
             tol: 0.02,
+            rel_tol: 0.0,
+            max_step: f64::INFINITY,
         }
     }
 }
@@ -68,14 +76,45 @@ pub(crate) fn levenberg_marquardt(
     x0: &[f64],
     settings: LmSettings,
 ) -> (Vec<f64>, f64) {
+    let out = levenberg_marquardt_run(f, x0, settings);
+    (out.x, out.chi2)
+}
+
+/// Where a Levenberg–Marquardt run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct LmOutcome {
+    /// The best point.
+    pub x: Vec<f64>,
+    /// Its χ² (∞ when `f` fails at the start).
+    pub chi2: f64,
+    /// It stopped by its tolerance (an accepted step, or the linear model's prediction,
+    /// below `tol`), not by the iteration budget, a failed Jacobian or a singular system.
+    pub converged: bool,
+}
+
+/// [`levenberg_marquardt`], telling also whether it converged.
+pub(crate) fn levenberg_marquardt_run(
+    f: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
+    x0: &[f64],
+    settings: LmSettings,
+) -> LmOutcome {
     let Some(mut r) = f(x0) else {
-        return (x0.to_vec(), f64::INFINITY);
+        return LmOutcome {
+            x: x0.to_vec(),
+            chi2: f64::INFINITY,
+            converged: false,
+        };
     };
     let mut x = x0.to_vec();
     let mut c = chi2(&r);
     if x.is_empty() {
-        return (x, c);
+        return LmOutcome {
+            x,
+            chi2: c,
+            converged: true,
+        };
     }
+    let mut converged = false;
     let (mut mu, mut nu): (Option<f64>, f64) = (None, 2.0);
     for _ in 0..settings.max_iters {
         let Some(j) = jacobian(f, &x, &r) else { break };
@@ -86,13 +125,19 @@ pub(crate) fn levenberg_marquardt(
         for i in 0..x.len() {
             a[(i, i)] += m * jtj[(i, i)].max(1e-12);
         }
-        let Some(delta) = a.lu().solve(&(-&g)) else {
+        let Some(mut delta) = a.lu().solve(&(-&g)) else {
             break;
         };
+        let longest = delta.amax();
+        if longest > settings.max_step {
+            delta *= settings.max_step / longest;
+        }
         let trial: Vec<f64> = x.iter().zip(delta.iter()).map(|(a, b)| a + b).collect();
         let predicted = -(delta.dot(&g) * 2.0 + (&j * &delta).norm_squared());
-        if predicted < settings.tol {
+        let tol = settings.tol + settings.rel_tol * c;
+        if predicted < tol {
             // The linear model sees no gain worth a simulation: converged.
+            converged = true;
             break;
         }
         match f(&trial).map(|rt| (chi2(&rt), rt)) {
@@ -102,7 +147,8 @@ pub(crate) fn levenberg_marquardt(
                 nu = 2.0;
                 let gain = c - ct;
                 (x, r, c) = (trial, rt, ct);
-                if gain < settings.tol {
+                if gain < tol {
+                    converged = true;
                     break;
                 }
             }
@@ -112,7 +158,11 @@ pub(crate) fn levenberg_marquardt(
             }
         }
     }
-    (x, c)
+    LmOutcome {
+        x,
+        chi2: c,
+        converged,
+    }
 }
 
 /// Levenberg–Marquardt on a problem's residuals from `x`, kept only where χ² falls: the
@@ -146,6 +196,8 @@ mod tests {
             LmSettings {
                 max_iters: 200,
                 tol: 0.0,
+                rel_tol: 0.0,
+                max_step: f64::INFINITY,
             },
         );
         assert!(c < 1e-12, "{c} at {x:?}");
@@ -164,6 +216,8 @@ mod tests {
         let tight = LmSettings {
             max_iters: 50,
             tol: 1e-14,
+            rel_tol: 0.0,
+            max_step: f64::INFINITY,
         };
         let (x, _) = levenberg_marquardt(&f, &[0.0, 0.0], tight);
         // Closed form: slope = Sxy/Sxx, intercept = ȳ − slope·t̄.

@@ -13,6 +13,7 @@
 use super::engine::Engine;
 use super::error::EstimateError;
 use super::history::ResultsFile;
+use super::least_squares::levenberg_marquardt_run;
 use super::objective::{Objective, Problem};
 use super::optimize::{RestartedNelderMead, Status};
 use super::settings::MultiStartSettings;
@@ -112,6 +113,8 @@ struct Runner {
     ended: Option<Ending>,
     /// The outcome of recording that ending in the results file (checked at the barrier).
     recorded: Option<Result<(), EstimateError>>,
+    /// The hand-over has happened (a start gets one).
+    handed: bool,
 }
 
 impl Runner {
@@ -125,6 +128,7 @@ impl Runner {
             trace: Vec::new(),
             ended: None,
             recorded: None,
+            handed: false,
         }
     }
 
@@ -141,6 +145,32 @@ impl Runner {
         self.evaluations += problem.evaluations();
         if let Some(t) = problem.take_trace() {
             self.trace.extend(t);
+        }
+    }
+
+    /// The hand-over stage: Levenberg–Marquardt on the cost's residuals from the best point
+    /// ([`MultiStartSettings::handoff_lm`]). Converged and no worse, the start ends there
+    /// (as converged: a minimum of the cost, found by another method). Otherwise, where it
+    /// went lower, Nelder–Mead goes on from there with a simplex a tenth of the first's
+    /// edge; where it did not, Nelder–Mead goes on as it was.
+    fn hand_over(
+        &mut self,
+        objective: &dyn Objective,
+        space: &ParamSpace,
+        cfg: &MultiStartSettings,
+    ) {
+        self.handed = true;
+        let problem = Problem::new(objective, space, false);
+        let residuals = |t: &[f64]| problem.cost_residuals(t);
+        let lm = cfg.handoff_lm();
+        let out = levenberg_marquardt_run(&residuals, self.search.x(), lm);
+        self.evaluations += problem.evaluations();
+        if out.converged && out.chi2.is_finite() && self.search.conclude(out.x.clone(), out.chi2) {
+            return;
+        }
+        if out.chi2 < self.search.cost() {
+            let step = cfg.nelder_mead().step * 0.1;
+            self.search.move_to(out.x, out.chi2, step);
         }
     }
 
@@ -197,7 +227,15 @@ impl Runner {
         cfg: &MultiStartSettings,
         file: Option<&ResultsFile>,
     ) {
-        self.advance(objective, space, cfg);
+        let handing = !self.handed
+            && self.search.status() == Status::Running
+            && objective.has_cost_residuals()
+            && cfg.hands_off(self.history.len());
+        if handing {
+            self.hand_over(objective, space, cfg);
+        } else {
+            self.advance(objective, space, cfg);
+        }
         self.history.push(self.search.cost());
         self.ended = self.own_ending(cfg);
         if let (Some(ending), Some(f)) = (self.ended, file) {
@@ -455,20 +493,34 @@ mod tests {
 
     /// A bowl in the log-parameters that stands for a kill (panics) at its `kill_at`-th
     /// evaluation: the run dies mid-round, as a fit killed with SIGKILL does.
+    /// With `least_squares`, it gives its cost as residuals too (a start is handed over).
     struct Bowl {
         evaluations: AtomicU64,
         kill_at: u64,
+        least_squares: bool,
+    }
+
+    impl Bowl {
+        fn count(&self) {
+            if self.evaluations.fetch_add(1, Ordering::SeqCst) + 1 == self.kill_at {
+                panic!("killed");
+            }
+        }
+        /// ln p − ln p₀ of every parameter, the bottom p₀ at twice the default values
+        /// (inside every bound).
+        fn offsets(motor: &Motor) -> Vec<f64> {
+            let bottom = MotorParams::default();
+            DEFAULT_ESTIMATED
+                .iter()
+                .map(|n| motor.params.get(n).unwrap().ln() - (2.0 * bottom.get(n).unwrap()).ln())
+                .collect()
+        }
     }
 
     impl Objective for Bowl {
         fn evaluate(&self, motor: &Motor) -> Evaluation {
-            if self.evaluations.fetch_add(1, Ordering::SeqCst) + 1 == self.kill_at {
-                panic!("killed");
-            }
-            let chi2: f64 = DEFAULT_ESTIMATED
-                .iter()
-                .map(|n| (motor.params.get(n).unwrap().ln() - 1e-9f64.ln()).powi(2))
-                .sum();
+            self.count();
+            let chi2: f64 = Self::offsets(motor).iter().map(|r| r * r).sum();
             Evaluation {
                 cost: chi2,
                 chi2,
@@ -476,12 +528,29 @@ mod tests {
                 failed: false,
             }
         }
+
+        fn cost_residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
+            self.count();
+            self.least_squares.then(|| Self::offsets(motor))
+        }
+
+        fn has_cost_residuals(&self) -> bool {
+            self.least_squares
+        }
     }
 
     fn bowl(kill_at: u64) -> Bowl {
         Bowl {
             evaluations: AtomicU64::new(0),
             kill_at,
+            least_squares: false,
+        }
+    }
+
+    fn least_squares_bowl(kill_at: u64) -> Bowl {
+        Bowl {
+            least_squares: true,
+            ..bowl(kill_at)
         }
     }
 
@@ -550,5 +619,88 @@ mod tests {
             counting.evaluations.load(Ordering::SeqCst),
             full.results[2].evaluations + full.results[3].evaluations
         );
+    }
+
+    #[test]
+    fn a_handed_over_start_ends_at_the_bottom_with_fewer_evaluations() {
+        let cfg = |handoff_after_rounds| {
+            MultiStartConfig {
+                starts: 6,
+                seed: 3,
+                stage_iters: 40,
+                handoff_after_rounds,
+                ..Default::default()
+            }
+            .check()
+            .unwrap()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str| ResultsFile::new(&dir.path().join(name));
+        let nelder_mead = run_on(2, &least_squares_bowl(0), &cfg(0), &file("nm.jsonl"), false);
+        let handed = run_on(2, &least_squares_bowl(0), &cfg(1), &file("lm.jsonl"), false);
+        // The same run on one thread: the hand-over looks at each start alone.
+        let one = run_on(
+            1,
+            &least_squares_bowl(0),
+            &cfg(1),
+            &file("one.jsonl"),
+            false,
+        );
+        assert_eq!(one.results, handed.results);
+        for r in &handed.results {
+            // Handed over after one stage, converged in that next one.
+            assert_eq!(r.ending, Ending::Converged, "start {}", r.index);
+            assert_eq!(r.history.len(), 2, "start {}", r.index);
+            assert!(
+                r.cost < 1e-5,
+                "start {}: cost {} at {:?} from {:?}",
+                r.index,
+                r.cost,
+                r.theta,
+                r.theta0
+            );
+        }
+        // Without residuals the same settings never hand over.
+        let plain = run_on(2, &bowl(0), &cfg(1), &file("plain.jsonl"), false);
+        assert_eq!(
+            plain.evaluations, nelder_mead.evaluations,
+            "an objective without residuals runs Nelder-Mead alone"
+        );
+        assert!(
+            2 * handed.evaluations < nelder_mead.evaluations,
+            "hand-over {} evaluations, Nelder-Mead alone {}",
+            handed.evaluations,
+            nelder_mead.evaluations
+        );
+        assert!(handed.best().cost <= nelder_mead.best().cost + 1e-5);
+    }
+
+    #[test]
+    fn a_run_killed_during_a_hand_over_resumes_to_the_same_end() {
+        let cfg = MultiStartConfig {
+            starts: 4,
+            seed: 9,
+            stage_iters: 30,
+            ..Default::default()
+        }
+        .check()
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let whole = ResultsFile::new(&dir.path().join("whole.jsonl"));
+        let full = run_on(1, &least_squares_bowl(0), &cfg, &whole, false);
+        assert!(full.results.iter().all(|r| r.history.len() == 2));
+        // One worker runs every start's first stage, then the hand-overs in index order:
+        // killed inside the last start's hand-over, the other three have ended.
+        let path = dir.path().join("killed.jsonl");
+        let killed = ResultsFile::new(&path);
+        let kill_at = full.evaluations - 3;
+        let died = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            run_on(1, &least_squares_bowl(kill_at), &cfg, &killed, false)
+        }));
+        assert!(died.is_err());
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text.lines().count(), 4, "header and three starts:\n{text}");
+        let resumed = run_on(2, &least_squares_bowl(0), &cfg, &killed, true);
+        assert_eq!(resumed.results, full.results);
     }
 }

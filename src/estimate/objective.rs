@@ -43,6 +43,22 @@ pub trait Objective: Sync {
         let _ = motor;
         None
     }
+
+    /// Residuals whose squares sum to the fitting cost (not χ²: each channel's rows scaled
+    /// by √(w/N) of its weight and row count, docs/model.md, "Cost J"), where the objective
+    /// can give them (`None`: it cannot, or the simulation failed); lets a multi-start hand
+    /// a start over to Levenberg–Marquardt ([`super::multistart`]). One residual per
+    /// compared row, so the prior's share of the cost (χ²_prior/n) is its residuals
+    /// scaled by 1/√n with n their count.
+    fn cost_residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
+        let _ = motor;
+        None
+    }
+
+    /// Whether [`Objective::cost_residuals`] gives residuals (where the simulation runs).
+    fn has_cost_residuals(&self) -> bool {
+        false
+    }
 }
 
 /// What a point of the search coordinates is: a motor, or `None` where the point breaks a
@@ -140,6 +156,24 @@ impl<'a, C: Coordinates + ?Sized> Problem<'a, C> {
         let mut r = self.objective.residuals(&motor)?;
         r.extend(self.space.prior_residuals(&motor));
         Some(r)
+    }
+
+    /// The objective's cost residuals at θ ([`Objective::cost_residuals`], counted as an
+    /// evaluation), with the prior's residuals scaled by 1/√n so that the squares sum to
+    /// [`Problem::evaluate`]'s cost; `None` where θ breaks a model constraint, the
+    /// simulation fails, a residual is not finite, or the objective has none.
+    pub fn cost_residuals(&self, theta: &[f64]) -> Option<Vec<f64>> {
+        self.evaluations.fetch_add(1, Ordering::Relaxed);
+        let motor = self.space.motor(theta)?;
+        let mut r = self.objective.cost_residuals(&motor)?;
+        let scale = 1.0 / (r.len().max(1) as f64).sqrt();
+        r.extend(
+            self.space
+                .prior_residuals(&motor)
+                .into_iter()
+                .map(|v| v * scale),
+        );
+        r.iter().all(|v| v.is_finite()).then_some(r)
     }
 
     /// Evaluations so far.

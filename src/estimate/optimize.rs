@@ -206,6 +206,32 @@ impl RestartedNelderMead {
         self.status
     }
 
+    /// Ends the search at `x` (cost `fx`) when that is no worse than the best point so far
+    /// (another method, e.g. a least-squares polish, converged there): the status becomes
+    /// [`Status::Converged`]. A worse point leaves the search as it was.
+    pub fn conclude(&mut self, x: Vec<f64>, fx: f64) -> bool {
+        if fx > self.fx {
+            return false;
+        }
+        self.x = x;
+        self.fx = fx;
+        self.status = Status::Converged;
+        true
+    }
+
+    /// Moves the search to `x` (cost `fx`, lower than the best so far) with a fresh axis
+    /// simplex of edge `step` there, keeping the iteration and restart counts.
+    pub fn move_to(&mut self, x: Vec<f64>, fx: f64, step: f64) {
+        if fx >= self.fx || self.status != Status::Running {
+            return;
+        }
+        let s = &self.settings;
+        let vertices = axis_simplex(&x, step, s.layout);
+        self.solver = Some(solver(vertices, s.sd_tolerance, s.adaptive));
+        self.x = x;
+        self.fx = fx;
+    }
+
     /// Runs one stage of at most `iters` iterations, then applies the restart rule.
     pub fn advance<P>(&mut self, problem: &P, iters: u64)
     where
