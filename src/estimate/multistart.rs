@@ -9,6 +9,11 @@
 //! inside its first (possibly only) round keeps every start that had ended. `resume` reads
 //! the file back and replays the round decisions from the recorded per-round histories, so
 //! a resumed run ends exactly where an uninterrupted one would, whatever the thread count.
+//!
+//! After `handoff_after_rounds` rounds a start still running is handed over to
+//! Levenberg–Marquardt on the cost's residuals for one stage ([`Objective::cost_residuals`],
+//! where the objective has them): Nelder–Mead finds the basin, least squares its floor.
+//! The rule looks at the start alone, so it keeps the run independent of the thread count.
 
 use super::engine::Engine;
 use super::error::EstimateError;
@@ -27,7 +32,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Ending {
-    /// A restart found nothing better (or the restarts ran out).
+    /// A restart found nothing better (or the restarts ran out), or the least-squares
+    /// hand-over converged.
     Converged,
     /// The iteration budget ran out (or the optimizer failed).
     Budget,
