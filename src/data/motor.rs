@@ -238,7 +238,7 @@ impl MotorSection {
                 p.v_disp() * 1e6,
                 from(
                     self.displacement_m3.is_some(),
-                    "the reference motor AR034-11's; give displacement_m3, or every size-scaled default is AR034-11's"
+                    "the reference motor AR034-11's; give displacement_m3 (a fit of catalogue pages alone estimates it from the pages, see below)"
                 )
             ),
             format!(

@@ -174,6 +174,9 @@ pub struct Prediction {
 /// prior rather than on the data ([`prior_shares`]).
 pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
     let mut out = Vec::new();
+    if let Some(line) = displacement_from_page(fit) {
+        out.push(line);
+    }
     if let Some(st) = &fit.statistics {
         if !st.noise_reached {
             out.push(format!(
@@ -206,6 +209,33 @@ pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
         ));
     }
     out
+}
+
+/// For a fit that estimated the displacement with the rest (a page that does not print it;
+/// its prior entries follow the size): "displacement estimated from the page: 4.1 cm³
+/// [3.8, 4.5] (95 %)", with what that means for the figures.
+pub fn displacement_from_page(fit: &FitFile) -> Option<String> {
+    let st = fit.statistics.as_ref()?;
+    let follows = st.prior.iter().any(|p| p.size_exponent.is_some());
+    if !(follows && fit.estimated.iter().any(|n| n == "v_disp")) {
+        return None;
+    }
+    let v = fit.params.v_disp();
+    let ci = fit
+        .ci95
+        .iter()
+        .find(|(n, _)| n == "v_disp")
+        .map(|(_, c)| *c);
+    let text = match ci {
+        Some(c) => crate::estimate::displacement::describe_cm3(v, c),
+        None => format!(
+            "displacement estimated from the page: {:.3} cm³ (no interval: not identifiable)",
+            v * 1e6
+        ),
+    };
+    Some(format!(
+        "The {text} (the page does not print it): the bands carry its uncertainty, and every size-scaled default and prior follows it."
+    ))
 }
 
 /// For each estimated parameter with a prior (`statistics.prior`) and in the covariance:

@@ -31,6 +31,7 @@
 
 use super::PredictError;
 use crate::data::fitfile::FitFile;
+use crate::data::motor::SIZE_EXPONENTS;
 use crate::estimate::space::DEFAULT_ESTIMATED;
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamSet};
@@ -200,6 +201,19 @@ impl ParamUncertainty {
         let mut set = ParamSet::from(fit.params.clone());
         for (n, v) in self.names.iter().zip(log_values) {
             set.set(n, v.exp())?;
+        }
+        // An estimated displacement (a page that did not print it): what the fit held fixed
+        // and scales with the size follows it, as in the fit (geometric similarity).
+        if let Some(j) = self.names.iter().position(|n| n == "v_disp") {
+            let size = log_values[j].exp() / fit.params.v_disp();
+            for (name, k) in SIZE_EXPONENTS {
+                if fit.estimated.iter().any(|n| n == name) {
+                    continue;
+                }
+                if let Some(v) = fit.params.get(name) {
+                    set.set(name, v * size.powf(k))?;
+                }
+            }
         }
         let params: MotorParams = set.check()?;
         Ok(Motor::new(params, fit.effects.clone()).with_extra(&fit.extra))
