@@ -236,6 +236,9 @@ fn search_space(
             let d = match (find(&o.bounds, n), displacement) {
                 (Some(r), _) => Dimension::with_bounds(n, r.lo, r.hi)?,
                 (None, Some(e)) if n == "v_disp" => displacement_dimension(e)?,
+                (None, _) if n == "v_dead" && fixed.v_dead() > 0.0 => {
+                    dead_volume_dimension(fixed.v_dead(), fixed.v_disp() / fixed.z())?
+                }
                 (None, _) => Dimension::for_param(n)?,
             };
             if n == "v_disp" && find(&o.start_ranges, n).is_none() {
@@ -276,6 +279,20 @@ fn search_space(
         Some(_) => space.with_size_following(v_ref),
         None => space,
     })
+}
+
+/// Parameters a fit of catalogue pages alone estimates besides [`DEFAULT_ESTIMATED`] when
+/// it has the motor prior: the dead volume (the share of the supply pressure's work lost to
+/// refilling it) and the nozzles' critical pressure ratio (where the ports choke), both of
+/// which shape how the figures change with the supply pressure.
+pub const PAGE_PRIOR_EXTRA: [&str; 2] = ["v_dead", "b_crit"];
+
+/// The search dimension of the dead volume (whose default search range starts at 0, no
+/// logarithm): 1/10 to 10 times its nominal value `v0`, and below 0.9 of the filling volume
+/// `v_fill` (it must stay below it).
+fn dead_volume_dimension(v0: f64, v_fill: f64) -> Result<Dimension, SpaceError> {
+    let hi = (10.0 * v0).min(0.9 * v_fill);
+    Dimension::with_bounds("v_dead", (v0 / 10.0).min(0.5 * hi), hi)
 }
 
 /// The search dimension of a displacement estimated from a page: bounds ×/÷ 5 around the
@@ -379,7 +396,20 @@ fn catalogue_estimates(
     } else {
         Prior::none()
     };
-    let names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    if !prior.is_empty() {
+        // With the motor prior, the two parameters that shape how torque and flow change with
+        // the supply pressure are estimated too, resting on their priors where the page is
+        // silent: held at their defaults, a page's torque deficit went into the Coulomb
+        // friction, a constant that eats a growing share of the torque at lower pressures
+        // (docs/estimation.md, "What a page cannot pin").
+        names.extend(
+            PAGE_PRIOR_EXTRA
+                .iter()
+                .filter(|n| prior.term(n).is_some())
+                .map(|n| n.to_string()),
+        );
+    }
     let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
     let nothing = || {
         let before = format!(
