@@ -42,6 +42,10 @@ use rand_distr::{Distribution, StandardNormal};
 /// The normal quantile of a two-sided 95 % band.
 const Z95: f64 = 1.959_963_984_540_054;
 
+/// Of one figure's variance: the share a set of parameters carries, and each parameter's
+/// own share ([`ParamUncertainty::variance_shares`]).
+pub type VarianceShares = (f64, Vec<f64>);
+
 /// What the bands stand on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BandBasis {
@@ -257,7 +261,7 @@ impl ParamUncertainty {
         which: &[usize],
         set: &[bool],
         figures: &dyn Fn(&Motor) -> Result<Vec<f64>, PredictError>,
-    ) -> Result<Option<Vec<(f64, Vec<f64>)>>, PredictError> {
+    ) -> Result<Option<Vec<VarianceShares>>, PredictError> {
         if self.is_empty() {
             return Ok(None);
         }
