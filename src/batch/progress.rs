@@ -74,6 +74,10 @@ impl crate::task::fit::FitObserver for UnitProgress<'_> {
             crate::io::say_line(format_args!("{line}"));
         }
     }
+    fn displacement(&self, estimate: &crate::estimate::displacement::DisplacementEstimate) {
+        let line = crate::task::fit::displacement_first_line(estimate);
+        crate::io::say_line(format_args!("{line}"));
+    }
 }
 
 impl RunObserver for UnitProgress<'_> {

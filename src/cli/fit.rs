@@ -5,13 +5,15 @@ use crate::cli::Failure;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use vanefit::data::dataset::{Dataset, Kind};
+use vanefit::estimate::displacement::DisplacementEstimate;
 use vanefit::estimate::fit::{FitOutcome, FitSetup, UncertaintyMethod};
 use vanefit::estimate::multistart::{RunObserver, StartResult};
 use vanefit::model::effects::EffectSet;
 use vanefit::report::explain;
 use vanefit::report::fit as report;
 use vanefit::task::fit::{
-    fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions, ParamRange, Pinning,
+    displacement_first_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
+    ParamRange, Pinning,
 };
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -254,6 +256,9 @@ impl FitObserver for Progress {
             say!("{line}");
         }
     }
+    fn displacement(&self, estimate: &DisplacementEstimate) {
+        say!("{}", displacement_first_line(estimate));
+    }
 }
 
 impl Progress {
@@ -316,6 +321,9 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     let fitted = fitted?;
     let written = write_fit(&fitted, &args.out, !args.no_plots)?;
     print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
+    if let Some(line) = fitted.displacement_line() {
+        say!("{line}: not printed on the page, fitted with the other parameters (every size-scaled default and prior follows it)");
+    }
     if !written.plots.is_empty() {
         say!(
             "plots: {}",

@@ -291,6 +291,10 @@ fn check(dir: &Path) -> Result<(), Failure> {
             say!("    {l}");
         }
     }
+    // A page without its displacement: the size a fit starts from, estimated from the page.
+    if let Ok(Some(e)) = vanefit::task::fit::page_displacement_of(&ds) {
+        say!("    {}", vanefit::task::fit::displacement_first_line(&e));
+    }
     for (ex, refs) in ds.experiments.iter().zip(&references) {
         say!(
             "  {} {} ({} rows)",

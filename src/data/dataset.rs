@@ -529,8 +529,11 @@ impl Dataset {
     /// file per input).
     pub fn from_rig_text(dir: &Path, text: &str) -> Result<Self, DataError> {
         let rig_path = dir.join("rig.toml");
-        let rig: RigFile =
+        let mut rig: RigFile =
             toml::from_str(text).map_err(|e| locate_toml_error(&rig_path, text, &e))?;
+        rig.motor
+            .resolve_units()
+            .map_err(|e| located(&rig_path, text, Table::Motor, e.key(), e.to_string()))?;
         check_rig(&rig_path, text, &rig)?;
         let p_atm_pa = rig.conditions.p_atm_pa;
         let mut experiments = Vec::with_capacity(rig.experiment.len());
@@ -661,6 +664,11 @@ fn experiment_data(
         file: ex.name(k),
         p_supply_pa,
         p_supply_written: ex.p_supply.clone(),
+        p_supply_line: ex
+            .p_supply
+            .as_ref()
+            .and_then(|_| key_location(rig.1, Table::Experiment(k), "p_supply"))
+            .map(|l| l.0),
         load: match ex.load {
             None | Some(LoadSection::None) => Load::None,
             Some(LoadSection::ViscousBrake { c_nm_s_rad }) => Load::ViscousBrake { c_nm_s_rad },

@@ -130,6 +130,11 @@ pub struct PriorEntry {
     pub median: f64,
     /// Standard deviation of ln v.
     pub sd_ln: f64,
+    /// Where the displacement was estimated with the other parameters (a page that does not
+    /// print it): k of the size law the median follows, median·(v_disp/v̂_disp)^k with
+    /// v̂_disp the fit's displacement (`data::motor::SIZE_EXPONENTS`). Absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size_exponent: Option<f64>,
 }
 
 /// Number of starts and how many converged.
@@ -985,6 +990,7 @@ mod tests {
             weight: 1.0,
             channel_weights: Default::default(),
             p_supply_written: None,
+            p_supply_line: None,
             tolerance: None,
             figures: Vec::new(),
             recording: Recording {

@@ -18,6 +18,10 @@ pub struct MotorSection {
     pub vanes: Option<u32>,
     /// Nominal displacement z·V_fill, m³ (paper eq. 7).
     pub displacement_m3: Option<f64>,
+    /// The same in cm³, as catalogues print it (`displacement_cm3 = 3.8`); moved into
+    /// `displacement_m3` by [`MotorSection::resolve_units`] when rig.toml is read.
+    #[serde(default)]
+    displacement_cm3: Option<f64>,
     /// Expansion ratio ε = V_exp/V_fill (paper eq. 6).
     pub expansion_ratio: Option<f64>,
     /// Dead volume per compartment V_d, m³.
@@ -71,6 +75,9 @@ pub enum MotorSpecError {
     /// The resulting parameters fail their check.
     #[error("[motor] gives {0}")]
     Param(#[from] ParamError),
+    /// The displacement is given twice, in m³ and in cm³.
+    #[error("[motor] gives both displacement_cm3 and displacement_m3; give one")]
+    DisplacementTwice,
 }
 
 impl MotorSpecError {
@@ -80,6 +87,7 @@ impl MotorSpecError {
             MotorSpecError::IncompleteGeometry { .. } => "length_m",
             MotorSpecError::GeometryAndVolume { key } => key,
             MotorSpecError::BadGeometry { key, .. } => key,
+            MotorSpecError::DisplacementTwice => "displacement_cm3",
             MotorSpecError::Param(e) => match e.name.as_str() {
                 "z" => "vanes",
                 "v_disp" => "displacement_m3",
@@ -102,6 +110,19 @@ const GEOMETRY_KEYS: [&str; 6] = [
 ];
 
 impl MotorSection {
+    /// Moves a displacement given in cm³ (`displacement_cm3`) into `displacement_m3`
+    /// (× 1e-6); both given is an error. rig.toml's reader calls this before anything else
+    /// looks at the table, so the rest of vanefit sees the displacement in m³ only.
+    pub fn resolve_units(&mut self) -> Result<(), MotorSpecError> {
+        if let Some(cm3) = self.displacement_cm3.take() {
+            if self.displacement_m3.is_some() {
+                return Err(MotorSpecError::DisplacementTwice);
+            }
+            self.displacement_m3 = Some(cm3 * 1e-6);
+        }
+        Ok(())
+    }
+
     fn geometry_values(&self) -> [Option<f64>; 6] {
         [
             self.length_m,
@@ -217,7 +238,7 @@ impl MotorSection {
                 p.v_disp() * 1e6,
                 from(
                     self.displacement_m3.is_some(),
-                    "the reference motor AR034-11's; give displacement_m3, or every size-scaled default is AR034-11's"
+                    "the reference motor AR034-11's; give displacement_m3 (a fit of catalogue pages alone estimates it from the pages, see below)"
                 )
             ),
             format!(
@@ -488,6 +509,18 @@ mod tests {
         assert!(lines[4].contains("2.000×"), "{}", lines[4]);
         let lines = ar034_by_geometry().assumed().unwrap();
         assert!(lines[0].contains("geometry"), "{}", lines[0]);
+    }
+
+    #[test]
+    fn a_displacement_in_cm3_is_read_as_m3_and_not_twice() {
+        let mut m: MotorSection = toml::from_str("displacement_cm3 = 4.1").unwrap();
+        m.resolve_units().unwrap();
+        assert_eq!(m.displacement_m3, Some(4.1e-6));
+        assert!((m.nominal_params().unwrap().v_disp() - 4.1e-6).abs() < 1e-18);
+        let mut both: MotorSection =
+            toml::from_str("displacement_cm3 = 4.1\ndisplacement_m3 = 4.1e-6").unwrap();
+        let e = both.resolve_units().unwrap_err();
+        assert_eq!(e.key(), "displacement_cm3");
     }
 
     #[test]

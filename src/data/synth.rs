@@ -129,6 +129,7 @@ fn experiment_data(
     let rows = columns[0].si.len();
     ExperimentData {
         p_supply_written: None,
+        p_supply_line: None,
         tolerance: None,
         figures: Vec::new(),
         kind,

@@ -463,6 +463,7 @@ pub(crate) fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kin
 /// The fit file of an outcome (docs/formats.md, "Fit files", with identifiability and
 /// statistics).
 pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) -> FitFile {
+    let displacement_estimated = setup.space.dims.iter().any(|d| d.name == "v_disp");
     FitFile {
         dataset: dataset.to_string(),
         effects: setup.space.effects.clone(),
@@ -537,10 +538,16 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
                 .terms
                 .iter()
                 .filter(|t| setup.space.dims.iter().any(|d| d.name == t.name))
-                .map(|t| PriorEntry {
-                    parameter: t.name.clone(),
-                    median: t.median,
-                    sd_ln: t.sd_ln,
+                .map(|t| {
+                    // Stated at the fit's displacement; where it was estimated, the median
+                    // follows it (a page without one).
+                    let size = setup.space.prior.size_of(&out.params);
+                    PriorEntry {
+                        parameter: t.name.clone(),
+                        median: t.median_at_size(size),
+                        sd_ln: t.sd_ln,
+                        size_exponent: displacement_estimated.then_some(t.size_exponent),
+                    }
                 })
                 .collect(),
             prior_chi2: (!setup.space.prior.is_empty()).then_some(out.prior_chi2),

@@ -173,7 +173,16 @@ impl FitLikelihood {
         let dims = fit
             .estimated
             .iter()
-            .map(|n| Dimension::for_param(n))
+            .map(|n| {
+                Dimension::for_param(n).or_else(|e| {
+                    // A parameter whose default search range starts at 0 (the dead volume, which
+                    // page fits estimate): ×/÷ 10 about the fitted value.
+                    match fit.params.get(n).filter(|v| *v > 0.0) {
+                        Some(v) => Dimension::with_bounds(n, v / 10.0, v * 10.0),
+                        None => Err(e),
+                    }
+                })
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let estimate = fit
             .estimated

@@ -6,6 +6,7 @@
 //! of a dataset (`fit`). Progress goes to a [`RunObserver`]; nothing here prints.
 
 pub mod derivatives;
+pub mod displacement;
 pub mod engine;
 pub mod error;
 pub mod fit;

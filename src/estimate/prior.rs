@@ -20,6 +20,7 @@
 //! to the log-likelihood −χ²/2: the log-density of θ, the Jacobian of θ → ln v included.
 
 use super::space::ParamSpace;
+use crate::data::motor::SIZE_EXPONENTS;
 use crate::model::params::MotorParams;
 
 /// The normal quantile of a two-sided 95 % range.
@@ -54,6 +55,10 @@ pub struct PriorTerm {
     pub median: f64,
     /// σ of ln v.
     pub sd_ln: f64,
+    /// k of the size law the median follows when the displacement is estimated too:
+    /// v₀(V) = `median`·(V/V_ref)^k with V_ref [`Prior::size_reference_m3`]
+    /// (`data::motor::SIZE_EXPONENTS`; 0 for a dimensionless parameter).
+    pub size_exponent: f64,
 }
 
 impl PriorTerm {
@@ -65,8 +70,21 @@ impl PriorTerm {
     /// (ln v − ln v₀)/σ; a value ≤ 0 or not finite (no logarithm) gives a large finite
     /// residual, so that a cost built on it stays finite.
     pub fn residual(&self, v: f64) -> f64 {
-        if v > 0.0 && v.is_finite() {
-            (v.ln() - self.median.ln()) / self.sd_ln
+        self.residual_at_size(v, 1.0)
+    }
+
+    /// The median at a motor `size` times the reference displacement: v₀·size^k.
+    pub fn median_at_size(&self, size: f64) -> f64 {
+        self.median * size.powf(self.size_exponent)
+    }
+
+    /// (ln v − ln v₀(V))/σ for a motor `size` = V/V_ref times the displacement the median is
+    /// stated at: the prior of a motor whose displacement is itself estimated (a page that
+    /// does not print it) follows that displacement by geometric similarity. Large and finite
+    /// where v or the size has no logarithm.
+    pub fn residual_at_size(&self, v: f64, size: f64) -> f64 {
+        if v > 0.0 && v.is_finite() && size > 0.0 && size.is_finite() {
+            (v.ln() - self.median.ln() - self.size_exponent * size.ln()) / self.sd_ln
         } else {
             1e6
         }
@@ -78,6 +96,10 @@ impl PriorTerm {
 pub struct Prior {
     /// One term per parameter with a prior.
     pub terms: Vec<PriorTerm>,
+    /// The displacement V_ref, m³, at which the terms' medians are stated (`None`: the
+    /// medians are fixed). Where the displacement is estimated (`v_disp` in the space) the
+    /// medians follow it as v₀·(V/V_ref)^k; where it is fixed, V = V_ref and nothing changes.
+    pub size_reference_m3: Option<f64>,
 }
 
 impl Prior {
@@ -94,14 +116,28 @@ impl Prior {
             .iter()
             .filter_map(|(name, f)| {
                 let median = nominal.get(name).filter(|v| *v > 0.0 && v.is_finite())?;
+                let size_exponent = SIZE_EXPONENTS
+                    .iter()
+                    .find(|(n, _)| n == name)
+                    .map_or(0.0, |(_, k)| *k);
                 Some(PriorTerm {
                     name: name.to_string(),
                     median,
                     sd_ln: f.ln() / Z95,
+                    size_exponent,
                 })
             })
             .collect();
-        Self { terms }
+        Self {
+            terms,
+            size_reference_m3: Some(nominal.v_disp()),
+        }
+    }
+
+    /// V/V_ref of a motor (1 when the medians are fixed).
+    pub fn size_of(&self, params: &MotorParams) -> f64 {
+        self.size_reference_m3
+            .map_or(1.0, |v_ref| params.v_disp() / v_ref)
     }
 
     /// Whether there is no prior.
@@ -118,12 +154,13 @@ impl Prior {
     /// order: their squares sum to χ²_prior. Parameters held fixed add nothing (they do not
     /// move).
     pub fn residuals(&self, space: &ParamSpace, params: &MotorParams) -> Vec<f64> {
+        let size = self.size_of(params);
         space
             .dims
             .iter()
             .filter_map(|d| {
                 let t = self.term(&d.name)?;
-                Some(t.residual(params.get(&d.name).unwrap_or(f64::NAN)))
+                Some(t.residual_at_size(params.get(&d.name).unwrap_or(f64::NAN), size))
             })
             .collect()
     }
@@ -143,6 +180,14 @@ impl Prior {
         if theta.len() != space.len() || theta.iter().any(|t| !t.is_finite()) {
             return f64::NEG_INFINITY;
         }
+        // The size the medians follow, where the displacement is estimated too.
+        let size = space
+            .dims
+            .iter()
+            .zip(theta)
+            .find(|(d, _)| d.name == "v_disp")
+            .zip(self.size_reference_m3)
+            .map_or(1.0, |((d, t), v_ref)| d.value(*t) / v_ref);
         let mut lp = 0.0;
         for (d, t) in space.dims.iter().zip(theta) {
             let u = 1.0 / (1.0 + (-t).exp());
@@ -161,7 +206,7 @@ impl Prior {
                     } else {
                         (d.hi - d.lo) / v
                     };
-                    let z = term.residual(v);
+                    let z = term.residual_at_size(v, size);
                     lp += -0.5 * z * z - (term.sd_ln * (2.0 * std::f64::consts::PI).sqrt()).ln()
                         + (dlnv_du * du_dtheta.max(f64::MIN_POSITIVE)).ln();
                 }
@@ -171,7 +216,9 @@ impl Prior {
     }
 
     /// The prior's precision in θ (diagonal): 1/σ² · (d ln v/dθ)² for each estimated
-    /// parameter with a term, 0 for the others; the Gauss–Newton curvature of χ²_prior/2.
+    /// parameter with a term, 0 for the others; the Gauss–Newton curvature of χ²_prior/2
+    /// where the displacement is fixed (where it is estimated, the medians' dependence on it
+    /// adds off-diagonal terms, which the fit's curvature takes from the residuals instead).
     pub fn precision_theta(&self, space: &ParamSpace, theta: &[f64]) -> Vec<f64> {
         space
             .dims
@@ -246,6 +293,40 @@ mod tests {
         }
         let s = space();
         assert_eq!(prior.ln_prior(&s, &[f64::NAN, 0.0, 0.0]), f64::NEG_INFINITY);
+    }
+
+    /// Where the displacement is estimated, each median follows it by its size law: a motor
+    /// twice AR034-11's size with its ports at the scaled default costs nothing, the same
+    /// ports at the reference size cost (⅔·ln 2/σ)², and b_crit does not move.
+    #[test]
+    fn the_medians_follow_an_estimated_displacement() {
+        let nominal = MotorParams::default();
+        let prior = Prior::for_motor(&nominal);
+        let space = ParamSpace::new(
+            &["c_in1", "v_disp", "b_crit"],
+            nominal.clone(),
+            EffectSet::empty(),
+        )
+        .unwrap();
+        let scaled_c = nominal.c_in1() * 2f64.powf(2.0 / 3.0);
+        let twice = nominal
+            .with("v_disp", 7.6e-6)
+            .unwrap()
+            .with("c_in1", scaled_c)
+            .unwrap();
+        let r = prior.residuals(&space, &twice);
+        assert_eq!(r.len(), 2, "{r:?}");
+        assert!(r.iter().all(|x| x.abs() < 1e-9), "{r:?}");
+        let same_size = nominal.with("c_in1", scaled_c).unwrap();
+        let r = prior.residuals(&space, &same_size);
+        let sd = prior.term("c_in1").unwrap().sd_ln;
+        assert!((r[0] - 2.0 / 3.0 * 2f64.ln() / sd).abs() < 1e-9, "{r:?}");
+        // ln p(θ) follows the same medians: at the scaled point it beats the unscaled one.
+        let (a, b) = (
+            space.theta(&twice),
+            space.theta(&nominal.with("v_disp", 7.6e-6).unwrap()),
+        );
+        assert!(prior.ln_prior(&space, &a) > prior.ln_prior(&space, &b));
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //! strictly inside the bounds (log for positive parameters, logistic for boxed ones).
 
 use super::prior::Prior;
+use crate::data::motor::SIZE_EXPONENTS;
 use crate::model::effects::EffectSet;
 use crate::model::params::{spec, Domain, MotorParams, ParamSet};
 
@@ -39,6 +40,11 @@ pub struct ParamSpace {
     /// The prior of the estimated parameters (empty: none), added to every cost the space
     /// is searched on (`estimate::prior`).
     pub prior: Prior,
+    /// The displacement, m³, that `fixed` was scaled to, when the fixed size-dependent
+    /// parameters follow an estimated displacement (a page that does not print it): with
+    /// `v_disp` estimated at V, each fixed parameter of `data::motor::SIZE_EXPONENTS` is
+    /// its `fixed` value × (V/V_ref)^k (geometric similarity). `None`: they stay as fixed.
+    pub size_reference_m3: Option<f64>,
 }
 
 /// An error in the estimation set-up (unknown name, bad bounds).
@@ -189,7 +195,16 @@ impl ParamSpace {
             fixed,
             effects,
             prior: Prior::none(),
+            size_reference_m3: None,
         })
+    }
+
+    /// The same space with the fixed size-dependent parameters following an estimated
+    /// displacement from `v_ref_m3`, the displacement `fixed` was scaled to (see
+    /// [`ParamSpace::size_reference_m3`]).
+    pub fn with_size_following(mut self, v_ref_m3: f64) -> Self {
+        self.size_reference_m3 = Some(v_ref_m3);
+        self
     }
 
     /// The same space with a prior on its parameters (MAP instead of maximum likelihood).
@@ -217,8 +232,24 @@ impl ParamSpace {
     /// still break a cross-constraint (e.g. v_dead ≥ V_fill): that is an error to penalise.
     pub fn params(&self, theta: &[f64]) -> Result<MotorParams, crate::model::params::ParamError> {
         let mut set = ParamSet::from(self.fixed.clone());
+        let mut v_disp = None;
         for (d, t) in self.dims.iter().zip(theta) {
-            set.set(&d.name, d.value(*t))?;
+            let v = d.value(*t);
+            set.set(&d.name, v)?;
+            if d.name == "v_disp" {
+                v_disp = Some(v);
+            }
+        }
+        if let (Some(v), Some(v_ref)) = (v_disp, self.size_reference_m3) {
+            let size = v / v_ref;
+            for (name, k) in SIZE_EXPONENTS {
+                if self.dims.iter().any(|d| d.name == name) {
+                    continue;
+                }
+                if let Some(fixed) = self.fixed.get(name) {
+                    set.set(name, fixed * size.powf(k))?;
+                }
+            }
         }
         set.check()
     }
@@ -274,6 +305,41 @@ mod tests {
                 assert!(v >= d.lo && v <= d.hi);
             }
         }
+    }
+
+    /// With the displacement estimated and size following on, the fixed size-dependent
+    /// parameters scale with it by their similarity exponents; the estimated ones and the
+    /// dimensionless ones do not; without size following nothing else moves.
+    #[test]
+    fn fixed_parameters_follow_an_estimated_displacement() {
+        let base = MotorParams::default();
+        let s = ParamSpace::new(&["c_in1", "v_disp"], base.clone(), EffectSet::empty())
+            .unwrap()
+            .with_size_following(base.v_disp());
+        let at = base.with("v_disp", 2.0 * base.v_disp()).unwrap();
+        let p = s.params(&s.theta(&at)).unwrap();
+        let ratio = |n: &str| p.get(n).unwrap() / base.get(n).unwrap();
+        assert!((ratio("v_disp") - 2.0).abs() < 1e-9);
+        for (name, k) in [
+            ("v_dead", 1.0),
+            ("vol1", 1.0),
+            ("t_coulomb", 1.0),
+            ("c_ext", 2.0 / 3.0),
+            ("visc", 4.0 / 3.0),
+            ("inertia", 5.0 / 3.0),
+        ] {
+            assert!(
+                (ratio(name) - 2f64.powf(k)).abs() < 1e-9,
+                "{name}: {}",
+                ratio(name)
+            );
+        }
+        assert!((ratio("c_in1") - 1.0).abs() < 1e-9, "estimated: not scaled");
+        assert_eq!(ratio("eps"), 1.0);
+        let plain =
+            ParamSpace::new(&["c_in1", "v_disp"], base.clone(), EffectSet::empty()).unwrap();
+        let q = plain.params(&plain.theta(&at)).unwrap();
+        assert_eq!(q.v_dead(), base.v_dead());
     }
 
     #[test]

@@ -166,6 +166,54 @@ pub struct Prediction {
     /// What the fit itself warned of, repeated with every prediction made from it
     /// ([`fit_warnings`]).
     pub fit_warnings: Vec<String>,
+    /// The catalogue figures whose band rests on the motor prior rather than on the data
+    /// ([`RestsOnPrior`]); empty for a fit without a prior or without delta-method bands.
+    pub resting: Vec<RestsOnPrior>,
+}
+
+/// A predicted figure whose band rests on the prior: knowing the parameters that rest on
+/// their prior (posterior σ of ln v at least half the prior's, [`prior_shares`]) would
+/// remove more than half of its delta-method variance
+/// ([`ParamUncertainty::variance_shares`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RestsOnPrior {
+    /// Supply pressure, Pa absolute.
+    pub p_supply_pa: f64,
+    /// The figure, one of [`ROW_FIGURES`].
+    pub figure: &'static str,
+    /// The share of its variance that knowing those parameters would remove.
+    pub prior_share: f64,
+    /// Those of them that alone would remove more than 5 %, with that share, largest first.
+    pub parameters: Vec<(String, f64)>,
+}
+
+impl RestsOnPrior {
+    /// The one extra measurement that would pin the figure's largest prior-resting
+    /// parameter, in words.
+    pub fn pinned_by(&self) -> &'static str {
+        self.parameters
+            .first()
+            .map_or("a rig experiment", |(name, _)| measurement_that_pins(name))
+    }
+}
+
+/// The one extra measurement a catalogue's reader can most easily get that pins a
+/// parameter: friction and the pressure-shaping parameters separate from the air's torque
+/// only across supply pressures (the Coulomb friction is a constant, the air torque ∝ the
+/// pressure); the leaks carry all the air at stall, where no air passes through the
+/// displacement; the outlet and exhaust ports set the air at free speed, where the flow
+/// through them peaks.
+pub fn measurement_that_pins(name: &str) -> &'static str {
+    match name {
+        "t_coulomb" | "visc" | "v_dead" | "b_crit" => {
+            "the torque curve (or stall torque) at a second supply pressure"
+        }
+        "c_1e" | "c_2e" | "c_12" => "the air flow at stall (the internal leakage)",
+        "c_out2" | "c_ext" => "the air consumption at free speed",
+        "c_in1" => "the air consumption at max power",
+        "v_disp" => "the displacement (a datasheet row)",
+        _ => "a rig experiment (docs/estimation.md, \"Catalogue pages\")",
+    }
 }
 
 /// The fit's own warnings that a prediction from it inherits: a fit that does not reach
@@ -174,6 +222,9 @@ pub struct Prediction {
 /// prior rather than on the data ([`prior_shares`]).
 pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
     let mut out = Vec::new();
+    if let Some(line) = displacement_from_page(fit) {
+        out.push(line);
+    }
     if let Some(st) = &fit.statistics {
         if !st.noise_reached {
             out.push(format!(
@@ -206,6 +257,33 @@ pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
         ));
     }
     out
+}
+
+/// For a fit that estimated the displacement with the rest (a page that does not print it;
+/// its prior entries follow the size): "displacement estimated from the page: 4.1 cm³
+/// [3.8, 4.5] (95 %)", with what that means for the figures.
+pub fn displacement_from_page(fit: &FitFile) -> Option<String> {
+    let st = fit.statistics.as_ref()?;
+    let follows = st.prior.iter().any(|p| p.size_exponent.is_some());
+    if !(follows && fit.estimated.iter().any(|n| n == "v_disp")) {
+        return None;
+    }
+    let v = fit.params.v_disp();
+    let ci = fit
+        .ci95
+        .iter()
+        .find(|(n, _)| n == "v_disp")
+        .map(|(_, c)| *c);
+    let text = match ci {
+        Some(c) => crate::estimate::displacement::describe_cm3(v, c),
+        None => format!(
+            "displacement estimated from the page: {:.3} cm³ (no interval: not identifiable)",
+            v * 1e6
+        ),
+    };
+    Some(format!(
+        "The {text} (the page does not print it): the bands carry its uncertainty, and every size-scaled default and prior follows it."
+    ))
 }
 
 /// For each estimated parameter with a prior (`statistics.prior`) and in the covariance:
@@ -274,6 +352,11 @@ pub fn predict_with(
         BandChoice::Delta => false,
         BandChoice::Samples => true,
         BandChoice::Auto => unreliable.is_some() && request.posterior.is_some(),
+    };
+    let resting = if use_samples {
+        Vec::new()
+    } else {
+        resting_on_prior(fit, &unc, &centre, options, &figures)?
     };
     let (bands, sampling) = match (use_samples, request.posterior) {
         (false, _) => (unc.delta_bands(fit, &shown, &figures)?, None),
@@ -350,7 +433,59 @@ pub fn predict_with(
         discovered_terms: fit.extra.len(),
         bands: made,
         fit_warnings: fit_warnings(fit),
+        resting,
     })
+}
+
+/// The catalogue figures (each pressure's [`ROW_FIGURES`]) whose delta-method variance
+/// comes for more than half from parameters resting on their prior ([`RestsOnPrior`]).
+fn resting_on_prior(
+    fit: &FitFile,
+    unc: &ParamUncertainty,
+    centre: &Outcome,
+    options: &PredictOptions,
+    figures: &dyn Fn(&Motor) -> Result<Vec<f64>, PredictError>,
+) -> Result<Vec<RestsOnPrior>, PredictError> {
+    let on_prior: Vec<String> = prior_shares(fit)
+        .into_iter()
+        .filter(|(_, r)| *r >= 0.5)
+        .map(|(n, _)| n)
+        .collect();
+    if on_prior.is_empty() {
+        return Ok(Vec::new());
+    }
+    let stride = N_ROW + N_FACTORS + N_CURVE * options.curve_points;
+    let n = stride * centre.rows.len();
+    let which: Vec<usize> = (0..centre.rows.len())
+        .flat_map(|p| (0..N_ROW).map(move |k| p * stride + k))
+        .collect();
+    let set: Vec<bool> = unc.names.iter().map(|n| on_prior.contains(n)).collect();
+    let Some(shares) = unc.variance_shares(fit, n, &which, &set, figures)? else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    for (w, (prior_share, each)) in which.iter().zip(&shares) {
+        let prior_share = *prior_share;
+        if prior_share <= 0.5 {
+            continue;
+        }
+        let mut parameters: Vec<(String, f64)> = unc
+            .names
+            .iter()
+            .zip(each)
+            .zip(&set)
+            .filter(|((_, share), on)| **on && **share > 0.05)
+            .map(|((name, share), _)| (name.clone(), *share))
+            .collect();
+        parameters.sort_by(|a, b| b.1.total_cmp(&a.1));
+        out.push(RestsOnPrior {
+            p_supply_pa: centre.rows[w / stride].p_supply_pa,
+            figure: ROW_FIGURES[w % stride],
+            prior_share,
+            parameters,
+        });
+    }
+    Ok(out)
 }
 
 /// The parameters of the fit's model (base and switched-on effects) that were not

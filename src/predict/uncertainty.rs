@@ -31,6 +31,7 @@
 
 use super::PredictError;
 use crate::data::fitfile::FitFile;
+use crate::data::motor::SIZE_EXPONENTS;
 use crate::estimate::space::DEFAULT_ESTIMATED;
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamSet};
@@ -40,6 +41,10 @@ use rand_distr::{Distribution, StandardNormal};
 
 /// The normal quantile of a two-sided 95 % band.
 const Z95: f64 = 1.959_963_984_540_054;
+
+/// Of one figure's variance: the share a set of parameters carries, and each parameter's
+/// own share ([`ParamUncertainty::variance_shares`]).
+pub type VarianceShares = (f64, Vec<f64>);
 
 /// What the bands stand on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -201,6 +206,19 @@ impl ParamUncertainty {
         for (n, v) in self.names.iter().zip(log_values) {
             set.set(n, v.exp())?;
         }
+        // An estimated displacement (a page that did not print it): what the fit held fixed
+        // and scales with the size follows it, as in the fit (geometric similarity).
+        if let Some(j) = self.names.iter().position(|n| n == "v_disp") {
+            let size = log_values[j].exp() / fit.params.v_disp();
+            for (name, k) in SIZE_EXPONENTS {
+                if fit.estimated.iter().any(|n| n == name) {
+                    continue;
+                }
+                if let Some(v) = fit.params.get(name) {
+                    set.set(name, v * size.powf(k))?;
+                }
+            }
+        }
         let params: MotorParams = set.check()?;
         Ok(Motor::new(params, fit.effects.clone()).with_extra(&fit.extra))
     }
@@ -217,8 +235,80 @@ impl ParamUncertainty {
         if self.is_empty() {
             return Ok(None);
         }
+        let jac = self.jacobian(fit, center.len(), figures)?;
+        let bands = (0..center.len())
+            .map(|i| {
+                let g = DVector::from_fn(self.len(), |j, _| jac[(i, j)]);
+                let var = (g.transpose() * &self.cov * &g)[(0, 0)].max(0.0);
+                let half = Z95 * var.sqrt();
+                [center[i] - half, center[i] + half]
+            })
+            .collect();
+        Ok(Some(bands))
+    }
+
+    /// For each figure of `which` (indices into `figures(motor)`, `n` values in all): how
+    /// much of its delta-method variance Var y = gᵀ·C·g knowing parameters exactly would
+    /// remove. For the set P of parameters marked in `set` it is 1 − Var(y | θ_P)/Var y =
+    /// c_Pᵀ·C_PP⁻¹·c_P / Var y with c = C·g (the covariances of y with each ln θ_j); for each
+    /// parameter alone, c_j²/(C_jj·Var y), its squared correlation with the figure. Both lie
+    /// in [0, 1]. Returns (the set's share, each parameter's share) per figure; `None`
+    /// without covered parameters. A figure of zero variance gets shares 0.
+    pub fn variance_shares(
+        &self,
+        fit: &FitFile,
+        n: usize,
+        which: &[usize],
+        set: &[bool],
+        figures: &dyn Fn(&Motor) -> Result<Vec<f64>, PredictError>,
+    ) -> Result<Option<Vec<VarianceShares>>, PredictError> {
+        if self.is_empty() {
+            return Ok(None);
+        }
+        let jac = self.jacobian(fit, n, figures)?;
+        let in_set: Vec<usize> = (0..self.len())
+            .filter(|j| set.get(*j) == Some(&true))
+            .collect();
+        let c_pp = DMatrix::from_fn(in_set.len(), in_set.len(), |a, b| {
+            self.cov[(in_set[a], in_set[b])]
+        });
+        let c_pp_inv = c_pp.clone().pseudo_inverse(1e-300).unwrap_or(c_pp * 0.0);
+        let shares = which
+            .iter()
+            .map(|&i| {
+                let g = DVector::from_fn(self.len(), |j, _| jac[(i, j)]);
+                let c = &self.cov * &g;
+                let var = g.dot(&c);
+                if var.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                    return (0.0, vec![0.0; self.len()]);
+                }
+                let c_p = DVector::from_fn(in_set.len(), |a, _| c[in_set[a]]);
+                let set_share = (c_p.dot(&(&c_pp_inv * &c_p)) / var).clamp(0.0, 1.0);
+                let each = (0..self.len())
+                    .map(|j| {
+                        let cjj = self.cov[(j, j)];
+                        if cjj > 0.0 {
+                            (c[j] * c[j] / (cjj * var)).clamp(0.0, 1.0)
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect();
+                (set_share, each)
+            })
+            .collect();
+        Ok(Some(shares))
+    }
+
+    /// ∂y_i/∂ln θ_j of the `n` figures by central differences (module documentation).
+    fn jacobian(
+        &self,
+        fit: &FitFile,
+        n: usize,
+        figures: &dyn Fn(&Motor) -> Result<Vec<f64>, PredictError>,
+    ) -> Result<DMatrix<f64>, PredictError> {
         let k = self.len();
-        let mut jac = DMatrix::<f64>::zeros(center.len(), k);
+        let mut jac = DMatrix::<f64>::zeros(n, k);
         for j in 0..k {
             let h = self.sd[j].clamp(1e-4, 0.05);
             let mut at = self.log_values.clone();
@@ -226,19 +316,11 @@ impl ParamUncertainty {
             let plus = figures(&self.motor_at(fit, &at)?)?;
             at[j] = self.log_values[j] - h;
             let minus = figures(&self.motor_at(fit, &at)?)?;
-            for (i, (a, b)) in plus.iter().zip(&minus).enumerate() {
+            for (i, (a, b)) in plus.iter().zip(&minus).enumerate().take(n) {
                 jac[(i, j)] = (a - b) / (2.0 * h);
             }
         }
-        let bands = (0..center.len())
-            .map(|i| {
-                let g = DVector::from_fn(k, |j, _| jac[(i, j)]);
-                let var = (g.transpose() * &self.cov * &g)[(0, 0)].max(0.0);
-                let half = Z95 * var.sqrt();
-                [center[i] - half, center[i] + half]
-            })
-            .collect();
-        Ok(Some(bands))
+        Ok(jac)
     }
 
     /// Monte-Carlo 95 % bands of the same figures: `samples` draws of ln θ ~ N(ln θ̂, C)
@@ -371,6 +453,30 @@ mod tests {
         assert!((u.sd[0] - 0.02 / Z95).abs() < 1e-12);
         assert_eq!(u.names.len(), 2 + u.spread.len());
         assert!(!u.spread.iter().any(|n| n == "c_in1" || n == "c_ext"));
+    }
+
+    /// On y = ln c_in1 + 2 ln c_ext with independent parameters, knowing c_ext removes its
+    /// share 4σ₂²/(σ₁² + 4σ₂²) of the variance, alone or as the set; a set of both removes
+    /// all of it.
+    #[test]
+    fn variance_shares_are_what_knowing_a_parameter_removes() {
+        let f = fit_file();
+        let u = ParamUncertainty::of(&f, None);
+        let y = |m: &Motor| Ok(vec![m.params.c_in1().ln() + 2.0 * m.params.c_ext().ln()]);
+        let (s1, s2) = (0.02 / Z95, 0.04 / Z95);
+        let want = 4.0 * s2 * s2 / (s1 * s1 + 4.0 * s2 * s2);
+        let shares = u
+            .variance_shares(&f, 1, &[0], &[false, true], &y)
+            .unwrap()
+            .unwrap();
+        let (set, each) = &shares[0];
+        assert!((set - want).abs() < 1e-6, "{set} vs {want}");
+        assert!((each[1] - want).abs() < 1e-6 && (each[0] - (1.0 - want)).abs() < 1e-6);
+        let all = u
+            .variance_shares(&f, 1, &[0], &[true, true], &y)
+            .unwrap()
+            .unwrap();
+        assert!((all[0].0 - 1.0).abs() < 1e-6, "{:?}", all[0]);
     }
 
     #[test]

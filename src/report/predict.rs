@@ -371,6 +371,7 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
         );
     }
     notes.extend(pr.fit_warnings.iter().cloned());
+    notes.extend(resting_notes(pr, display));
     notes.extend(band_notes(pr));
     let sampled: &[String] = pr.bands.sampling.as_ref().map_or(&[], |s| &s.names);
     for (name, why) in &pr.uncertainty.uncovered {
@@ -439,6 +440,63 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
     });
     notes.push(format!("Atmosphere {:.0} Pa.", o.p_atm_pa));
     notes
+}
+
+/// One note per pressure naming the figures whose band rests on the motor prior, the
+/// share of the band's variance that knowing the prior-resting parameters would remove,
+/// the largest of them alone, and the measurements that would pin them: "At 3 bar g, 3
+/// bands rest on the motor prior more than on the data: stall torque 81 % (t_coulomb 74 %),
+/// … One more measurement would pin them: the torque curve (or stall torque) at a second
+/// supply pressure."
+pub fn resting_notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
+    let mut out = Vec::new();
+    for p in &pr.pressures {
+        let here: Vec<_> = pr
+            .resting
+            .iter()
+            .filter(|r| r.p_supply_pa == p.p_supply_pa)
+            .collect();
+        if here.is_empty() {
+            continue;
+        }
+        let figures: Vec<String> = here
+            .iter()
+            .map(|r| {
+                let on: Vec<String> = r
+                    .parameters
+                    .iter()
+                    .take(2)
+                    .map(|(n, s)| format!("{n} {:.0} %", 100.0 * s))
+                    .collect();
+                let on = if on.is_empty() {
+                    "several, none alone above 5 %".to_string()
+                } else {
+                    on.join(", ")
+                };
+                format!(
+                    "{} {:.0} % ({on})",
+                    r.figure.replace('_', " "),
+                    100.0 * r.prior_share
+                )
+            })
+            .collect();
+        let mut pins: Vec<&str> = here
+            .iter()
+            .filter(|r| !r.parameters.is_empty())
+            .map(|r| r.pinned_by())
+            .collect();
+        pins.sort_unstable();
+        pins.dedup();
+        out.push(format!(
+            "At {} {}, {} band(s) rest on the motor prior more than on the data (the share of each band's variance that knowing the parameters resting on their prior would remove; in brackets the largest of them alone): {}. What would pin them: {}.",
+            display.text(p.p_supply_pa),
+            display.label(),
+            here.len(),
+            figures.join(", "),
+            pins.join("; ")
+        ));
+    }
+    out
 }
 
 /// The notes on which method made the bands (every band of a prediction is made by one

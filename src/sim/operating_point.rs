@@ -387,6 +387,7 @@ mod tests {
             weight: 1.0,
             channel_weights: Default::default(),
             p_supply_written: None,
+            p_supply_line: None,
             tolerance: None,
             figures: Vec::new(),
             recording: Recording {

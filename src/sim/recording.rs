@@ -181,6 +181,8 @@ pub struct ExperimentData {
     pub p_supply_pa: Option<f64>,
     /// The supply pressure as written (`p_supply = "90 psi(g)"`), for people.
     pub p_supply_written: Option<String>,
+    /// The rig.toml line of `p_supply`, for warnings about how it was read.
+    pub p_supply_line: Option<u64>,
     /// Load on the shaft.
     pub load: Load,
     /// Weight of the whole experiment in the cost (default 1).

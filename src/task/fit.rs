@@ -6,6 +6,9 @@
 use super::OptionError;
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::data::fitfile::FitFile;
+use crate::estimate::displacement::{
+    describe_cm3, displacement_missing, from_page as displacement_from_page, DisplacementEstimate,
+};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::fit::{
@@ -201,7 +204,11 @@ pub enum FitError {
 
 /// The search space of a fit: estimated names (default set plus every parameter of the
 /// effects switched on), bounds and start ranges, around the dataset's nominal motor.
-fn search_space(ds: &Dataset, o: &FitOptions) -> Result<ParamSpace, FitError> {
+fn search_space(
+    ds: &Dataset,
+    o: &FitOptions,
+    displacement: Option<&DisplacementEstimate>,
+) -> Result<ParamSpace, FitError> {
     let fixed = ds.nominal_params()?;
     let mut names: Vec<String> = match &o.estimate {
         Some(list) => list
@@ -226,10 +233,19 @@ fn search_space(ds: &Dataset, o: &FitOptions) -> Result<ParamSpace, FitError> {
     let dims = names
         .iter()
         .map(|n| {
-            let d = match find(&o.bounds, n) {
-                Some(r) => Dimension::with_bounds(n, r.lo, r.hi)?,
-                None => Dimension::for_param(n)?,
+            let d = match (find(&o.bounds, n), displacement) {
+                (Some(r), _) => Dimension::with_bounds(n, r.lo, r.hi)?,
+                (None, Some(e)) if n == "v_disp" => displacement_dimension(e)?,
+                (None, _) if n == "v_dead" && fixed.v_dead() > 0.0 => {
+                    dead_volume_dimension(fixed.v_dead(), fixed.v_disp() / fixed.z())?
+                }
+                (None, _) => Dimension::for_param(n)?,
             };
+            if n == "v_disp" && find(&o.start_ranges, n).is_none() {
+                if let Some(e) = displacement {
+                    return d.with_start_range(e.ci95_m3[0], e.ci95_m3[1]);
+                }
+            }
             match find(&o.start_ranges, n) {
                 Some(r) => d.with_start_range(r.lo, r.hi),
                 None => {
@@ -256,7 +272,45 @@ fn search_space(ds: &Dataset, o: &FitOptions) -> Result<ParamSpace, FitError> {
     } else {
         Prior::none()
     };
-    Ok(ParamSpace::from_dims(dims, fixed, o.effects.clone())?.with_prior(prior))
+    let v_ref = fixed.v_disp();
+    let space = ParamSpace::from_dims(dims, fixed, o.effects.clone())?.with_prior(prior);
+    // A page without a displacement: what is fixed follows the estimated one (similarity).
+    Ok(match displacement {
+        Some(_) => space.with_size_following(v_ref),
+        None => space,
+    })
+}
+
+/// Parameters a fit of catalogue pages alone estimates besides [`DEFAULT_ESTIMATED`] when
+/// it has the motor prior: the dead volume (the share of the supply pressure's work lost to
+/// refilling it) and the nozzles' critical pressure ratio (where the ports choke), both of
+/// which shape how the figures change with the supply pressure.
+pub const PAGE_PRIOR_EXTRA: [&str; 2] = ["v_dead", "b_crit"];
+
+/// The search dimension of the dead volume (whose default search range starts at 0, no
+/// logarithm): 1/10 to 10 times its nominal value `v0`, and below 0.9 of the filling volume
+/// `v_fill` (it must stay below it).
+fn dead_volume_dimension(v0: f64, v_fill: f64) -> Result<Dimension, SpaceError> {
+    let hi = (10.0 * v0).min(0.9 * v_fill);
+    Dimension::with_bounds("v_dead", (v0 / 10.0).min(0.5 * hi), hi)
+}
+
+/// The search dimension of a displacement estimated from a page: bounds ×/÷ 5 around the
+/// page's estimate (wider where its interval is), within the parameter's own domain.
+fn displacement_dimension(e: &DisplacementEstimate) -> Result<Dimension, SpaceError> {
+    let (domain_lo, domain_hi) = spec("v_disp").map_or((1e-8, 1e-2), |s| s.search);
+    let lo = (e.v_disp_m3 / 5.0).min(e.ci95_m3[0] / 2.0).max(domain_lo);
+    let hi = (e.v_disp_m3 * 5.0).max(e.ci95_m3[1] * 2.0).min(domain_hi);
+    Dimension::with_bounds("v_disp", lo, hi)
+}
+
+/// For a dataset of catalogue pages only whose `[motor]` gives neither a displacement nor
+/// a geometry: the displacement estimated from the pages (`estimate::displacement`).
+fn page_displacement(ds: &Dataset, data: &FitData) -> Option<DisplacementEstimate> {
+    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
+    (catalogue_only && displacement_missing(&ds.motor))
+        .then(|| displacement_from_page(data, &ds.motor))
+        .flatten()
 }
 
 /// Where the run's side files go: `<out without .json>.<suffix>`.
@@ -327,8 +381,12 @@ fn catalogue_estimates(
     data: &FitData,
     o: &FitOptions,
     observer: &dyn FitObserver,
+    displacement: Option<&DisplacementEstimate>,
 ) -> Result<FitOptions, FitError> {
     let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
+    if let Some(e) = displacement {
+        observer.displacement(e);
+    }
     if o.estimate.is_some() || !catalogue_only {
         return Ok(o.clone());
     }
@@ -338,7 +396,20 @@ fn catalogue_estimates(
     } else {
         Prior::none()
     };
-    let names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    if !prior.is_empty() {
+        // With the motor prior, the two parameters that shape how torque and flow change with
+        // the supply pressure are estimated too, resting on their priors where the page is
+        // silent: held at their defaults, a page's torque deficit went into the Coulomb
+        // friction, a constant that eats a growing share of the torque at lower pressures
+        // (docs/estimation.md, "What a page cannot pin").
+        names.extend(
+            PAGE_PRIOR_EXTRA
+                .iter()
+                .filter(|n| prior.term(n).is_some())
+                .map(|n| n.to_string()),
+        );
+    }
     let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
     let nothing = || {
         let before = format!(
@@ -374,10 +445,35 @@ fn catalogue_estimates(
     if chosen.is_empty() {
         return Err(nothing());
     }
+    let mut chosen = chosen;
+    if displacement.is_some() {
+        // Not printed: the displacement is estimated with the rest, from the page.
+        chosen.push("v_disp".to_string());
+    }
     Ok(FitOptions {
         estimate: Some(chosen),
         ..o.clone()
     })
+}
+
+/// The first estimate of a page's displacement as `fit` and `check` print it.
+pub fn displacement_first_line(estimate: &DisplacementEstimate) -> String {
+    format!(
+        "{}, by similarity with AR034-11 (torque per supply pressure, air per revolution): the page does not print it, so the fit estimates it with the other parameters",
+        estimate.describe()
+    )
+}
+
+/// For `vanefit check`: the displacement of a dataset of catalogue pages only whose
+/// `[motor]` gives neither a displacement nor a geometry, estimated from the pages
+/// (`None` otherwise, or where no displacement gives a motor the pages can be simulated at).
+pub fn page_displacement_of(ds: &Dataset) -> Result<Option<DisplacementEstimate>, FitError> {
+    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
+    if !(catalogue_only && displacement_missing(&ds.motor)) {
+        return Ok(None);
+    }
+    let data = FitData::new(ds, CostOptions::default())?;
+    Ok(page_displacement(ds, &data))
 }
 
 /// What a fit reports while it runs: the multi-start's events ([`RunObserver`], which
@@ -388,6 +484,12 @@ pub trait FitObserver: RunObserver {
     /// which a parameter counts as pinned and is estimated).
     fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
         let _ = (limit_pct, rows);
+    }
+
+    /// A page that does not print the displacement: its estimate from the page by
+    /// similarity, before the fit estimates it with the other parameters.
+    fn displacement(&self, estimate: &DisplacementEstimate) {
+        let _ = estimate;
     }
 }
 
@@ -403,6 +505,9 @@ impl FitObserver for Noted<'_> {
     fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
         *self.pinning.lock().unwrap_or_else(|p| p.into_inner()) = rows.to_vec();
         self.inner.pinning(limit_pct, rows);
+    }
+    fn displacement(&self, estimate: &DisplacementEstimate) {
+        self.inner.displacement(estimate);
     }
 }
 
@@ -426,6 +531,26 @@ pub struct Fit {
     /// For a dataset of catalogue pages only: what the catalogue pins down (empty
     /// otherwise).
     pub pinning: Vec<Pinning>,
+    /// For pages that do not print the displacement: its first estimate from the pages
+    /// (the fit then estimates `v_disp` with the rest; its interval is the fit file's).
+    pub displacement: Option<DisplacementEstimate>,
+}
+
+impl Fit {
+    /// For pages that do not print the displacement: the fit's estimate and 95 % interval
+    /// in words ("displacement estimated from the page: 4.1 cm³ [3.8, 4.5] (95 %)"; the
+    /// interval is the page estimate's where the fit gives none).
+    pub fn displacement_line(&self) -> Option<String> {
+        let first = self.displacement.as_ref()?;
+        let v = self.outcome.params.v_disp();
+        let ci = self
+            .file
+            .ci95
+            .iter()
+            .find(|(n, _)| n == "v_disp")
+            .map_or(first.ci95_m3, |(_, c)| *c);
+        Some(describe_cm3(v, ci))
+    }
 }
 
 /// Loads the dataset at `dataset` and fits it on a thread pool of its own (the catalogue's
@@ -457,13 +582,25 @@ pub(crate) fn fit_dataset<O: FitObserver>(
     observer: &O,
 ) -> Result<Fit, FitError> {
     let data = FitData::new(&ds, CostOptions::default())?;
+    let mut ds = ds;
+    let displacement = page_displacement(&ds, &data);
+    if let Some(e) = &displacement {
+        // Every default and prior is scaled to the page's size, as if it had printed it.
+        ds.motor.displacement_m3 = Some(e.v_disp_m3);
+    }
     let pinning = std::sync::Mutex::new(Vec::new());
     let noted = Noted {
         inner: observer,
         pinning: &pinning,
     };
-    let o = &catalogue_estimates(&ds, &data, settings.options(), &noted)?;
-    let space = search_space(&ds, o)?;
+    let o = &catalogue_estimates(
+        &ds,
+        &data,
+        settings.options(),
+        &noted,
+        displacement.as_ref(),
+    )?;
+    let space = search_space(&ds, o, displacement.as_ref())?;
     let setup = FitSetup {
         space,
         multistart: MultiStartConfig {
@@ -487,6 +624,7 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         file,
         seed: o.seed,
         pinning: pinning.into_inner().unwrap_or_else(|p| p.into_inner()),
+        displacement,
     })
 }
 

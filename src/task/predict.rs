@@ -360,21 +360,34 @@ pub fn predict_observed(
 /// a Gaussian with no Jacobian term. `None` for a fit made without priors.
 fn motor_log_prior(fit: &FitFile, names: &[String]) -> Option<impl Fn(&[f64]) -> f64 + Sync> {
     let entries = &fit.statistics.as_ref()?.prior;
-    let terms: Vec<(usize, f64, f64)> = names
+    let terms: Vec<(usize, f64, f64, f64)> = names
         .iter()
         .enumerate()
         .filter_map(|(i, n)| {
             let e = entries.iter().find(|e| e.parameter == *n)?;
-            (e.median > 0.0 && e.sd_ln > 0.0).then(|| (i, e.median.ln(), e.sd_ln))
+            let k = e.size_exponent.unwrap_or(0.0);
+            (e.median > 0.0 && e.sd_ln > 0.0).then(|| (i, e.median.ln(), e.sd_ln, k))
         })
         .collect();
+    // Where the displacement was estimated too, the medians follow it (size exponent k):
+    // ln v₀ = ln median + k·ln(V/V̂).
+    let size_index = names.iter().position(|n| n == "v_disp");
+    let ln_v_hat = fit.params.v_disp().ln();
     (!terms.is_empty()).then_some(move |values: &[f64]| {
+        let ln_size = size_index.map_or(0.0, |j| {
+            if values[j] > 0.0 {
+                values[j].ln() - ln_v_hat
+            } else {
+                f64::NAN
+            }
+        });
         terms
             .iter()
-            .map(|&(i, mu, sd)| {
+            .map(|&(i, mu, sd, k)| {
                 let v = values[i];
-                if v > 0.0 {
-                    -0.5 * ((v.ln() - mu) / sd).powi(2)
+                let z = (v.ln() - mu - k * ln_size) / sd;
+                if v > 0.0 && z.is_finite() {
+                    -0.5 * z * z
                 } else {
                     f64::NEG_INFINITY
                 }

@@ -69,6 +69,10 @@ struct Motor {
     factors: Vec<[Check; 4]>,
     /// The fit said it did not reach the noise.
     noise_not_reached: bool,
+    /// What `vanefit fit` printed.
+    fit_stdout: String,
+    /// The fit's displacement, m³, and its 95 % interval if it has one.
+    v_disp_fit: (f64, Option<[f64; 2]>),
 }
 
 /// Why a motor was not evaluated.
@@ -138,8 +142,22 @@ fn banded(
 /// Prints, fits and predicts the page of motor `seed` in `dir`; `starts` overrides the fit's
 /// number of starts (`None`: vanefit's default).
 fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failure> {
+    evaluate_styled(seed, dir, starts, None)
+}
+
+/// [`evaluate`] with the page's displacement printed or not as `displacement` says (`None`:
+/// as the page style drew it).
+fn evaluate_styled(
+    seed: u64,
+    dir: &Path,
+    starts: Option<usize>,
+    displacement: Option<bool>,
+) -> Result<Motor, Failure> {
     let motor = random_motor(seed, &SPREAD);
-    let style = page_style(seed);
+    let mut style = page_style(seed);
+    if let Some(d) = displacement {
+        style.displacement = d;
+    }
     let page_dir = dir.join("page");
     std::fs::create_dir_all(&page_dir).map_err(|e| e.to_string())?;
     let page = print_page(&page_dir, &motor, &style).map_err(|e| format!("twin: {e}"))?;
@@ -160,6 +178,9 @@ fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failu
     if let Some(s) = &starts_s {
         args.extend(["--starts", s]);
     }
+    // PAGE_FIT_ARGS adds options to fit (e.g. "--priors none"); default none.
+    let fit_extra = std::env::var("PAGE_FIT_ARGS").unwrap_or_default();
+    args.extend(fit_extra.split_whitespace());
     let fit_out = vanefit(&args).map_err(|(code, e)| match code {
         Some(1) => Failure::Refused(e),
         _ => Failure::Failed(e),
@@ -219,8 +240,11 @@ fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failu
         }
         factor_checks.push(g);
     }
+    let v_disp_fit = fit_displacement(&fit)?;
     Ok(Motor {
         seed,
+        fit_stdout: fit_out.clone(),
+        v_disp_fit,
         v_disp_cm3: page.motor.v_disp * 1e6,
         displacement_printed: style.displacement,
         supply: style.supply.0,
@@ -228,6 +252,21 @@ fn evaluate(seed: u64, dir: &Path, starts: Option<usize>) -> Result<Motor, Failu
         factors: factor_checks,
         noise_not_reached: fit_out.contains("NOT reach"),
     })
+}
+
+/// The displacement of a fit file, m³, and its 95 % interval where it has one.
+fn fit_displacement(fit: &Path) -> Result<(f64, Option<[f64; 2]>), String> {
+    let text = std::fs::read_to_string(fit).map_err(|e| e.to_string())?;
+    let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    let p = &json["parameters"]["v_disp"];
+    let value = p["value"]
+        .as_f64()
+        .or_else(|| p.as_f64())
+        .ok_or("no v_disp in the fit file")?;
+    let ci = p["ci95"]
+        .as_array()
+        .and_then(|c| Some([c.first()?.as_f64()?, c.get(1)?.as_f64()?]));
+    Ok((value, ci))
 }
 
 /// Every motor of `seeds`, in parallel (each motor's work depends on its seed only, so the
@@ -413,6 +452,10 @@ fn study(seeds: Vec<u64>, starts: Option<usize>) -> Study {
             m.figures[3][1].truth,
             m.figures[3][4].truth,
         );
+        // PAGE_SHOW_MOTOR=1 prints the twin's motor (its true parameters) too.
+        if std::env::var_os("PAGE_SHOW_MOTOR").is_some() {
+            println!("  {:?}", random_motor(m.seed, &SPREAD));
+        }
     }
     s
 }
@@ -487,14 +530,78 @@ fn pages_of_random_motors_fit_and_predict_end_to_end() {
         };
         assert_eq!(bits(a), bits(b));
     }
-    // Loose bound that holds before the page fixes (main measured a worst error of 19 %
-    // over these motors): a page that prints its displacement predicts every figure at
-    // 3–7 bar g within a factor 2. To be tightened to the targets (≥ 90 % coverage, ≤ 10 %
-    // median half-width, ≤ 10 % worst error) once priors and sample-based bands are in.
-    for m in s.ok.iter().filter(|m| m.displacement_printed) {
+    // Bounds from what these six motors give with the page fixes (60-motor table: figure
+    // bands 99 %, factor bands 97 %, median half-width 8.5 %; these six: every band holds,
+    // worst errors 2–10 %), with a margin for the 8 starts: every figure at 3–7 bar g within
+    // 15 %, at least 90 % of the figure and of the factor bands hold the truth, the median
+    // figure band is at most ±12 % wide. (Before: worst error 19 % and bands of 83–95 %.)
+    for m in &s.ok {
         let e = stats(m.figures.iter().flatten()).worst_error;
-        assert!(e.abs() < 1.0, "motor {}: worst error {e}", m.seed);
+        assert!(e.abs() < 0.15, "motor {}: worst error {e}", m.seed);
     }
+    let figs = stats(s.ok.iter().flat_map(|m| m.figures.iter().flatten()));
+    let facs = stats(s.ok.iter().flat_map(|m| m.factors.iter().flatten()));
+    for (what, st) in [("figure", figs), ("factor", facs)] {
+        assert!(
+            st.held * 10 >= st.total * 9,
+            "{what} bands: {}/{} hold the truth",
+            st.held,
+            st.total
+        );
+    }
+    assert!(figs.median_half_width <= 0.12, "{figs:?}");
+}
+
+#[test]
+fn pages_without_their_displacement_are_sized_from_the_page() {
+    // Motors 0–3 (3.6 to 8.9 cm³), their pages printed without the displacement: `fit`
+    // estimates it from the page with the other parameters and says so, and the estimate
+    // and the predictions hold as on the page that prints it (before, such a page was fitted
+    // as the 3.8 cm³ reference motor: figures off by up to a factor of 7 over the 60-motor
+    // table).
+    let tmp = tempfile::tempdir().unwrap();
+    let results: Vec<(u64, Result<Motor, Failure>)> = (0..4u64)
+        .into_par_iter()
+        .map(|seed| {
+            let dir = tmp.path().join(format!("m{seed}"));
+            (seed, evaluate_styled(seed, &dir, Some(8), Some(false)))
+        })
+        .collect();
+    let mut held = 0;
+    for (seed, r) in results {
+        let m = r.unwrap_or_else(|e| panic!("motor {seed}: {e:?}"));
+        assert!(
+            m.fit_stdout
+                .contains("displacement estimated from the page:"),
+            "motor {seed}: {}",
+            m.fit_stdout
+        );
+        let truth = m.v_disp_cm3 * 1e-6;
+        let (v, ci) = m.v_disp_fit;
+        assert!(
+            (v / truth - 1.0).abs() < 0.15,
+            "motor {seed}: displacement {v:e} m³, truth {truth:e}"
+        );
+        held += usize::from(ci.is_some_and(|[lo, hi]| lo <= truth && truth <= hi));
+        let worst = stats(m.figures.iter().flatten()).worst_error;
+        println!("motor {seed}: displacement {v:e} m³ {ci:?}, truth {truth:e}; worst figure error {worst:+.3}");
+        assert!(
+            worst.abs() < 0.3,
+            "motor {seed}: worst figure error {worst}"
+        );
+    }
+    // Nominal 95 %: 4 of 4 expected; 3 allows one miss.
+    assert!(
+        held >= 3,
+        "{held} of 4 displacement intervals hold the truth"
+    );
+    // `check` says what the fit will start from.
+    let page = tmp.path().join("m0").join("page");
+    let out = vanefit(&["check", page.to_str().unwrap()]).unwrap();
+    assert!(
+        out.contains("displacement estimated from the page:") && out.contains("cm³ ["),
+        "{out}"
+    );
 }
 
 #[test]

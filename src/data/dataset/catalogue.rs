@@ -108,7 +108,8 @@ pub enum ValueError {
 /// Reads "6.3 bar(g)", "0.12 kW", "12 lbf·ft", "7.4 cfm": a number and a unit of `q`,
 /// converted to SI. Returns (SI value, unit, the number as written).
 pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit, f64), ValueError> {
-    let text = text.trim();
+    let plain = without_thousands(without_approx(text.trim()));
+    let text = plain.as_str();
     let split = text
         .find(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E')))
         .unwrap_or(text.len());
@@ -151,21 +152,122 @@ pub fn parse_value(text: &str, q: Quantity, p_atm_pa: f64) -> Result<(f64, Unit,
             example: format!("{value} {}", q.si_unit().suffix()),
         });
     }
-    let unit = unit_of(q, &normalise_unit(unit)).map_err(|_| ValueError::WrongUnit {
-        unit: unit.trim().to_string(),
-        what: words(q),
-        known: q
-            .units()
-            .iter()
-            .map(|u| u.suffix())
-            .collect::<Vec<_>>()
-            .join(", "),
+    let unit = unit_of(q, bare_pressure_as_gauge(q, &normalise_unit(unit))).map_err(|_| {
+        ValueError::WrongUnit {
+            unit: unit.trim().to_string(),
+            what: words(q),
+            known: q
+                .units()
+                .iter()
+                .map(|u| u.suffix())
+                .collect::<Vec<_>>()
+                .join(", "),
+        }
     })?;
     let si = unit.to_si(value, p_atm_pa);
     if !si.is_finite() {
         return Err(ValueError::NotFinite(text.to_string()));
     }
     Ok((si, unit, value))
+}
+
+/// Words and signs a page prints before an approximate figure ("~9000 rpm", "approx. 0.3
+/// N·m", "ca. 180 l/min"): the figure is read as printed, within its reading tolerance.
+const APPROX: [&str; 6] = ["approximately", "approx.", "approx", "ca.", "~", "≈"];
+
+/// `text` without a leading sign or word of [`APPROX`] (case-insensitive).
+fn without_approx(text: &str) -> &str {
+    for word in APPROX {
+        if text.len() >= word.len()
+            && text.is_char_boundary(word.len())
+            && text[..word.len()].eq_ignore_ascii_case(word)
+        {
+            return text[word.len()..].trim_start();
+        }
+    }
+    text
+}
+
+/// Separators a page puts between groups of three digits: the comma, and spaces (plain,
+/// thin, narrow no-break, no-break) as ISO 80000 writes "12 200".
+const THOUSANDS: [char; 5] = [',', ' ', '\u{2009}', '\u{202f}', '\u{a0}'];
+
+/// `text` with its thousands separators removed where they cannot be a decimal comma:
+/// "1,200,000 rpm" (more than one group), "1,200.5 rpm" (a decimal point after the group),
+/// "12 200 rpm" (a space; never a decimal mark). A single comma group without a point
+/// ("1,200 rpm": 1.2 or 1200?) is left as it is, for [`parse_value`] to refuse as
+/// ambiguous with both readings, at the figure's line and column.
+fn without_thousands(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let digits_at = |i: usize| chars[i..].iter().take_while(|c| c.is_ascii_digit()).count();
+    let sign = usize::from(matches!(chars.first(), Some('-' | '+')));
+    let lead = digits_at(sign);
+    if !(1..=3).contains(&lead) {
+        return text.to_string();
+    }
+    let mut i = sign + lead;
+    let (mut groups, mut sep) = (0, None);
+    while i < chars.len() && THOUSANDS.contains(&chars[i]) && sep.is_none_or(|s| s == chars[i]) {
+        if digits_at(i + 1) != 3 {
+            break;
+        }
+        sep = Some(chars[i]);
+        groups += 1;
+        i += 4;
+    }
+    let point_follows =
+        chars.get(i) == Some(&'.') && chars.get(i + 1).is_some_and(char::is_ascii_digit);
+    let unambiguous = match sep {
+        None => false,
+        Some(',') => groups >= 2 || point_follows,
+        Some(_) => true,
+    };
+    if !unambiguous {
+        return text.to_string();
+    }
+    let number: String = chars[..i]
+        .iter()
+        .filter(|c| !THOUSANDS.contains(c))
+        .collect();
+    number + &chars[i..].iter().collect::<String>()
+}
+
+/// A supply pressure printed in bare `bar` or `psi` (neither gauge nor absolute said): read
+/// as gauge, as makers print supply pressures (docs/formats.md, "Catalogue data"); a
+/// warning names the line (`supply_notation`).
+fn bare_pressure_as_gauge(q: Quantity, unit: &str) -> &str {
+    match (q, unit) {
+        (Quantity::PPort1 | Quantity::PPort2, "bar") => "bar_g",
+        (Quantity::PPort1 | Quantity::PPort2, "psi") => "psi_g",
+        _ => unit,
+    }
+}
+
+/// How a printed supply pressure was read where the page leaves it open: bare `bar`/`psi`
+/// as gauge, `MPa`/`kPa`/`Pa` as absolute (vanefit's convention for those units), in words
+/// for a warning; `None` where the unit says which (`bar(g)`, `psi(a)`, …).
+pub fn supply_notation(text: &str, p_atm_pa: f64) -> Option<String> {
+    let (si, unit, written) = parse_value(text, Quantity::PPort1, p_atm_pa).ok()?;
+    let plain = without_thousands(without_approx(text.trim()));
+    let printed = normalise_unit(plain.trim_start_matches(|c: char| {
+        c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E') || c.is_whitespace()
+    }));
+    let gauge_bar = Unit::BarG.from_si(si, p_atm_pa);
+    match printed.as_str() {
+        "bar" | "psi" => Some(format!(
+            "supply pressure '{}' says neither gauge nor absolute: read as GAUGE, {written} {} = {:.3} bar absolute, as makers print supply pressures; write '{written} {}(a)' if absolute is meant",
+            text.trim(),
+            unit.suffix(),
+            Unit::BarAbs.from_si(si, p_atm_pa),
+            printed
+        )),
+        "mpa" | "kpa" | "pa" => Some(format!(
+            "supply pressure '{}' is read as ABSOLUTE ({gauge_bar:.3} bar g), as vanefit reads {printed} everywhere; makers usually print gauge: if gauge is meant, write it as '{:.4} bar(g)'",
+            text.trim(),
+            Unit::BarG.from_si(si + p_atm_pa, p_atm_pa)
+        )),
+        _ => None,
+    }
 }
 
 /// A printed unit as a column suffix: "N·m" → "n_m", "m³/min" → "m3_min", "bar(g)" →
@@ -633,6 +735,74 @@ mod tests {
             parse_value("0.12", Quantity::Power, p),
             Err(ValueError::NoUnit { .. })
         ));
+    }
+
+    /// "~9000 rpm", "approx. 0.3 N·m", "ca. 180 l/min": read as printed.
+    #[test]
+    fn approximate_figures_are_read() {
+        let p = 101_325.0;
+        for (text, q, want) in [
+            ("~9000 rpm", Quantity::Speed, 9000.0),
+            ("≈ 9000 rpm", Quantity::Speed, 9000.0),
+            ("approx. 0.3 N·m", Quantity::Torque, 0.3),
+            ("Approx 0.3 N·m", Quantity::Torque, 0.3),
+            ("ca. 180 l/min", Quantity::Flow1, 180.0),
+        ] {
+            let (_, _, written) = parse_value(text, q, p).unwrap();
+            assert_eq!(written, want, "{text}");
+        }
+        assert!(parse_value("~ rpm", Quantity::Speed, p).is_err());
+    }
+
+    /// Thousands separators where they cannot be a decimal comma are read; "1,200 rpm" (1.2
+    /// or 1200?) is refused with both readings.
+    #[test]
+    fn thousands_separators_are_read_where_unambiguous() {
+        let p = 101_325.0;
+        for (text, want) in [
+            ("1,200,000 rpm", 1_200_000.0),
+            ("1,200.5 rpm", 1200.5),
+            ("12 200 rpm", 12_200.0),
+            ("12\u{202f}200 rpm", 12_200.0),
+            ("12\u{a0}200 r/min", 12_200.0),
+            ("9000 1/min", 9000.0),
+            ("12200 rpm", 12_200.0),
+        ] {
+            let (_, _, written) = parse_value(text, Quantity::Speed, p).unwrap();
+            assert_eq!(written, want, "{text}");
+        }
+        let e = parse_value("1,200 rpm", Quantity::Speed, p).unwrap_err();
+        assert!(matches!(e, ValueError::DecimalComma { .. }), "{e}");
+        assert!(e.to_string().contains("'1200 rpm'"), "{e}");
+        // Mixed separators are not a grouping.
+        assert!(parse_value("1,200 000 rpm", Quantity::Speed, p).is_err());
+    }
+
+    /// Bare bar and psi are gauge; MPa is absolute; each is said, a stated reference is not.
+    #[test]
+    fn supply_pressures_without_gauge_or_absolute_are_read_and_said() {
+        let p = 101_325.0;
+        let (si, u, _) = parse_value("6.3 bar", Quantity::PPort1, p).unwrap();
+        assert_eq!(u, Unit::BarG);
+        assert!((si - 731_325.0).abs() < 1e-6);
+        assert_eq!(
+            parse_value("90 psi", Quantity::PPort1, p).unwrap().1,
+            Unit::PsiG
+        );
+        let note = supply_notation("6.3 bar", p).unwrap();
+        assert!(
+            note.contains("GAUGE") && note.contains("7.313 bar absolute"),
+            "{note}"
+        );
+        let note = supply_notation("0.73 MPa", p).unwrap();
+        assert!(
+            note.contains("ABSOLUTE") && note.contains("6.287 bar g"),
+            "{note}"
+        );
+        assert!(note.contains("'7.3000 bar(g)'"), "{note}");
+        for stated in ["6.3 bar(g)", "6.3 bar_abs", "90 psi(g)", "90 psig"] {
+            assert_eq!(supply_notation(stated, p), None, "{stated}");
+        }
     }
 
     proptest::proptest! {

@@ -64,6 +64,21 @@ fn slip(ratio: f64) -> Option<&'static str> {
 /// The warnings of one catalogue experiment (none for other kinds).
 pub fn page_warnings(ex: &ExperimentData) -> Vec<PageWarning> {
     let mut out = Vec::new();
+    // How the supply pressure was read where its unit leaves gauge or absolute open. The
+    // gauge's zero is the standard atmosphere here (the rig's is not at hand; the wording
+    // only rounds the other reading).
+    let p_atm = crate::units::constants::P_ATM_PA;
+    if let Some(note) = ex
+        .p_supply_written
+        .as_deref()
+        .and_then(|t| super::catalogue::supply_notation(t, p_atm))
+    {
+        out.push(PageWarning {
+            key: "p_supply".into(),
+            line: ex.p_supply_line,
+            message: note,
+        });
+    }
     let fig = |k: &str| ex.figures.iter().find(|f| f.key == k);
     let warn = |f: &Figure, message: String| PageWarning {
         key: f.key.clone(),
@@ -181,6 +196,35 @@ mod tests {
             .flat_map(super::page_warnings)
             .map(|w| (w.key, w.message))
             .collect()
+    }
+
+    /// A supply pressure in bare bar is read as gauge and said at its line; an ambiguous
+    /// thousands comma is refused at the figure's line and column.
+    #[test]
+    fn supply_notation_is_warned_at_its_line_and_ambiguity_refused_at_its_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let rig = "[motor]\ndisplacement_cm3 = 3.8\n\n[[experiment]]\nkind = \"catalogue\"\np_supply = \"6.3 bar\"\n\n[experiment.figures]\nfree_speed = \"12 200 rpm\"\nstall_torque = \"~0.29 N·m\"\n";
+        std::fs::write(dir.path().join("rig.toml"), rig).unwrap();
+        let ds = Dataset::load(dir.path()).unwrap();
+        assert!((ds.nominal_params().unwrap().v_disp() - 3.8e-6).abs() < 1e-18);
+        let ex = &ds.experiments[0];
+        assert!((ex.p_supply_pa.unwrap() - 731_325.0).abs() < 1e-6);
+        assert_eq!(ex.figures[0].written, 12_200.0);
+        let w = super::page_warnings(ex);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!((w[0].key.as_str(), w[0].line), ("p_supply", Some(6)));
+        assert!(w[0].message.contains("GAUGE"), "{}", w[0].message);
+        std::fs::write(
+            dir.path().join("rig.toml"),
+            rig.replace("12 200 rpm", "12,200 rpm"),
+        )
+        .unwrap();
+        let e = Dataset::load(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("rig.toml:9:"), "{e}");
+        assert!(
+            e.contains("'12.200 rpm'") && e.contains("'12200 rpm'"),
+            "{e}"
+        );
     }
 
     const CURVE: &str = "speed_rpm,torque_lbf_in\n0,13.1\n3000,9.8\n6000,6.5\n9000,3.3\n";

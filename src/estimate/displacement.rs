@@ -1,0 +1,188 @@
+//! The displacement of a motor whose catalogue page does not print it, estimated from the
+//! page itself (docs/estimation.md, "A page without a displacement").
+//!
+//! The steady model is exactly similar under the size laws of `data::motor::SIZE_EXPONENTS`:
+//! a motor s = V_disp/3.8 cm³ times AR034-11 with every default scaled has s × its torques,
+//! s^⅔ × its flows and powers and s^−⅓ × its speeds at every supply pressure. So the
+//! torque per supply pressure (∝ V_disp) and the air per revolution at free speed
+//! (ṁ/ω ∝ V_disp) tell the size, while port sizes, which differ between makers, move speeds
+//! and flows but hardly these two ratios. The estimate here is the first step:
+//!
+//! 1. **Similarity estimate.** χ²(s) of the page at the AR034-11 motor scaled to s (the
+//!    likelihood's rows, each with its reading tolerance), minimised over ln s: a scan from
+//!    0.05 to 2000 cm³, then Brent's minimiser between the scan's neighbours of its best point.
+//! 2. **Its interval**, linearised at that motor: the Jacobian J of the normalised residuals
+//!    with respect to ln s (every size-scaled parameter moving with it) and to the ln θ of the
+//!    parameters a fit estimates by default (each on its own, about its size-scaled median),
+//!    the posterior precision H = JᵀJ + diag(0, 1/σ²_prior) (a flat prior on ln s, the motor
+//!    prior on the others) and σ_ln s = √(H⁻¹)₀₀: the spread the page leaves in the size once
+//!    the ports, leaks and friction of real motors may differ from the scaled defaults.
+//!
+//! The fit then estimates `v_disp` with every other parameter, the priors' medians and the
+//! fixed size-dependent parameters following it (`estimate::prior`, `estimate::space`), and
+//! its profile interval is the one reported with the fit.
+
+use super::fit_data::FitData;
+use super::prior::Prior;
+use super::space::DEFAULT_ESTIMATED;
+use crate::data::motor::MotorSection;
+use crate::model::effects::EffectSet;
+use crate::model::motor::Motor;
+use crate::model::params::MotorParams;
+use crate::numerics::scalar::brent_minimize;
+use crate::numerics::DefaultSolver;
+use nalgebra::DMatrix;
+
+/// The normal quantile of a two-sided 95 % range.
+const Z95: f64 = 1.959_963_984_540_054;
+/// The scan's range of displacements, m³ (0.05 to 2000 cm³: beyond every vane motor sold).
+const SCAN_M3: (f64, f64) = (0.05e-6, 2000e-6);
+/// Points of the scan (a factor of about 1.3 between neighbours).
+const SCAN_POINTS: usize = 41;
+/// Step of the central differences in ln θ and ln s.
+const LOG_STEP: f64 = 1e-3;
+
+/// A displacement estimated from a page, with its 95 % interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DisplacementEstimate {
+    /// The estimate, m³.
+    pub v_disp_m3: f64,
+    /// Its 95 % interval, m³ (linearised; see the module documentation).
+    pub ci95_m3: [f64; 2],
+}
+
+impl DisplacementEstimate {
+    /// "displacement estimated from the page: 4.1 cm³ [3.8, 4.5]".
+    pub fn describe(&self) -> String {
+        describe_cm3(self.v_disp_m3, self.ci95_m3)
+    }
+}
+
+/// "displacement estimated from the page: 4.1 cm³ [3.8, 4.5]" (3 significant digits) of a
+/// value and its 95 % interval in m³.
+pub fn describe_cm3(v_m3: f64, ci95_m3: [f64; 2]) -> String {
+    let digits = |v: f64| {
+        let v = v * 1e6;
+        let d = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.d$}")
+    };
+    format!(
+        "displacement estimated from the page: {} cm³ [{}, {}] (95 %)",
+        digits(v_m3),
+        digits(ci95_m3[0]),
+        digits(ci95_m3[1])
+    )
+}
+
+/// Whether a `[motor]` table leaves the displacement to be estimated: no displacement and
+/// no geometry.
+pub fn displacement_missing(motor: &MotorSection) -> bool {
+    motor.displacement_m3.is_none() && matches!(motor.geometry(), Ok(None))
+}
+
+/// The nominal motor of `section` at displacement `v_m3` (its defaults scaled to it).
+fn nominal_at(section: &MotorSection, v_m3: f64) -> Option<MotorParams> {
+    let mut at = section.clone();
+    at.displacement_m3 = Some(v_m3);
+    at.nominal_params().ok()
+}
+
+/// The page's normalised residuals at a motor (`None`: the simulation failed).
+fn residuals(data: &FitData, params: MotorParams) -> Option<Vec<f64>> {
+    let solver = DefaultSolver::default();
+    data.target.residuals(
+        &data.smoothed,
+        &Motor::new(params, EffectSet::empty()),
+        &solver,
+    )
+}
+
+/// χ² of the page at the nominal motor of displacement e^`ln_v` (a large finite value where
+/// it cannot be simulated, so that the scan passes over it).
+fn chi2_at(data: &FitData, section: &MotorSection, ln_v: f64) -> f64 {
+    nominal_at(section, ln_v.exp())
+        .and_then(|p| residuals(data, p))
+        .map_or(1e300, |r| r.iter().map(|x| x * x).sum())
+}
+
+/// The displacement of a page (see the module documentation), `None` when no displacement
+/// in the scan's range gives a motor the page can be simulated at.
+pub fn from_page(data: &FitData, section: &MotorSection) -> Option<DisplacementEstimate> {
+    let (lo, hi) = (SCAN_M3.0.ln(), SCAN_M3.1.ln());
+    let step = (hi - lo) / (SCAN_POINTS - 1) as f64;
+    let scan: Vec<(f64, f64)> = (0..SCAN_POINTS)
+        .map(|i| {
+            let x = lo + step * i as f64;
+            (x, chi2_at(data, section, x))
+        })
+        .collect();
+    let best = scan
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
+        .map(|(i, _)| i)?;
+    if scan[best].1 >= 1e300 {
+        return None;
+    }
+    let (a, b) = (
+        scan[best.saturating_sub(1)].0,
+        scan[(best + 1).min(SCAN_POINTS - 1)].0,
+    );
+    let (ln_v, _) = brent_minimize(
+        |x| Ok::<f64, ()>(chi2_at(data, section, x)),
+        a,
+        b,
+        1e-6,
+        1e-6,
+    )
+    .ok()?;
+    let v = ln_v.exp();
+    let sd = size_sd(data, section, v).unwrap_or(f64::INFINITY);
+    let half = (Z95 * sd).min(700.0);
+    Some(DisplacementEstimate {
+        v_disp_m3: v,
+        ci95_m3: [v * (-half).exp(), v * half.exp()],
+    })
+}
+
+/// σ of ln V_disp at the nominal motor of displacement `v` (module documentation, step 2).
+fn size_sd(data: &FitData, section: &MotorSection, v: f64) -> Option<f64> {
+    let nominal = nominal_at(section, v)?;
+    let prior = Prior::for_motor(&nominal);
+    let r0 = residuals(data, nominal.clone())?;
+    let n = r0.len();
+    let names: Vec<&str> = DEFAULT_ESTIMATED
+        .iter()
+        .copied()
+        .filter(|name| prior.term(name).is_some())
+        .collect();
+    let mut jac = DMatrix::<f64>::zeros(n, names.len() + 1);
+    let column = |plus: Vec<f64>, minus: Vec<f64>, jac: &mut DMatrix<f64>, j: usize| {
+        for i in 0..n.min(plus.len()).min(minus.len()) {
+            jac[(i, j)] = (plus[i] - minus[i]) / (2.0 * LOG_STEP);
+        }
+    };
+    let at_size = |f: f64| nominal_at(section, v * f).and_then(|p| residuals(data, p));
+    column(
+        at_size(LOG_STEP.exp())?,
+        at_size((-LOG_STEP).exp())?,
+        &mut jac,
+        0,
+    );
+    for (j, name) in names.iter().enumerate() {
+        let x = nominal.get(name)?;
+        let at = |f: f64| {
+            let p = nominal.with(name, x * f).ok()?;
+            residuals(data, p)
+        };
+        column(at(LOG_STEP.exp())?, at((-LOG_STEP).exp())?, &mut jac, j + 1);
+    }
+    let mut h = jac.transpose() * &jac;
+    for (j, name) in names.iter().enumerate() {
+        let sd = prior.term(name)?.sd_ln;
+        h[(j + 1, j + 1)] += 1.0 / (sd * sd);
+    }
+    let cov = h.try_inverse()?;
+    let var = cov[(0, 0)];
+    (var.is_finite() && var > 0.0).then(|| var.sqrt())
+}
