@@ -35,7 +35,8 @@ pub(crate) fn search(
 }
 
 /// The base model with the first proposed term, and with every proposed term when there
-/// are several (full baseline budget: the coefficients start from their linearised values).
+/// are several (warm from the baseline with the refit budget: the coefficients start from
+/// their linearised values).
 fn on_the_baseline(cx: &Context, baseline: &Fitted, reg: &Regression) -> Vec<(ModelKind, FitJob)> {
     let mut jobs = Vec::new();
     let Some(first) = reg.selected.first() else {
@@ -54,6 +55,7 @@ fn on_the_baseline(cx: &Context, baseline: &Fitted, reg: &Regression) -> Vec<(Mo
             label: "uncatalogued".into(),
             extra: vec![first.term],
             starts: vec![baseline.params.clone()],
+            max_iters: cx.opts.refit_iters,
             ..cx.base_job()
         },
     ));
@@ -64,6 +66,7 @@ fn on_the_baseline(cx: &Context, baseline: &Fitted, reg: &Regression) -> Vec<(Mo
                 label: "uncatalogued (2 terms)".into(),
                 extra: reg.selected.iter().map(|t| t.term).collect(),
                 starts: vec![baseline.params.clone()],
+                max_iters: cx.opts.refit_iters,
                 ..cx.base_job()
             },
         ));

@@ -19,7 +19,7 @@ pub enum Effort {
     /// candidates.
     #[default]
     Full,
-    /// Reduced (tests, quick fleet scans): a smaller refit budget, pairs only when needed,
+    /// Reduced (tests, quick fleet scans): one baseline start, pairs only when needed,
     /// held-out prediction of the selected model only.
     Quick,
 }

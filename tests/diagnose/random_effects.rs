@@ -121,7 +121,7 @@ pub(crate) fn random_row(seed: u64, opts: &DiagnoseOptions) -> (Class, bool, Str
         .collect();
     let (before, after) = d.noise_ratios();
     let row = format!(
-        "| {seed} | {} | {} | {:.0} | {before:.2} → {after:.2} | {class:?} | {} | {wall_s:.0} |\n",
+        "| {seed} | {} | {} | {:.0} | {before:.2} → {after:.2} | {class:?} | {} | {} | {wall_s:.0} |\n",
         drawn.describe(),
         if found.is_empty() {
             "-".to_string()
@@ -130,6 +130,7 @@ pub(crate) fn random_row(seed: u64, opts: &DiagnoseOptions) -> (Class, bool, Str
         },
         d.delta_bic(),
         if law { "yes" } else { "no" },
+        crate::support::evaluations(&d),
     );
     eprint!("{row}");
     eprintln!("  {}", summary(&d));
@@ -137,10 +138,11 @@ pub(crate) fn random_row(seed: u64, opts: &DiagnoseOptions) -> (Class, bool, Str
 }
 
 /// The table header.
-const HEADER: &str = "| seed | drawn | selected | ΔBIC | noise ratio | class | law | wall s |\n|---|---|---|---|---|---|---|---|\n";
+const HEADER: &str = "| seed | drawn | selected | ΔBIC | noise ratio | class | law | evaluations | wall s |\n|---|---|---|---|---|---|---|---|---|\n";
 
-/// The random-effect table over `RANDOM_CASES` draws (default 30, seeds 1..), quick options;
-/// writes `target/random-effects.md` with the rates.
+/// The random-effect table over `RANDOM_CASES` draws (default 30, seeds 1..), the command
+/// line's default options (`DIAG_EFFORT=quick` for the quick ones); writes
+/// `target/random-effects.md` with the rates.
 #[test]
 #[ignore]
 fn random_effect_table() {
@@ -152,12 +154,13 @@ fn random_effect_table() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(1);
-    let mut md = String::from(HEADER);
+    let (opts, opts_name) = crate::support::table_options();
+    let mut md = format!("Options: {opts_name}.\n\n{HEADER}");
     let mut counts = [0usize; 4];
     let mut laws = 0;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/random-effects.md");
     for seed in first..first + n {
-        let (class, law, row) = random_row(seed, &DiagnoseOptions::quick(1));
+        let (class, law, row) = random_row(seed, &opts);
         counts[class as usize] += 1;
         laws += usize::from(law);
         md += &row;

@@ -81,3 +81,29 @@ pub fn synthesize_with(truth: &Motor, seed: u64, noise: &SensorNoise) -> Vec<Exp
     vanefit::data::synth::synthesize(truth, &DefaultSolver::default(), &rig_plan(), noise, seed)
         .unwrap()
 }
+
+/// The options of the ignored tables: the command line's defaults
+/// (`DiagnoseOptions::full(4, 1)`: 4 baseline starts, seed 1), or the quick ones when the
+/// environment says `DIAG_EFFORT=quick`; with the name to print.
+pub fn table_options() -> (vanefit::diagnose::DiagnoseOptions, &'static str) {
+    use vanefit::diagnose::DiagnoseOptions;
+    match std::env::var("DIAG_EFFORT").as_deref() {
+        Ok("quick") => (
+            DiagnoseOptions::quick(1),
+            "quick (DiagnoseOptions::quick(1))",
+        ),
+        _ => (
+            DiagnoseOptions::full(4, 1),
+            "default (DiagnoseOptions::full(4, 1), the command line's)",
+        ),
+    }
+}
+
+/// Cost evaluations of the baseline fit and every refitted model of a diagnosis (the
+/// concealment's fits of experiment subsets not included).
+pub fn evaluations(d: &vanefit::diagnose::Diagnosis) -> u64 {
+    std::iter::once(&d.baseline)
+        .chain(&d.candidates)
+        .map(|c| c.fitted.evaluations)
+        .sum()
+}

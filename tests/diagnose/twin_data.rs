@@ -173,7 +173,7 @@ fn false_alarm_row(seed: u64, opts: &DiagnoseOptions) -> (bool, String) {
         .fold(f64::INFINITY, f64::min);
     let selected: Vec<&str> = d.selected.iter().map(|s| s.effect.as_str()).collect();
     let row = format!(
-        "| twin seed {seed} | {} | {:.3} | {} | {:.1} | {:.1} |\n",
+        "| twin seed {seed} | {} | {:.3} | {} | {:.1} | {} | {:.1} |\n",
         d.mismatch,
         d.baseline.noise_ratio,
         if selected.is_empty() {
@@ -182,6 +182,7 @@ fn false_alarm_row(seed: u64, opts: &DiagnoseOptions) -> (bool, String) {
             selected.join(" + ")
         },
         best,
+        crate::support::evaluations(&d),
         d.wall_s
     );
     eprint!("{row}");
@@ -198,7 +199,8 @@ fn clean_twin_datasets_are_not_flagged() {
 }
 
 /// At most 1 false alarm in 20 clean twin datasets (different base motors, rates and noise
-/// levels); writes `target/false-alarms.md`:
+/// levels), the command line's default options (`DIAG_EFFORT=quick` for the quick ones);
+/// writes `target/false-alarms.md`:
 ///
 /// ```sh
 /// cargo test --release --test diagnose -- --ignored --nocapture false_alarm_table
@@ -206,16 +208,18 @@ fn clean_twin_datasets_are_not_flagged() {
 #[test]
 #[ignore]
 fn false_alarm_table() {
-    let mut md = String::from(
-        "| dataset | mismatch | noise ratio | selected | best ΔBIC | wall s |\n|---|---|---|---|---|---|\n",
+    let (opts, opts_name) = crate::support::table_options();
+    let mut md = format!(
+        "Options: {opts_name}.\n\n| dataset | mismatch | noise ratio | selected | best ΔBIC | evaluations | wall s |\n|---|---|---|---|---|---|---|\n",
     );
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/false-alarms.md");
     let mut alarms = 0;
     for seed in 1..=20 {
-        let (mismatch, row) = false_alarm_row(seed, &DiagnoseOptions::quick(1));
+        let (mismatch, row) = false_alarm_row(seed, &opts);
         alarms += usize::from(mismatch);
         md += &row;
+        std::fs::write(&path, &md).unwrap();
     }
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/false-alarms.md");
     std::fs::write(&path, &md).unwrap();
     println!("{md}");
     assert!(alarms <= 1, "{alarms} false alarms in 20\n{md}");
