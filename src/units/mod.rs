@@ -3,8 +3,11 @@
 //! convert to SI on import and back on export. Nothing inside the crate sees any unit but
 //! SI.
 
-pub mod constants;
-pub mod format;
+pub(crate) mod constants;
+pub(crate) mod format;
+
+pub use constants::{P_ATM_PA, T0_K};
+pub use format::trim_zeros;
 
 use crate::units::constants::RHO0_KG_M3;
 use std::f64::consts::PI;
