@@ -172,6 +172,7 @@ fn step(t: &ExtraTerm) -> f64 {
 
 /// Why the term regression could not run.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RegressError {
     /// The model whose residual is regressed does not simulate.
     #[error("the model to regress does not simulate")]

@@ -27,6 +27,7 @@ use std::time::Instant;
 
 /// Why a fit could not run (every message starts with the fit's label).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FitError {
     /// The job has no start point.
     #[error("{0}: no start point")]

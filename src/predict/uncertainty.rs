@@ -43,6 +43,7 @@ const Z95: f64 = 1.959_963_984_540_054;
 
 /// What the bands stand on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum BandBasis {
     /// The fit's covariance (correlations) with profile-interval widths.
     Covariance,

@@ -14,6 +14,7 @@ use std::f64::consts::PI;
 
 /// A measured or imposed quantity in a recording.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
 pub enum Quantity {
     /// Time, s.
     Time,
@@ -121,6 +122,7 @@ impl Quantity {
 
 /// A unit that a column may carry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Unit {
     /// Seconds.
     S,
@@ -417,6 +419,7 @@ fn shifted(mantissa: &str, exponent: i32) -> Option<f64> {
 
 /// Why a column name was not understood (the units layer's error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ColumnNameError {
     /// The quantity is known but the unit is not.
     #[error(
