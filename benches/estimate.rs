@@ -12,17 +12,18 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use std::path::Path;
-use vanefit::data::dataset::Dataset;
-use vanefit::estimate::fit::DataObjective;
-use vanefit::estimate::multistart::{self, Silent};
+use vanefit::data::Dataset;
+use vanefit::estimate::multistart;
+use vanefit::estimate::multistart::Silent;
+use vanefit::estimate::DataObjective;
 use vanefit::estimate::{Engine, MultiStartConfig};
 use vanefit::estimate::{Objective, ParamSpace, DEFAULT_ESTIMATED};
-use vanefit::model::effects::EffectSet;
-use vanefit::model::motor::Motor;
-use vanefit::model::params::MotorParams;
-use vanefit::numerics::ode::{DiffsolBdf, StiffSolver};
+use vanefit::model::EffectSet;
+use vanefit::model::Motor;
+use vanefit::model::MotorParams;
 use vanefit::numerics::DefaultSolver;
-use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::numerics::{DiffsolBdf, StiffSolver};
+use vanefit::objective::{CostModel, CostOptions};
 
 fn bench(c: &mut Criterion) {
     let ds = Dataset::load(Path::new("measurements/ar034-synthetic")).unwrap();

@@ -6,11 +6,11 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
-use vanefit::data::synth::{free_speed, plan_experiments, SynthPlan};
-use vanefit::model::motor::Motor;
-use vanefit::numerics::ode::{DiffsolBdf, StiffSolver};
+use vanefit::data::{free_speed, plan_experiments, SynthPlan};
+use vanefit::model::Motor;
 use vanefit::numerics::DefaultSolver;
-use vanefit::sim::experiment::Experiment;
+use vanefit::numerics::{DiffsolBdf, StiffSolver};
+use vanefit::sim::Experiment;
 
 fn experiments() -> (Motor, Vec<Experiment>) {
     let motor = Motor::default_motor();

@@ -4,12 +4,12 @@
 //! χ²(truth) − χ²(estimate) follows χ²(k), k estimated parameters.
 
 use std::path::Path;
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
-use vanefit::estimate::fit::FitData;
-use vanefit::model::motor::Motor;
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
+use vanefit::estimate::FitData;
+use vanefit::model::Motor;
 use vanefit::numerics::DefaultSolver;
-use vanefit::objective::cost::CostOptions;
+use vanefit::objective::CostOptions;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -4,8 +4,8 @@
 //! tables and SVG figures of `vanefit control step` are written there).
 
 use std::path::{Path, PathBuf};
-use vanefit::control::study::step::StepOptions;
-use vanefit::control::study::{LoopOptions, MotorOptions};
+use vanefit::control::StepOptions;
+use vanefit::control::{LoopOptions, MotorOptions};
 use vanefit::prelude::*;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

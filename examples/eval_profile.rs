@@ -4,9 +4,9 @@
 #[path = "common/support.rs"]
 mod support;
 
-use vanefit::model::motor::Motor;
-use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
-use vanefit::numerics::rodas::Rodas4;
+use vanefit::model::Motor;
+use vanefit::numerics::Rodas4;
+use vanefit::numerics::{DiffsolBdf, StiffSolver, Tolerances};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (n, _, cost) = support::shipped(200)?;

@@ -4,12 +4,12 @@
 //! `vanefit fit` does the same with 32 starts, results files and plots).
 
 use std::path::Path;
-use vanefit::data::dataset::Dataset;
-use vanefit::estimate::fit::{fit, FitData, FitSetup, UncertaintyMethod};
+use vanefit::data::Dataset;
 use vanefit::estimate::multistart::Silent;
+use vanefit::estimate::{fit, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, DEFAULT_ESTIMATED};
-use vanefit::model::effects::EffectSet;
-use vanefit::objective::cost::CostOptions;
+use vanefit::model::EffectSet;
+use vanefit::objective::CostOptions;
 use vanefit::report::fit::{parameter_rows, terminal_table};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

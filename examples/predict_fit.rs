@@ -4,7 +4,7 @@
 
 use std::path::Path;
 use vanefit::prelude::*;
-use vanefit::task::predict::fit_atmosphere_pa;
+use vanefit::task::fit_atmosphere_pa;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fits/ar034-synthetic.json");

@@ -3,16 +3,16 @@
 //! `cargo run --release --example profile_probe -- DATASET FIT.json NAME VALUE`
 
 use std::path::Path;
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
-use vanefit::estimate::fit::FitData;
-use vanefit::estimate::likelihood::Likelihood;
-use vanefit::estimate::optimize::{minimize, Layout, NelderMeadSettings, Restart};
-use vanefit::estimate::uncertainty::polish_chi2;
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
+use vanefit::estimate::polish_chi2;
+use vanefit::estimate::FitData;
+use vanefit::estimate::Likelihood;
+use vanefit::estimate::{minimize, Layout, NelderMeadSettings, Restart};
 use vanefit::estimate::{ParamSpace, Problem, DEFAULT_ESTIMATED};
-use vanefit::model::motor::Motor;
+use vanefit::model::Motor;
 use vanefit::numerics::DefaultSolver;
-use vanefit::objective::cost::CostOptions;
+use vanefit::objective::CostOptions;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -12,12 +12,12 @@
 #[path = "common/support.rs"]
 mod support;
 
-use vanefit::model::effects::EffectSet;
-use vanefit::model::motor::Motor;
-use vanefit::model::params::MotorParams;
-use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
-use vanefit::numerics::rodas::Rodas4;
-use vanefit::objective::cost::CostModel;
+use vanefit::model::EffectSet;
+use vanefit::model::Motor;
+use vanefit::model::MotorParams;
+use vanefit::numerics::Rodas4;
+use vanefit::numerics::{DiffsolBdf, StiffSolver, Tolerances};
+use vanefit::objective::CostModel;
 
 fn outputs(cost: &CostModel, motor: &Motor, solver: &dyn StiffSolver) -> Vec<(f64, Vec<f64>)> {
     let res = cost.residuals(motor, solver).expect("simulation");

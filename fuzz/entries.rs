@@ -34,9 +34,9 @@ pub fn recording(data: &[u8]) {
     let p_atm = if mode & 2 == 0 { 101_325.0 } else { 90_000.0 };
     let path = Path::new("fuzz.csv");
     let read = if mode & 1 == 0 {
-        vanefit::data::dataset::Recording::parse(path, &text, p_atm)
+        vanefit::data::Recording::parse(path, &text, p_atm)
     } else {
-        vanefit::data::dataset::Recording::parse_sparse(path, &text, p_atm)
+        vanefit::data::Recording::parse_sparse(path, &text, p_atm)
     };
     if let Ok(rec) = read {
         for c in &rec.columns {
@@ -86,7 +86,7 @@ pub fn rig(data: &[u8]) {
         return;
     }
     let dir = rig_dir();
-    match vanefit::data::dataset::Dataset::from_rig_text(dir, &text) {
+    match vanefit::data::Dataset::from_rig_text(dir, &text) {
         Ok(ds) => {
             let _ = ds.nominal_params();
         }
@@ -96,7 +96,7 @@ pub fn rig(data: &[u8]) {
 
 /// A fit file (vanefit.fit/1).
 pub fn fit_file(data: &[u8]) {
-    let _ = vanefit::data::fitfile::FitFile::parse(Path::new("fuzz.json"), &text(data));
+    let _ = vanefit::data::FitFile::parse(Path::new("fuzz.json"), &text(data));
 }
 
 /// A batch manifest, in a folder of its own with two (empty) dataset folders under
@@ -117,7 +117,7 @@ pub fn manifest(data: &[u8]) {
     let text = text(data);
     let path = dir.join("manifest.toml");
     let shown = Path::new("manifest.toml");
-    if let Err(e) = vanefit::batch::manifest::Manifest::parse(&path, shown, &text) {
+    if let Err(e) = vanefit::batch::Manifest::parse(&path, shown, &text) {
         assert!(e.to_string().starts_with("manifest.toml"), "{e}");
     }
 }
@@ -128,7 +128,7 @@ pub fn manifest(data: &[u8]) {
 /// of a fit and a diagnosis of one dataset stands in, so that the other files are still
 /// read. The summary is made in memory, the fleet plot drawn to a string.
 pub fn batch_files(data: &[u8]) {
-    use vanefit::batch::{merge, BatchRecord};
+    use vanefit::batch::{summarize, BatchRecord};
     let mut parts = data.split(|b| *b == 0).map(text);
     let batch = parts.next().unwrap_or_default();
     let files: Vec<String> = parts.take(3).collect();
@@ -157,7 +157,7 @@ pub fn batch_files(data: &[u8]) {
             .cloned()
             .ok_or_else(|| std::io::Error::from(std::io::ErrorKind::NotFound))
     };
-    let summary = merge::summarize(out, &record, &read);
+    let summary = summarize(out, &record, &read);
     assert!(summary.csv.starts_with("dataset,task,status,message,cost"));
     if let Some(fig) = summary.fleet {
         let _ = fig.to_svg();
@@ -179,9 +179,7 @@ pub fn catalogue_value(data: &[u8]) {
         Quantity::PPort1,
     ];
     let q = quantities[pick as usize % quantities.len()];
-    if let Ok((si, _, _)) =
-        vanefit::data::dataset::catalogue::parse_value(&text(rest), q, 101_325.0)
-    {
+    if let Ok((si, _, _)) = vanefit::data::parse_value(&text(rest), q, 101_325.0) {
         assert!(si.is_finite(), "{si}");
     }
 }

@@ -43,9 +43,16 @@
 //! it: `units` → `io` → `numerics` → `model` → `sim` → `data` → `objective` → `estimate` →
 //! {`diagnose`, `control`, `predict`, `export`} → `report` → `task` → `batch` (and the
 //! command line, part of the `vanefit` binary, on top). SI units everywhere inside; `units`
-//! converts at the file edge. They stay public for what builds on the model directly (the
-//! tests, benches, fuzz targets and the Python package): the simulator, the cost, the
-//! likelihood, the optimiser. Their items may change more often than the front door's.
+//! converts at the file edge. Each layer is a namespace for what builds on the model
+//! directly (the command line, tests, benches, fuzz targets, the Python package and the FMU
+//! library): the simulator, the cost, the likelihood, the optimiser. Its files are private;
+//! the layer's root re-exports the items used outside it and every type its public items
+//! mention, so a path is `vanefit::<layer>::<Item>` (`vanefit::model::Motor`,
+//! `vanefit::estimate::FitOutcome`). A few submodules stay public because their functions
+//! are named by the module (`sim::steady::free`, `estimate::multistart::run`,
+//! `batch::plan::units`, `diagnose::discover::formula`, `export::petab::write`, the writers
+//! of `report::{fit, predict, diagnose, control}`). Items below the front door may change
+//! more often than the front door's.
 
 pub mod batch;
 pub mod control;
@@ -65,23 +72,18 @@ pub mod task;
 pub mod units;
 
 pub use batch::{BatchOptions, BatchSettings, Manifest};
-pub use data::dataset::Dataset;
-pub use data::fitfile::FitFile;
+pub use data::{Dataset, FitFile};
 pub use diagnose::{DiagnoseObserver, Diagnosis};
-pub use estimate::multistart::Silent;
-pub use estimate::RunObserver;
-pub use model::effects::{Effect, EffectSet};
-pub use model::motor::Motor;
-pub use model::params::MotorParams;
+pub use estimate::{RunObserver, Silent};
+pub use model::{Effect, EffectSet, Motor, MotorParams};
 pub use predict::Prediction;
-pub use task::control::{run_study, write_study, CheckedStudy, ControlStudy, Study, StudyResult};
-pub use task::diagnose::{
-    diagnose, write_diagnosis, DiagnoseOptions, DiagnoseSettings, DiagnoseTaskError, Effort,
+// The layers `diagnose` and `predict` share their names with these two functions.
+pub use task::diagnose::diagnose;
+pub use task::predict::predict;
+pub use task::{
+    fit, motor_for, run_study, simulated_tables, synth_motor, write_diagnosis, write_fit,
+    write_prediction, write_study, write_synthetic, CheckedStudy, ControlStudy, DiagnoseOptions,
+    DiagnoseSettings, DiagnoseTaskError, Effort, Fit, FitError, FitObserver, FitOptions,
+    FitSettings, OptionError, PredictOptions, PredictSettings, PredictTaskError, SimulatedTable,
+    Study, StudyResult, SynthOptions, SynthSettings,
 };
-pub use task::fit::{fit, write_fit, Fit, FitError, FitObserver, FitOptions, FitSettings};
-pub use task::predict::{
-    predict, write_prediction, PredictOptions, PredictSettings, PredictTaskError,
-};
-pub use task::simulate::{motor_for, simulated_tables, SimulatedTable};
-pub use task::synth::{synth_motor, write_synthetic, SynthOptions, SynthSettings};
-pub use task::OptionError;

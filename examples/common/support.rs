@@ -4,10 +4,10 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
-use vanefit::data::dataset::Dataset;
-use vanefit::model::motor::Motor;
-use vanefit::numerics::ode::{Jacobian, Kinks, Rhs, SolveError, State, StiffSolver};
-use vanefit::objective::cost::{CostModel, CostOptions, CostValue};
+use vanefit::data::Dataset;
+use vanefit::model::Motor;
+use vanefit::numerics::{Jacobian, Kinks, Rhs, SolveError, State, StiffSolver};
+use vanefit::objective::{CostModel, CostOptions, CostValue};
 
 /// Right-hand-side evaluations since the last [`reset`].
 pub static CALLS: AtomicU64 = AtomicU64::new(0);

@@ -3,7 +3,7 @@
 //! `binaries/linux64/vanefit_fmu.so` (docs/fmu.md).
 //!
 //! Only the C calling convention lives here: every call finds its instance, converts the C
-//! arguments and calls `vanefit::export::fmu::runtime::MotorFmu`, which holds the model (the
+//! arguments and calls `vanefit::export::fmu::MotorFmu`, which holds the model (the
 //! same code as `vanefit simulate`). The fit comes from the FMU's `resources/fit.json`,
 //! checked against the GUID of `modelDescription.xml`. No call unwinds into C: a panic
 //! becomes `fmi2Fatal`.
@@ -13,11 +13,11 @@
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
-use vanefit::data::fitfile::FitFile;
-use vanefit::export::fmu::runtime::MotorFmu;
-use vanefit::export::fmu::variables::vr;
+use vanefit::data::FitFile;
+use vanefit::export::fmu::vr;
+use vanefit::export::fmu::MotorFmu;
 use vanefit::export::fmu::{guid, RESOURCE_FIT};
-use vanefit::model::motor::N_STATES;
+use vanefit::model::N_STATES;
 
 /// fmi2Status.
 pub type Status = c_int;

@@ -1,4 +1,4 @@
-//! The FMU as an importer sees it: exported by `vanefit::export::fmu::package::write_fmu`,
+//! The FMU as an importer sees it: exported by `vanefit::export::fmu::write_fmu`,
 //! unpacked, its shared library loaded with `libloading` and driven through the FMI 2.0 C
 //! functions (co-simulation and model exchange), its answers checked against the library's
 //! own `MotorFmu` and against physics (a steady start is steady; a throttle at port 2 slows
@@ -7,10 +7,10 @@
 use libloading::{Library, Symbol};
 use std::ffi::{c_char, c_int, c_uint, c_void, CString};
 use std::path::{Path, PathBuf};
-use vanefit::data::fitfile::FitFile;
-use vanefit::export::fmu::package::{find_binary, write_fmu};
-use vanefit::export::fmu::runtime::MotorFmu;
-use vanefit::export::fmu::variables::vr;
+use vanefit::data::FitFile;
+use vanefit::export::fmu::vr;
+use vanefit::export::fmu::MotorFmu;
+use vanefit::export::fmu::{find_binary, write_fmu};
 
 type Instantiate = unsafe extern "C" fn(
     *const c_char,

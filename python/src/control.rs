@@ -7,17 +7,18 @@ use crate::errors::{param_err, DataError, ParameterError, VanefitError};
 use pyo3::prelude::*;
 use serde_json::{Map, Value};
 use std::path::PathBuf;
-use vanefit::control::study::bode::BodeOptions;
-use vanefit::control::study::design::DesignOptions;
-use vanefit::control::study::disturbance::DisturbanceOptions;
-use vanefit::control::study::min_speed::MinSpeedOptions;
-use vanefit::control::study::step::StepOptions;
-use vanefit::control::study::throttle::ThrottleOptions;
-use vanefit::control::study::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
-use vanefit::control::throttle::Port;
+use vanefit::control::BodeOptions;
 use vanefit::control::ControlError;
-use vanefit::report::control::{self as rc, ControlReportError};
-use vanefit::task::control::{ControlStudy, Study, StudyResult};
+use vanefit::control::DesignOptions;
+use vanefit::control::DisturbanceOptions;
+use vanefit::control::MinSpeedOptions;
+use vanefit::control::Port;
+use vanefit::control::StepOptions;
+use vanefit::control::ThrottleOptions;
+use vanefit::control::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
+use vanefit::report::control as rc;
+use vanefit::report::control::ControlReportError;
+use vanefit::task::{ControlStudy, Study, StudyResult};
 
 /// A study's CSV tables and JSON summaries as (file name, text), the text its files get.
 fn texts(r: &StudyResult) -> Result<Vec<(String, String)>, ControlReportError> {
@@ -215,14 +216,14 @@ pub fn control(
     let checked = study.check().map_err(control_err)?;
     let _lock = match &out {
         Some(dir) => {
-            Some(vanefit::io::out::prepare_dir(dir).map_err(|e| param_err(format!("out {e}")))?)
+            Some(vanefit::io::prepare_dir(dir).map_err(|e| param_err(format!("out {e}")))?)
         }
         None => None,
     };
     let result = py.detach(|| checked.run()).map_err(control_err)?;
     let report_err = |e: ControlReportError| VanefitError::new_err(e.to_string());
     if let Some(dir) = &out {
-        vanefit::task::control::write_study(&result, dir, &mut |_| {}).map_err(report_err)?;
+        vanefit::task::write_study(&result, dir, &mut |_| {}).map_err(report_err)?;
     }
     let texts = texts(&result).map_err(report_err)?;
     if let StudyResult::Design(r) = &result {

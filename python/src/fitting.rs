@@ -8,13 +8,13 @@ use crate::observe::{PyDiagnoseProgress, PyFitProgress};
 use pyo3::exceptions::PyKeyboardInterrupt;
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
-use vanefit::estimate::fit::UncertaintyMethod;
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
 use vanefit::estimate::EstimateError;
-use vanefit::model::effects::EffectSet;
-use vanefit::task::fit::{FitError, FitOptions};
+use vanefit::estimate::UncertaintyMethod;
+use vanefit::model::EffectSet;
 use vanefit::task::OptionError;
+use vanefit::task::{FitError, FitOptions};
 
 /// The text of a fit file as `vanefit fit` writes it (`FitFile::write`).
 pub fn fit_text(file: &FitFile) -> String {
@@ -97,9 +97,9 @@ pub fn fit(
     .map_err(|e| option_err(&e))?;
     let results = out
         .as_ref()
-        .map(|o| vanefit::task::fit::side_path(o, "starts.jsonl"));
+        .map(|o| vanefit::task::side_path(o, "starts.jsonl"));
     let observer = PyFitProgress::new(progress);
-    let run = py.detach(|| vanefit::task::fit::fit(&dataset, &settings, results, &observer));
+    let run = py.detach(|| vanefit::task::fit(&dataset, &settings, results, &observer));
     // The callback's exception (or the KeyboardInterrupt) first: it is why a run stopped.
     observer.raise_callback_error()?;
     let run = run.map_err(fit_err)?;
@@ -149,7 +149,7 @@ pub fn diagnose(
     out: Option<PathBuf>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(String, String, String)> {
-    use vanefit::task::diagnose::{diagnose_dataset, write_diagnosis, DiagnoseOptions};
+    use vanefit::task::{diagnose_dataset, write_diagnosis, DiagnoseOptions};
     let settings = DiagnoseOptions {
         starts,
         seed,

@@ -16,14 +16,14 @@ use errors::{data_err, param_err, DataError, ParameterError, VanefitError};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use tasks::load_fit;
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
-use vanefit::estimate::fit::DataObjective;
-use vanefit::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
+use vanefit::estimate::DataObjective;
 use vanefit::estimate::Objective;
-use vanefit::model::params::PARAMS;
+use vanefit::estimate::{FitLikelihood, FitLikelihoodError};
+use vanefit::model::PARAMS;
 use vanefit::numerics::DefaultSolver;
-use vanefit::objective::cost::{CostModel, CostOptions};
+use vanefit::objective::{CostModel, CostOptions};
 
 /// A dataset read and checked by vanefit (rig.toml and its recordings).
 #[pyclass(module = "vanefit._core", frozen)]
@@ -143,7 +143,7 @@ fn parameters(
         None => FitFile::from_params(
             &ds.name,
             ds.nominal_params().map_err(data_err)?,
-            vanefit::model::effects::EffectSet::empty(),
+            vanefit::model::EffectSet::empty(),
         ),
     };
     for (name, v) in overrides {
@@ -166,9 +166,9 @@ fn simulate(
     overrides: Vec<(String, f64)>,
 ) -> PyResult<Vec<(String, Columns)>> {
     let f = parameters(&ds.inner, fit, fit_text, overrides)?;
-    let motor = vanefit::task::simulate::motor_for(&ds.inner, Some(&f)).map_err(data_err)?;
+    let motor = vanefit::task::motor_for(&ds.inner, Some(&f)).map_err(data_err)?;
     let tables = py
-        .detach(|| vanefit::task::simulate::simulated_tables(&ds.inner, &motor))
+        .detach(|| vanefit::task::simulated_tables(&ds.inner, &motor))
         .map_err(|e| VanefitError::new_err(e.to_string()))?;
     Ok(tables
         .into_iter()
@@ -193,8 +193,7 @@ fn cost(
     let f = parameters(&ds.inner, fit, fit_text, overrides)?;
     let model = CostModel::new(&ds.inner, CostOptions::default()).map_err(data_err)?;
     py.detach(|| {
-        let motor =
-            vanefit::task::simulate::motor_for(&ds.inner, Some(&f)).map_err(|e| e.to_string())?;
+        let motor = vanefit::task::motor_for(&ds.inner, Some(&f)).map_err(|e| e.to_string())?;
         let objective = DataObjective {
             cost: &model,
             solver: Box::new(DefaultSolver::default()),
@@ -321,12 +320,12 @@ impl PyLikelihood {
 
     /// The sampling coordinates of SI values.
     fn to_coords(&self, values: Vec<f64>) -> Vec<f64> {
-        vanefit::estimate::sample::FitPosterior::new(&self.inner).to_coords(&values)
+        vanefit::estimate::FitPosterior::new(&self.inner).to_coords(&values)
     }
 
     /// The SI values at sampling coordinates.
     fn to_values(&self, x: Vec<f64>) -> Vec<f64> {
-        vanefit::estimate::sample::FitPosterior::new(&self.inner).to_values(&x)
+        vanefit::estimate::FitPosterior::new(&self.inner).to_values(&x)
     }
 
     /// Runs vanefit's ensemble sampler on the log-posterior from `starts` (one list of

@@ -96,7 +96,7 @@ impl PyFitProgress {
     }
 }
 
-impl vanefit::task::fit::FitObserver for PyFitProgress {}
+impl vanefit::task::FitObserver for PyFitProgress {}
 
 impl RunObserver for PyFitProgress {
     fn started(&self, total: usize, already_done: usize) {

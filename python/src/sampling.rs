@@ -5,9 +5,9 @@
 
 use crate::errors::ParameterError;
 use pyo3::prelude::*;
-use vanefit::estimate::fit_likelihood::FitLikelihood;
-use vanefit::estimate::sample::diagnostics::summarise;
-use vanefit::estimate::sample::{run_ensemble, EnsembleSettings, FitPosterior, LogDensity};
+use vanefit::estimate::summarise;
+use vanefit::estimate::FitLikelihood;
+use vanefit::estimate::{run_ensemble, EnsembleSettings, FitPosterior, LogDensity};
 
 /// Chains, ln p and acceptance of a run, as plain lists.
 pub(crate) type Run = (Vec<Vec<Vec<f64>>>, Vec<Vec<f64>>, Vec<f64>);

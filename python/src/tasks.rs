@@ -7,8 +7,8 @@ use crate::errors::{data_err, param_err, DataError, ParameterError, VanefitError
 use crate::fitting::option_err;
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
 
 /// A fit file from `path`, or from `text` (a fit held in memory; `path` then only names it
 /// in messages).
@@ -41,7 +41,8 @@ pub fn predict(
     out: Option<PathBuf>,
 ) -> PyResult<String> {
     use vanefit::report::predict as report;
-    use vanefit::task::predict::{self as task, PredictOptions};
+    use vanefit::task;
+    use vanefit::task::PredictOptions;
     let file = load_fit(&fit, fit_text.as_deref())?;
     let settings = PredictOptions {
         unit: task::pressure_unit("PredictOptions.unit", &unit).map_err(|e| option_err(&e))?,
@@ -62,7 +63,7 @@ pub fn predict(
     let source = task::source_name(&fit, &file);
     let mut written = Vec::new();
     if let Some(dir) = &out {
-        vanefit::io::out::check_dir(dir).map_err(|e| param_err(format!("out {e}")))?;
+        vanefit::io::check_dir(dir).map_err(|e| param_err(format!("out {e}")))?;
         written = py
             .detach(|| task::write_prediction(&pr, &settings, &source, dir))
             .map_err(|e| VanefitError::new_err(e.to_string()))?;
@@ -98,13 +99,13 @@ pub fn export_petab(
             out.display()
         )));
     }
-    vanefit::io::out::check_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
+    vanefit::io::check_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
     let file = load_fit(&fit, fit_text.as_deref())?;
     let ds = Dataset::load(&dataset).map_err(data_err)?;
     let (tables, summary) = py
         .detach(|| petab::tables(&ds, &file, &fit))
         .map_err(data_err)?;
-    let _lock = vanefit::io::out::prepare_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
+    let _lock = vanefit::io::prepare_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
     petab::write(&out, &tables).map_err(|e| VanefitError::new_err(e.to_string()))?;
     Ok(serde_json::json!({
         "measurements": summary.measurements, "observables": summary.observables,
@@ -132,8 +133,8 @@ pub fn synth(
     catalogue: bool,
     pressures_bar_g: Vec<f64>,
 ) -> PyResult<()> {
-    use vanefit::model::effects::EffectSet;
-    use vanefit::task::synth::{synth_motor, write_synthetic, SynthOptions};
+    use vanefit::model::EffectSet;
+    use vanefit::task::{synth_motor, write_synthetic, SynthOptions};
     let effects = effects
         .map(|list| EffectSet::parse_list(&list.join(",")))
         .transpose()
@@ -153,7 +154,7 @@ pub fn synth(
         .transpose()?;
     let name = out.file_name().unwrap_or_default().to_string_lossy();
     let (motor, truth) = synth_motor(&name, file.as_ref(), &settings);
-    let _lock = vanefit::io::out::prepare_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
+    let _lock = vanefit::io::prepare_dir(&out).map_err(|e| param_err(format!("out {e}")))?;
     py.detach(|| write_synthetic(&out, &motor, &truth, &settings))
         .map_err(|e| DataError::new_err(e.to_string()))?;
     Ok(())

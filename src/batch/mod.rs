@@ -9,17 +9,19 @@
 //! and `fleet.svg`. A unit runs the same library function as its command (`task`), so a
 //! unit's numbers are the command's, and results never depend on shards or threads.
 
-pub mod manifest;
-pub mod merge;
+pub(crate) mod manifest;
+pub(crate) mod merge;
 mod options;
 pub mod plan;
 mod progress;
-pub mod run;
-pub mod slurm;
-pub mod status;
+pub(crate) mod run;
+pub(crate) mod slurm;
+pub(crate) mod status;
 
-pub use manifest::{Manifest, ManifestError, TaskKind};
-pub use merge::{merge, MergeOutcome};
+pub use manifest::{DatasetEntry, Manifest, ManifestError, TaskKind};
+pub use slurm::{submit, SlurmError, SlurmOptions, Submitted};
+
+pub use merge::{merge, summarize, MergeOutcome, Summary};
 pub use options::{BatchOptions, BatchSettings};
 pub use plan::{Shard, Unit};
 pub use run::{run, RunOptions, RunOutcome};

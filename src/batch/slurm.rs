@@ -28,6 +28,7 @@ pub struct SlurmOptions {
 
 /// Why submitting failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SlurmError {
     /// `sbatch` could not be started.
     #[error("cannot run sbatch ({0}): is Slurm installed and sbatch on PATH?")]

@@ -33,11 +33,6 @@ impl State {
             State::Failed => "failed",
         }
     }
-
-    /// Done or failed.
-    pub fn finished(self) -> bool {
-        matches!(self, State::Done | State::Failed)
-    }
 }
 
 /// The contents of a status file.

@@ -3,8 +3,9 @@
 
 use crate::cli::Failure;
 use std::path::PathBuf;
-use vanefit::batch::slurm::{submit, SlurmOptions};
-use vanefit::batch::{self, BatchOptions, Manifest, Shard};
+use vanefit::batch;
+use vanefit::batch::{submit, SlurmOptions};
+use vanefit::batch::{BatchOptions, Manifest, Shard};
 
 /// `vanefit batch` options.
 #[derive(clap::Args, Debug, Clone)]

@@ -2,9 +2,9 @@
 //! figures and every point, as printed and in SI, with the reference conditions of the
 //! air-consumption unit (free air, ANR, normal or standard air).
 
-use vanefit::data::dataset::catalogue::FIGURES;
-use vanefit::data::dataset::{ExperimentData, Kind};
-use vanefit::units::format::trim_zeros;
+use vanefit::data::FIGURES;
+use vanefit::data::{ExperimentData, Kind};
+use vanefit::units::trim_zeros;
 use vanefit::units::{Quantity, Unit};
 
 /// A number for people: 5 significant digits.

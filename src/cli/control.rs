@@ -13,21 +13,22 @@
 use crate::cli::Failure;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
-use vanefit::control::closed_loop::Loop;
 use vanefit::control::rpm;
-use vanefit::control::study::bode::{BodeOptions, BodeStudy};
-use vanefit::control::study::design::{DesignOptions, DesignRun, DesignStudy};
-use vanefit::control::study::disturbance::{DisturbanceOptions, DisturbanceStudy};
-use vanefit::control::study::min_speed::{MinSpeedOptions, MinSpeedStudy};
-use vanefit::control::study::step::{StepOptions, StepStudy};
-use vanefit::control::study::throttle::{ThrottleOptions, ThrottleStudy};
-use vanefit::control::study::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
-use vanefit::control::throttle::Port;
-use vanefit::io::out::prepare_dir;
+use vanefit::control::Loop;
+use vanefit::control::Port;
+use vanefit::control::{BodeOptions, BodeStudy};
+use vanefit::control::{DesignOptions, DesignRun, DesignStudy};
+use vanefit::control::{DisturbanceOptions, DisturbanceStudy};
+use vanefit::control::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
+use vanefit::control::{MinSpeedOptions, MinSpeedStudy};
+use vanefit::control::{StepOptions, StepStudy};
+use vanefit::control::{ThrottleOptions, ThrottleStudy};
+use vanefit::io::prepare_dir;
 use vanefit::report::control::bode::RPM_PER_BAR;
 use vanefit::report::control::{describe_load, describe_pi, describe_valve};
 use vanefit::report::explain;
-use vanefit::task::control::{self as task, write_study, ControlStudy, StudyResult};
+use vanefit::task;
+use vanefit::task::{write_study, ControlStudy, StudyResult};
 
 /// `vanefit control` arguments.
 #[derive(Args, Debug)]

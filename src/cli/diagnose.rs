@@ -3,10 +3,10 @@
 
 use crate::cli::Failure;
 use std::path::PathBuf;
-use vanefit::data::dataset::Dataset;
+use vanefit::data::Dataset;
 use vanefit::diagnose::{summary, DiagnoseObserver, Progress};
 use vanefit::estimate::Engine;
-use vanefit::task::diagnose::{diagnose_dataset, write_diagnosis, DiagnoseOptions};
+use vanefit::task::{diagnose_dataset, write_diagnosis, DiagnoseOptions};
 
 /// `vanefit diagnose` options.
 #[derive(clap::Args, Debug, Clone)]
@@ -44,9 +44,9 @@ pub(crate) fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
     .check()?;
     // The output is checked, then the data (so bad data leaves no folder behind), then the
     // output is created and locked: all before the diagnosis, which takes tens of seconds.
-    vanefit::io::out::check_dir(&args.out)?;
+    vanefit::io::check_dir(&args.out)?;
     let ds = Dataset::load(&args.dataset)?;
-    let _lock = vanefit::io::out::prepare_dir(&args.out)?;
+    let _lock = vanefit::io::prepare_dir(&args.out)?;
     let engine = Engine::with_threads(settings.threads())?;
     let d = diagnose_dataset(&engine, &ds, &settings, &StderrProgress)?;
     write_diagnosis(&d, &args.out)?;

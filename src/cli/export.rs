@@ -4,7 +4,7 @@ use crate::cli::Failure;
 use clap::Args;
 use std::path::PathBuf;
 use vanefit::export::petab;
-use vanefit::task::export::petab_problem;
+use vanefit::task::petab_problem;
 
 /// Options of `vanefit export-petab`.
 #[derive(Args, Debug)]
@@ -31,9 +31,9 @@ pub(crate) fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
     }
     // Checked now without writing (nothing is written when an input is bad), created and
     // locked once the tables are made.
-    vanefit::io::out::check_dir(&args.out)?;
+    vanefit::io::check_dir(&args.out)?;
     let problem = petab_problem(&args.fit, args.dataset.as_deref())?;
-    let _lock = vanefit::io::out::prepare_dir(&args.out)?;
+    let _lock = vanefit::io::prepare_dir(&args.out)?;
     petab::write(&args.out, &problem.tables)?;
     let summary = &problem.summary;
     say!(
@@ -76,7 +76,7 @@ pub(crate) fn run_fmu(args: &ExportFmuArgs) -> Result<(), Failure> {
             args.out.display()
         )));
     }
-    let done = vanefit::task::export::export_fmu(&vanefit::task::export::FmuOptions {
+    let done = vanefit::task::export_fmu(&vanefit::task::FmuOptions {
         fit: args.fit.clone(),
         out: args.out.clone(),
         binary: args.binary.clone(),

@@ -4,14 +4,14 @@
 use crate::cli::Failure;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
-use vanefit::data::dataset::{Dataset, Kind};
-use vanefit::estimate::displacement::DisplacementEstimate;
-use vanefit::estimate::fit::{FitOutcome, FitSetup, UncertaintyMethod};
+use vanefit::data::{Dataset, Kind};
 use vanefit::estimate::multistart::{RunObserver, StartResult};
-use vanefit::model::effects::EffectSet;
+use vanefit::estimate::DisplacementEstimate;
+use vanefit::estimate::{FitOutcome, FitSetup, UncertaintyMethod};
+use vanefit::model::EffectSet;
 use vanefit::report::explain;
 use vanefit::report::fit as report;
-use vanefit::task::fit::{
+use vanefit::task::{
     displacement_first_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
     ParamRange, Pinning,
 };
@@ -301,11 +301,10 @@ fn progress() -> Progress {
 /// Runs `vanefit fit`: fit, fit file, summary, plots.
 pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     // Before the search: an unwritable or busy output fails now, not after the starts.
-    let _lock =
-        vanefit::io::out::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
+    let _lock = vanefit::io::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
     let settings = args.options()?.check()?;
     // A page's reading errors are said before the search, not found in its residuals.
-    if let Ok(ds) = vanefit::data::dataset::Dataset::load(&args.dataset) {
+    if let Ok(ds) = vanefit::data::Dataset::load(&args.dataset) {
         for ex in &ds.experiments {
             crate::cli::print_page_warnings(&ds, ex);
         }

@@ -24,11 +24,11 @@ pub(crate) mod predict;
 
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
-use vanefit::data::dataset::{Dataset, Kind};
-use vanefit::data::fitfile::FitFile;
-use vanefit::model::effects::EffectSet;
-use vanefit::task::simulate::{motor_for, simulated_tables, write_table};
-use vanefit::task::synth::{synth_motor, write_synthetic, SynthOptions};
+use vanefit::data::FitFile;
+use vanefit::data::{Dataset, Kind};
+use vanefit::model::EffectSet;
+use vanefit::task::{motor_for, simulated_tables, write_table};
+use vanefit::task::{synth_motor, write_synthetic, SynthOptions};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -184,7 +184,7 @@ pub(crate) fn flags(message: &str) -> String {
 /// Clap value parser of `--effects`: the list as given once every id in it is known, so an
 /// unknown id is bad usage (exit status 2, reported by clap with the known ids) rather than
 /// a failed run.
-pub(crate) fn effects_arg(list: &str) -> Result<String, vanefit::model::effects::UnknownEffect> {
+pub(crate) fn effects_arg(list: &str) -> Result<String, vanefit::model::UnknownEffect> {
     EffectSet::parse_list(list).map(|_| list.to_string())
 }
 
@@ -258,7 +258,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
         .filter(|ex| ex.kind != Kind::Catalogue)
     {
         for c in &mut ex.recording.columns {
-            c.raw = vanefit::data::dataset::Cells::new();
+            c.raw = vanefit::data::Cells::new();
         }
     }
     // Every reference is fitted before anything is printed: a channel that cannot give one
@@ -267,9 +267,9 @@ fn check(dir: &Path) -> Result<(), Failure> {
         .experiments
         .iter()
         .map(|ex| {
-            vanefit::objective::reference::experiment_references(
+            vanefit::objective::experiment_references(
                 ex,
-                &vanefit::objective::reference::FitOptions::default(),
+                &vanefit::objective::FitOptions::default(),
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -292,8 +292,8 @@ fn check(dir: &Path) -> Result<(), Failure> {
         }
     }
     // A page without its displacement: the size a fit starts from, estimated from the page.
-    if let Ok(Some(e)) = vanefit::task::fit::page_displacement_of(&ds) {
-        say!("    {}", vanefit::task::fit::displacement_first_line(&e));
+    if let Ok(Some(e)) = vanefit::task::page_displacement_of(&ds) {
+        say!("    {}", vanefit::task::displacement_first_line(&e));
     }
     for (ex, refs) in ds.experiments.iter().zip(&references) {
         say!(
@@ -328,7 +328,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
 
 /// One reference response for `check`: channel, degree, R², σ in the column's unit, valid
 /// range in the abscissa column's unit, and its pieces when the data jump.
-fn print_reference(r: &vanefit::objective::reference::ChannelReference, p_atm_pa: f64) {
+fn print_reference(r: &vanefit::objective::ChannelReference, p_atm_pa: f64) {
     let a = &r.abscissa;
     let fit = &r.reference;
     let x_name = if a.log10 {
@@ -387,7 +387,7 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
     let ds = Dataset::load(dir)?;
     let fit = params.map(FitFile::read).transpose()?;
     let motor = motor_for(&ds, fit.as_ref())?;
-    let _lock = vanefit::io::out::prepare_dir(out)?;
+    let _lock = vanefit::io::prepare_dir(out)?;
     for table in simulated_tables(&ds, &motor)? {
         let path = write_table(&table, out)?;
         say!("wrote {}", path.display());
@@ -402,7 +402,7 @@ fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<()
     let fit = params.map(FitFile::read).transpose()?;
     let name = out.file_name().unwrap_or_default().to_string_lossy();
     let (motor, truth) = synth_motor(&name, fit.as_ref(), &settings);
-    let _lock = vanefit::io::out::prepare_dir(out)?;
+    let _lock = vanefit::io::prepare_dir(out)?;
     let written = write_synthetic(out, &motor, &truth, &settings)?;
     if written.catalogue {
         say!(
@@ -422,8 +422,8 @@ fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<()
 
 /// The warnings of a catalogue page (maker rules, figures against the page's own curves),
 /// each at its rig.toml line, on stderr (`check` and `fit`).
-pub(crate) fn print_page_warnings(ds: &Dataset, ex: &vanefit::sim::recording::ExperimentData) {
-    for w in vanefit::data::dataset::page_rules::page_warnings(ex) {
+pub(crate) fn print_page_warnings(ds: &Dataset, ex: &vanefit::sim::ExperimentData) {
+    for w in vanefit::data::page_warnings(ex) {
         let at = w.line.map_or(String::new(), |l| format!(":{l}"));
         eprintln!(
             "warning: {}{at} (key '{}'): {}",

@@ -11,10 +11,10 @@ use clap::builder::PossibleValuesParser;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
-use vanefit::data::fitfile::FitFile;
+use vanefit::data::FitFile;
 use vanefit::predict::{BandChoice, SamplingOptions};
 use vanefit::report::predict::{notes, tables_markdown};
-use vanefit::task::predict::{
+use vanefit::task::{
     fit_atmosphere_pa, predict_observed, pressure_unit, source_name, write_prediction,
     PredictOptions,
 };
@@ -69,7 +69,7 @@ pub(crate) struct PredictArgs {
     #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub(crate) speed_grid_rpm: f64,
     /// Points of each curve from standstill to the free speed.
-    #[arg(long, default_value_t = vanefit::predict::options::DEFAULT_CURVE_POINTS)]
+    #[arg(long, default_value_t = vanefit::predict::DEFAULT_CURVE_POINTS)]
     pub(crate) curve_points: usize,
     /// Take the parameters a fit could estimate but held fixed or could not identify as
     /// uncertain within this factor (95 %), so that the bands include them (e.g. 1.5 for a
@@ -91,13 +91,13 @@ pub(crate) struct PredictArgs {
     #[arg(long)]
     pub(crate) walkers: Option<usize>,
     /// Kept steps per walker of the posterior sampler.
-    #[arg(long, default_value_t = vanefit::predict::samples::DEFAULT_STEPS)]
+    #[arg(long, default_value_t = vanefit::predict::DEFAULT_STEPS)]
     pub(crate) steps: usize,
     /// Steps per walker run first and discarded.
-    #[arg(long, default_value_t = vanefit::predict::samples::DEFAULT_BURN_IN)]
+    #[arg(long, default_value_t = vanefit::predict::DEFAULT_BURN_IN)]
     pub(crate) burn_in: usize,
     /// Posterior samples propagated through the figures.
-    #[arg(long, default_value_t = vanefit::predict::samples::DEFAULT_DRAWS)]
+    #[arg(long, default_value_t = vanefit::predict::DEFAULT_DRAWS)]
     pub(crate) draws: usize,
     /// Seed of the posterior sampler; a seed gives the same bands whatever the thread count.
     #[arg(long, default_value_t = 1)]
@@ -109,7 +109,7 @@ pub(crate) struct PredictArgs {
 
 /// The column suffixes of the pressure units, the values `--unit` accepts.
 fn pressure_suffixes() -> Vec<&'static str> {
-    vanefit::task::predict::pressure_units()
+    vanefit::task::pressure_units()
         .iter()
         .map(|u| u.suffix())
         .collect()
@@ -164,7 +164,7 @@ impl PredictArgs {
 /// Runs `vanefit predict`.
 pub(crate) fn run(args: &PredictArgs) -> Result<(), Failure> {
     let t0 = Instant::now();
-    vanefit::io::out::check_dir(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
+    vanefit::io::check_dir(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
     let fit = FitFile::read(&args.fit)?;
     let settings = args.options()?.check(fit_atmosphere_pa(&fit))?;
     let bar = Progress::default();

@@ -176,6 +176,7 @@ impl Valve {
 
 /// What the integrator does while the command is saturated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum AntiWindup {
     /// Plain integration (winds up).
     None,

@@ -102,6 +102,7 @@ pub fn margins(lin: &LinearModel, valve: &Valve, pi: &PiController) -> Margins {
 
 /// What the design asks for.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum Target {
     /// Phase margin only (degrees); the crossover follows from the 15° rule.
     PhaseMargin {

@@ -6,15 +6,16 @@ pub use crate::data::motor::MotorSection;
 use crate::model::motor::Load;
 use crate::model::params::MotorParams;
 use crate::sim::experiment::InputCheck;
-pub use crate::sim::recording::{
-    Cells, Column, ExperimentData, Figure, Kind, MissingColumn, Recording,
-};
+pub use crate::sim::recording::{Cells, Column, ExperimentData, Kind, MissingColumn, Recording};
 
-pub mod catalogue;
-pub mod page_rules;
+pub(crate) mod catalogue;
+pub(crate) mod page_rules;
 mod plausible;
+
 use crate::units::constants::P_ATM_PA;
 use crate::units::{parse_column, ColumnNameError, Quantity};
+pub use catalogue::{parse_value, FIGURES};
+pub use page_rules::page_warnings;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 

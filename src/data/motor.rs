@@ -49,6 +49,7 @@ pub struct MotorSection {
 
 /// A `[motor]` table that does not describe a motor; each names the key to blame.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum MotorSpecError {
     /// Part of the geometry is given, but not all of it.
     #[error("[motor] gives part of the geometry; '{missing}' is missing (a geometry needs vanes, length_m, r_stator_m, r_rotor_m, alpha_dead_deg, alpha_fill_deg and alpha_exp_deg)")]

@@ -17,7 +17,7 @@
 //! them).
 //!
 //! With r = (recorded − simulated)/σ over every compared point (σ the channel's noise,
-//! [`crate::objective::likelihood`]) and S the normalised
+//! `objective::likelihood`) and S the normalised
 //! sensitivities, forward selection with BIC: the nuisance columns are projected out, each
 //! library column's χ² reduction (sᵀr)²/(sᵀs) of the projected quantities is computed, and
 //! the best is kept while its ΔBIC = −Δχ² + ln n is below `DISCOVERY_DELTA_BIC`; at most
@@ -172,6 +172,7 @@ fn step(t: &ExtraTerm) -> f64 {
 
 /// Why the term regression could not run.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RegressError {
     /// The model whose residual is regressed does not simulate.
     #[error("the model to regress does not simulate")]

@@ -27,6 +27,7 @@ use std::time::Instant;
 
 /// Why a fit could not run (every message starts with the fit's label).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FitError {
     /// The job has no start point.
     #[error("{0}: no start point")]
@@ -62,7 +63,7 @@ pub struct Fitted {
     pub params: MotorParams,
     /// The project's fitting cost J (`cost::CostModel::evaluate`) at these parameters.
     pub cost: f64,
-    /// χ² against the recorded data ([`crate::objective::likelihood`], eq. 1), which the fit minimises.
+    /// χ² against the recorded data (`objective::likelihood`, eq. 1), which the fit minimises.
     pub chi2: f64,
     /// Data points behind χ².
     pub n_points: usize,

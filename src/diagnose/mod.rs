@@ -5,7 +5,7 @@
 //! # What is fitted
 //!
 //! Every fit of a diagnosis maximises the Gaussian likelihood of the RECORDED rows
-//! ([`crate::objective::likelihood`]): χ² = Σ((simulated − recorded)/σ)² over the rows the cost compares, σ each
+//! (`objective::likelihood`): χ² = Σ((simulated − recorded)/σ)² over the rows the cost compares, σ each
 //! channel's noise estimated from the data alone (second differences). Not the project's
 //! cost J against the reference polynomials: their σ also holds the polynomials' lack of
 //! fit (threefold for a ramp's speed), and their systematic error is a signal that a fit to
@@ -78,6 +78,8 @@ mod candidates;
 mod concealment;
 mod context;
 mod error;
+pub use analysis::{ChannelData, Location};
+pub use fitting::{run_job, FitError, FitJob, Fitted};
 mod json;
 mod locate;
 mod models;
@@ -89,8 +91,8 @@ mod uncatalogued;
 
 pub(crate) mod analysis;
 pub mod discover;
-pub mod fitting;
-pub mod stats;
+pub(crate) mod fitting;
+pub(crate) mod stats;
 
 pub use alternatives::ALSO_CONSISTENT_DELTA_BIC;
 pub use error::DiagnoseError;

@@ -32,6 +32,7 @@ impl DiagnoseObserver for crate::estimate::multistart::Silent {}
 
 /// One step of a diagnosis. `Display` gives the command line's progress line.
 #[derive(Debug, Clone, Copy)]
+#[non_exhaustive]
 pub enum Progress<'a> {
     /// The baseline fit starts.
     BaselineStart {

@@ -77,6 +77,7 @@ impl DiagnoseOptions {
 
 /// What kind of model a refit is (the order is the simplicity order of the selection).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[non_exhaustive]
 pub enum ModelKind {
     /// The base model (docs/model.md, "Parameters", "What is estimated").
     Baseline,

@@ -92,6 +92,7 @@ const RIVALS: usize = 8;
 
 /// How intervals are computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum UncertaintyMethod {
     /// Profile likelihood (curvature sizes the steps and fills in if it fails).
     Profile,

@@ -281,7 +281,7 @@ impl FitLikelihood {
     }
 
     /// χ² at `values` for an optimizer: finite always, the cost module's
-    /// [`FAILURE_PENALTY`] where the values are invalid or the simulation fails.
+    /// `FAILURE_PENALTY` where the values are invalid or the simulation fails.
     pub fn chi2(&self, values: &[f64]) -> f64 {
         self.try_chi2(values).unwrap_or(FAILURE_PENALTY)
     }

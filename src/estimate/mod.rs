@@ -5,33 +5,50 @@
 //! and its results file (`history`), profile-likelihood intervals (`uncertainty`), and the fit
 //! of a dataset (`fit`). Progress goes to a [`RunObserver`]; nothing here prints.
 
-pub mod derivatives;
-pub mod displacement;
-pub mod engine;
-pub mod error;
-pub mod fit;
+pub(crate) mod derivatives;
+pub(crate) mod displacement;
+pub(crate) mod engine;
+pub(crate) mod error;
+pub(crate) mod fit;
 pub(crate) mod fit_data;
-pub mod fit_likelihood;
-pub mod goodness;
-pub mod history;
+pub(crate) mod fit_likelihood;
+pub(crate) mod goodness;
+pub(crate) mod history;
 pub(crate) mod least_squares;
-pub mod likelihood;
+pub(crate) mod likelihood;
 pub(crate) mod max_likelihood;
 pub mod multistart;
-pub mod objective;
-pub mod optimize;
-pub mod prior;
-pub mod sample;
-pub mod settings;
-pub mod space;
+pub(crate) mod objective;
+pub(crate) mod optimize;
+pub(crate) mod prior;
+pub(crate) mod sample;
+pub(crate) mod settings;
+pub(crate) mod space;
 pub(crate) mod subset;
-pub mod uncertainty;
+pub(crate) mod uncertainty;
 
+pub use fit::{fit, fit_file, DataObjective, FitData, FitOutcome, FitSetup, UncertaintyMethod};
+pub use fit_likelihood::{Breakdown, ChannelRows, FitLikelihood, FitLikelihoodError};
+pub use goodness::{ChannelChi2, GoodnessOfFit};
+pub use likelihood::Likelihood;
+pub use multistart::{Ending, MultiStartOutcome, RunObserver, Silent, StartResult};
+pub use optimize::{minimize, Layout, NelderMeadSettings, Restart, RestartedNelderMead, Status};
+pub use prior::{Prior, PriorTerm};
+pub use sample::diagnostics::ParamDiagnostics;
+pub use sample::posterior::LogPrior;
+pub use sample::{
+    ess, ess_bulk, ess_tail, rhat_rank, run_ensemble, summarise, Chains, EnsembleSettings,
+    FitPosterior, LogDensity, SampleError,
+};
+pub use space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
+pub use uncertainty::{
+    curvature_covariance, curvature_intervals, polish_chi2, profile_intervals, Interval, Method,
+    ProfilePoint, CHI2_95,
+};
+
+pub use displacement::DisplacementEstimate;
 pub use engine::Engine;
 pub use error::EstimateError;
 pub use history::ResultsFile;
-pub use multistart::{MultiStartOutcome, RunObserver, StartResult};
 pub use objective::{Coordinates, Evaluation, Objective, Problem};
-pub use prior::Prior;
 pub use settings::{MultiStartConfig, MultiStartSettings};
-pub use space::{Dimension, ParamSpace, DEFAULT_ESTIMATED};

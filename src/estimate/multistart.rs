@@ -31,6 +31,7 @@ use serde::{Deserialize, Serialize};
 /// How a start ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum Ending {
     /// A restart found nothing better (or the restarts ran out), or the least-squares
     /// hand-over converged.

@@ -145,6 +145,7 @@ fn curvature_simplex(
 
 /// Where a search stands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Status {
     /// More stages would go on searching.
     Running,

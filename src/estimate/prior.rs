@@ -110,7 +110,7 @@ impl Prior {
 
     /// The prior of a motor whose nominal parameters (defaults scaled to its displacement,
     /// and whatever its rig file gives) are `nominal`: a term for every parameter of
-    /// [`PRIOR_SPREADS`] with a positive nominal value.
+    /// `PRIOR_SPREADS` with a positive nominal value.
     pub fn for_motor(nominal: &MotorParams) -> Self {
         let terms = PRIOR_SPREADS
             .iter()

@@ -33,6 +33,7 @@ const THETA_EDGE: f64 = 15.0;
 /// How an interval was obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum Method {
     /// Profile likelihood.
     Profile,

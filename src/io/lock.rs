@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 /// Why an output cannot be locked.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LockError {
     /// Another live run holds the lock.
     #[error("output in use by pid {pid} (lock file {})", path.display())]

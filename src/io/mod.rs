@@ -1,9 +1,13 @@
 //! File-system helpers: never lose work, never run twice into the same output, and never
 //! die because stdout was closed.
 
-pub mod lock;
-pub mod out;
-pub mod stale;
+pub(crate) mod lock;
+pub(crate) mod out;
+pub(crate) mod stale;
+
+pub use lock::{LockError, OutputLock};
+pub use out::{check_dir, prepare_dir, prepare_file, OutputError};
+pub use stale::temporary_name;
 
 use std::io::Write;
 use std::path::Path;
@@ -13,9 +17,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// renamed over the target, so that a reader sees either the old or the new file, never half.
 /// The temporary file is removed again when any step fails (a full disk, a folder that
 /// vanished), so a failed write leaves nothing behind. A missing folder is created, but
-/// commands create and check their output folders before they compute (see [`out`]).
+/// commands create and check their output folders before they compute (see `out`).
 /// A run killed between creating and renaming its temporary cannot remove it; the first
-/// atomic write of a later run into the folder does ([`stale`]).
+/// atomic write of a later run into the folder does (`stale`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let dir = path
         .parent()

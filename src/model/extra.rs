@@ -230,7 +230,7 @@ pub enum SpeedFactor {
     Sign,
     /// ω·|ω|^(1/2), (rad/s)^1.5: a viscous loss growing faster than ω (mixed lubrication).
     OmegaPow15,
-    /// exp(−|ω|/ω_s)·tanh(ω/ω_reg), 1, ω_s = [`STRIBECK_EXP_RAD_S`]: the exponential
+    /// exp(−|ω|/ω_s)·tanh(ω/ω_reg), 1, ω_s = `STRIBECK_EXP_RAD_S`: the exponential
     /// Stribeck curve's excess over Coulomb friction.
     StribeckExp,
 }

@@ -48,13 +48,16 @@ pub(crate) type SlopedFlow = (f64, f64, f64);
 /// ```
 ///
 /// Slopes, like the flow, are taken at the p_m the solver returns; a choked first nozzle
-/// (∂_m ṁ_1 = 0) makes the flow independent of p_b, as it should.
+/// (∂_m ṁ_1 = 0) makes the flow independent of p_b, as it should. (The model takes all
+/// slopes at once from `series_slopes`; this pair is what the tests check against
+/// difference quotients.)
+#[cfg(test)]
 pub fn series_flow_with_slopes(first: &Nozzle, second: &Nozzle, p_a: f64, p_b: f64) -> SlopedFlow {
     let (m, d_a, d_b, _) = series_flow_sensitivities(first, second, p_a, p_b);
     (m, d_a, d_b)
 }
 
-/// As [`series_flow_with_slopes`], and the slope ∂ṁ/∂ln C_2 of the flow in the logarithm
+/// As `series_flow_with_slopes`, and the slope ∂ṁ/∂ln C_2 of the flow in the logarithm
 /// of the second nozzle's conductance, kg/s (how an outlet throttle that moves in time
 /// moves the flow).
 ///

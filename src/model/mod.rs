@@ -2,12 +2,25 @@
 //! friction, the missing-physics catalog, parameters, the motor as parameters → state
 //! derivatives, and the analytic Jacobian of the base model.
 
-pub mod effects;
-pub mod extra;
-pub mod friction;
-pub mod geometry;
-pub mod jacobian;
-pub mod motor;
-pub mod nozzle;
-pub mod params;
+pub(crate) mod effects;
+pub(crate) mod extra;
+pub(crate) mod friction;
+pub(crate) mod geometry;
+pub(crate) mod jacobian;
+pub(crate) mod motor;
+pub(crate) mod nozzle;
+pub(crate) mod params;
 pub(crate) mod thermo;
+
+pub use effects::{
+    CatalogEffect, Category, Effect, EffectSet, ShowsIn, SupplyValve, Term, UnknownEffect,
+};
+pub use geometry::{PortTiming, VaneGeometry};
+pub use jacobian::BoundaryRate;
+pub use motor::{
+    idx, Balance, BalanceId, Boundary, Chamber, ExtraTerm, LeakPath, Load, Motor, PressureFactor,
+    SpeedFactor, State, ThrottleSide, N_STATES,
+};
+pub use nozzle::{psi, Nozzle, R_LAMINAR};
+pub use params::{spec, MotorParams, OffValue, ParamError, ParamSpec, PARAMS};
+pub use thermo::{Cycle, DisplacementFlows};

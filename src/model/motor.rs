@@ -39,6 +39,7 @@ pub mod idx {
 
 /// Mechanical load on the shaft.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[non_exhaustive]
 pub enum Load {
     /// Free shaft.
     #[default]

@@ -270,12 +270,6 @@ pub fn description(name: &str) -> Option<&'static str> {
     spec(name).map(ParamSpec::description)
 }
 
-/// A parameter's id with its description for people, e.g. `c_1e (leak, inlet side →
-/// exhaust)`; an unknown name is returned as it is.
-pub fn label(name: &str) -> String {
-    spec(name).map_or_else(|| name.to_string(), ParamSpec::label)
-}
-
 /// Whether the named parameter is a sonic conductance (false for an unknown name).
 pub(crate) fn is_conductance(name: &str) -> bool {
     spec(name).is_some_and(ParamSpec::is_conductance)
@@ -443,14 +437,13 @@ mod tests {
             let d = p.description();
             assert!(d.len() >= 6 && d != p.name, "{}: '{d}'", p.name);
             assert_eq!(description(p.name), Some(d));
-            assert_eq!(label(p.name), format!("{} ({d})", p.name));
+            assert_eq!(p.label(), format!("{} ({d})", p.name));
         }
         assert_eq!(description("c_1e"), Some("leak, inlet side → exhaust"));
         assert_eq!(description("c_in1"), Some("inlet port, supply → chamber 1"));
         assert_eq!(description("t_coulomb"), Some("Coulomb friction torque"));
         assert_eq!(description("visc"), Some("viscous friction"));
         assert_eq!(description("no_such"), None);
-        assert_eq!(label("no_such"), "no_such");
         let conductances: Vec<_> = PARAMS
             .iter()
             .filter(|p| p.is_conductance())

@@ -99,7 +99,7 @@ pub struct ChannelCost {
 /// The cost of one parameter set.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CostValue {
-    /// J of eq. \[1\], or [`FAILURE_PENALTY`]; always finite.
+    /// J of eq. \[1\], or `FAILURE_PENALTY`; always finite.
     pub total: f64,
     /// Why the simulation failed or the cost was not finite, if it did.
     pub failed: Option<String>,

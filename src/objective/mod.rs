@@ -1,7 +1,14 @@
 //! The fitting objective: polynomial reference responses and the cost built on them, and
 //! the likelihood of the recorded rows with a noise estimate from the data.
 
-pub mod cost;
-pub mod likelihood;
-pub mod nuisance;
-pub mod reference;
+pub(crate) mod cost;
+pub(crate) mod likelihood;
+pub(crate) mod nuisance;
+pub(crate) mod reference;
+
+pub use cost::{ChannelCost, ChannelResiduals, CostError, CostModel, CostOptions, CostValue};
+pub use likelihood::{ChannelTarget, InputSmoothing, Target};
+pub use nuisance::{Nuisance, Nuisances};
+pub use reference::{
+    experiment_references, Abscissa, ChannelReference, FitError, FitOptions, Piece, Reference,
+};

@@ -81,6 +81,7 @@ impl Default for FitOptions {
 
 /// Why a reference could not be fitted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum FitError {
     /// The polynomial of this degree is not determined by the points.
     #[error("degree {0} is not determined by the data")]

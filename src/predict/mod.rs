@@ -2,7 +2,7 @@
 //! "Catalogue figures and predictions"): what the fitted motor does at other supply
 //! pressures, or with an extra nozzle at its inlet or outlet, and how sure that is.
 //!
-//! For each asked supply pressure: the catalogue row of [`crate::sim::operating_point`]
+//! For each asked supply pressure: the catalogue row of `sim::operating_point`
 //! (free speed, maximum power on a speed grid with the speed, torque and air there, stall
 //! torque, air at free speed), the correction factors relative to a reference pressure
 //! (6.3 bar g unless asked otherwise), and curves of shaft torque, power and air
@@ -14,19 +14,20 @@
 //! * `air`: air consumption at maximum power ṁ_1(p)/ṁ_1(p_ref),
 //!
 //! each 1 at the reference pressure. Every figure carries a 95 % band propagated from the
-//! fit's parameter uncertainty ([`uncertainty`]); a pressure outside the supply pressures
+//! fit's parameter uncertainty (`uncertainty`); a pressure outside the supply pressures
 //! the fitted data covered is flagged as an extrapolation.
 
 mod figures;
-pub mod options;
-pub mod samples;
-pub mod uncertainty;
+pub(crate) mod options;
+pub(crate) mod samples;
+pub(crate) mod uncertainty;
 
-pub use options::{Nozzle, NozzlePort, PredictOptions};
+pub use options::{Nozzle, NozzlePort, PredictOptions, DEFAULT_CURVE_POINTS};
 pub use samples::{
-    BandChoice, BandMethod, BandRequest, BandsMade, PosteriorSource, PosteriorSummary,
-    SamplingOptions,
+    delta_unreliable, BandChoice, BandMethod, BandRequest, BandsMade, PosteriorSource,
+    PosteriorSummary, SamplingOptions, DEFAULT_BURN_IN, DEFAULT_DRAWS, DEFAULT_STEPS,
 };
+
 pub use uncertainty::{BandBasis, ParamUncertainty};
 
 use crate::data::fitfile::FitFile;
@@ -324,7 +325,7 @@ fn centre_and_figures(
 }
 
 /// Predicts the fitted motor under `options` with 95 % delta-method bands (see the module
-/// documentation and [`uncertainty`]).
+/// documentation and `uncertainty`).
 pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, PredictError> {
     let sampling = SamplingOptions::default();
     let request = BandRequest {
@@ -337,7 +338,7 @@ pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, Pr
 }
 
 /// Predicts the fitted motor under `options` with 95 % bands made as `request` asks: the
-/// delta method, or percentiles of posterior samples ([`samples`]).
+/// delta method, or percentiles of posterior samples (`samples`).
 pub fn predict_with(
     fit: &FitFile,
     options: &PredictOptions,

@@ -42,6 +42,7 @@ pub const LOPSIDED: f64 = 1.5;
 
 /// Which method is asked to make the bands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum BandChoice {
     /// The delta method always.
     Delta,
@@ -65,6 +66,7 @@ impl BandChoice {
 
 /// The method that made the bands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum BandMethod {
     /// The delta method from the fit's covariance.
     Delta,

@@ -48,6 +48,7 @@ pub type VarianceShares = (f64, Vec<f64>);
 
 /// What the bands stand on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum BandBasis {
     /// The fit's covariance (correlations) with profile-interval widths.
     Covariance,

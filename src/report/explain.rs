@@ -2,10 +2,10 @@
 //! people: every printed summary and written report takes its sentences and formats from
 //! here, so that the terminal, `report.md` and the docs (`docs/model.md`) say the same.
 //!
-//! The definitions are the code's: J is [`crate::objective::cost`] eq. \[1\], χ² is
-//! [`crate::objective::likelihood`] eq. \[1\] (with the sensor offsets of
-//! [`crate::objective::nuisance`] profiled out in a fit), the noise ratio and its limit are
-//! [`crate::estimate::goodness`] eqs. \[1\]–\[2\].
+//! The definitions are the code's: J is `objective::cost` eq. \[1\], χ² is
+//! `objective::likelihood` eq. \[1\] (with the sensor offsets of
+//! `objective::nuisance` profiled out in a fit), the noise ratio and its limit are
+//! `estimate::goodness` eqs. \[1\]–\[2\].
 
 use crate::model::params::{
     conductance_dm3_s_bar, spec, CATALOGUE_CONDUCTANCE_UNIT, CONDUCTANCE_UNIT,

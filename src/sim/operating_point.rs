@@ -147,6 +147,7 @@ impl<'a> Sweep<'a> {
 
 /// Why a catalogue row could not be made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum OperatingPointError {
     /// A steady state was not found.
     #[error(transparent)]

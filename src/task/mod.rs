@@ -11,13 +11,32 @@
 //! The command line calls these for one dataset and `batch` for every unit of a fleet, so
 //! a unit of a batch leaves exactly the files, and the numbers, the command would.
 
-pub mod control;
-pub mod diagnose;
-pub mod export;
-pub mod fit;
-pub mod predict;
-pub mod simulate;
-pub mod synth;
+pub(crate) mod control;
+pub(crate) mod diagnose;
+pub(crate) mod export;
+pub(crate) mod fit;
+pub(crate) mod predict;
+pub(crate) mod simulate;
+pub(crate) mod synth;
+
+pub use control::{run_study, write_study, CheckedStudy, ControlStudy, Study, StudyResult};
+pub use diagnose::{
+    diagnose, diagnose_dataset, write_diagnosis, DiagnoseOptions, DiagnoseSettings,
+    DiagnoseTaskError, Effort,
+};
+pub use export::{export_fmu, petab_problem, ExportError, FmuExport, FmuOptions, PetabProblem};
+pub use fit::{
+    displacement_first_line, fit, page_displacement_of, pinning_lines, side_path, write_fit, Fit,
+    FitError, FitObserver, FitOptions, FitSettings, FitWritten, ParamRange, Pinning, RangeSyntax,
+};
+pub use predict::{
+    fit_atmosphere_pa, predict, predict_observed, pressure_unit, pressure_units, source_name,
+    write_prediction, PredictOptions, PredictSettings, PredictTaskError,
+};
+pub use simulate::{
+    motor_for, simulated_tables, write_table, SimulateError, SimulatedColumn, SimulatedTable,
+};
+pub use synth::{synth_motor, write_synthetic, SynthOptions, SynthSettings, Synthesized};
 
 /// A bad value of an option, named by its field (`FitOptions.starts`). Its message is
 /// `before`, the field's name, `after` (e.g. `FitOptions.starts must be at least 1`);

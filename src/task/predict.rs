@@ -44,7 +44,7 @@ pub struct PredictOptions {
     pub fixed_spread: Option<f64>,
     /// Which method makes the bands: the delta method, posterior samples, or `auto`
     /// (samples where the fit says the delta method fails and `data` is given;
-    /// [`crate::predict::samples`]).
+    /// `predict::samples`).
     pub bands: BandChoice,
     /// The dataset folder the fit was made from (needed to sample the posterior).
     pub data: Option<PathBuf>,
@@ -444,10 +444,6 @@ pub fn write_prediction(
 pub struct Predicted {
     /// The prediction.
     pub prediction: Prediction,
-    /// The pressure unit of the tables.
-    pub display: PressureDisplay,
-    /// The fit file and its dataset, as titles name them.
-    pub source: String,
     /// The files written.
     pub written: Vec<PathBuf>,
 }
@@ -466,8 +462,6 @@ pub(crate) fn predict_to(
     let written = write_prediction(&prediction, &settings, &source, out)?;
     Ok(Predicted {
         prediction,
-        display: settings.display,
-        source,
         written,
     })
 }

@@ -3,14 +3,18 @@
 //! convert to SI on import and back on export. Nothing inside the crate sees any unit but
 //! SI.
 
-pub mod constants;
-pub mod format;
+pub(crate) mod constants;
+pub(crate) mod format;
+
+pub use constants::{P_ATM_PA, T0_K};
+pub use format::trim_zeros;
 
 use crate::units::constants::RHO0_KG_M3;
 use std::f64::consts::PI;
 
 /// A measured or imposed quantity in a recording.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
 pub enum Quantity {
     /// Time, s.
     Time,
@@ -118,6 +122,7 @@ impl Quantity {
 
 /// A unit that a column may carry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Unit {
     /// Seconds.
     S,
@@ -414,6 +419,7 @@ fn shifted(mantissa: &str, exponent: i32) -> Option<f64> {
 
 /// Why a column name was not understood (the units layer's error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ColumnNameError {
     /// The quantity is known but the unit is not.
     #[error(

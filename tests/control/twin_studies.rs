@@ -19,15 +19,15 @@ use crate::twin;
 use std::path::PathBuf;
 use twin::control::{self as tc, Rig, SpeedLoop, ThrottlePort};
 use twin::motor::TwinMotor;
-use vanefit::control::closed_loop::PiController;
-use vanefit::control::design::{design_pi, margins, Target};
-use vanefit::control::min_speed::open_loop_start;
-use vanefit::control::study::bode::linear_at;
-use vanefit::control::study::disturbance::DisturbanceOptions;
-use vanefit::control::study::step::StepOptions;
-use vanefit::control::study::throttle::ThrottleOptions;
-use vanefit::control::study::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
-use vanefit::control::throttle::Port;
+use vanefit::control::linear_at;
+use vanefit::control::open_loop_start;
+use vanefit::control::DisturbanceOptions;
+use vanefit::control::PiController;
+use vanefit::control::Port;
+use vanefit::control::StepOptions;
+use vanefit::control::ThrottleOptions;
+use vanefit::control::{design_pi, margins, Target};
+use vanefit::control::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
 use vanefit::prelude::{ControlStudy, Study, StudyResult};
 
 /// Supply pressure of the studies, Pa absolute.
@@ -273,7 +273,7 @@ fn frequency_response_and_design_margins_agree_with_the_twins_linearisation() {
 }
 
 /// Largest |Δ speed| between vanefit's trace and the twin's, rad/s (same sample times).
-fn trace_gap(v: &vanefit::control::closed_loop::Trace, t: &tc::LoopTrace) -> f64 {
+fn trace_gap(v: &vanefit::control::Trace, t: &tc::LoopTrace) -> f64 {
     assert_eq!(v.t_s.len(), t.len());
     v.speed_rad_s
         .iter()

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 use std::process::Command;
-use vanefit::data::dataset::{Dataset, Kind};
+use vanefit::data::{Dataset, Kind};
 use vanefit::units::Quantity;
 
 const RIG_HEAD: &str =

@@ -5,7 +5,7 @@
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use vanefit::data::dataset::{DataError, Dataset, Recording};
+use vanefit::data::{DataError, Dataset, Recording};
 
 const SHIPPED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/measurements/ar034-synthetic");
 

@@ -38,10 +38,8 @@ use std::time::Instant;
 use vanefit::diagnose::{
     diagnose, discover, noise_ratio_limit, summary, to_json, Candidate, DiagnoseOptions, Diagnosis,
 };
-use vanefit::model::effects::{Effect, EffectSet};
-use vanefit::model::motor::{
-    BalanceId, Chamber, ExtraTerm, LeakPath, Motor, PressureFactor, SpeedFactor,
-};
+use vanefit::model::{BalanceId, Chamber, ExtraTerm, LeakPath, Motor, PressureFactor, SpeedFactor};
+use vanefit::model::{Effect, EffectSet};
 
 /// What a case should be diagnosed as.
 #[derive(Debug, Clone)]

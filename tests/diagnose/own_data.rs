@@ -112,7 +112,7 @@ fn uncatalogued_torque_is_discovered_and_modelled() {
     let dir = tempfile::tempdir().unwrap();
     vanefit::report::diagnose::write_all(&d, dir.path()).unwrap();
     let path = dir.path().join("extended.json");
-    let file = vanefit::data::fitfile::FitFile::read(&path).unwrap();
+    let file = vanefit::data::FitFile::read(&path).unwrap();
     assert_eq!(file.extra, d.extended.fitted.extra);
 }
 
@@ -204,7 +204,7 @@ fn quadratic_internal_leak_is_a_leak_path() {
     // The extended fit file carries the path and reads back.
     let dir = tempfile::tempdir().unwrap();
     vanefit::report::diagnose::write_all(&d, dir.path()).unwrap();
-    let file = vanefit::data::fitfile::FitFile::read(&dir.path().join("extended.json")).unwrap();
+    let file = vanefit::data::FitFile::read(&dir.path().join("extended.json")).unwrap();
     assert_eq!(file.extra, d.extended.fitted.extra);
 }
 

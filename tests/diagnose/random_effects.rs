@@ -15,8 +15,8 @@ use crate::twin;
 use crate::twin::laws::{Drawn, LeakLaw, Node};
 use std::time::Instant;
 use vanefit::diagnose::{diagnose, discover, summary, DiagnoseOptions, Diagnosis};
-use vanefit::model::effects::Category;
-use vanefit::model::motor::{BalanceId, Chamber, LeakPath, PressureFactor};
+use vanefit::model::Category;
+use vanefit::model::{BalanceId, Chamber, LeakPath, PressureFactor};
 
 /// How an answer compares with the drawn truth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -94,7 +94,7 @@ pub(crate) fn classify(truth: &Drawn, d: &Diagnosis) -> (Class, bool) {
 
 /// A random case: the twin's perturbed motor of `seed` with the effect drawn from `seed`,
 /// recorded as a rig does (20 Hz, rig noise).
-pub(crate) fn random_case(seed: u64) -> (Drawn, vanefit::data::dataset::Dataset) {
+pub(crate) fn random_case(seed: u64) -> (Drawn, vanefit::data::Dataset) {
     let drawn = twin::laws::draw(seed);
     let motor = twin::TwinMotor {
         laws: vec![drawn],

@@ -3,10 +3,10 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use vanefit::data::dataset::{Dataset, ExperimentData, MotorSection};
-use vanefit::data::synth::{SensorNoise, SynthPlan};
-use vanefit::model::motor::Motor;
-use vanefit::model::params::MotorParams;
+use vanefit::data::{Dataset, ExperimentData, MotorSection};
+use vanefit::data::{SensorNoise, SynthPlan};
+use vanefit::model::Motor;
+use vanefit::model::MotorParams;
 use vanefit::numerics::DefaultSolver;
 
 /// The base parameters of the test motor: the AR034-11 defaults with every estimated
@@ -32,7 +32,7 @@ pub fn perturbed_base() -> MotorParams {
 /// by `synth::synthesize`, typical sensor noise on the measured channels and on the
 /// recorded inputs.
 pub fn synthesize(truth: &Motor, seed: u64) -> Vec<ExperimentData> {
-    vanefit::data::synth::synthesize(
+    vanefit::data::synthesize(
         truth,
         &DefaultSolver::default(),
         &SynthPlan::default(),
@@ -50,8 +50,8 @@ pub fn dataset(name: &str, experiments: Vec<ExperimentData>) -> Dataset {
         synthetic: true,
         description: None,
         motor: MotorSection::default(),
-        p_atm_pa: vanefit::units::constants::P_ATM_PA,
-        temperature_k: vanefit::units::constants::T0_K,
+        p_atm_pa: vanefit::units::P_ATM_PA,
+        temperature_k: vanefit::units::T0_K,
         experiments,
     }
 }
@@ -78,8 +78,7 @@ pub fn rig_plan() -> SynthPlan {
 
 /// [`synthesize`] with the rig's plan and `noise`.
 pub fn synthesize_with(truth: &Motor, seed: u64, noise: &SensorNoise) -> Vec<ExperimentData> {
-    vanefit::data::synth::synthesize(truth, &DefaultSolver::default(), &rig_plan(), noise, seed)
-        .unwrap()
+    vanefit::data::synthesize(truth, &DefaultSolver::default(), &rig_plan(), noise, seed).unwrap()
 }
 
 /// The options of the ignored tables: the command line's defaults

@@ -4,10 +4,10 @@ use crate::cases::*;
 use crate::support::{dataset, perturbed_base, rig_noise, synthesize_with};
 use crate::twin;
 use std::time::Instant;
-use vanefit::data::dataset::Dataset;
+use vanefit::data::Dataset;
 use vanefit::diagnose::{diagnose, summary, DiagnoseOptions, Diagnosis};
-use vanefit::model::effects::{Effect, EffectSet};
-use vanefit::model::motor::{Chamber, LeakPath, Motor, PressureFactor};
+use vanefit::model::{Chamber, LeakPath, Motor, PressureFactor};
+use vanefit::model::{Effect, EffectSet};
 
 /// A test rig's recording: 20 Hz, flows 0.03 g/s, speed 15 rpm, torques 4 mN·m, recorded
 /// supply pressure 2 kPa, no calibration offsets.
@@ -37,7 +37,7 @@ pub(crate) fn twin_dataset(
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(format!("twin-{seed}"));
     twin::write_dataset(&path, motor, cfg, seed).unwrap();
-    vanefit::data::dataset::Dataset::load(&path).unwrap()
+    vanefit::data::Dataset::load(&path).unwrap()
 }
 
 /// A twin case: its motor, what must be selected, and the truth of the checked values.
@@ -244,8 +244,8 @@ fn false_alarm_seed_11() {
 #[test]
 #[ignore]
 fn stiction_likelihood_at_the_truth() {
-    use vanefit::diagnose::fitting::{run_job, FitJob};
-    use vanefit::objective::{cost::CostModel, cost::CostOptions, likelihood::Target};
+    use vanefit::diagnose::{run_job, FitJob};
+    use vanefit::objective::{CostModel, CostOptions, Target};
     let c = case("stiction");
     let synth = truth(&c);
     let ds_synth = dataset("synth", synthesize_with(&synth, 11, &rig_noise()));
@@ -255,9 +255,9 @@ fn stiction_likelihood_at_the_truth() {
         p = p.with(n, v).unwrap();
     }
     let ds_twin = twin_dataset(&tc.motor, &twin_rig_config(), 11);
-    let engine = vanefit::estimate::engine::Engine::with_threads(Some(1)).unwrap();
+    let engine = vanefit::estimate::Engine::with_threads(Some(1)).unwrap();
     let effects = EffectSet::empty().with(Effect::BreakawayFriction);
-    let mut names: Vec<String> = vanefit::estimate::space::DEFAULT_ESTIMATED
+    let mut names: Vec<String> = vanefit::estimate::DEFAULT_ESTIMATED
         .iter()
         .map(|s| s.to_string())
         .collect();

@@ -23,12 +23,12 @@
 use crate::twin;
 
 use std::fmt::Write as _;
-use vanefit::data::dataset::Dataset;
-use vanefit::estimate::fit::{fit, fit_file, FitData, FitSetup, UncertaintyMethod};
+use vanefit::data::Dataset;
 use vanefit::estimate::multistart::Silent;
+use vanefit::estimate::{fit, fit_file, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::{Engine, MultiStartConfig, ParamSpace, Prior, DEFAULT_ESTIMATED};
-use vanefit::model::effects::EffectSet;
-use vanefit::objective::cost::CostOptions;
+use vanefit::model::EffectSet;
+use vanefit::objective::CostOptions;
 use vanefit::predict::{predict, PredictOptions, ROW_FIGURES};
 
 /// One parameter of one fit against the truth.
@@ -63,7 +63,7 @@ struct Case {
 /// `vanefit predict`'s catalogue rows at 4 and 6.3 bar(g) from the fit, each figure's band
 /// against the twin's figure for the true motor (its own steady states and search).
 fn band_checks(
-    file: &vanefit::data::fitfile::FitFile,
+    file: &vanefit::data::FitFile,
     motor: &twin::TwinMotor,
     p_atm_pa: f64,
 ) -> Vec<(&'static str, bool)> {

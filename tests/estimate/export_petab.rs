@@ -13,9 +13,9 @@ use common::{stderr, vanefit, vanefit_in, DATASET};
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
-use vanefit::estimate::fit_likelihood::FitLikelihood;
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
+use vanefit::estimate::FitLikelihood;
 
 /// A fit of the shipped dataset by the CLI with profile intervals (few starts: seconds).
 fn profile_fit(dir: &Path) -> std::path::PathBuf {

@@ -4,10 +4,10 @@
 
 use std::path::Path;
 use std::process::Command;
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
-use vanefit::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
-use vanefit::estimate::uncertainty::CHI2_95;
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
+use vanefit::estimate::CHI2_95;
+use vanefit::estimate::{FitLikelihood, FitLikelihoodError};
 
 const DATASET: &str = "measurements/ar034-synthetic";
 

@@ -2,7 +2,8 @@
 //! same result whatever the thread count, and a resumed run ends where an uninterrupted one
 //! would.
 
-use vanefit::estimate::multistart::{self, cluster, Ending, MultiStartOutcome, Silent};
+use vanefit::estimate::multistart;
+use vanefit::estimate::multistart::{cluster, Ending, MultiStartOutcome, Silent};
 use vanefit::estimate::{
     Engine, Evaluation, MultiStartConfig, Objective, ParamSpace, ResultsFile, DEFAULT_ESTIMATED,
 };
@@ -20,9 +21,9 @@ fn run(
     let cfg = cfg.check().unwrap();
     multistart::run(&engine, obj, s, &cfg, &Silent, file, resume).unwrap()
 }
-use vanefit::model::effects::EffectSet;
-use vanefit::model::motor::Motor;
-use vanefit::model::params::MotorParams;
+use vanefit::model::EffectSet;
+use vanefit::model::Motor;
+use vanefit::model::MotorParams;
 
 /// χ² of log-parameters against a known truth: a bowl with its bottom at the truth.
 struct Bowl {
@@ -184,10 +185,8 @@ fn double_well_has_two_minima_and_the_deeper_one_wins() {
 
 #[test]
 fn profile_and_curvature_intervals_match_the_closed_form_of_a_bowl() {
-    use vanefit::estimate::uncertainty::{
-        curvature_covariance, curvature_intervals, profile_intervals,
-    };
     use vanefit::estimate::Problem;
+    use vanefit::estimate::{curvature_covariance, curvature_intervals, profile_intervals};
     let truth = truth();
     let obj = Bowl {
         truth: truth.clone(),
@@ -201,7 +200,7 @@ fn profile_and_curvature_intervals_match_the_closed_form_of_a_bowl() {
     let problem = Problem::new(&obj, &s, false);
     let engine = Engine::with_threads(Some(2)).unwrap();
     let theta = s.theta(&truth);
-    let chi2_95 = vanefit::estimate::uncertainty::CHI2_95;
+    let chi2_95 = vanefit::estimate::CHI2_95;
     // χ² = Σ (Δ ln p / 0.05)²: the 95% interval of each is ln p ± 1.96·0.05 (1.96² = 3.84);
     // widened by s = 2 (a model that misses its noise twofold) it doubles. (The curvature's
     // interval is symmetric in the search coordinate, whose logistic map bends ln p at the
@@ -227,7 +226,7 @@ fn profile_and_curvature_intervals_match_the_closed_form_of_a_bowl() {
 }
 
 fn check_half_widths(
-    intervals: impl Iterator<Item = vanefit::estimate::uncertainty::Interval>,
+    intervals: impl Iterator<Item = vanefit::estimate::Interval>,
     truth: &MotorParams,
     half: f64,
 ) {
@@ -251,7 +250,7 @@ fn check_half_widths(
 
 #[test]
 fn a_parameter_the_cost_ignores_is_not_identifiable() {
-    use vanefit::estimate::uncertainty::profile_intervals;
+    use vanefit::estimate::profile_intervals;
     use vanefit::estimate::Problem;
     let truth = truth();
     let obj = Bowl {
@@ -262,7 +261,7 @@ fn a_parameter_the_cost_ignores_is_not_identifiable() {
     let problem = Problem::new(&obj, &s, false);
     let engine = Engine::with_threads(Some(2)).unwrap();
     let theta = s.theta(&truth);
-    let chi2_95 = vanefit::estimate::uncertainty::CHI2_95;
+    let chi2_95 = vanefit::estimate::CHI2_95;
     let ivs = profile_intervals(&engine, &problem, &theta, 0.0, chi2_95, None, 200);
     assert!(ivs[0].identifiable(), "{ivs:?}");
     assert!(!ivs[1].identifiable());

@@ -2,17 +2,17 @@
 //! Without noise the estimates land within 1% of the truth; with sensor noise the truth lies
 //! inside the reported 95% intervals of the identifiable parameters.
 
-use vanefit::data::dataset::Dataset;
-use vanefit::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
-use vanefit::estimate::fit::{fit, FitData, FitSetup, UncertaintyMethod};
+use vanefit::data::Dataset;
+use vanefit::data::{synthesize, write_dataset, SensorNoise, SynthPlan};
 use vanefit::estimate::multistart::Silent;
+use vanefit::estimate::{fit, FitData, FitSetup, UncertaintyMethod};
 use vanefit::estimate::{Engine, MultiStartConfig};
 use vanefit::estimate::{ParamSpace, DEFAULT_ESTIMATED};
-use vanefit::model::effects::EffectSet;
-use vanefit::model::motor::Motor;
-use vanefit::model::params::MotorParams;
-use vanefit::numerics::ode::DiffsolBdf;
-use vanefit::objective::cost::CostOptions;
+use vanefit::model::EffectSet;
+use vanefit::model::Motor;
+use vanefit::model::MotorParams;
+use vanefit::numerics::DiffsolBdf;
+use vanefit::objective::CostOptions;
 
 /// A motor that is not the default one: conductances and friction moved by up to 40%.
 fn truth() -> MotorParams {
@@ -53,7 +53,7 @@ fn dataset(noise: SensorNoise, seed: u64) -> (tempfile::TempDir, Dataset) {
 }
 
 /// Fits from the default motor (every parameter 15–40% off) plus a few Latin-hypercube starts.
-fn fit_back(ds: &Dataset, uncertainty: UncertaintyMethod) -> vanefit::estimate::fit::FitOutcome {
+fn fit_back(ds: &Dataset, uncertainty: UncertaintyMethod) -> vanefit::estimate::FitOutcome {
     let data = FitData::new(ds, CostOptions::default()).unwrap();
     let space = ParamSpace::new(
         &DEFAULT_ESTIMATED,

@@ -6,8 +6,8 @@
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use vanefit::estimate::sample::diagnostics::{ess_bulk, ess_tail, rhat_rank};
-use vanefit::estimate::sample::{run_ensemble, summarise, Chains, EnsembleSettings, LogDensity};
+use vanefit::estimate::{ess_bulk, ess_tail, rhat_rank};
+use vanefit::estimate::{run_ensemble, summarise, Chains, EnsembleSettings, LogDensity};
 
 /// A density from a closure.
 struct Density<F: Fn(&[f64]) -> f64 + Sync>(usize, F);
@@ -142,7 +142,7 @@ fn a_banana_s_curved_valley_is_followed() {
             })
             .collect();
         let p = mean_of(&c, &|x| f64::from(u8::from(x[1] > 5.024 * b)));
-        let ess = vanefit::estimate::sample::diagnostics::ess(&tail);
+        let ess = vanefit::estimate::ess(&tail);
         let tol = 4.0 * (0.025 * 0.975 / ess).sqrt();
         assert!(
             (p - 0.025).abs() < tol,
@@ -172,7 +172,7 @@ fn both_modes_of_a_mixture_get_their_weights() {
             .map(|w| w.iter().map(|x| f64::from(u8::from(x[0] > 0.0))).collect())
             .collect();
         let p = mean_of(&c, &|x| f64::from(u8::from(x[0] > 0.0)));
-        let ess = vanefit::estimate::sample::diagnostics::ess(&right);
+        let ess = vanefit::estimate::ess(&right);
         let tol = 4.0 * (want * (1.0 - want) / ess).sqrt();
         assert!(
             (p - want).abs() < tol.max(0.02),

@@ -125,7 +125,7 @@ fn a_second_run_on_the_same_output_is_refused_and_a_stale_lock_taken_over() {
         ])
     };
     // This test process holds the lock as a running fit would.
-    let lock = vanefit::io::lock::OutputLock::acquire(&dir.path().join("fit.lock")).unwrap();
+    let lock = vanefit::io::OutputLock::acquire(&dir.path().join("fit.lock")).unwrap();
     let o = fit(out_s);
     assert_eq!(o.status.code(), Some(1));
     let want = format!(
@@ -139,7 +139,7 @@ fn a_second_run_on_the_same_output_is_refused_and_a_stale_lock_taken_over() {
     // The same for a diagnosis folder, before any work.
     let diag = dir.path().join("diag");
     std::fs::create_dir(&diag).unwrap();
-    let held = vanefit::io::lock::OutputLock::acquire(&diag.join(".vanefit.lock")).unwrap();
+    let held = vanefit::io::OutputLock::acquire(&diag.join(".vanefit.lock")).unwrap();
     let t0 = Instant::now();
     let o = vanefit(&["diagnose", DATASET, "--out", diag.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));

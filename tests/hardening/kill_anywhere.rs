@@ -87,7 +87,7 @@ fn temporaries(dir: &Path) -> Vec<String> {
 /// host's naming, the pid of a process that cannot exist (above the kernel's 2^22 limit).
 /// Killing a run exactly inside a write is rare, so the test makes the leftover itself.
 fn plant_stale_temporary(dir: &Path, name: &str) -> std::path::PathBuf {
-    let mine = vanefit::io::stale::temporary_name(name);
+    let mine = vanefit::io::temporary_name(name);
     let host = mine.split_once('-').map_or("", |(_, h)| h);
     let path = dir.join(format!(".{name}.tmp4194305-{host}"));
     std::fs::write(&path, "{\"half\": ").unwrap();

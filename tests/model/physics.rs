@@ -3,15 +3,15 @@
 
 use proptest::prelude::*;
 use std::f64::consts::PI;
-use vanefit::data::synth::{free_speed, plan_experiments, SynthPlan};
-use vanefit::model::effects::{Effect, EffectSet};
-use vanefit::model::motor::{idx, Boundary, Load, Motor, State};
-use vanefit::model::nozzle::{psi, Nozzle, R_LAMINAR};
-use vanefit::model::params::MotorParams;
-use vanefit::numerics::ode::{DiffsolBdf, StiffSolver, Tolerances};
+use vanefit::data::{free_speed, plan_experiments, SynthPlan};
+use vanefit::model::MotorParams;
+use vanefit::model::{idx, Boundary, Load, Motor, State};
+use vanefit::model::{psi, Nozzle, R_LAMINAR};
+use vanefit::model::{Effect, EffectSet};
 use vanefit::numerics::DefaultSolver;
-use vanefit::sim::experiment::Experiment;
+use vanefit::numerics::{DiffsolBdf, StiffSolver, Tolerances};
 use vanefit::sim::steady;
+use vanefit::sim::Experiment;
 use vanefit::units::Quantity;
 
 const P_ATM: f64 = 101_325.0;

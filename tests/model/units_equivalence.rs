@@ -11,13 +11,13 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use vanefit::data::dataset::Dataset;
-use vanefit::model::effects::EffectSet;
-use vanefit::model::motor::Motor;
-use vanefit::model::params::MotorParams;
+use vanefit::data::Dataset;
+use vanefit::model::EffectSet;
+use vanefit::model::Motor;
+use vanefit::model::MotorParams;
 use vanefit::numerics::DefaultSolver;
-use vanefit::objective::cost::{CostModel, CostOptions};
-use vanefit::sim::experiment::Experiment;
+use vanefit::objective::{CostModel, CostOptions};
+use vanefit::sim::Experiment;
 use vanefit::units::{column_name, Quantity, Unit};
 
 fn measurements(name: &str) -> PathBuf {

@@ -127,7 +127,7 @@ fn fixed_defaults_that_are_not_the_truth_leave_a_stated_error() {
         "format": "vanefit.fit/1", "dataset": "off-default", "model": { "effects": [] },
         "parameters": {}
     });
-    let defaults = vanefit::model::params::MotorParams::default();
+    let defaults = vanefit::model::MotorParams::default();
     for (name, f) in [
         ("c_in1", 0.9),
         ("c_out2", 1.15),
@@ -140,7 +140,7 @@ fn fixed_defaults_that_are_not_the_truth_leave_a_stated_error() {
     ] {
         doc["parameters"][name] = serde_json::json!({
             "value": defaults.get(name).unwrap() * f,
-            "unit": vanefit::model::params::spec(name).unwrap().unit,
+            "unit": vanefit::model::spec(name).unwrap().unit,
             "estimated": false, "ci95": null
         });
     }

@@ -5,7 +5,7 @@
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use vanefit::data::fitfile::{FitFile, LogCovariance};
+use vanefit::data::{FitFile, LogCovariance};
 use vanefit::predict::{check_bands, predict, BandCheck, PredictOptions};
 use vanefit::units::Unit;
 

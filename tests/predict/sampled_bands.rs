@@ -5,9 +5,9 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use vanefit::data::dataset::Dataset;
-use vanefit::data::fitfile::FitFile;
-use vanefit::estimate::fit_likelihood::FitLikelihood;
+use vanefit::data::Dataset;
+use vanefit::data::FitFile;
+use vanefit::estimate::FitLikelihood;
 use vanefit::predict::{
     predict_with, BandChoice, BandMethod, BandRequest, PosteriorSource, PredictOptions, Prediction,
     SamplingOptions,
@@ -135,7 +135,7 @@ fn where_the_posterior_is_close_to_gaussian_samples_and_delta_agree() {
     let dir = tempfile::tempdir().unwrap();
     let fit = catalogue_fit(dir.path(), &["--estimate", "c_in1,c_1e"]);
     let fit = FitFile::read(&fit).unwrap();
-    assert!(vanefit::predict::samples::delta_unreliable(&fit).is_none());
+    assert!(vanefit::predict::delta_unreliable(&fit).is_none());
     let s = SamplingOptions {
         steps: 1500,
         burn_in: 300,

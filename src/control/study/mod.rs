@@ -7,12 +7,19 @@
 //! Options shared by the studies: the motor and its load ([`MotorOptions`] → [`Plant`]) and
 //! the control loop ([`LoopOptions`] → `closed_loop::Loop`).
 
-pub mod bode;
-pub mod design;
-pub mod disturbance;
-pub mod min_speed;
-pub mod step;
-pub mod throttle;
+pub(crate) mod bode;
+pub(crate) mod design;
+pub(crate) mod disturbance;
+pub(crate) mod min_speed;
+pub(crate) mod step;
+pub(crate) mod throttle;
+
+pub use bode::{linear_at, BodeOptions, BodeStudy};
+pub use design::{DesignOptions, DesignRun, DesignStudy};
+pub use disturbance::{DisturbanceOptions, DisturbanceStudy};
+pub use min_speed::{MinSpeedOptions, MinSpeedStudy};
+pub use step::{StepOptions, StepStudy};
+pub use throttle::{ThrottleOptions, ThrottleStudy};
 
 use super::closed_loop::{AntiWindup, Loop, PiController, Valve, ValveDynamics};
 use super::error::{ControlError, SettingsError};

@@ -70,6 +70,7 @@ impl Source<'_> {
 
 /// Why a printed value ("0.12 kW") was not understood.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ValueError {
     /// No number first.
     #[error("'{0}' is not a number followed by a unit (e.g. '6.3 bar_g')")]

@@ -26,10 +26,11 @@
 //! evaluated per walker, so the chains for a seed do not depend on how many threads rayon
 //! runs the walkers on.
 
-pub mod diagnostics;
-pub mod posterior;
+pub(crate) mod diagnostics;
+pub(crate) mod posterior;
 
-pub use diagnostics::{summarise, ParamDiagnostics};
+pub use diagnostics::{ess, ess_bulk, ess_tail, rhat_rank, summarise, ParamDiagnostics};
+
 pub use posterior::{FitPosterior, LogPrior};
 
 use rand::{Rng, SeedableRng};

@@ -7,11 +7,15 @@
 //! One binary serves every fit: it reads the fit file packed into the FMU's `resources/`
 //! when instantiated, so `vanefit export-fmu` only writes an archive and never compiles.
 
-pub mod description;
-pub mod package;
-pub mod runtime;
-pub mod units;
-pub mod variables;
+pub(crate) mod description;
+pub(crate) mod package;
+pub(crate) mod runtime;
+pub(crate) mod units;
+pub(crate) mod variables;
+
+pub use package::{find_binary, write_fmu, FmuSummary};
+pub use runtime::{Inputs, MotorFmu, RuntimeError};
+pub use variables::vr;
 
 use std::path::PathBuf;
 

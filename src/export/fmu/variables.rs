@@ -48,7 +48,7 @@ pub mod vr {
     pub const C_BRAKE: u32 = 41;
     /// Boolean parameter: start from the steady state at the initial inputs.
     pub const START_STEADY: u32 = 42;
-    /// The first model parameter; the k-th of [`super::model_parameters`] is this + k.
+    /// The first model parameter; the k-th of `model_parameters` is this + k.
     pub const FIRST_MODEL_PARAMETER: u32 = 100;
 }
 

@@ -52,6 +52,7 @@ impl Category {
 /// In which experiments an effect can show (the model knows no experiment kinds; the
 /// diagnosis maps "transient" to the kinds that are).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ShowsIn {
     /// In steady and in transient experiments.
     Any,

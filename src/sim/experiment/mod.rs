@@ -134,7 +134,7 @@ macro_rules! registry {
         #[non_exhaustive]
         pub enum Kind {
             $(
-                #[doc = concat!("See [`", stringify!($file), "`].")]
+                #[doc = concat!("The `", stringify!($file), "` experiment (rig.toml `kind`).")]
                 $ty,
             )*
         }
