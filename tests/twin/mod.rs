@@ -10,7 +10,7 @@
 //! `extern crate twin;` (so that its modules' `use crate::twin;` reach it), an example
 //! uses `twin::…` directly. (`#[path = "../twin/mod.rs"] mod twin;` includes it as a module
 //! as well.)
-#![allow(dead_code, unused_imports, clippy::type_complexity)]
+#![allow(dead_code, unused_imports)]
 
 pub mod cases;
 pub mod catalogue;
