@@ -17,9 +17,6 @@
 //! `--varied SEED` writes `tests/estimate/coverage.rs`'s case SEED (its base motor, rate, noise,
 //! offsets and brake-torque channel; it overrides the other recording options and the seed).
 
-#[path = "../tests/twin/mod.rs"]
-mod twin;
-
 use std::path::PathBuf;
 use twin::{Breakaway, NoiseSigmas, OffsetSpec, RecordConfig, SealLeakage, TwinMotor};
 

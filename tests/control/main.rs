@@ -3,6 +3,5 @@
 //! margins, the step and load-disturbance responses of the loop, and the start-up on a
 //! pressure ramp.
 
-#[path = "../twin/mod.rs"]
-mod twin;
+extern crate twin;
 mod twin_studies;

@@ -12,6 +12,4 @@ mod fit_likelihood;
 mod multistart;
 mod recovery;
 mod sampler;
-#[allow(clippy::type_complexity)] // the twin generator is another engineer's code
-#[path = "../twin/mod.rs"]
-mod twin;
+extern crate twin;

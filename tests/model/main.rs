@@ -3,7 +3,6 @@
 //! implementation of the same physics ([`twin_agreement`]).
 
 mod physics;
-#[path = "../twin/mod.rs"]
-mod twin;
+extern crate twin;
 mod twin_agreement;
 mod units_equivalence;

@@ -6,6 +6,5 @@ mod catalogue_predict;
 mod page_coverage;
 mod predict;
 mod sampled_bands;
-#[path = "../twin/mod.rs"]
-mod twin;
+extern crate twin;
 mod twin_catalogue;

@@ -5,8 +5,11 @@
 //! vanefit::…`), and integrates with TR-BDF2 where vanefit uses Rodas4/BDF: "same physics,
 //! different code".
 //!
-//! Include it with `#[path = "../twin/mod.rs"] mod twin;` from a test binary's `main.rs`, or with
-//! `#[path = "../tests/twin/mod.rs"] mod twin;` from an example.
+//! It is a crate of its own, `vanefit-twin` (lib `twin`, tests/twin/Cargo.toml), a
+//! dev-dependency of vanefit, compiled once: a test binary's `main.rs` names it with
+//! `extern crate twin;` (so that its modules' `use crate::twin;` reach it), an example
+//! uses `twin::…` directly. (`#[path = "../twin/mod.rs"] mod twin;` includes it as a module
+//! as well.)
 #![allow(dead_code, unused_imports)]
 
 pub mod cases;
