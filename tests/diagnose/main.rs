@@ -2,11 +2,10 @@
 //! the cases and their checks ([`cases`]), vanefit's own synthetic data ([`own_data`]) and
 //! data written by the independent twin generator ([`twin_data`]).
 
+extern crate twin;
+
 mod cases;
 mod own_data;
 mod random_effects;
 mod support;
-#[allow(clippy::type_complexity)] // the twin generator is another engineer's code
-#[path = "../twin/mod.rs"]
-mod twin;
 mod twin_data;
