@@ -59,7 +59,7 @@ fn uncertainty_of(name: &str) -> PyResult<UncertaintyMethod> {
 /// `progress`) stops the starts at their next round: the finished ones are in the starts
 /// file, and the exception is raised.
 #[pyfunction]
-#[pyo3(signature = (dataset, starts, seed, threads, effects, estimate, uncertainty, max_iters, out, resume, progress))]
+#[pyo3(signature = (dataset, starts, seed, threads, effects, estimate, uncertainty, max_iters, out, resume, progress, handoff=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -74,6 +74,7 @@ pub fn fit(
     out: Option<PathBuf>,
     resume: bool,
     progress: Option<Py<PyAny>>,
+    handoff: bool,
 ) -> PyResult<(String, String)> {
     if resume && out.is_none() {
         return Err(ParameterError::new_err(
@@ -89,6 +90,7 @@ pub fn fit(
         effects,
         estimate,
         max_iters,
+        handoff,
         uncertainty: uncertainty_of(uncertainty)?,
         resume,
         ..FitOptions::default()

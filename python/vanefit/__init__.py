@@ -192,6 +192,7 @@ def fit(
     out: Optional[PathLike] = None,
     resume: bool = False,
     progress: Progress = None,
+    handoff: bool = True,
 ) -> Fit:
     """Fits the dataset exactly as ``vanefit fit`` does (multi-start Nelder–Mead on J, the
     estimate at the likelihood's maximum, 95 % intervals), with the GIL released.
@@ -205,6 +206,10 @@ def fit(
     ``out``: also write the fit file there (byte for byte what ``vanefit fit --no-plots``
     writes) and record every finished start in ``<out>.starts.jsonl``; ``resume=True``
     continues an interrupted fit from that file.
+
+    ``handoff``: after a first round of Nelder–Mead each start goes on by least squares
+    (Levenberg–Marquardt), which usually ends it in the second round; ``False`` runs
+    Nelder–Mead alone, round after round.
 
     Returns a :class:`Fit` (``.parameters``, ``.starts``, ``.statistics``, ``.profiles``,
     ``.plot``)."""
@@ -223,6 +228,7 @@ def fit(
             None if out is None else os.fspath(out),
             bool(resume),
             callback,
+            bool(handoff),
         )
     return Fit(text, starts=json.loads(starts_json), path=out)
 

@@ -108,6 +108,7 @@ def fit(
     out: Optional[_Path],
     resume: bool,
     progress: Optional[Callable[[int, int, float], Any]],
+    handoff: bool = ...,
 ) -> Tuple[str, str]: ...
 def diagnose(
     ds: PyDataset,

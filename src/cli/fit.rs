@@ -57,6 +57,10 @@ pub(crate) struct FitArgs {
     /// Iteration budget of each start.
     #[arg(long, default_value_t = 3000)]
     pub(crate) max_iters: u64,
+    /// Run Nelder–Mead alone, round after round, instead of handing each start over to
+    /// least squares (Levenberg–Marquardt) after its first round (docs/performance.md).
+    #[arg(long)]
+    pub(crate) no_handoff: bool,
     /// How to compute 95% intervals.
     #[arg(long, value_enum, default_value_t = Uncertainty::Profile)]
     pub(crate) uncertainty: Uncertainty,
@@ -118,6 +122,7 @@ impl FitArgs {
             start_ranges: ranges(&self.start_range, "--start-range")?,
             start_spread: self.start_spread,
             max_iters: self.max_iters,
+            handoff: !self.no_handoff,
             uncertainty: match self.uncertainty {
                 Uncertainty::Profile => UncertaintyMethod::Profile,
                 Uncertainty::Curvature => UncertaintyMethod::Curvature,

@@ -87,6 +87,10 @@ pub struct FitOptions {
     pub start_spread: f64,
     /// Iteration budget of each start.
     pub max_iters: u64,
+    /// Hand each start still running after its first round of Nelder–Mead over to
+    /// Levenberg–Marquardt on the cost's residuals (docs/performance.md, "Sixth pass").
+    /// `false` runs Nelder–Mead alone, round after round, as before the hand-over.
+    pub handoff: bool,
     /// How 95 % intervals are computed.
     pub uncertainty: UncertaintyMethod,
     /// Continue an interrupted run from its results file.
@@ -112,6 +116,7 @@ impl Default for FitOptions {
             start_ranges: Vec::new(),
             start_spread: 3.0,
             max_iters: 3000,
+            handoff: true,
             uncertainty: UncertaintyMethod::Profile,
             resume: false,
             trace: false,
@@ -608,6 +613,11 @@ pub(crate) fn fit_dataset<O: FitObserver>(
             seed: o.seed,
             max_iters: o.max_iters,
             keep_traces: o.trace,
+            handoff_after_rounds: if o.handoff {
+                MultiStartConfig::default().handoff_after_rounds
+            } else {
+                0
+            },
             ..MultiStartConfig::default()
         },
         uncertainty: o.uncertainty,
