@@ -1,12 +1,13 @@
 //! Times one full cost evaluation of the shipped dataset and counts the right-hand-side
 //! evaluations behind it: `cargo run --release --example eval_profile [n [rtol [atol_p atol_w]]]`
-//! (`SOLVER=rodas4` or `bdf` runs one solver only).
+//! (`SOLVER=rodas4`, `bdf` or `quasi_steady` runs one solver only; the quasi-steady
+//! approximation of the ramps is not accurate enough to fit with, see docs/performance.md).
 #[path = "common/support.rs"]
 mod support;
 
 use vanefit::model::Motor;
 use vanefit::numerics::Rodas4;
-use vanefit::numerics::{DiffsolBdf, StiffSolver, Tolerances};
+use vanefit::numerics::{DiffsolBdf, QuasiSteady, StiffSolver, Tolerances};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (n, _, cost) = support::shipped(200)?;
@@ -25,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         tol
     });
-    let solvers: [(&str, Box<dyn StiffSolver>); 2] = [
+    let solvers: [(&str, Box<dyn StiffSolver>); 3] = [
         (
             "bdf",
             Box::new(given.map_or_else(DiffsolBdf::default, |tol| DiffsolBdf { tol })),
@@ -34,6 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "rodas4",
             Box::new(given.map_or_else(Rodas4::default, |tol| Rodas4 { tol })),
         ),
+        ("quasi_steady", Box::new(QuasiSteady::default())),
     ];
     let only = std::env::var("SOLVER").ok();
     for (name, solver) in &solvers {

@@ -15,3 +15,6 @@ pub use rodas::Rodas4;
 /// The stiff solver every simulation uses unless it asks for another: Rodas4 (see
 /// `rodas` for why, and `examples/solver_accuracy.rs` for the measurements behind it).
 pub type DefaultSolver = rodas::Rodas4;
+
+pub(crate) mod quasi_steady;
+pub use quasi_steady::QuasiSteady;
