@@ -221,10 +221,25 @@ fn cost(
 }
 
 /// The likelihood a fit's estimate and intervals were measured on, rebuilt from its fit
-/// file: χ² as a function of the estimated parameters (SI values).
+/// file: χ² as a function of the estimated parameters (SI values), with the fit's motor
+/// prior χ²_prior added when `priors` (docs/estimation.md, "Priors"): the objective the fit
+/// minimised.
 #[pyclass(module = "vanefit._core", frozen)]
 struct PyLikelihood {
     inner: FitLikelihood,
+    priors: bool,
+}
+
+impl PyLikelihood {
+    /// χ² (plus χ²_prior when `priors`) at `x`.
+    fn objective(&self, x: &[f64]) -> Result<f64, FitLikelihoodError> {
+        let c = self.inner.try_chi2(x)?;
+        Ok(if self.priors {
+            c + self.inner.prior_chi2(x)
+        } else {
+            c
+        })
+    }
 }
 
 fn likelihood_err(e: FitLikelihoodError) -> PyErr {
@@ -240,20 +255,46 @@ fn likelihood_err(e: FitLikelihoodError) -> PyErr {
 #[pymethods]
 impl PyLikelihood {
     /// Rebuilds the likelihood of the fit file at `fit` (its text `fit_text` when held in
-    /// memory) on dataset `ds`.
+    /// memory) on dataset `ds`; `priors`: add the fit's motor prior (as the fit did).
     #[new]
-    #[pyo3(signature = (ds, fit, fit_text=None))]
+    #[pyo3(signature = (ds, fit, fit_text=None, priors=true))]
     fn new(
         py: Python<'_>,
         ds: &PyDataset,
         fit: PathBuf,
         fit_text: Option<String>,
+        priors: bool,
     ) -> PyResult<Self> {
         let f = load_fit(&fit, fit_text.as_deref())?;
         let inner = py
             .detach(|| FitLikelihood::from_fit(&ds.inner, &f))
             .map_err(likelihood_err)?;
-        Ok(Self { inner })
+        Ok(Self { inner, priors })
+    }
+
+    /// Whether the motor prior is part of χ², the residuals and the posterior.
+    #[getter]
+    fn priors(&self) -> bool {
+        self.priors
+    }
+
+    /// The motor prior of the estimated parameters: (name, median SI, σ of ln v, size
+    /// exponent) each; empty for a fit made without priors.
+    #[getter]
+    fn prior_terms(&self) -> Vec<(String, f64, f64, f64)> {
+        self.inner
+            .prior_terms()
+            .iter()
+            .map(|t| (t.name.clone(), t.median, t.sd_ln, t.size_exponent))
+            .collect()
+    }
+
+    /// χ²_prior of the motor prior at `x` (SI), whether or not `priors` is on.
+    fn prior_chi2(&self, x: Vec<f64>) -> PyResult<f64> {
+        self.inner
+            .prior_residuals(&x)
+            .map(|r| r.iter().map(|v| v * v).sum())
+            .map_err(likelihood_err)
     }
 
     /// Names of the estimated parameters.
@@ -280,10 +321,15 @@ impl PyLikelihood {
         self.inner.estimate()
     }
 
-    /// χ² at the estimate as the fit file states it.
+    /// χ² at the estimate as the fit file states it (`likelihood_chi2`, plus `prior_chi2`
+    /// when `priors`).
     #[getter]
     fn chi2_min(&self) -> f64 {
-        self.inner.chi2_min()
+        if self.priors {
+            self.inner.chi2_min() + self.inner.prior_chi2_min()
+        } else {
+            self.inner.chi2_min()
+        }
     }
 
     /// Rise of χ² that bounds a 95 % profile interval.
@@ -292,30 +338,47 @@ impl PyLikelihood {
         self.inner.threshold()
     }
 
-    /// χ² at `x` (SI); raises on a bad vector or a failed simulation.
+    /// χ² at `x` (SI; plus χ²_prior when `priors`); raises on a bad vector or a failed
+    /// simulation.
     fn chi2(&self, py: Python<'_>, x: Vec<f64>) -> PyResult<f64> {
-        py.detach(|| self.inner.try_chi2(&x))
-            .map_err(likelihood_err)
+        py.detach(|| self.objective(&x)).map_err(likelihood_err)
     }
 
     /// The residual vector at `x` (SI): the compared rows after the nuisances' correction,
-    /// then one row per nuisance prior; its squares sum to χ². Raises like `chi2`.
+    /// then one row per nuisance prior, then (when `priors`) one per motor prior term; its
+    /// squares sum to χ². Raises like `chi2`.
     fn residuals(&self, py: Python<'_>, x: Vec<f64>) -> PyResult<Vec<f64>> {
-        py.detach(|| self.inner.residuals(&x))
-            .map_err(likelihood_err)
+        py.detach(|| {
+            let mut r = self.inner.residuals(&x)?;
+            if self.priors {
+                r.extend(self.inner.prior_residuals(&x)?);
+            }
+            Ok(r)
+        })
+        .map_err(likelihood_err)
     }
 
     /// χ² at `x` for an optimizer: always finite (a large penalty where `x` is invalid or
     /// the simulation fails).
     fn chi2_or_penalty(&self, py: Python<'_>, x: Vec<f64>) -> f64 {
-        py.detach(|| self.inner.chi2(&x))
+        // Both parts are finite always (a penalty where the simulation fails, a large
+        // residual where a value has no logarithm).
+        py.detach(|| {
+            let prior = if self.priors {
+                self.inner.prior_chi2(&x)
+            } else {
+                0.0
+            };
+            self.inner.chi2(&x) + prior
+        })
     }
 
     /// ln p at sampling coordinates `x` (ln θ of a log-scale parameter, θ otherwise):
-    /// −½·(χ² − χ²_min)/s² with a prior flat in `x` within the search bounds; −inf outside
-    /// them or where the simulation fails.
+    /// −½·(χ² − χ²_min)/s² of the likelihood, plus (when `priors`) the motor prior
+    /// −½·(χ²_prior − χ²_prior,min), with a prior flat in `x` within the search bounds; −inf
+    /// outside them or where the simulation fails.
     fn log_posterior(&self, py: Python<'_>, x: Vec<f64>) -> PyResult<f64> {
-        sampling::log_posterior(&self.inner, py, x)
+        sampling::log_posterior(&self.inner, self.priors, py, x)
     }
 
     /// The sampling coordinates of SI values.
@@ -340,7 +403,7 @@ impl PyLikelihood {
         burn_in: usize,
         seed: u64,
     ) -> PyResult<sampling::Run> {
-        sampling::sample(&self.inner, py, starts, steps, burn_in, seed)
+        sampling::sample(&self.inner, self.priors, py, starts, steps, burn_in, seed)
     }
 
     /// χ² at `x` split into data and prior parts with every compared row, as JSON.
@@ -363,9 +426,24 @@ impl PyLikelihood {
             .iter()
             .map(|(l, v, tau)| serde_json::json!({"label": l, "value": v, "prior_sd": tau}))
             .collect();
+        let motor_prior: Vec<serde_json::Value> = self
+            .inner
+            .prior_terms()
+            .iter()
+            .zip(self.inner.prior_residuals(&x).map_err(likelihood_err)?)
+            .map(|(t, r)| {
+                serde_json::json!({
+                    "parameter": t.name, "median": t.median, "sd_ln": t.sd_ln,
+                    "size_exponent": t.size_exponent, "residual": r,
+                })
+            })
+            .collect();
+        let chi2_motor_prior = self.inner.prior_chi2(&x);
         Ok(serde_json::json!({
             "chi2": b.chi2(), "chi2_data": b.chi2_data, "chi2_prior": b.chi2_prior,
-            "channels": channels, "nuisances": nuisances,
+            "chi2_motor_prior": chi2_motor_prior,
+            "objective": b.chi2() + chi2_motor_prior,
+            "channels": channels, "nuisances": nuisances, "motor_prior": motor_prior,
         })
         .to_string())
     }

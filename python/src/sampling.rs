@@ -12,11 +12,28 @@ use vanefit::estimate::{run_ensemble, EnsembleSettings, FitPosterior, LogDensity
 /// Chains, ln p and acceptance of a run, as plain lists.
 pub(crate) type Run = (Vec<Vec<Vec<f64>>>, Vec<Vec<f64>>, Vec<f64>);
 
+/// The fit's motor prior as the sampler's log-prior (`FitLikelihood::log_prior`: a
+/// Gaussian in ln v, 0 at the estimate), as `vanefit predict --bands samples` adds it.
+fn motor_prior(inner: &FitLikelihood) -> impl Fn(&[f64]) -> f64 + Sync + '_ {
+    move |values: &[f64]| inner.log_prior(values)
+}
+
 /// ln p at sampling coordinates `x` (ln θ for a log-scale parameter, θ otherwise):
-/// −½·(χ² − χ²_min)/s² with a prior flat in `x` within the search bounds; −inf outside
-/// them or where the simulation fails.
-pub(crate) fn log_posterior(inner: &FitLikelihood, py: Python<'_>, x: Vec<f64>) -> PyResult<f64> {
+/// −½·(χ² − χ²_min)/s², plus the motor prior when `priors`, with a prior flat in `x`
+/// within the search bounds; −inf outside them or where the simulation fails.
+pub(crate) fn log_posterior(
+    inner: &FitLikelihood,
+    priors: bool,
+    py: Python<'_>,
+    x: Vec<f64>,
+) -> PyResult<f64> {
+    let prior = motor_prior(inner);
     let post = FitPosterior::new(inner);
+    let post = if priors {
+        post.with_prior(&prior)
+    } else {
+        post
+    };
     if x.len() != post.dim() {
         return Err(ParameterError::new_err(format!(
             "{} coordinates given, the fit estimated {} ({})",
@@ -28,18 +45,25 @@ pub(crate) fn log_posterior(inner: &FitLikelihood, py: Python<'_>, x: Vec<f64>) 
     Ok(py.detach(|| post.log_density(&x)))
 }
 
-/// Runs vanefit's ensemble sampler on the log-posterior from `starts` (one list of
-/// coordinates per walker): returns (chains[walker][step][param], ln p[walker][step],
+/// Runs vanefit's ensemble sampler on the log-posterior (with the motor prior when
+/// `priors`) from `starts` (one list of coordinates per walker): returns (chains[walker][step][param], ln p[walker][step],
 /// acceptance per walker).
 pub(crate) fn sample(
     inner: &FitLikelihood,
+    priors: bool,
     py: Python<'_>,
     starts: Vec<Vec<f64>>,
     steps: usize,
     burn_in: usize,
     seed: u64,
 ) -> PyResult<Run> {
+    let prior = motor_prior(inner);
     let post = FitPosterior::new(inner);
+    let post = if priors {
+        post.with_prior(&prior)
+    } else {
+        post
+    };
     let settings = EnsembleSettings {
         walkers: starts.len(),
         steps,

@@ -82,7 +82,8 @@ pub fn predict(
 }
 
 /// Writes the fit as a PEtab v1 problem into `out` (as `vanefit export-petab`); returns the
-/// summary JSON (`measurements`, `observables`, `conditions`, `chi2_rows`, `chi2_priors`).
+/// summary JSON (`measurements`, `observables`, `conditions`, `chi2_rows`, `chi2_priors`,
+/// `chi2_motor_priors`, `objective`).
 #[pyfunction]
 #[pyo3(signature = (fit, fit_text, dataset, out))]
 pub fn export_petab(
@@ -110,7 +111,8 @@ pub fn export_petab(
     Ok(serde_json::json!({
         "measurements": summary.measurements, "observables": summary.observables,
         "conditions": summary.conditions, "chi2_rows": summary.chi2_rows,
-        "chi2_priors": summary.chi2_priors,
+        "chi2_priors": summary.chi2_priors, "chi2_motor_priors": summary.chi2_motor_priors,
+        "objective": summary.objective(),
     })
     .to_string())
 }

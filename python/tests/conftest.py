@@ -51,3 +51,17 @@ def profile_fit(tmp_path_factory) -> Path:
     doc = json.loads(out.read_text())
     assert doc["statistics"]["uncertainty"] == "profile"
     return out
+
+
+CATALOGUE = ROOT / "measurements" / "ar034-synthetic-catalogue"
+
+
+@pytest.fixture(scope="session")
+def page_fit(tmp_path_factory) -> Path:
+    """A fit of the shipped catalogue page by the CLI with its default motor prior (every
+    default parameter estimated; what the page cannot pin rests on its prior)."""
+    out = tmp_path_factory.mktemp("cli_page") / "fit.json"
+    run_cli("fit", CATALOGUE, "--starts", 16, "--seed", 1, "--no-plots", "--out", out)
+    doc = json.loads(out.read_text())
+    assert doc["statistics"]["prior_chi2"] > 0
+    return out

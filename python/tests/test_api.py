@@ -154,11 +154,20 @@ def test_likelihood_is_the_fits_own(ds, cli_fit):
     est = [n for n, p in doc["parameters"].items() if p["estimated"]]
     assert lik.names == est
     x = lik.x_hat
-    assert rel(lik.chi2(x), doc["statistics"]["likelihood_chi2"]) < 1e-9
-    assert lik.chi2_min == doc["statistics"]["likelihood_chi2"]
+    # By default the fit's objective: the likelihood plus the motor prior it was made with.
+    st = doc["statistics"]
+    objective = st["likelihood_chi2"] + st["prior_chi2"]
+    assert lik.priors and st["prior_chi2"] > 0
+    assert rel(lik.chi2(x), objective) < 1e-9
+    assert rel(lik.chi2_min, objective) < 1e-15
+    alone = vanefit.likelihood(ds, cli_fit, priors=False)
+    assert rel(alone.chi2(x), st["likelihood_chi2"]) < 1e-9
+    assert alone.chi2_min == st["likelihood_chi2"]
+    assert rel(lik.prior_chi2(x), st["prior_chi2"]) < 1e-9
     assert lik.threshold == doc["statistics"]["profile_threshold"]
     b = lik.breakdown(x)
-    assert rel(b["chi2_data"] + b["chi2_prior"], lik.chi2(x)) < 1e-12
+    assert rel(b["chi2_data"] + b["chi2_prior"], alone.chi2(x)) < 1e-12
+    assert rel(b["objective"], lik.chi2(x)) < 1e-12
     assert sum(len(c["rows"]) for c in b["channels"]) == doc["statistics"]["n_points"]
     assert np.all(lik.lower < x) and np.all(x < lik.upper)
     y = x.copy()

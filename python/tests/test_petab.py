@@ -1,6 +1,7 @@
 """`vanefit export-petab` checked by the PEtab community's own tools: the real `petablint`
 on the export, and `petab.calculate_chi2` on the exported tables with vanefit's simulation
-against the fit's own χ²."""
+plus the priors the parameter table states (the nuisances' and the motor's) against the
+fit's own objective, for a rig fit and a catalogue-page fit."""
 
 import json
 import os
@@ -14,7 +15,7 @@ import pytest
 
 import vanefit
 import vanefit.petab as vpetab
-from conftest import DATASET, run_cli, vanefit_bin
+from conftest import CATALOGUE, DATASET, run_cli, vanefit_bin
 
 
 def petablint(yaml: Path) -> subprocess.CompletedProcess:
@@ -23,18 +24,19 @@ def petablint(yaml: Path) -> subprocess.CompletedProcess:
     return subprocess.run([str(exe), "-v", str(yaml)], capture_output=True, text=True)
 
 
-@pytest.fixture(scope="module", params=["cli_fit", "profile_fit"])
+@pytest.fixture(scope="module", params=["cli_fit", "profile_fit", "page_fit"])
 def export(request, tmp_path_factory):
-    """Both fits exported by the command line: (fit file, export folder)."""
+    """The fits exported by the command line: (fit file, export folder, dataset)."""
     fit = request.getfixturevalue(request.param)
+    dataset = CATALOGUE if request.param == "page_fit" else DATASET
     out = tmp_path_factory.mktemp("petab")
-    p = run_cli("export-petab", fit, "--dataset", DATASET, "--out", out)
+    p = run_cli("export-petab", fit, "--dataset", dataset, "--out", out)
     assert "measurements" in p.stdout
-    return fit, out
+    return fit, out, dataset
 
 
 def test_petablint_accepts_the_export(export):
-    _, out = export
+    _, out, _ = export
     p = petablint(out / "problem.yaml")
     text = p.stdout + p.stderr
     assert p.returncode == 0, text
@@ -43,24 +45,62 @@ def test_petablint_accepts_the_export(export):
     assert "Checking model" in text and "Model not available" not in text, text
 
 
-def test_petab_chi2_with_vanefits_simulation_is_the_fits_chi2(export):
-    fit, out = export
+def test_petab_chi2_with_vanefits_simulation_is_the_fits_objective(export):
+    fit, out, dataset = export
     doc = json.loads(Path(fit).read_text())
     want = doc["statistics"]["likelihood_chi2"]
+    motor = doc["statistics"]["prior_chi2"]
+    assert motor > 0, "every fit made with default options carries the motor prior"
     got = vpetab.chi2(out / "problem.yaml")
-    assert abs(got["total"] - want) <= 1e-9 * want, (got, want)
+    # Rows + nuisance priors: the likelihood; + the motor prior: the fit's objective.
+    assert abs(got["likelihood"] - want) <= 1e-9 * want, (got, want)
+    assert abs(got["motor_priors"] - motor) <= 1e-9 * motor, (got, motor)
+    assert abs(got["total"] - (want + motor)) <= 1e-9 * (want + motor), (got, want, motor)
     # The rows' part is petab's own calculate_chi2; the nuisances' priors are the rest.
-    ds = vanefit.load_dataset(DATASET)
-    b = vanefit.Likelihood(ds, fit).breakdown(np.array(
-        [doc["parameters"][n]["value"] for n in vanefit.Likelihood(ds, fit).names]))
+    ds = vanefit.load_dataset(dataset)
+    lik = vanefit.Likelihood(ds, fit)
+    b = lik.breakdown(np.array([doc["parameters"][n]["value"] for n in lik.names]))
     assert abs(got["rows"] - b["chi2_data"]) <= 1e-9 * b["chi2_data"]
     assert abs(got["priors"] - b["chi2_prior"]) <= 1e-9 * max(b["chi2_prior"], 1e-12)
+    assert abs(b["objective"] - (want + motor)) <= 1e-9 * (want + motor)
     summary = json.loads((out / "vanefit_export.json").read_text())
     assert abs(summary["chi2"] - want) <= 1e-9 * want
+    assert abs(summary["objective"] - (want + motor)) <= 1e-9 * (want + motor)
+
+
+def test_motor_priors_are_the_fit_files_as_petab_reads_them(export):
+    """Each prior of the fit file is in the parameter table, and petab's own Prior
+    (parsed from the table row) has −ln p = ½((ln v − ln m)/σ)² + its normalisation and
+    Jacobian: the table says what the fit file says, on the scale PEtab reads it."""
+    from petab.v1.priors import Prior
+
+    fit, out, _ = export
+    doc = json.loads(Path(fit).read_text())
+    table = pd.read_csv(out / "parameters.tsv", sep="\t").set_index("parameterId")
+    entries = doc["statistics"]["prior"]
+    assert entries
+    for e in entries:
+        row = table.loc[e["parameter"]].to_dict()
+        kind = "parameterScaleNormal" if row["parameterScale"] == "log10" else "logNormal"
+        assert row["objectivePriorType"] == kind, (e, row)
+        prior = Prior.from_par_dict(row, "objective", _bounds_truncate=False)
+        v = float(row["nominalValue"])
+        z2 = ((np.log(v) - np.log(e["median"])) / e["sd_ln"]) ** 2
+        # Both kinds are, to petab, a log-normal density of the linear value v: the
+        # normal density of log10 v (or ln v) times its Jacobian 1/(v·ln 10) (1/v).
+        sd = float(row["objectivePriorParameters"].split(";")[1])
+        jac = np.log(v * np.log(10)) if kind == "parameterScaleNormal" else np.log(v)
+        const = np.log(sd * np.sqrt(2 * np.pi)) + jac
+        assert prior.neglogprior(v) - const == pytest.approx(0.5 * z2, rel=1e-9, abs=1e-12), e
+    # Parameters without a fit-file prior carry none (the nuisances' are normal).
+    others = table[~table.index.isin([e["parameter"] for e in entries])]
+    assert set(others["objectivePriorType"].dropna()) <= {"normal"}
 
 
 def test_tables_hold_every_compared_row_with_its_noise(export):
-    fit, out = export
+    fit, out, dataset = export
+    if dataset != DATASET:
+        pytest.skip("the rig dataset's recordings are checked row by row")
     m = pd.read_csv(out / "measurements.tsv", sep="\t")
     obs = pd.read_csv(out / "observables.tsv", sep="\t").set_index("observableId")
     cond = pd.read_csv(out / "conditions.tsv", sep="\t").set_index("conditionId")
@@ -87,8 +127,8 @@ def test_tables_hold_every_compared_row_with_its_noise(export):
 
 
 def test_the_export_from_python_equals_the_clis(export, tmp_path):
-    fit, out = export
-    s = vanefit.export_petab(fit, tmp_path / "py", dataset=DATASET)
+    fit, out, dataset = export
+    s = vanefit.export_petab(fit, tmp_path / "py", dataset=dataset)
     assert Path(s["yaml"]).is_file()
     for name in ("parameters.tsv", "observables.tsv", "measurements.tsv", "conditions.tsv", "model.xml"):
         assert (tmp_path / "py" / name).read_text() == (out / name).read_text(), name

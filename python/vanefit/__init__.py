@@ -235,14 +235,38 @@ def fit(
 
 class Likelihood:
     """The likelihood a fit's estimate and intervals were measured on, rebuilt from its fit
-    file: χ²(x) over the estimated parameters ``names`` (SI values). At ``x_hat`` it is the
-    fit file's ``statistics.likelihood_chi2``; a 95 % profile interval ends where it rises
-    by ``threshold``. Calling the object gives χ² or, where ``x`` is invalid or the
-    simulation fails, a large finite penalty (for optimizers)."""
+    file: χ²(x) over the estimated parameters ``names`` (SI values). With ``priors`` (the
+    default) χ² includes the fit's motor prior, χ²_prior = Σ((ln v − ln m)/σ)² over the
+    parameters the fit file's ``statistics.prior`` lists (:attr:`prior_terms`;
+    docs/estimation.md, "Priors"): the objective the fit minimised, whose value at ``x_hat``
+    is ``statistics.likelihood_chi2`` + ``statistics.prior_chi2``. ``priors=False`` gives
+    the likelihood alone (``likelihood_chi2`` at ``x_hat``). A 95 % profile interval ends
+    where χ² rises by ``threshold``. Calling the object gives χ² or, where ``x`` is invalid
+    or the simulation fails, a large finite penalty (for optimizers)."""
 
-    def __init__(self, ds: Dataset, fit: Union[Fit, PathLike]):
+    def __init__(self, ds: Dataset, fit: Union[Fit, PathLike], priors: bool = True):
         path, text = _fit_source(fit)
-        self._core = _core.PyLikelihood(ds._core, path, text)
+        self._core = _core.PyLikelihood(ds._core, path, text, bool(priors))
+
+    @property
+    def priors(self) -> bool:
+        """Whether the motor prior is part of χ², the residuals and :meth:`log_posterior`."""
+        return self._core.priors
+
+    @property
+    def prior_terms(self) -> List[Dict[str, Any]]:
+        """The fit's motor prior of the estimated parameters: ``parameter``, ``median`` (SI),
+        ``sd_ln`` (σ of ln v), ``size_exponent`` (k of the size law the median follows
+        where the displacement is estimated too; 0 otherwise). Empty for a fit made with
+        ``--priors none``."""
+        return [
+            {"parameter": n, "median": m, "sd_ln": s, "size_exponent": k}
+            for n, m, s, k in self._core.prior_terms
+        ]
+
+    def prior_chi2(self, x: Sequence[float]) -> float:
+        """χ²_prior of the motor prior at ``x`` (SI), whether or not :attr:`priors` is on."""
+        return self._core.prior_chi2([float(v) for v in x])
 
     @property
     def names(self) -> List[str]:
@@ -271,7 +295,8 @@ class Likelihood:
 
     @property
     def chi2_min(self) -> float:
-        """χ² at the estimate as the fit file states it."""
+        """χ² at the estimate as the fit file states it (``likelihood_chi2``, plus
+        ``prior_chi2`` with :attr:`priors`)."""
         return self._core.chi2_min
 
     @property
@@ -290,14 +315,18 @@ class Likelihood:
     def residuals(self, x: Sequence[float]) -> np.ndarray:
         """The residual vector at ``x`` (SI) whose squares sum to :meth:`chi2`: every compared
         row, (simulated − recorded)/σ after the nuisances' correction, then one row per
-        nuisance prior (β̂/τ). For least-squares optimizers (pyPESTO's ``res``, SciPy's
+        nuisance prior (β̂/τ), then with :attr:`priors` one per motor prior term
+        ((ln v − ln m)/σ, in :attr:`prior_terms`' order). For least-squares optimizers (pyPESTO's ``res``, SciPy's
         ``least_squares``). Raises like :meth:`chi2`."""
         return np.asarray(self._core.residuals([float(v) for v in x]))
 
     def breakdown(self, x: Sequence[float]) -> Dict[str, Any]:
-        """χ² at ``x`` split into the rows' part and the nuisance priors' part, with every
-        compared row (``channels``: file, column, rows, data, sigma, simulated, residuals)
-        and the profiled nuisances (label, value, prior_sd)."""
+        """χ² at ``x`` split into the rows' part (``chi2_data``), the nuisance priors' part
+        (``chi2_prior``; ``chi2`` is their sum, the likelihood's) and the motor prior's
+        (``chi2_motor_prior``; ``objective`` = ``chi2`` + it, whatever :attr:`priors`), with
+        every compared row (``channels``: file, column, rows, data, sigma, simulated,
+        residuals), the profiled nuisances (label, value, prior_sd) and the motor prior's
+        terms (``motor_prior``: parameter, median, sd_ln, size_exponent, residual)."""
         b = json.loads(self._core.breakdown([float(v) for v in x]))
         for c in b["channels"]:
             for k in ("rows", "data", "simulated", "residuals"):
@@ -306,8 +335,10 @@ class Likelihood:
 
     def log_posterior(self, x: Sequence[float]) -> float:
         """ln p at sampling coordinates ``x`` (ln θ of a log-scale parameter, θ otherwise):
-        −½·(χ² − χ²_min)/s² (s² = ``threshold``/χ²₁(0.95)) with a prior flat in ``x`` within
-        the search bounds; −inf outside them or where the simulation fails. The density
+        −½·(χ² − χ²_min)/s² of the likelihood (s² = ``threshold``/χ²₁(0.95)), plus with
+        :attr:`priors` the motor prior −½·(χ²_prior − χ²_prior(x̂)) (a Gaussian in ln v, no
+        Jacobian: ``x`` is ln v), with a prior flat in ``x`` within the search bounds; −inf
+        outside them or where the simulation fails. 0 at the estimate. The density
         ``vanefit predict --bands samples`` samples; a callable for emcee."""
         return self._core.log_posterior([float(v) for v in x])
 
@@ -345,9 +376,10 @@ def chain_diagnostics(chains: Any) -> Dict[str, np.ndarray]:
     return {"rhat": d[:, 0], "ess_bulk": d[:, 1], "ess_tail": d[:, 2]}
 
 
-def likelihood(ds: Dataset, fit: Union[Fit, PathLike]) -> Likelihood:
-    """The :class:`Likelihood` of ``fit`` (a :class:`Fit` or a fit file's path) on ``ds``."""
-    return Likelihood(ds, fit)
+def likelihood(ds: Dataset, fit: Union[Fit, PathLike], priors: bool = True) -> Likelihood:
+    """The :class:`Likelihood` of ``fit`` (a :class:`Fit` or a fit file's path) on ``ds``
+    (with the fit's motor prior unless ``priors=False``)."""
+    return Likelihood(ds, fit, priors)
 
 
 def _find_dataset(fit_path: Optional[str], name: str) -> str:
@@ -374,7 +406,8 @@ def export_petab(
     ``problem.yaml`` and ``vanefit_export.json``. ``dataset``: the fit's dataset (default:
     ``measurements/<name>`` beside the fit file's folder, or in the current folder).
     Returns the summary (``measurements``, ``observables``, ``conditions``, ``chi2_rows``,
-    ``chi2_priors``, ``chi2``) with ``yaml``, the problem file's path. See
+    ``chi2_priors``, ``chi2`` = their sum (the likelihood's), ``chi2_motor_priors``,
+    ``objective`` = all three (the fit's)) with ``yaml``, the problem file's path. See
     :mod:`vanefit.petab` to evaluate the tables with vanefit's simulation."""
     path, text = _fit_source(fit)
     if isinstance(dataset, Dataset):

@@ -94,21 +94,46 @@ def _simulation_table(problem, problem_yaml: PathLike, dataset, fit):
 
 
 def prior_chi2(problem_yaml: PathLike) -> float:
-    """Σ((nominal − mean)/sd)² over the parameters with a normal ``objectivePrior`` (the
-    nuisances): the priors' part of χ² at the nominal values, which
-    ``petab.calculate_chi2`` (measurements only) does not count."""
+    """Σ((nominal − mean)/sd)² over the parameters' ``objectivePrior`` at their nominal
+    values, each on its own scale: the priors' part of χ² (−2 ln of the prior densities up
+    to their constants), which ``petab.calculate_chi2`` (measurements only) does not count.
+    The nuisances' ``normal`` priors and the motor prior's ``parameterScaleNormal`` ones
+    (docs/python.md, "The motor prior in PEtab")."""
     return _prior_chi2(_problem(problem_yaml).parameter_df)
 
 
-def _prior_chi2(p) -> float:
-    """:func:`prior_chi2` of a loaded parameter table."""
+def _prior_term(kind: str, parameters: str, value: float, scale: str) -> float:
+    """((x − μ)/σ)² of one objective prior at ``value`` (linear), x on the prior's scale:
+    the value itself (``normal``), its natural log (``logNormal``, whose parameters are
+    those of ln x) or its value on ``parameterScale`` (``parameterScaleNormal``)."""
+    mean, sd = (float(v) for v in str(parameters).split(";"))
+    if kind == "normal":
+        x = value
+    elif kind == "logNormal":
+        x = np.log(value)
+    elif kind == "parameterScaleNormal":
+        x = {"lin": value, "log": np.log(value), "log10": np.log10(value)}[scale]
+    else:
+        raise ValueError(f"objectivePriorType {kind!r}: not one vanefit exports")
+    return ((x - mean) / sd) ** 2
+
+
+def _prior_chi2(p, kinds: Optional[tuple] = None) -> float:
+    """:func:`prior_chi2` of a loaded parameter table (only the prior types ``kinds`` if
+    given)."""
     total = 0.0
     if "objectivePriorType" not in p:
         return total
     for _, row in p.iterrows():
-        if row.get("objectivePriorType") == "normal":
-            mean, sd = (float(v) for v in str(row["objectivePriorParameters"]).split(";"))
-            total += ((float(row["nominalValue"]) - mean) / sd) ** 2
+        kind = row.get("objectivePriorType")
+        if not isinstance(kind, str) or not kind or (kinds and kind not in kinds):
+            continue
+        total += _prior_term(
+            kind,
+            row["objectivePriorParameters"],
+            float(row["nominalValue"]),
+            str(row.get("parameterScale", "lin")),
+        )
     return total
 
 
@@ -117,10 +142,12 @@ def chi2(
     dataset: Optional[PathLike] = None,
     fit: Optional[PathLike] = None,
 ) -> Dict[str, float]:
-    """χ² of the exported problem at the fit as PEtab computes it:
-    ``rows`` (``petab.calculate_chi2`` on the tables with :func:`simulation_table`),
-    ``priors`` (:func:`prior_chi2`) and their sum ``total`` — which is the fit file's
-    ``statistics.likelihood_chi2``."""
+    """χ² of the exported problem at the fit as PEtab computes it: ``rows``
+    (``petab.calculate_chi2`` on the tables with :func:`simulation_table`), ``priors`` (the
+    nuisances' ``normal`` priors), ``motor_priors`` (the motor prior's
+    ``parameterScaleNormal``/``logNormal`` terms) and ``total`` = all three, the fit's
+    objective: ``statistics.likelihood_chi2`` + ``statistics.prior_chi2`` of the fit file
+    (``likelihood`` = rows + priors is ``likelihood_chi2`` alone)."""
     from petab import v1 as petab
 
     problem = _problem(problem_yaml)
@@ -130,5 +157,12 @@ def chi2(
             problem.measurement_df, sim, problem.observable_df, problem.parameter_df
         )
     )
-    priors = _prior_chi2(problem.parameter_df)
-    return {"rows": rows, "priors": priors, "total": rows + priors}
+    priors = _prior_chi2(problem.parameter_df, ("normal",))
+    motor = _prior_chi2(problem.parameter_df, ("parameterScaleNormal", "logNormal"))
+    return {
+        "rows": rows,
+        "priors": priors,
+        "motor_priors": motor,
+        "likelihood": rows + priors,
+        "total": rows + priors + motor,
+    }

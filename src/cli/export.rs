@@ -50,6 +50,11 @@ pub(crate) fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
         summary.chi2_rows,
         summary.chi2_priors
     );
+    say!(
+        "objective at the fit: {:.6} (+ motor priors {:.6}; statistics.likelihood_chi2 + statistics.prior_chi2)",
+        summary.objective(),
+        summary.chi2_motor_priors
+    );
     say!("wrote {}", args.out.join("problem.yaml").display());
     Ok(())
 }

@@ -18,6 +18,22 @@
 //! a parameter is where χ² rises by `statistics.profile_threshold` = χ²₁(0.95)·s² (s ≥ 1 the
 //! widened likelihood's interval scale). (`statistics.chi2` is the goodness of fit: the
 //! rows against the data's own σ, without the priors.)
+//!
+//! # The motor prior
+//!
+//! A fit made with the motor prior (docs/estimation.md, "Priors") minimised χ² + χ²_prior,
+//! with the prior's log-normal terms as the fit file states them (`statistics.prior`):
+//!
+//! ```text
+//!     χ²_prior(θ) = Σ_j ((ln θ_j − ln m_j − k_j·ln(V/V̂))/σ_j)²
+//! ```
+//!
+//! over the estimated parameters with an entry (median m_j, σ_j = `sd_ln`; where the
+//! displacement V was estimated too, the medians follow it with size exponent k_j about
+//! the fit's V̂, else k_j = 0). [`FitLikelihood::prior_chi2`] and
+//! [`FitLikelihood::prior_residuals`] give it; the χ² methods above stay the likelihood's
+//! alone, so that a sampler adding its own prior does not count it twice. At the fit's
+//! estimate, `likelihood_chi2` + `prior_chi2` of the fit file is the fit's objective.
 
 use super::fit_data::FitData;
 use super::space::{Dimension, SpaceError};
@@ -118,6 +134,26 @@ impl Breakdown {
     }
 }
 
+/// One estimated parameter's motor prior, as the fit file states it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MotorPriorTerm {
+    /// Index of the parameter among the estimated ones.
+    pub index: usize,
+    /// The parameter.
+    pub name: String,
+    /// The median m at the fit's displacement, SI.
+    pub median: f64,
+    /// σ of ln v.
+    pub sd_ln: f64,
+    /// Size exponent k the median follows where the displacement is estimated (0 where it
+    /// is not).
+    pub size_exponent: f64,
+}
+
+/// Residual of a prior term where the value has no logarithm: large and finite, so that a
+/// cost built on it stays finite.
+const NO_LOG_RESIDUAL: f64 = 1e6;
+
 /// The likelihood of a fit, as a function of its estimated parameters (SI values).
 pub struct FitLikelihood {
     data: FitData,
@@ -130,6 +166,12 @@ pub struct FitLikelihood {
     chi2_min: f64,
     threshold: f64,
     solver: DefaultSolver,
+    prior: Vec<MotorPriorTerm>,
+    /// Index of `v_disp` among the estimated parameters, where the priors' medians follow it.
+    size_index: Option<usize>,
+    /// ln V̂ of the fit's displacement, m³.
+    ln_v_disp_hat: f64,
+    prior_chi2_min: f64,
 }
 
 impl FitLikelihood {
@@ -189,6 +231,22 @@ impl FitLikelihood {
             .iter()
             .map(|n| fit.params.get(n).unwrap_or(f64::NAN))
             .collect();
+        let prior: Vec<MotorPriorTerm> = fit
+            .estimated
+            .iter()
+            .enumerate()
+            .filter_map(|(index, n)| {
+                let e = stats.prior.iter().find(|e| e.parameter == *n)?;
+                (e.median > 0.0 && e.sd_ln > 0.0).then(|| MotorPriorTerm {
+                    index,
+                    name: n.clone(),
+                    median: e.median,
+                    sd_ln: e.sd_ln,
+                    size_exponent: e.size_exponent.unwrap_or(0.0),
+                })
+            })
+            .collect();
+        let size_index = fit.estimated.iter().position(|n| n == "v_disp");
         let mut out = Self {
             data,
             target,
@@ -202,7 +260,14 @@ impl FitLikelihood {
                 .profile_threshold
                 .unwrap_or(CHI2_95 * stats.interval_scale.powi(2)),
             solver: DefaultSolver::default(),
+            prior,
+            size_index,
+            ln_v_disp_hat: fit.params.v_disp().ln(),
+            prior_chi2_min: 0.0,
         };
+        out.prior_chi2_min = stats
+            .prior_chi2
+            .unwrap_or_else(|| out.prior_chi2(&out.estimate));
         if older {
             // Files written before `likelihood_chi2` existed: the minimum is taken where it
             // is evaluated now.
@@ -273,6 +338,66 @@ impl FitLikelihood {
         self.target
             .residuals(&self.data.smoothed, &motor, &self.solver)
             .ok_or(FitLikelihoodError::Simulation)
+    }
+
+    /// The motor prior's terms of the estimated parameters (empty for a fit made without
+    /// priors), in the fit file's order.
+    pub fn prior_terms(&self) -> &[MotorPriorTerm] {
+        &self.prior
+    }
+
+    /// The motor prior's residuals (ln θ_j − ln m_j − k_j·ln(V/V̂))/σ_j at `values`, one per
+    /// [`Self::prior_terms`] entry: their squares sum to χ²_prior (module documentation). A
+    /// value without a logarithm gives a large finite residual.
+    pub fn prior_residuals(&self, values: &[f64]) -> Result<Vec<f64>, FitLikelihoodError> {
+        if values.len() != self.dims.len() {
+            return Err(FitLikelihoodError::Length {
+                got: values.len(),
+                want: self.dims.len(),
+                names: self.names().join(", "),
+            });
+        }
+        let ln_size = self.size_index.map(|j| values[j].ln() - self.ln_v_disp_hat);
+        Ok(self
+            .prior
+            .iter()
+            .map(|t| {
+                let v = values[t.index];
+                let shift = ln_size.map_or(0.0, |s| t.size_exponent * s);
+                let r = (v.ln() - t.median.ln() - shift) / t.sd_ln;
+                if v > 0.0 && r.is_finite() {
+                    r
+                } else {
+                    NO_LOG_RESIDUAL
+                }
+            })
+            .collect())
+    }
+
+    /// χ²_prior at `values` (module documentation); 0 for a fit made without priors, the
+    /// square of the large residual for a bad vector.
+    pub fn prior_chi2(&self, values: &[f64]) -> f64 {
+        self.prior_residuals(values)
+            .map_or(NO_LOG_RESIDUAL * NO_LOG_RESIDUAL, |r| {
+                r.iter().map(|x| x * x).sum()
+            })
+    }
+
+    /// χ²_prior at the estimate, as the fit file states it (`statistics.prior_chi2`).
+    pub fn prior_chi2_min(&self) -> f64 {
+        self.prior_chi2_min
+    }
+
+    /// The motor prior as a log-density of the values in the sampler's coordinates (ln θ,
+    /// where the log-normal is a Gaussian with no Jacobian): −½·(χ²_prior − χ²_prior,min),
+    /// 0 at the estimate, −∞ where a value has no logarithm.
+    pub fn log_prior(&self, values: &[f64]) -> f64 {
+        match self.prior_residuals(values) {
+            Ok(r) if r.iter().all(|x| x.abs() < NO_LOG_RESIDUAL) => {
+                -0.5 * (r.iter().map(|x| x * x).sum::<f64>() - self.prior_chi2_min)
+            }
+            _ => f64::NEG_INFINITY,
+        }
     }
 
     /// The estimated parameters' search dimensions (bounds, scales), in the fit file's order.

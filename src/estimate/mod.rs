@@ -28,7 +28,9 @@ pub(crate) mod subset;
 pub(crate) mod uncertainty;
 
 pub use fit::{fit, fit_file, DataObjective, FitData, FitOutcome, FitSetup, UncertaintyMethod};
-pub use fit_likelihood::{Breakdown, ChannelRows, FitLikelihood, FitLikelihoodError};
+pub use fit_likelihood::{
+    Breakdown, ChannelRows, FitLikelihood, FitLikelihoodError, MotorPriorTerm,
+};
 pub use goodness::{ChannelChi2, GoodnessOfFit};
 pub use likelihood::Likelihood;
 pub use multistart::{Ending, MultiStartOutcome, RunObserver, Silent, StartResult};

@@ -22,6 +22,25 @@
 //! β̂, PEtab's χ² of the rows plus the priors' Σ(β̂_k/τ_k)² is the fit file's
 //! `statistics.likelihood_chi2`; `vanefit_export.json` states both parts.
 //!
+//! # The motor prior
+//!
+//! A fit made with the motor prior (docs/estimation.md, "Priors") minimised χ² + χ²_prior,
+//! each estimated parameter with an entry in the fit file's `statistics.prior` being
+//! log-normal, ln v ~ N(ln m, σ²). vanefit estimates these parameters on a log scale
+//! (`parameterScale` log10), and the fit is the posterior's mode in ln v, i.e. a normal
+//! density on the parameter scale with no Jacobian term: PEtab's `parameterScaleNormal`
+//! with
+//!
+//! ```text
+//!     objectivePriorParameters = log10 m ; σ / ln 10                               [2]
+//! ```
+//!
+//! (PEtab's `logNormal` is a density of the linear value, whose 1/v factor would move the
+//! mode; it is used only for a parameter searched on a linear scale, with ln m ; σ). At the
+//! fit, Σ((log10 v − log10 m)/(σ/ln 10))² = Σ((ln v − ln m)/σ)² is the fit file's
+//! `statistics.prior_chi2`, so rows + nuisance priors + motor priors is the fit's objective
+//! (`objective` in `vanefit_export.json`).
+//!
 //! # What PEtab cannot carry
 //!
 //! The model itself: the SBML document declares parameters, inputs and outputs only, and
@@ -29,11 +48,16 @@
 //! simulated rows). The recorded inputs as time functions (supply-pressure ramp, outlet
 //! throttle): a transient experiment is one condition whose inputs are the recording's.
 //! The fitting cost J (per-channel means and reference polynomials), which is vanefit's
-//! search criterion, not a likelihood.
+//! search criterion, not a likelihood. Where the fit estimated the displacement (a page
+//! that does not print it), the motor priors' medians follow it (docs/estimation.md, "A
+//! page without a displacement"); PEtab's priors have fixed parameters, so the table
+//! states them at the fit's displacement: exact at the fit, not as the displacement moves.
 
 use crate::data::dataset::{Dataset, Kind};
 use crate::data::fitfile::FitFile;
-use crate::estimate::fit_likelihood::{Breakdown, ChannelRows, FitLikelihood, FitLikelihoodError};
+use crate::estimate::fit_likelihood::{
+    Breakdown, ChannelRows, FitLikelihood, FitLikelihoodError, MotorPriorTerm,
+};
 use crate::model::params::{spec, PARAMS};
 use crate::sim::recording::ExperimentData;
 use crate::units::Quantity;
@@ -106,6 +130,16 @@ pub struct PetabSummary {
     pub chi2_rows: f64,
     /// Σ(β̂/τ)² of the nuisances' priors at their nominal values.
     pub chi2_priors: f64,
+    /// χ²_prior of the motor prior at the fit (the parameter table's `parameterScaleNormal`
+    /// priors at the nominal values; 0 for a fit made without priors).
+    pub chi2_motor_priors: f64,
+}
+
+impl PetabSummary {
+    /// The fit's objective at its estimate: rows + nuisance priors + motor priors.
+    pub fn objective(&self) -> f64 {
+        self.chi2_rows + self.chi2_priors + self.chi2_motor_priors
+    }
 }
 
 /// The file names, in the order they are written (the YAML last, so that a problem that
@@ -139,6 +173,7 @@ pub fn tables(
 ) -> Result<(PetabTables, PetabSummary), PetabError> {
     let likelihood = FitLikelihood::from_fit(ds, fit)?;
     let b = likelihood.breakdown(&likelihood.estimate())?;
+    let chi2_motor_priors = likelihood.prior_chi2(&likelihood.estimate());
     let nuisance_ids: Vec<String> = b.nuisances.iter().map(|(l, _, _)| nuisance_id(l)).collect();
     let mut observables = Vec::new();
     let mut measurements = String::from(
@@ -163,6 +198,7 @@ pub fn tables(
         conditions: conditions.len(),
         chi2_rows: b.chi2_data,
         chi2_priors: b.chi2_prior,
+        chi2_motor_priors,
     };
     let t = PetabTables {
         parameters: parameter_table(&likelihood, fit, &b, &nuisance_ids),
@@ -171,7 +207,7 @@ pub fn tables(
         conditions: condition_table(&conditions),
         model: sbml(fit, &outputs),
         problem: PROBLEM_YAML.to_string(),
-        summary: summary_json(ds, fit, fit_path, &summary),
+        summary: summary_json(ds, fit, fit_path, &summary, &likelihood),
     };
     Ok((t, summary))
 }
@@ -429,8 +465,8 @@ fn observable_table(observables: &[Observable]) -> String {
 }
 
 /// The estimated parameters (bounds and scale of vanefit's search, nominal value the fit's
-/// estimate) and the nuisances (nominal value β̂, prior N(0, τ²), bounds ±10τ around 0 or
-/// wider to hold β̂).
+/// estimate, the motor prior where the fit has one, eq. \[2\]) and the nuisances (nominal
+/// value β̂, prior N(0, τ²), bounds ±10τ around 0 or wider to hold β̂).
 fn parameter_table(
     likelihood: &FitLikelihood,
     fit: &FitFile,
@@ -440,13 +476,18 @@ fn parameter_table(
     let mut s = String::from(
         "parameterId\tparameterName\tparameterScale\tlowerBound\tupperBound\tnominalValue\testimate\tobjectivePriorType\tobjectivePriorParameters\n",
     );
-    for d in likelihood.dimensions() {
+    for (i, d) in likelihood.dimensions().iter().enumerate() {
         let value = fit.params.get(&d.name).unwrap_or(f64::NAN);
         let meaning = spec(&d.name).map_or("", |p| p.meaning);
         let scale = if d.log_scale { "log10" } else { "lin" };
+        let prior = likelihood
+            .prior_terms()
+            .iter()
+            .find(|t| t.index == i)
+            .map_or_else(|| "\t".to_string(), |t| motor_prior_cells(t, d.log_scale));
         let _ = writeln!(
             s,
-            "{}\t{meaning}\t{scale}\t{}\t{}\t{value}\t1\t\t",
+            "{}\t{meaning}\t{scale}\t{}\t{}\t{value}\t1\t{prior}",
             d.name, d.lo, d.hi
         );
     }
@@ -459,6 +500,21 @@ fn parameter_table(
         );
     }
     s
+}
+
+/// The `objectivePriorType` and `objectivePriorParameters` cells of a motor prior term,
+/// eq. \[2\]: `parameterScaleNormal` (log10 m; σ/ln 10) on a log10 scale, `logNormal`
+/// (ln m; σ) on a linear one.
+fn motor_prior_cells(t: &MotorPriorTerm, log_scale: bool) -> String {
+    if log_scale {
+        format!(
+            "parameterScaleNormal\t{};{}",
+            t.median.log10(),
+            t.sd_ln / std::f64::consts::LN_10
+        )
+    } else {
+        format!("logNormal\t{};{}", t.median.ln(), t.sd_ln)
+    }
 }
 
 /// An SBML Level 3 document that declares the model's symbols: every parameter of the fitted
@@ -514,7 +570,13 @@ fn xml_escape(text: &str) -> String {
 }
 
 /// `vanefit_export.json`: where the problem came from and vanefit's χ² of it at the fit.
-fn summary_json(ds: &Dataset, fit: &FitFile, fit_path: &Path, s: &PetabSummary) -> String {
+fn summary_json(
+    ds: &Dataset,
+    fit: &FitFile,
+    fit_path: &Path,
+    s: &PetabSummary,
+    likelihood: &FitLikelihood,
+) -> String {
     // Absolute paths: tools read this file from wherever they run.
     let absolute = |p: &Path| {
         std::fs::canonicalize(p)
@@ -522,6 +584,17 @@ fn summary_json(ds: &Dataset, fit: &FitFile, fit_path: &Path, s: &PetabSummary) 
             .display()
             .to_string()
     };
+    let mut not_carried = vec![
+        "the model's dynamics (model.xml declares symbols only; vanefit simulates)",
+        "recorded inputs as time functions (a transient experiment is one condition driven by its recording)",
+        "the fitting cost J (per-channel means and reference polynomials)",
+    ];
+    if likelihood.names().iter().any(|n| n == "v_disp") && !likelihood.prior_terms().is_empty() {
+        not_carried.push(
+            "the motor priors' medians following the estimated displacement (parameters.tsv states them at the fit's displacement)",
+        );
+    }
+    let stats = fit.statistics.as_ref();
     let doc = serde_json::json!({
         "format": "vanefit.petab_export/1",
         "fit": absolute(fit_path),
@@ -532,12 +605,11 @@ fn summary_json(ds: &Dataset, fit: &FitFile, fit_path: &Path, s: &PetabSummary) 
         "chi2_rows": s.chi2_rows,
         "chi2_priors": s.chi2_priors,
         "chi2": s.chi2_rows + s.chi2_priors,
-        "likelihood_chi2": fit.statistics.as_ref().and_then(|st| st.likelihood_chi2),
-        "not_carried": [
-            "the model's dynamics (model.xml declares symbols only; vanefit simulates)",
-            "recorded inputs as time functions (a transient experiment is one condition driven by its recording)",
-            "the fitting cost J (per-channel means and reference polynomials)"
-        ],
+        "likelihood_chi2": stats.and_then(|st| st.likelihood_chi2),
+        "chi2_motor_priors": s.chi2_motor_priors,
+        "objective": s.objective(),
+        "prior_chi2": stats.and_then(|st| st.prior_chi2),
+        "not_carried": not_carried,
     });
     serde_json::to_string_pretty(&doc).expect("plain data") + "\n"
 }

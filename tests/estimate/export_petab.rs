@@ -5,7 +5,10 @@
 //! compared row is present once with its recorded value, every observable's formula names
 //! only symbols that the model, the parameter table or its own per-row parameters define,
 //! the nuisances' nominal values reproduce the fit's χ² when the residuals are recomputed
-//! from the tables and the simulated rows, and bad input is refused with exit status 1.
+//! from the tables and the simulated rows, the motor priors' `parameterScaleNormal` terms at
+//! the nominal values add the fit's `prior_chi2` (so the tables' total is the fit's
+//! objective, for a rig fit and a catalogue-page fit), and bad input is refused with exit
+//! status 1.
 //! (The PEtab library's own linter and χ² are run on the same export by the Python tests.)
 
 use crate::common;
@@ -17,12 +20,20 @@ use vanefit::data::Dataset;
 use vanefit::data::FitFile;
 use vanefit::estimate::FitLikelihood;
 
+/// The shipped catalogue page (one supply pressure, no dead volume).
+const CATALOGUE: &str = "measurements/ar034-synthetic-catalogue";
+
 /// A fit of the shipped dataset by the CLI with profile intervals (few starts: seconds).
 fn profile_fit(dir: &Path) -> std::path::PathBuf {
+    fit_of(dir, DATASET)
+}
+
+/// A fit of `dataset` by the CLI with its default prior and profile intervals.
+fn fit_of(dir: &Path, dataset: &str) -> std::path::PathBuf {
     let out = dir.join("fit.json");
     let o = vanefit(&[
         "fit",
-        DATASET,
+        dataset,
         "--starts",
         "6",
         "--seed",
@@ -71,12 +82,36 @@ fn is_petab_id(s: &str) -> bool {
 fn the_tables_hold_the_fits_likelihood() {
     let dir = tempfile::tempdir().unwrap();
     let fit_path = profile_fit(dir.path());
-    let out = dir.path().join("petab");
+    check_export(dir.path(), &fit_path, DATASET);
+}
+
+/// A page fit estimates every default parameter, most resting on their prior: the table
+/// carries each one's prior, and the tables' χ² is the fit's objective.
+#[test]
+fn a_page_fits_tables_carry_its_motor_prior() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit_path = fit_of(dir.path(), CATALOGUE);
+    let fit = FitFile::read(&fit_path).unwrap();
+    let stats = fit.statistics.as_ref().unwrap();
+    assert!(stats.prior.len() >= 8, "{:?}", stats.prior);
+    let prior_chi2 = stats.prior_chi2.unwrap();
+    assert!(prior_chi2 > 0.0);
+    let motor = check_export(dir.path(), &fit_path, CATALOGUE);
+    assert!(
+        ((motor - prior_chi2) / prior_chi2).abs() < 1e-9,
+        "{motor} vs {prior_chi2}"
+    );
+}
+
+/// Exports `fit_path` and checks its tables against the fit (module documentation);
+/// returns the motor priors' χ² at the nominal values.
+fn check_export(dir: &Path, fit_path: &Path, dataset: &str) -> f64 {
+    let out = dir.join("petab");
     let o = vanefit(&[
         "export-petab",
         fit_path.to_str().unwrap(),
         "--dataset",
-        DATASET,
+        dataset,
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -144,26 +179,75 @@ fn the_tables_hold_the_fits_likelihood() {
     }
 
     // The estimated parameters carry the fit's values; nuisance priors are N(0, τ²), τ > 0.
-    let fit = FitFile::read(&fit_path).unwrap();
+    let fit = FitFile::read(fit_path).unwrap();
     let nominal = column(&params, "nominalValue");
     for name in &fit.estimated {
         let v: f64 = nominal[table[name.as_str()]].parse().unwrap();
         assert_eq!(v, fit.params.get(name).unwrap(), "{name}");
     }
     let priors = column(&params, "objectivePriorParameters");
+    let scales = column(&params, "parameterScale");
+    let ids = column(&params, "parameterId");
+    let stats = fit.statistics.clone().unwrap();
     let mut chi2_priors = 0.0;
+    let mut chi2_motor = 0.0;
     for (i, kind) in column(&params, "objectivePriorType").iter().enumerate() {
-        if *kind == "normal" {
-            let (m, s) = priors[i].split_once(';').unwrap();
-            let (m, s): (f64, f64) = (m.parse().unwrap(), s.parse().unwrap());
-            assert!(m == 0.0 && s > 0.0);
-            let b: f64 = nominal[i].parse().unwrap();
-            chi2_priors += (b / s).powi(2);
+        let (m, s) = match priors[i].split_once(';') {
+            Some((m, s)) => (m.parse::<f64>().unwrap(), s.parse::<f64>().unwrap()),
+            None => {
+                // No prior: only a parameter the fit file states none for.
+                assert!(kind.is_empty(), "{}: {kind} without parameters", ids[i]);
+                assert!(
+                    stats.prior.iter().all(|e| e.parameter != ids[i]),
+                    "{}",
+                    ids[i]
+                );
+                continue;
+            }
+        };
+        let v: f64 = nominal[i].parse().unwrap();
+        match *kind {
+            "normal" => {
+                assert!(m == 0.0 && s > 0.0);
+                chi2_priors += (v / s).powi(2);
+            }
+            "parameterScaleNormal" => {
+                // log10 of the fit file's median, σ of ln v / ln 10, on the log10 scale.
+                assert_eq!(scales[i], "log10", "{}", ids[i]);
+                let e = stats.prior.iter().find(|e| e.parameter == ids[i]).unwrap();
+                assert!((m - e.median.log10()).abs() < 1e-12, "{}", ids[i]);
+                assert!((s * std::f64::consts::LN_10 / e.sd_ln - 1.0).abs() < 1e-12);
+                chi2_motor += ((v.log10() - m) / s).powi(2);
+            }
+            "logNormal" => {
+                // A parameter searched on a linear scale (b_crit): ln of the median, σ of ln v.
+                assert_eq!(scales[i], "lin", "{}", ids[i]);
+                let e = stats.prior.iter().find(|e| e.parameter == ids[i]).unwrap();
+                assert!((m - e.median.ln()).abs() < 1e-12, "{}", ids[i]);
+                assert!((s / e.sd_ln - 1.0).abs() < 1e-12);
+                chi2_motor += ((v.ln() - m) / s).powi(2);
+            }
+            other => panic!("{}: unexpected prior {other}", ids[i]),
         }
+    }
+    // Every prior the fit file states is in the table.
+    for e in &stats.prior {
+        let i = table[e.parameter.as_str()];
+        let want = if scales[i] == "log10" {
+            "parameterScaleNormal"
+        } else {
+            "logNormal"
+        };
+        assert_eq!(
+            column(&params, "objectivePriorType")[i],
+            want,
+            "{}",
+            e.parameter
+        );
     }
 
     // χ² recomputed from the tables and the simulated rows equals the fit's.
-    let ds = Dataset::load(Path::new(DATASET)).unwrap();
+    let ds = Dataset::load(Path::new(dataset)).unwrap();
     let lik = FitLikelihood::from_fit(&ds, &fit).unwrap();
     let b = lik.breakdown(&lik.estimate()).unwrap();
     let values: Vec<f64> = column(&meas, "measurement")
@@ -204,12 +288,25 @@ fn the_tables_hold_the_fits_likelihood() {
             chi2_rows += ((values[i] - y) / sigma).powi(2);
         }
     }
-    let want = fit.statistics.unwrap().likelihood_chi2.unwrap();
+    let want = stats.likelihood_chi2.unwrap();
     let got = chi2_rows + chi2_priors;
     assert!(
         ((got - want) / want).abs() < 1e-9,
         "tables' chi2 {got} vs fit's {want}"
     );
+    // With the motor priors: the fit's objective, as the summary states it.
+    let objective = want + stats.prior_chi2.unwrap_or(0.0);
+    let total = got + chi2_motor;
+    assert!(
+        ((total - objective) / objective).abs() < 1e-9,
+        "tables' objective {total} vs fit's {objective}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("vanefit_export.json")).unwrap())
+            .unwrap();
+    let stated = summary["objective"].as_f64().unwrap();
+    assert!(((stated - objective) / objective).abs() < 1e-9, "{stated}");
+    chi2_motor
 }
 
 #[test]
