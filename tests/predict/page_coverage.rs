@@ -161,6 +161,8 @@ fn evaluate_styled(
     let page_dir = dir.join("page");
     std::fs::create_dir_all(&page_dir).map_err(|e| e.to_string())?;
     let page = print_page(&page_dir, &motor, &style).map_err(|e| format!("twin: {e}"))?;
+    let oracle = Oracle::from_env(&motor);
+    oracle.tell_page(&page_dir)?;
     let (rows, factors) =
         truth(&motor, &BAR_G, REFERENCE_BAR_G).map_err(|e| format!("twin: {e}"))?;
     let fit = dir.join("fit.json");
@@ -178,6 +180,8 @@ fn evaluate_styled(
     if let Some(s) = &starts_s {
         args.extend(["--starts", s]);
     }
+    let oracle_args = oracle.fit_args(style.displacement);
+    args.extend(oracle_args.iter().map(String::as_str));
     // PAGE_FIT_ARGS adds options to fit (e.g. "--priors none"); default none.
     let fit_extra = std::env::var("PAGE_FIT_ARGS").unwrap_or_default();
     args.extend(fit_extra.split_whitespace());
@@ -252,6 +256,87 @@ fn evaluate_styled(
         factors: factor_checks,
         noise_not_reached: fit_out.contains("NOT reach"),
     })
+}
+
+/// Oracle experiments (not what a user can do; to find where the errors come from):
+/// PAGE_ORACLE lists what of the twin's truth the fit is given, comma-separated: `geom`
+/// (vanes and expansion ratio in the page's `[motor]`, the polytropic index fixed by
+/// bounds), `coulomb` (the Coulomb friction fixed by bounds), `visc` (the viscous friction likewise), `dead` (the dead volume in
+/// `[motor]`, still estimated). Empty: the fit as a user runs it.
+struct Oracle {
+    motor: twin::motor::TwinMotor,
+    geom: bool,
+    coulomb: bool,
+    dead: bool,
+    visc: bool,
+}
+
+impl Oracle {
+    fn from_env(motor: &twin::motor::TwinMotor) -> Self {
+        let v = std::env::var("PAGE_ORACLE").unwrap_or_default();
+        Oracle {
+            motor: motor.clone(),
+            geom: v.contains("geom"),
+            coulomb: v.contains("coulomb"),
+            dead: v.contains("dead"),
+            visc: v.contains("visc"),
+        }
+    }
+
+    fn any(&self) -> bool {
+        self.geom || self.coulomb || self.dead || self.visc
+    }
+
+    /// Writes what the oracle gives into the page's `[motor]` table.
+    fn tell_page(&self, page_dir: &Path) -> Result<(), String> {
+        let mut add = String::new();
+        if self.geom {
+            add += &format!(
+                "vanes = {}\nexpansion_ratio = {}\n",
+                self.motor.z as u32, self.motor.eps
+            );
+        }
+        if self.dead {
+            add += &format!("dead_volume_m3 = {:e}\n", self.motor.v_dead);
+        }
+        if add.is_empty() {
+            return Ok(());
+        }
+        let path = page_dir.join("rig.toml");
+        let text = std::fs::read_to_string(&path).map_err(|e| e.to_string())?;
+        let text = text.replacen("[motor]\n", &format!("[motor]\n{add}"), 1);
+        std::fs::write(&path, text).map_err(|e| e.to_string())
+    }
+
+    /// The fit options that fix what the oracle gives.
+    fn fit_args(&self, displacement_printed: bool) -> Vec<String> {
+        if !self.any() {
+            return Vec::new();
+        }
+        let mut est = "c_in1,c_out2,c_ext,c_1e,c_2e,c_12,t_coulomb,visc,v_dead,b_crit".to_string();
+        if !displacement_printed {
+            est += ",v_disp";
+        }
+        let mut bounds = Vec::new();
+        if self.geom {
+            est += ",n_poly";
+            let n = self.motor.n_poly;
+            bounds.push(format!("n_poly={}:{}", n - 1e-6, n + 1e-6));
+        }
+        if self.coulomb {
+            let t = self.motor.t_coulomb;
+            bounds.push(format!("t_coulomb={:e}:{:e}", t * 0.999, t * 1.001));
+        }
+        if self.visc {
+            let v = self.motor.visc;
+            bounds.push(format!("visc={:e}:{:e}", v * 0.999, v * 1.001));
+        }
+        let mut args = vec!["--estimate".to_string(), est];
+        if !bounds.is_empty() {
+            args.extend(["--bounds".to_string(), bounds.join(",")]);
+        }
+        args
+    }
 }
 
 /// The displacement of a fit file, m³, and its 95 % interval where it has one.
