@@ -4,7 +4,7 @@
 //! A chosen model that puts catalog effects (or a second term) beside a discovered term may
 //! be a patchwork: the term's law was not the data's, and the other parts make up the
 //! difference. Before it is accepted, the term alone is refitted with every flow law of the
-//! term library on its path (and the best-ranked path terms of the baseline's regression),
+//! term library on its path (every pressure's Coulomb law for a Coulomb-like torque term) (and the best-ranked path terms of the baseline's regression),
 //! warm from the baseline; a one-part model within [`SELECT_DELTA_BIC`] of the patchwork is
 //! chosen instead (it explains the data as well with fewer parts).
 //!
@@ -66,7 +66,8 @@ pub(crate) fn one_explanation(
 }
 
 /// The terms to refit alone: every flow law (constant and times |ω|) on the paths of the
-/// chosen model's terms, its other terms as they are, and the best path terms of the
+/// chosen model's terms, every pressure-loaded Coulomb term of the library beside a
+/// Coulomb-like torque term, its other terms as they are, and the best path terms of the
 /// regression's ranking; each with its linearised coefficient.
 fn alone_terms(c: &Candidate, reg: &Regression) -> Vec<ExtraTerm> {
     let linearised = |t: &ExtraTerm| {
@@ -100,6 +101,20 @@ fn alone_terms(c: &Candidate, reg: &Regression) -> Vec<ExtraTerm> {
                             push(u, &mut out);
                         }
                     }
+                }
+            }
+            // A pressure-loaded Coulomb term beside other parts: every pressure's Coulomb law
+            // of the library alone (a catalog `pressure_dependent_friction` plus a (p_2 − p_e)
+            // term is the chamber-sum law in two parts).
+            BalanceId::Torque if t.speed == SpeedFactor::Sign => {
+                push(*t, &mut out);
+                for s in reg.ranking.iter().filter(|s| {
+                    s.term.balance == BalanceId::Torque
+                        && s.term.speed == SpeedFactor::Sign
+                        && s.term.coefficient != 0.0
+                        && s.term.coefficient.is_finite()
+                }) {
+                    push(s.term, &mut out);
                 }
             }
             _ => push(*t, &mut out),

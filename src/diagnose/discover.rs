@@ -27,8 +27,8 @@
 //! # Library
 //!
 //! Torque (a loss torque): p·ω for p ∈ {p_1, p_2, p_e} and the differences p_1 − p_e,
-//! p_2 − p_e, p_1 − p_2 times ω, and pressure-dependent Coulomb-like terms (p_2 − p_e,
-//! p_1 − p_2, gauge pressures)·tanh(ω/ω_reg), a power-law viscous loss ω·|ω|^(1/2) and the
+//! p_2 − p_e, p_1 − p_2 times ω, and pressure-dependent Coulomb-like terms (p_1 + p_2 − 2·p_e,
+//! p_2 − p_e, p_1 − p_2, gauge pressures)·tanh(ω/ω_reg), a power-law viscous loss ω·|ω|^(1/2) and the
 //! exponential Stribeck excess exp(−|ω|/ω_s)·tanh(ω/ω_reg). Terms the model already has are left out:
 //! tanh and ω alone are the base model's `t_coulomb` and `visc`, ω·|ω| is
 //! `vane_friction_speed_squared`, (p_1 − p_e)·tanh is `pressure_dependent_friction`.
@@ -39,7 +39,7 @@
 //! V_1, V_2, V_e alone: gauge pressures and pressure differences (a volume's own gauge
 //! pressure is the laminar path to atmosphere and is left to the paths); ω, absolute
 //! pressures times ω and pressure differences times ω (speed-driven flows: pumping,
-//! carry-over). 121 terms in all. A one-balance mass term gives way to a path that explains
+//! carry-over). 122 terms in all. A one-balance mass term gives way to a path that explains
 //! the misfit within `PATH_PREFERENCE` as well (mass conservation is physics).
 
 use super::fitting::Fitted;
@@ -93,8 +93,11 @@ pub fn library() -> Vec<ExtraTerm> {
     ] {
         out.push(term(BalanceId::Torque, p, W::Omega));
     }
-    // Coulomb-like, pressure-dependent ((p_1 − p_e)·tanh is `pressure_dependent_friction`):
+    // Coulomb-like, pressure-dependent ((p_1 − p_e)·tanh is `pressure_dependent_friction`;
+    // the chamber sum is vanes pressed by both chambers, one law where the catalog effect
+    // plus a (p_2 − p_e) term would be two parts):
     for p in [
+        P::ChamberSum,
         P::P2MinusPe,
         P::P1MinusP2,
         P::P1Gauge,

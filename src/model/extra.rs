@@ -197,9 +197,18 @@ pub enum PressureFactor {
     P2MinusPe,
     /// p_1 − p_2, Pa.
     P1MinusP2,
+    /// (p_1 − p_e) + (p_2 − p_e), Pa: the normal load of vanes pressed by both chambers
+    /// (pressure-loaded Coulomb friction T = k·(p_1 + p_2 − 2·p_e)·tanh(ω/ω_reg), the
+    /// Coulomb force F_C = F_pr + f·(p_A + p_B) of seal friction; docs/diagnosis.md,
+    /// "Term library").
+    ChamberSum,
     /// Flow law of a leak path: Δp = p_from − p_to, Pa (laminar).
     Laminar,
-    /// Flow law of a leak path: Δp·|Δp|, Pa² (grows with the square of the difference).
+    /// Flow law of a leak path: Δp·|Δp|, Pa² (grows with the square of the difference): a
+    /// gap that the pressure opens. Not a textbook law of a fixed gap; the first-order
+    /// correction of a laminar gap whose height grows with Δp (ṁ ∝ h³·Δp with
+    /// h = h_0·(1 + Δp/p_d) gives Δp + 3·Δp²/p_d + …), the "elastic leak" of a seal lifted
+    /// by the pressure (docs/diagnosis.md, "Term library").
     Quadratic,
     /// Flow law of a leak path: p_from² − p_to², Pa² (isothermal compressible laminar gap
     /// flow, ṁ = h³·w·(p_a² − p_b²)/(24·μ·L·R·T): Poiseuille flow at the mean density).
@@ -252,7 +261,7 @@ impl PressureFactor {
     }
 
     /// Every pressure factor.
-    pub const ALL: [PressureFactor; 16] = [
+    pub const ALL: [PressureFactor; 17] = [
         P::One,
         P::P1,
         P::P2,
@@ -263,6 +272,7 @@ impl PressureFactor {
         P::P1MinusPe,
         P::P2MinusPe,
         P::P1MinusP2,
+        P::ChamberSum,
         P::Laminar,
         P::Quadratic,
         P::Orifice,
@@ -315,6 +325,7 @@ impl ExtraTerm {
             PressureFactor::P1MinusPe => p1 - pe,
             PressureFactor::P2MinusPe => p2 - pe,
             PressureFactor::P1MinusP2 => p1 - p2,
+            PressureFactor::ChamberSum => p1 + p2 - 2.0 * pe,
             law => match self.balance {
                 BalanceId::Path(path) => flow_law(
                     law,
@@ -435,7 +446,9 @@ pub fn describe(t: &ExtraTerm) -> String {
         BalanceId::Path(path) => {
             let law = match t.pressure {
                 P::Laminar => "that grows in proportion to the pressure difference (laminar)",
-                P::Quadratic => "that grows with the square of the pressure difference",
+                P::Quadratic => {
+                    "that grows with the square of the pressure difference (a gap the pressure opens)"
+                }
                 P::CompressibleLaminar => {
                     "that grows with the difference of the squared pressures (compressible laminar)"
                 }
@@ -499,6 +512,7 @@ fn pressure_symbol(p: P) -> (&'static str, &'static str) {
         P::P1MinusPe => ("(p1 - pe)", "Pa"),
         P::P2MinusPe => ("(p2 - pe)", "Pa"),
         P::P1MinusP2 => ("(p1 - p2)", "Pa"),
+        P::ChamberSum => ("(p1 + p2 - 2*pe)", "Pa"),
         P::Laminar => ("dp", "Pa"),
         P::Quadratic => ("dp*|dp|", "Pa2"),
         P::CompressibleLaminar => ("(pa^2 - pb^2)", "Pa2"),
@@ -533,6 +547,7 @@ pub fn pressure_id(p: P) -> &'static str {
         P::P1MinusPe => "p1_minus_pe",
         P::P2MinusPe => "p2_minus_pe",
         P::P1MinusP2 => "p1_minus_p2",
+        P::ChamberSum => "p1_plus_p2_minus_2pe",
         P::Laminar => "laminar",
         P::Quadratic => "quadratic",
         P::CompressibleLaminar => "compressible_laminar",

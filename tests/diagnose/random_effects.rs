@@ -92,14 +92,20 @@ pub(crate) fn classify(truth: &Drawn, d: &Diagnosis) -> (Class, bool) {
     (class, law)
 }
 
-/// A random case: the twin's perturbed motor of `seed` with the effect drawn from `seed`,
-/// recorded as a rig does (20 Hz, rig noise).
-pub(crate) fn random_case(seed: u64) -> (Drawn, vanefit::data::Dataset) {
+/// The effect drawn from `seed` and the twin's perturbed motor of `seed` with it.
+fn random_motor(seed: u64) -> (Drawn, twin::TwinMotor) {
     let drawn = twin::laws::draw(seed);
     let motor = twin::TwinMotor {
         laws: vec![drawn],
         ..twin::perturbed_motor(1000 + seed)
     };
+    (drawn, motor)
+}
+
+/// A random case: the twin's perturbed motor of `seed` with the effect drawn from `seed`,
+/// recorded as a rig does (20 Hz, rig noise).
+pub(crate) fn random_case(seed: u64) -> (Drawn, vanefit::data::Dataset) {
+    let (drawn, motor) = random_motor(seed);
     let ds = crate::twin_data::twin_dataset(&motor, &crate::twin_data::twin_rig_config(), seed);
     (drawn, ds)
 }
@@ -197,5 +203,32 @@ fn random_effects_short() {
 fn random_effect_draws() {
     for seed in 1..=40 {
         println!("{seed}: {}", twin::laws::draw(seed).describe());
+    }
+}
+
+/// Writes the random cases `RANDOM_SEEDS` (comma-separated, default 6,7,10) as rig folders
+/// under `RANDOM_OUT` (default `target/random-cases`), for timing `vanefit diagnose` on
+/// them:
+///
+/// ```sh
+/// RANDOM_SEEDS=6,7,10 cargo test --release --test diagnose -- --ignored random_cases_to_disk
+/// ```
+#[test]
+#[ignore]
+fn random_cases_to_disk() {
+    let seeds: Vec<u64> = std::env::var("RANDOM_SEEDS")
+        .unwrap_or_else(|_| "6,7,10".into())
+        .split(',')
+        .map(|s| s.trim().parse().unwrap())
+        .collect();
+    let out = std::env::var("RANDOM_OUT").map_or_else(
+        |_| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/random-cases"),
+        std::path::PathBuf::from,
+    );
+    for seed in seeds {
+        let (drawn, motor) = random_motor(seed);
+        let path = out.join(format!("random-{seed}"));
+        twin::write_dataset(&path, &motor, &crate::twin_data::twin_rig_config(), seed).unwrap();
+        println!("{}: {}", path.display(), drawn.describe());
     }
 }
