@@ -285,7 +285,10 @@ impl PyLikelihood {
         self.inner
             .prior_terms()
             .iter()
-            .map(|t| (t.name.clone(), t.median, t.sd_ln, t.size_exponent))
+            .map(|t| {
+                let t = &t.term;
+                (t.name.clone(), t.median, t.sd_ln, t.size_exponent)
+            })
             .collect()
     }
 
@@ -432,6 +435,7 @@ impl PyLikelihood {
             .iter()
             .zip(self.inner.prior_residuals(&x).map_err(likelihood_err)?)
             .map(|(t, r)| {
+                let t = &t.term;
                 serde_json::json!({
                     "parameter": t.name, "median": t.median, "sd_ln": t.sd_ln,
                     "size_exponent": t.size_exponent, "residual": r,

@@ -36,6 +36,7 @@
 //! estimate, `likelihood_chi2` + `prior_chi2` of the fit file is the fit's objective.
 
 use super::fit_data::FitData;
+use super::prior::{PriorTerm, NO_LOG_RESIDUAL};
 use super::space::{Dimension, SpaceError};
 use super::uncertainty::CHI2_95;
 use crate::data::dataset::Dataset;
@@ -139,20 +140,11 @@ impl Breakdown {
 pub struct MotorPriorTerm {
     /// Index of the parameter among the estimated ones.
     pub index: usize,
-    /// The parameter.
-    pub name: String,
-    /// The median m at the fit's displacement, SI.
-    pub median: f64,
-    /// σ of ln v.
-    pub sd_ln: f64,
-    /// Size exponent k the median follows where the displacement is estimated (0 where it
+    /// The prior: its median stated at the fit's displacement V̂ (SI), σ of ln v, and the
+    /// size exponent k the median follows where the displacement is estimated (0 where it
     /// is not).
-    pub size_exponent: f64,
+    pub term: PriorTerm,
 }
-
-/// Residual of a prior term where the value has no logarithm: large and finite, so that a
-/// cost built on it stays finite.
-const NO_LOG_RESIDUAL: f64 = 1e6;
 
 /// The likelihood of a fit, as a function of its estimated parameters (SI values).
 pub struct FitLikelihood {
@@ -169,8 +161,8 @@ pub struct FitLikelihood {
     prior: Vec<MotorPriorTerm>,
     /// Index of `v_disp` among the estimated parameters, where the priors' medians follow it.
     size_index: Option<usize>,
-    /// ln V̂ of the fit's displacement, m³.
-    ln_v_disp_hat: f64,
+    /// V̂, the fit's displacement, m³.
+    v_disp_hat: f64,
     prior_chi2_min: f64,
 }
 
@@ -239,10 +231,12 @@ impl FitLikelihood {
                 let e = stats.prior.iter().find(|e| e.parameter == *n)?;
                 (e.median > 0.0 && e.sd_ln > 0.0).then(|| MotorPriorTerm {
                     index,
-                    name: n.clone(),
-                    median: e.median,
-                    sd_ln: e.sd_ln,
-                    size_exponent: e.size_exponent.unwrap_or(0.0),
+                    term: PriorTerm {
+                        name: n.clone(),
+                        median: e.median,
+                        sd_ln: e.sd_ln,
+                        size_exponent: e.size_exponent.unwrap_or(0.0),
+                    },
                 })
             })
             .collect();
@@ -262,7 +256,7 @@ impl FitLikelihood {
             solver: DefaultSolver::default(),
             prior,
             size_index,
-            ln_v_disp_hat: fit.params.v_disp().ln(),
+            v_disp_hat: fit.params.v_disp(),
             prior_chi2_min: 0.0,
         };
         out.prior_chi2_min = stats
@@ -357,20 +351,12 @@ impl FitLikelihood {
                 names: self.names().join(", "),
             });
         }
-        let ln_size = self.size_index.map(|j| values[j].ln() - self.ln_v_disp_hat);
+        // V/V̂: the medians are stated at the fit's displacement V̂.
+        let size = self.size_index.map_or(1.0, |j| values[j] / self.v_disp_hat);
         Ok(self
             .prior
             .iter()
-            .map(|t| {
-                let v = values[t.index];
-                let shift = ln_size.map_or(0.0, |s| t.size_exponent * s);
-                let r = (v.ln() - t.median.ln() - shift) / t.sd_ln;
-                if v > 0.0 && r.is_finite() {
-                    r
-                } else {
-                    NO_LOG_RESIDUAL
-                }
-            })
+            .map(|t| t.term.residual_at_size(values[t.index], size))
             .collect())
     }
 

@@ -46,6 +46,10 @@ pub const PRIOR_SPREADS: [(&str, f64); 14] = [
     ("b_crit", 1.6),
 ];
 
+/// The residual of a prior term whose value (or size) has no logarithm: large and finite,
+/// so that a cost built on it stays finite.
+pub(crate) const NO_LOG_RESIDUAL: f64 = 1e6;
+
 /// One parameter's log-normal prior.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PriorTerm {
@@ -86,7 +90,7 @@ impl PriorTerm {
         if v > 0.0 && v.is_finite() && size > 0.0 && size.is_finite() {
             (v.ln() - self.median.ln() - self.size_exponent * size.ln()) / self.sd_ln
         } else {
-            1e6
+            NO_LOG_RESIDUAL
         }
     }
 }

@@ -506,6 +506,7 @@ fn parameter_table(
 /// eq. \[2\]: `parameterScaleNormal` (log10 m; σ/ln 10) on a log10 scale, `logNormal`
 /// (ln m; σ) on a linear one.
 fn motor_prior_cells(t: &MotorPriorTerm, log_scale: bool) -> String {
+    let t = &t.term;
     if log_scale {
         format!(
             "parameterScaleNormal\t{};{}",
