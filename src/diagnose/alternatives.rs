@@ -4,8 +4,9 @@
 //! A chosen model that puts catalog effects (or a second term) beside a discovered term may
 //! be a patchwork: the term's law was not the data's, and the other parts make up the
 //! difference. Before it is accepted, the term alone is refitted with every flow law of the
-//! term library on its path (every pressure's Coulomb law for a Coulomb-like torque term) (and the best-ranked path terms of the baseline's regression),
-//! warm from the baseline; a one-part model within [`SELECT_DELTA_BIC`] of the patchwork is
+//! term library on its path (for a Coulomb-like torque term: every pressure's Coulomb law),
+//! and the best-ranked path terms of the baseline's regression too, each warm from the
+//! baseline; a one-part model within [`SELECT_DELTA_BIC`] of the patchwork is
 //! chosen instead (it explains the data as well with fewer parts).
 //!
 //! Every other model within [`ALSO_CONSISTENT_DELTA_BIC`] of the chosen one is "also

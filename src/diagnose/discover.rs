@@ -27,10 +27,10 @@
 //! # Library
 //!
 //! Torque (a loss torque): p·ω for p ∈ {p_1, p_2, p_e} and the differences p_1 − p_e,
-//! p_2 − p_e, p_1 − p_2 times ω, and pressure-dependent Coulomb-like terms (p_1 + p_2 − 2·p_e,
-//! p_2 − p_e, p_1 − p_2, gauge pressures)·tanh(ω/ω_reg), a power-law viscous loss ω·|ω|^(1/2) and the
-//! exponential Stribeck excess exp(−|ω|/ω_s)·tanh(ω/ω_reg). Terms the model already has are left out:
-//! tanh and ω alone are the base model's `t_coulomb` and `visc`, ω·|ω| is
+//! p_2 − p_e, p_1 − p_2 times ω, and pressure-dependent Coulomb-like terms
+//! (p_1 + p_2 − 2·p_e, p_2 − p_e, p_1 − p_2, gauge pressures)·tanh(ω/ω_reg), a power-law
+//! viscous loss ω·|ω|^(1/2) and the exponential Stribeck excess exp(−|ω|/ω_s)·tanh(ω/ω_reg).
+//! Terms the model already has are left out: tanh and ω alone are the base model's `t_coulomb` and `visc`, ω·|ω| is
 //! `vane_friction_speed_squared`, (p_1 − p_e)·tanh is `pressure_dependent_friction`.
 //! Leak paths ([`crate::model::extra::LeakPath`]: V_1→V_e, V_2→V_e, V_1→V_2 and each
 //! volume to atmosphere; the mass one balance loses the other gains) with each flow law
