@@ -7,7 +7,7 @@ use crate::errors::ParameterError;
 use pyo3::prelude::*;
 use vanefit::estimate::summarise;
 use vanefit::estimate::FitLikelihood;
-use vanefit::estimate::{run_ensemble, EnsembleSettings, FitPosterior, LogDensity};
+use vanefit::estimate::{run_ensemble, EnsembleSettings, FitPosterior, LogDensity, LogPrior};
 
 /// Chains, ln p and acceptance of a run, as plain lists.
 pub(crate) type Run = (Vec<Vec<Vec<f64>>>, Vec<Vec<f64>>, Vec<f64>);
@@ -16,6 +16,20 @@ pub(crate) type Run = (Vec<Vec<Vec<f64>>>, Vec<Vec<f64>>, Vec<f64>);
 /// Gaussian in ln v, 0 at the estimate), as `vanefit predict --bands samples` adds it.
 fn motor_prior(inner: &FitLikelihood) -> impl Fn(&[f64]) -> f64 + Sync + '_ {
     move |values: &[f64]| inner.log_prior(values)
+}
+
+/// The fit's posterior, with `prior` when `priors` (else flat in the sampling coordinates).
+fn posterior<'a>(
+    inner: &'a FitLikelihood,
+    priors: bool,
+    prior: &'a dyn LogPrior,
+) -> FitPosterior<'a> {
+    let post = FitPosterior::new(inner);
+    if priors {
+        post.with_prior(prior)
+    } else {
+        post
+    }
 }
 
 /// ln p at sampling coordinates `x` (ln θ for a log-scale parameter, θ otherwise):
@@ -28,12 +42,7 @@ pub(crate) fn log_posterior(
     x: Vec<f64>,
 ) -> PyResult<f64> {
     let prior = motor_prior(inner);
-    let post = FitPosterior::new(inner);
-    let post = if priors {
-        post.with_prior(&prior)
-    } else {
-        post
-    };
+    let post = posterior(inner, priors, &prior);
     if x.len() != post.dim() {
         return Err(ParameterError::new_err(format!(
             "{} coordinates given, the fit estimated {} ({})",
@@ -58,12 +67,7 @@ pub(crate) fn sample(
     seed: u64,
 ) -> PyResult<Run> {
     let prior = motor_prior(inner);
-    let post = FitPosterior::new(inner);
-    let post = if priors {
-        post.with_prior(&prior)
-    } else {
-        post
-    };
+    let post = posterior(inner, priors, &prior);
     let settings = EnsembleSettings {
         walkers: starts.len(),
         steps,
