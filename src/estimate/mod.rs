@@ -39,8 +39,8 @@ pub use prior::{Prior, PriorTerm};
 pub use sample::diagnostics::ParamDiagnostics;
 pub use sample::posterior::LogPrior;
 pub use sample::{
-    ess, ess_bulk, ess_tail, rhat_rank, run_ensemble, summarise, Chains, EnsembleSettings,
-    FitPosterior, LogDensity, SampleError,
+    ess, ess_bulk, ess_tail, rhat_rank, run_ensemble, run_ensemble_with, summarise, Chains,
+    EnsembleSettings, FitPosterior, LogDensity, Moves, SampleError,
 };
 pub use space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
 pub use uncertainty::{

@@ -515,7 +515,8 @@ pub fn band_notes(pr: &Prediction) -> Vec<String> {
             out.push(format!(
                 "EVERY band is made from POSTERIOR SAMPLES{why}: the 2.5 and 97.5 percentiles \
                  of each figure over {} samples of {} ({} walkers × {} steps after {} burn-in, \
-                 affine-invariant ensemble, seed {}, acceptance {:.2}); the value is the \
+                 affine-invariant ensemble of differential-evolution and stretch moves, seed {}, \
+                 acceptance {:.2}); the value is the \
                  figure at the estimate.",
                 s.draws - s.failed_draws,
                 s.names.join(", "),

@@ -18,6 +18,13 @@
 //! leaves p invariant; the move is unchanged by any affine map of x, so that a narrow,
 //! correlated posterior is sampled as easily as a round one.
 //!
+//! # The differential-evolution move
+//!
+//! [`run_ensemble_with`] can mix in ter Braak's differential-evolution move ([`Moves`]): a
+//! walker steps along the difference of two walkers of the other half. `predict` samples
+//! with 80 % of these: on a catalogue page's posterior (a prior cut by a few thin, curved
+//! constraints) the stretch move alone needed about ten times the steps to mix.
+//!
 //! # Determinism
 //!
 //! Walker k draws from its own Xoshiro256++ stream: the stream of the seed advanced by k
@@ -163,6 +170,8 @@ struct Walker {
     lp: f64,
     rng: Xoshiro256PlusPlus,
     accepted: usize,
+    /// DE proposals made so far (every 10th takes γ = 1).
+    de_count: usize,
 }
 
 /// The random streams of `k` walkers: the seed's stream advanced by 0, 1, ..., k−1 jumps.
@@ -182,26 +191,82 @@ fn stretch(u: f64) -> f64 {
     ((STRETCH_A - 1.0) * u + 1.0).powi(2) / STRETCH_A
 }
 
+/// The proposals the walkers make.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum Moves {
+    /// The stretch move alone (emcee's default; the module documentation).
+    Stretch,
+    /// The differential-evolution move (ter Braak 2006, "A Markov chain Monte Carlo version
+    /// of the genetic algorithm Differential Evolution", Stat. Comput. 16; emcee's
+    /// `DEMove`) with probability `de`, the stretch move otherwise. Walker k proposes
+    ///
+    /// ```text
+    ///     y = x_k + γ·(x_a − x_b),    γ = (2.38/√(2d))·(1 + 0.1·N(0,1)),
+    /// ```
+    ///
+    /// with x_a ≠ x_b two walkers of the other half, and accepts with probability
+    /// min(1, p(y)/p(x_k)) (a symmetric proposal). Every 10th DE proposal of a walker takes
+    /// γ = 1 (a jump between modes, as ter Braak advises). The move is affine invariant as
+    /// the stretch move is, and in ten or more dimensions its steps follow a thin, curved
+    /// posterior far better: on catalogue-page posteriors its autocorrelation time is a
+    /// fraction of the stretch move's (docs/validation.md, "Catalogue predictions").
+    Mixed {
+        /// Probability of a DE proposal, in [0, 1].
+        de: f64,
+    },
+}
+
 /// Moves one half of the walkers (the first or the second) against the other half held
 /// fixed, in parallel; `count` tallies the accepted proposals.
-fn half_step(density: &dyn LogDensity, walkers: &mut [Walker], first_half: bool, count: bool) {
+fn half_step(
+    density: &dyn LogDensity,
+    walkers: &mut [Walker],
+    first_half: bool,
+    count: bool,
+    moves: Moves,
+) {
     let k = walkers.len();
     let half = k / 2;
     let (a, b) = walkers.split_at_mut(half);
     let (moving, fixed) = if first_half { (a, &*b) } else { (b, &*a) };
     let d = density.dim();
     moving.par_iter_mut().for_each(|w| {
-        let j = w.rng.random_range(0..fixed.len());
-        let z = stretch(w.rng.random::<f64>());
+        let de = match moves {
+            Moves::Stretch => false,
+            Moves::Mixed { de } => w.rng.random::<f64>() < de,
+        };
+        let (y, log_jacobian) = if de && fixed.len() >= 2 {
+            let a = w.rng.random_range(0..fixed.len());
+            let b = (a + w.rng.random_range(1..fixed.len())) % fixed.len();
+            w.de_count += 1;
+            let gamma = if w.de_count % 10 == 0 {
+                1.0
+            } else {
+                let z: f64 =
+                    rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut w.rng);
+                2.38 / (2.0 * d as f64).sqrt() * (1.0 + 0.1 * z)
+            };
+            let y: Vec<f64> =
+                w.x.iter()
+                    .zip(fixed[a].x.iter().zip(&fixed[b].x))
+                    .map(|(x, (p, q))| x + gamma * (p - q))
+                    .collect();
+            (y, 0.0)
+        } else {
+            let j = w.rng.random_range(0..fixed.len());
+            let z = stretch(w.rng.random::<f64>());
+            let partner = &fixed[j].x;
+            let y: Vec<f64> = partner
+                .iter()
+                .zip(&w.x)
+                .map(|(p, x)| p + z * (x - p))
+                .collect();
+            (y, (d as f64 - 1.0) * z.ln())
+        };
         let u: f64 = w.rng.random();
-        let partner = &fixed[j].x;
-        let y: Vec<f64> = partner
-            .iter()
-            .zip(&w.x)
-            .map(|(p, x)| p + z * (x - p))
-            .collect();
         let lp = density.log_density(&y);
-        let log_ratio = (d as f64 - 1.0) * z.ln() + lp - w.lp;
+        let log_ratio = log_jacobian + lp - w.lp;
         if lp.is_finite() && u.ln() < log_ratio {
             w.x = y;
             w.lp = lp;
@@ -213,11 +278,23 @@ fn half_step(density: &dyn LogDensity, walkers: &mut [Walker], first_half: bool,
 }
 
 /// Runs the ensemble from `starts` (one per walker, each where the density is positive) and
-/// returns the kept chains; `progress(done, total)` is called after each step.
+/// returns the kept chains; `progress(done, total)` is called after each step. The stretch
+/// move alone ([`run_ensemble_with`] chooses the moves).
 pub fn run_ensemble(
     density: &dyn LogDensity,
     starts: &[Vec<f64>],
     settings: &EnsembleSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Chains, SampleError> {
+    run_ensemble_with(density, starts, settings, Moves::Stretch, progress)
+}
+
+/// [`run_ensemble`] with the proposals `moves`.
+pub fn run_ensemble_with(
+    density: &dyn LogDensity,
+    starts: &[Vec<f64>],
+    settings: &EnsembleSettings,
+    moves: Moves,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Chains, SampleError> {
     let d = density.dim();
@@ -250,6 +327,7 @@ pub fn run_ensemble(
             lp,
             rng,
             accepted: 0,
+            de_count: 0,
         })
         .collect();
     let total = settings.burn_in + settings.steps;
@@ -257,8 +335,8 @@ pub fn run_ensemble(
     let mut log_density = vec![Vec::with_capacity(settings.steps); k];
     for step in 0..total {
         let keep = step >= settings.burn_in;
-        half_step(density, &mut walkers, true, keep);
-        half_step(density, &mut walkers, false, keep);
+        half_step(density, &mut walkers, true, keep, moves);
+        half_step(density, &mut walkers, false, keep, moves);
         if keep {
             for (i, w) in walkers.iter().enumerate() {
                 draws[i].push(w.x.clone());
