@@ -68,55 +68,18 @@ def page_fit(tmp_path_factory) -> Path:
 
 
 # --- running on several workers (pytest-xdist) ---------------------------------------------
-# CI runs these tests on both cores (`pytest -n 2 --dist loadgroup`, .ci/run). A fixture is
-# made once per worker that needs it, and tests are handed to workers one by one; so tests
-# that share an expensive module fixture go to one worker together (an xdist group), and the
-# timing-dependent Ctrl-C tests run one after the other on one worker. Without xdist the marks
-# do nothing (the longest groups only run first).
-
-# Fixture name → group: the tests that use it run on one worker, which makes it once.
-SHARED_FIXTURE_GROUPS = {
-    "pesto": "pesto",  # pyPESTO's multi-start and profiles (≈ 45 s)
-    "runs": "sampler-runs",  # both samplers on the catalogue likelihood
-    "page_runs": "sampler-page",  # both samplers on the page posterior (≈ 75 s)
-    "fmus": "fmu",  # two FMUs exported and simulated
-    "tiny_fit": "plot-fit",  # a fit with profiles for the plots
-    "posterior": "sampler-runs",  # the catalogue fit the samplers start from
-}
-# The longest groups are handed out first (CI passes --no-loadscope-reorder, so that xdist
-# keeps this order): started last, one of them would keep a worker busy alone at the end.
-FIRST = ["sampler-page", "pesto"]
-# Tests that measure how long something takes (the Ctrl-C tests: a KeyboardInterrupt within a
-# round, a SIGINT answered within 30 s): one worker, one after the other.
-TIMING_TESTS = {
-    "test_keyboard_interrupt_stops_the_fit_and_it_resumes",
-    "test_ctrl_c_interrupts_a_running_fit",
-}
-
-
-def pytest_configure(config):
-    # Registered here too, so that the mark is known when pytest-xdist is not installed.
-    config.addinivalue_line("markers", "xdist_group(name): run on one xdist worker together")
+# CI runs these tests on both cores (`pytest -n 2 --dist loadfile`, .ci/run): a file's tests
+# run on one worker, so that a module fixture (pyPESTO's multi-start, the samplers' runs, the
+# FMUs, each PEtab export) is made once, and the timing-dependent Ctrl-C tests of test_api.py
+# run one after the other. (xdist's own groups, `--dist loadgroup`, were tried first: the
+# worker names a test's group in its collection hook, which ran before this file's marks in
+# pytest-xdist 3.8, so the groups never formed.) The files with the longest tests are handed
+# out first (CI passes --no-loadscope-reorder, so that xdist keeps this order): started last,
+# one of them would keep a worker busy alone at the end. Without xdist only the order changes.
+LONGEST_FIRST = ["test_sampler.py", "test_pesto.py", "test_petab.py", "test_notebooks.py"]
 
 
 def pytest_collection_modifyitems(config, items):
-    for item in items:
-        group = None
-        if item.originalname in TIMING_TESTS:
-            group = "interrupt"
-        params = getattr(getattr(item, "callspec", None), "params", {})
-        if "export" in params:
-            # test_petab's module fixture, one export per fit: the tests of one fit together.
-            group = f"petab-{params['export']}"
-        for name, g in SHARED_FIXTURE_GROUPS.items():
-            if group is None and name in item.fixturenames:
-                group = g
-        if group is not None:
-            item.add_marker(pytest.mark.xdist_group(group))
-        item.stash[_GROUP] = group
-    # A stable sort: within a group, and for the rest, the collection's order.
-    rank = {g: i for i, g in enumerate(FIRST)}
-    items.sort(key=lambda it: rank.get(it.stash[_GROUP], len(FIRST)))
-
-
-_GROUP = pytest.StashKey[object]()
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    # A stable sort: each file's tests stay together and in their order.
+    items.sort(key=lambda it: rank.get(it.path.name, len(LONGEST_FIRST)))
