@@ -65,3 +65,21 @@ def page_fit(tmp_path_factory) -> Path:
     doc = json.loads(out.read_text())
     assert doc["statistics"]["prior_chi2"] > 0
     return out
+
+
+# --- running on several workers (pytest-xdist) ---------------------------------------------
+# CI runs these tests on both cores (`pytest -n 2 --dist loadfile`, .ci/run): a file's tests
+# run on one worker, so that a module fixture (pyPESTO's multi-start, the samplers' runs, the
+# FMUs, each PEtab export) is made once, and the timing-dependent Ctrl-C tests of test_api.py
+# run one after the other. (xdist's own groups, `--dist loadgroup`, were tried first: the
+# worker names a test's group in its collection hook, which ran before this file's marks in
+# pytest-xdist 3.8, so the groups never formed.) The files with the longest tests are handed
+# out first (CI passes --no-loadscope-reorder, so that xdist keeps this order): started last,
+# one of them would keep a worker busy alone at the end. Without xdist only the order changes.
+LONGEST_FIRST = ["test_sampler.py", "test_pesto.py", "test_petab.py", "test_notebooks.py"]
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    # A stable sort: each file's tests stay together and in their order.
+    items.sort(key=lambda it: rank.get(it.path.name, len(LONGEST_FIRST)))

@@ -7,9 +7,9 @@ pub(crate) mod ode;
 pub(crate) mod rodas;
 pub(crate) mod scalar;
 
-pub use ode::{
-    DiffsolBdf, Jacobian, Kinks, Rhs, Slopes, SolveError, State, StiffSolver, Tolerances,
-};
+#[cfg(feature = "bdf")]
+pub use ode::DiffsolBdf;
+pub use ode::{Jacobian, Kinks, Rhs, Slopes, SolveError, State, StiffSolver, Tolerances};
 pub use rodas::Rodas4;
 
 /// The stiff solver every simulation uses unless it asks for another: Rodas4 (see

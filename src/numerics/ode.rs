@@ -124,10 +124,12 @@ pub trait StiffSolver: Send + Sync {
 
 /// Typical magnitude of each state (pressures in Pa, then a speed in rad/s), used to size
 /// finite-difference steps.
+#[cfg(feature = "bdf")]
 const STATE_SCALE: State = [1e5, 1e5, 1e5, 1.0];
 
 /// Jacobian-vector product J·v by a forward difference, with a step sized so that each
 /// state moves by about 1e-7 of its magnitude.
+#[cfg(feature = "bdf")]
 fn jacobian_times(rhs: &Rhs<'_>, t: f64, x: &State, f0: &State, v: &State) -> State {
     let mut ratio: f64 = 0.0;
     for i in 0..N_STATES {
@@ -154,12 +156,17 @@ fn jacobian_times(rhs: &Rhs<'_>, t: f64, x: &State, f0: &State, v: &State) -> St
 }
 
 /// diffsol's BDF (variable order 1–5, like MATLAB's ode15s) with nalgebra's dense LU.
+///
+/// Behind the cargo feature `bdf` (on by default): the fuzz targets build vanefit without
+/// it, which spares their instrumented build diffsol and its linear-algebra crates.
+#[cfg(feature = "bdf")]
 #[derive(Debug, Clone, Copy, Default)]
 pub struct DiffsolBdf {
     /// Integration tolerances.
     pub tol: Tolerances,
 }
 
+#[cfg(feature = "bdf")]
 impl StiffSolver for DiffsolBdf {
     fn solve(
         &self,
@@ -247,11 +254,12 @@ impl StiffSolver for DiffsolBdf {
     }
 }
 
+#[cfg(feature = "bdf")]
 fn to_state(x: &[f64]) -> State {
     std::array::from_fn(|i| x[i])
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "bdf"))]
 mod tests {
     use super::*;
 
