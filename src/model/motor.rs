@@ -12,6 +12,9 @@
 //! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (docs/model.md, "Mechanics and friction").
 
 use crate::model::effects::{CatalogEffect, Effect, EffectSet, SupplyValve};
+// The catalog's hooks, named in the documentation (the code calls them through CatalogEffect).
+#[cfg(doc)]
+use crate::model::effects::Term;
 use crate::model::extra::slot;
 pub use crate::model::extra::{
     BalanceId, Chamber, ExtraTerm, LeakPath, PressureFactor, SpeedFactor,
