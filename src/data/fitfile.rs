@@ -870,6 +870,11 @@ pub fn term_from_json(v: &serde_json::Value) -> Result<ExtraTerm, TermError> {
             "the flow law '{p}' needs a leak path (\"balance\": \"leak_path\")"
         )));
     }
+    if pressure == P::AirTorque && balance != BalanceId::Torque {
+        return Err(TermError(format!(
+            "the pressure factor '{p}' is a torque: it enters only \"balance\": \"torque\""
+        )));
+    }
     let w = field("speed")?;
     let speed = W::ALL
         .into_iter()

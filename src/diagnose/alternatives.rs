@@ -4,7 +4,8 @@
 //! A chosen model that puts catalog effects (or a second term) beside a discovered term may
 //! be a patchwork: the term's law was not the data's, and the other parts make up the
 //! difference. Before it is accepted, the term alone is refitted with every flow law of the
-//! term library on its path (for a Coulomb-like torque term: every pressure's Coulomb law),
+//! term library on its path (for a Coulomb-like torque term: every pressure's Coulomb law
+//! and the load-dependent one on the air torque),
 //! and the best-ranked path terms of the baseline's regression too, each warm from the
 //! baseline; a one-part model within [`SELECT_DELTA_BIC`] of the patchwork is
 //! chosen instead (it explains the data as well with fewer parts).
@@ -104,9 +105,10 @@ fn alone_terms(c: &Candidate, reg: &Regression) -> Vec<ExtraTerm> {
                     }
                 }
             }
-            // A pressure-loaded Coulomb term beside other parts: every pressure's Coulomb law
-            // of the library alone (a catalog `pressure_dependent_friction` plus a (p_2 − p_e)
-            // term is the chamber-sum law in two parts).
+            // A pressure-loaded Coulomb term beside other parts: every Coulomb law of the
+            // library alone, pressure- and load-dependent (a catalog
+            // `pressure_dependent_friction` plus a (p_2 − p_e) term is the chamber-sum law, or
+            // the air-torque law, in two parts).
             BalanceId::Torque if t.speed == SpeedFactor::Sign => {
                 push(*t, &mut out);
                 for s in reg.ranking.iter().filter(|s| {

@@ -28,7 +28,9 @@
 //!
 //! Torque (a loss torque): p·ω for p ∈ {p_1, p_2, p_e} and the differences p_1 − p_e,
 //! p_2 − p_e, p_1 − p_2 times ω, and pressure-dependent Coulomb-like terms
-//! (p_1 + p_2 − 2·p_e, p_2 − p_e, p_1 − p_2, gauge pressures)·tanh(ω/ω_reg), a power-law
+//! (p_1 + p_2 − 2·p_e, p_2 − p_e, p_1 − p_2, gauge pressures)·tanh(ω/ω_reg), load-dependent
+//! Coulomb friction |T_air|·tanh(ω/ω_reg) (T_air the model's own air torque at the state,
+//! [`Motor::air_torque_nm`]), a power-law
 //! viscous loss ω·|ω|^(1/2) and the exponential Stribeck excess exp(−|ω|/ω_s)·tanh(ω/ω_reg).
 //! Terms the model already has are left out: tanh and ω alone are the base model's `t_coulomb` and `visc`, ω·|ω| is
 //! `vane_friction_speed_squared`, (p_1 − p_e)·tanh is `pressure_dependent_friction`.
@@ -39,7 +41,7 @@
 //! V_1, V_2, V_e alone: gauge pressures and pressure differences (a volume's own gauge
 //! pressure is the laminar path to atmosphere and is left to the paths); ω, absolute
 //! pressures times ω and pressure differences times ω (speed-driven flows: pumping,
-//! carry-over). 122 terms in all. A one-balance mass term gives way to a path that explains
+//! carry-over). 123 terms in all. A one-balance mass term gives way to a path that explains
 //! the misfit within `PATH_PREFERENCE` as well (mass conservation is physics).
 
 use super::fitting::Fitted;
@@ -98,6 +100,9 @@ pub fn library() -> Vec<ExtraTerm> {
     // plus a (p_2 − p_e) term would be two parts):
     for p in [
         P::ChamberSum,
+        // Load-dependent: the torque the vanes and bearings transmit loads them (k·|T_air|,
+        // the air torque weighing p_1, p_2 and p_e as the cycle does):
+        P::AirTorque,
         P::P2MinusPe,
         P::P1MinusP2,
         P::P1Gauge,
@@ -157,14 +162,14 @@ pub fn library() -> Vec<ExtraTerm> {
 }
 
 /// Perturbation δ of a library term's coefficient: the size of one noise level of its
-/// balance at [`TYPICAL`].
-fn step(t: &ExtraTerm) -> f64 {
+/// balance at [`TYPICAL`], where the motor's air torque is `t_air_nm`.
+fn step(t: &ExtraTerm, t_air_nm: f64) -> f64 {
     let unit = ExtraTerm {
         coefficient: 1.0,
         ..*t
     };
     let f = unit
-        .feature(&TYPICAL, crate::units::constants::P_ATM_PA, 0.2)
+        .feature(&TYPICAL, crate::units::constants::P_ATM_PA, 0.2, t_air_nm)
         .abs()
         .max(1e-30);
     match t.balance {
@@ -328,7 +333,8 @@ fn sensitivities(
     let mut cols: Vec<Col> = (0..theta.len()).map(Col::Theta).collect();
     cols.extend((0..model.extra.len()).map(Col::Extra));
     let n_nuisance = cols.len();
-    cols.extend(lib.iter().map(|t| Col::Library(*t, step(t))));
+    let t_air_nm = motor.air_torque_nm(&TYPICAL);
+    cols.extend(lib.iter().map(|t| Col::Library(*t, step(t, t_air_nm))));
     let column = |c: &Col| -> Option<Vec<f64>> {
         let at = |sign: f64| -> Option<Vec<f64>> {
             let m = match c {
@@ -501,6 +507,7 @@ mod tests {
     #[test]
     fn library_terms_are_distinct_and_described() {
         let lib = library();
+        let t_air_nm = Motor::default_motor().air_torque_nm(&TYPICAL);
         for (i, a) in lib.iter().enumerate() {
             for b in &lib[..i] {
                 assert!(
@@ -508,7 +515,7 @@ mod tests {
                     "{a:?}"
                 );
             }
-            assert!(step(a).is_finite() && step(a) > 0.0);
+            assert!(step(a, t_air_nm).is_finite() && step(a, t_air_nm) > 0.0);
         }
         let t = ExtraTerm {
             balance: BalanceId::Torque,
@@ -524,6 +531,22 @@ mod tests {
             assert_eq!(term_from_json(&term_to_json(&t)).unwrap(), t);
         }
         assert!(term_from_json(&serde_json::json!({"balance": "torque"})).is_err());
+        // Load-dependent friction: a pure-number fraction of the air torque, torque only.
+        let t = ExtraTerm {
+            balance: BalanceId::Torque,
+            pressure: P::AirTorque,
+            speed: W::Sign,
+            coefficient: 0.066,
+        };
+        assert_eq!(coefficient_unit(&t), "1");
+        assert_eq!(
+            formula(&t),
+            "T_loss += 6.6000e-2 * |T_air|*tanh(omega/w_reg)"
+        );
+        let mut json = term_to_json(&t);
+        json["balance"] = "mass_v1".into();
+        let e = term_from_json(&json).unwrap_err().to_string();
+        assert!(e.contains("air_torque") && e.contains("torque"), "{e}");
     }
 
     #[test]

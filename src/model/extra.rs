@@ -17,9 +17,8 @@
 //! is taken as is (the flow from→to is coefficient·factor·speed). A flow law on a
 //! one-balance term has no Δp and contributes nothing; fit files refuse it.
 
-use crate::model::effects::{Category, Term};
+use crate::model::effects::Category;
 use crate::model::nozzle;
-use crate::model::params::MotorParams;
 use crate::numerics::ode::State;
 use PressureFactor as P;
 use SpeedFactor as W;
@@ -42,7 +41,8 @@ pub enum BalanceId {
     Path(LeakPath),
 }
 
-/// Where the four balances sit in the accumulator of [`Term::add_to_balances`].
+/// Where the four balances sit in the accumulator of
+/// [`crate::model::effects::Term::add_to_balances`] (and of [`ExtraTerm::add_to`]).
 pub mod slot {
     /// The torque balance (a loss torque, N·m).
     pub(crate) const TORQUE: usize = 0;
@@ -55,8 +55,9 @@ pub mod slot {
 }
 
 impl BalanceId {
-    /// The balance's place in the accumulator of [`Term::add_to_balances`] (`None` for a
-    /// path, which acts on two).
+    /// The balance's place in the accumulator of
+    /// [`crate::model::effects::Term::add_to_balances`] (`None` for a path, which acts on
+    /// two).
     pub fn slot(self) -> Option<usize> {
         match self {
             BalanceId::Torque => Some(slot::TORQUE),
@@ -202,6 +203,13 @@ pub enum PressureFactor {
     /// Coulomb force F_C = F_pr + f·(p_A + p_B) of seal friction; docs/diagnosis.md,
     /// "Term library").
     ChamberSum,
+    /// |T_air|, N·m: the magnitude of the air torque on the rotor at the state, the ideal
+    /// motor's torque T of J·dω/dt = T − T_f − T_load
+    /// ([`crate::model::motor::Motor::air_torque_nm`]). Times `sign` it is load-dependent
+    /// Coulomb friction T = k·|T_air|·tanh(ω/ω_reg), k dimensionless: vanes and bearings
+    /// loaded by the torque they transmit (docs/diagnosis.md, "Term library"). A torque,
+    /// so only the torque balance takes it.
+    AirTorque,
     /// Flow law of a leak path: Δp = p_from − p_to, Pa (laminar).
     Laminar,
     /// Flow law of a leak path: Δp·|Δp|, Pa² (grows with the square of the difference): a
@@ -261,7 +269,7 @@ impl PressureFactor {
     }
 
     /// Every pressure factor.
-    pub const ALL: [PressureFactor; 17] = [
+    pub const ALL: [PressureFactor; 18] = [
         P::One,
         P::P1,
         P::P2,
@@ -273,6 +281,7 @@ impl PressureFactor {
         P::P2MinusPe,
         P::P1MinusP2,
         P::ChamberSum,
+        P::AirTorque,
         P::Laminar,
         P::Quadratic,
         P::Orifice,
@@ -311,8 +320,10 @@ pub struct ExtraTerm {
 
 impl ExtraTerm {
     /// The feature pressure(x)·speed(ω) at state x (SI), times the coefficient: the loss
-    /// torque or the mass flow into the balance, or along the path from→to.
-    pub fn feature(&self, x: &State, p_atm_pa: f64, w_reg: f64) -> f64 {
+    /// torque or the mass flow into the balance, or along the path from→to. `t_air_nm` is
+    /// the air torque at x, N·m ([`crate::model::motor::Motor::air_torque_nm`]; only
+    /// [`PressureFactor::AirTorque`] reads it).
+    pub fn feature(&self, x: &State, p_atm_pa: f64, w_reg: f64, t_air_nm: f64) -> f64 {
         let [p1, p2, pe, omega] = *x;
         let p = match self.pressure {
             PressureFactor::One => 1.0,
@@ -326,6 +337,7 @@ impl ExtraTerm {
             PressureFactor::P2MinusPe => p2 - pe,
             PressureFactor::P1MinusP2 => p1 - p2,
             PressureFactor::ChamberSum => p1 + p2 - 2.0 * pe,
+            PressureFactor::AirTorque => t_air_nm.abs(),
             law => match self.balance {
                 BalanceId::Path(path) => flow_law(
                     law,
@@ -388,18 +400,20 @@ pub(crate) fn flow_law(law: PressureFactor, p_from: f64, p_to: f64) -> f64 {
     }
 }
 
-impl Term for ExtraTerm {
-    /// coefficient·feature(x) added to its balance (the catalog effects' hook); along a
-    /// path, taken from `from`'s balance and given to `to`'s.
-    fn add_to_balances(
+impl ExtraTerm {
+    /// coefficient·feature(x) added to its balance in `acc` (the slots of [`slot`], as the
+    /// catalog effects' [`crate::model::effects::Term::add_to_balances`]); along a path,
+    /// taken from `from`'s balance and given to `to`'s. `t_air_nm`: the air torque at x,
+    /// N·m, which the motor has already computed for its torque equation.
+    pub(crate) fn add_to(
         &self,
-        _own: &[f64],
-        params: &MotorParams,
         x: &State,
         p_atm_pa: f64,
+        w_reg: f64,
+        t_air_nm: f64,
         acc: &mut [f64; 4],
     ) {
-        let f = self.feature(x, p_atm_pa, params.w_reg());
+        let f = self.feature(x, p_atm_pa, w_reg, t_air_nm);
         match self.balance {
             BalanceId::Path(path) => {
                 if let Some(i) = path.from.slot() {
@@ -472,6 +486,10 @@ pub fn describe(t: &ExtraTerm) -> String {
                 path.to.words()
             )
         }
+        BalanceId::Torque if t.pressure == P::AirTorque => format!(
+            "a loss torque proportional to the magnitude of the air torque (load-dependent \
+             friction){speed}"
+        ),
         BalanceId::Torque => format!("a loss torque proportional to {}", feature_name(t)),
         b => format!(
             "a mass flow into {} proportional to {}",
@@ -513,6 +531,7 @@ fn pressure_symbol(p: P) -> (&'static str, &'static str) {
         P::P2MinusPe => ("(p2 - pe)", "Pa"),
         P::P1MinusP2 => ("(p1 - p2)", "Pa"),
         P::ChamberSum => ("(p1 + p2 - 2*pe)", "Pa"),
+        P::AirTorque => ("|T_air|", "N*m"),
         P::Laminar => ("dp", "Pa"),
         P::Quadratic => ("dp*|dp|", "Pa2"),
         P::CompressibleLaminar => ("(pa^2 - pb^2)", "Pa2"),
@@ -548,6 +567,7 @@ pub fn pressure_id(p: P) -> &'static str {
         P::P2MinusPe => "p2_minus_pe",
         P::P1MinusP2 => "p1_minus_p2",
         P::ChamberSum => "p1_plus_p2_minus_2pe",
+        P::AirTorque => "air_torque",
         P::Laminar => "laminar",
         P::Quadratic => "quadratic",
         P::CompressibleLaminar => "compressible_laminar",
@@ -592,7 +612,11 @@ pub fn coefficient_unit(t: &ExtraTerm) -> String {
     let (_, pu) = factor_symbol(t);
     let (_, wu) = speed_symbol(t.speed);
     let den: Vec<&str> = [pu, wu].into_iter().filter(|s| !s.is_empty()).collect();
-    if den.is_empty() {
+    // A torque per torque (load-dependent friction's fraction of the air torque) is a pure
+    // number.
+    if den == [num] {
+        "1".into()
+    } else if den.is_empty() {
         num.into()
     } else {
         format!("{num}/({})", den.join("*"))
@@ -634,18 +658,24 @@ pub fn balance_name(b: BalanceId) -> &'static str {
 }
 
 /// A term as a formula with its coefficient, e.g.
-/// `T_loss += 1.2e-10 N*m/(Pa*rad/s) * p2*omega`.
+/// `T_loss += 1.2e-10 N*m/(Pa*rad/s) * p2*omega` (a pure number's unit left out:
+/// `T_loss += 6.6e-2 * |T_air|*tanh(omega/w_reg)`).
 pub fn formula(t: &ExtraTerm) -> String {
     let op = if matches!(t.balance, BalanceId::Path(_)) {
         "="
     } else {
         "+="
     };
+    let unit = coefficient_unit(t);
+    let unit = if unit == "1" {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
     format!(
-        "{} {op} {:.4e} {} * {}",
+        "{} {op} {:.4e}{unit} * {}",
         balance_symbol(t.balance),
         t.coefficient,
-        coefficient_unit(t),
         feature_name(t)
     )
 }

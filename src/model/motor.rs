@@ -11,7 +11,10 @@
 //! plus the displacement flows of the ideal motor (`thermo`).
 //! Mechanics: J·dω/dt = T − T_f(ω) − T_load(ω) (docs/model.md, "Mechanics and friction").
 
-use crate::model::effects::{CatalogEffect, Effect, EffectSet, SupplyValve, Term};
+use crate::model::effects::{CatalogEffect, Effect, EffectSet, SupplyValve};
+// The catalog's hooks, named in the documentation (the code calls them through CatalogEffect).
+#[cfg(doc)]
+use crate::model::effects::Term;
 use crate::model::extra::slot;
 pub use crate::model::extra::{
     BalanceId, Chamber, ExtraTerm, LeakPath, PressureFactor, SpeedFactor,
@@ -321,6 +324,15 @@ impl Motor {
         w_fwd * t_fwd + (1.0 - w_fwd) * t_rev
     }
 
+    /// The air torque on the rotor at state x, N·m: the ideal motor's torque T of the torque
+    /// equation J·dω/dt = T − T_f − T_load, with the forward/reverse blend (docs/model.md,
+    /// "Cycle work and torque"). The load that load-dependent friction
+    /// ([`PressureFactor::AirTorque`]) is proportional to.
+    pub fn air_torque_nm(&self, x: &State) -> f64 {
+        let [p1, p2, pe, omega] = *x;
+        self.ideal_torque(p1, p2, pe, omega)
+    }
+
     /// Evaluates every flow and torque at state `x` under boundary `bc`.
     #[inline]
     pub fn balance(&self, x: &State, bc: &Boundary) -> Balance {
@@ -339,8 +351,10 @@ impl Motor {
                 m.add_to_balances(own, p, x, bc.p_atm_pa, &mut extra);
             }
         }
+        // Computed once: the torque equation's T and the load of load-dependent friction.
+        let torque_ideal_nm = self.ideal_torque(p1, p2, pe, omega);
         for t in &self.extra {
-            t.add_to_balances(&[], p, x, bc.p_atm_pa, &mut extra);
+            t.add_to(x, bc.p_atm_pa, p.w_reg(), torque_ideal_nm, &mut extra);
         }
         let displacement = displacement_flows(
             &self.cycle,
@@ -366,7 +380,7 @@ impl Motor {
             dme_kg_s: leak_1e_kg_s + leak_2e_kg_s - flow_exhaust_kg_s
                 + displacement.into_e_kg_s
                 + extra[slot::MASSE],
-            torque_ideal_nm: self.ideal_torque(p1, p2, pe, omega),
+            torque_ideal_nm,
             torque_friction_nm: self.friction_torque(omega, p_in, pe) + extra[slot::TORQUE],
             torque_load_nm: bc.load.torque(omega),
         }
@@ -491,6 +505,42 @@ mod tests {
             );
         }
     }
+    /// Load-dependent friction k·|T_air|·tanh(ω/ω_reg) (k > 0) adds exactly that to the
+    /// friction torque, with T_air the torque equation's own air torque, and takes power out
+    /// at every state (T_loss·ω ≥ 0): driving forwards and backwards, and braked (the air
+    /// torque against the rotation, where |T_air| still loads the bearings).
+    #[test]
+    fn load_dependent_friction_is_a_loss_never_a_gain() {
+        let k = 0.07;
+        let term = ExtraTerm {
+            balance: BalanceId::Torque,
+            pressure: PressureFactor::AirTorque,
+            speed: SpeedFactor::Sign,
+            coefficient: k,
+        };
+        let plain = Motor::default_motor();
+        let loaded = Motor::default_motor().with_extra(&[term]);
+        let bc = Boundary::supplied(7.3e5, 1.01325e5, Load::None);
+        let w_reg = plain.params.w_reg();
+        let mut braked = 0;
+        for p1 in [1.0e5, 2.5e5, 5e5, 7e5] {
+            for p2 in [1.0e5, 2e5, 4e5, 7e5] {
+                for w in [-900.0, -30.0, -0.1, 0.0, 0.05, 40.0, 800.0] {
+                    let x = [p1, p2, 1.2e5, w];
+                    let t_air = plain.air_torque_nm(&x);
+                    assert_eq!(t_air, plain.balance(&x, &bc).torque_ideal_nm);
+                    let loss = loaded.balance(&x, &bc).torque_friction_nm
+                        - plain.balance(&x, &bc).torque_friction_nm;
+                    let want = k * t_air.abs() * (w / w_reg).tanh();
+                    assert!((loss - want).abs() <= 1e-15 * t_air.abs().max(1.0), "{x:?}");
+                    assert!(loss * w >= 0.0, "a gain of {} W at {x:?}", -loss * w);
+                    braked += usize::from(t_air * w < 0.0 && loss * w > 0.0);
+                }
+            }
+        }
+        assert!(braked > 0, "no braked state was tried");
+    }
+
     /// A throttle in front of port 1 passes supply → throttle → in_1 → V_1. With a choked
     /// throttle smaller than the duct the flow is the throttle's own, C_th·ρ0·p_s; in the
     /// other order (duct first) the throttle sees only the pressure p_m behind the duct,

@@ -232,3 +232,35 @@ fn random_cases_to_disk() {
         println!("{}: {}", path.display(), drawn.describe());
     }
 }
+
+/// Draw 10, load-dependent Coulomb friction μ·|T_air|·sign(ω) (the twin's own air torque),
+/// with the command line's default options: one part, the library's load-dependent law on
+/// vanefit's air torque (not a catalog pressure-dependent friction plus a second Coulomb
+/// term), with a positive fraction of the air torque near the drawn μ (a loss, never a
+/// gain).
+#[test]
+fn load_dependent_coulomb_is_one_law() {
+    let (drawn, ds) = random_case(10);
+    let twin::laws::Drawn::Friction(twin::laws::FrictionLaw::LoadDependent { mu }) = drawn else {
+        panic!("draw 10 changed: {}", drawn.describe());
+    };
+    let d = diagnose(&ds, &DiagnoseOptions::full(4, 1)).unwrap();
+    let (class, _) = classify(&drawn, &d);
+    assert_eq!(class, Class::Exact, "{}", summary(&d));
+    let t = d.selected[0]
+        .term
+        .expect("a library term, not a catalog effect");
+    assert_eq!(
+        (t.balance, t.pressure),
+        (BalanceId::Torque, PressureFactor::AirTorque),
+        "{}",
+        summary(&d)
+    );
+    // The two implementations' air torques differ in their details (cycle, blend), so the
+    // fraction agrees with μ to a few per cent, not exactly.
+    assert!(
+        t.coefficient > 0.0 && (t.coefficient / mu - 1.0).abs() < 0.15,
+        "k = {} for μ = {mu}",
+        t.coefficient
+    );
+}
