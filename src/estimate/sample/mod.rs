@@ -217,6 +217,39 @@ pub enum Moves {
     },
 }
 
+/// Walker `w`'s differential-evolution proposal y = x + γ·(x_a − x_b) from two distinct
+/// walkers of `fixed` (at least two), in `d` dimensions ([`Moves::Mixed`]); symmetric, so
+/// its log-Jacobian is 0.
+fn de_proposal(w: &mut Walker, fixed: &[Walker], d: usize) -> Vec<f64> {
+    let a = w.rng.random_range(0..fixed.len());
+    let b = (a + w.rng.random_range(1..fixed.len())) % fixed.len();
+    w.de_count += 1;
+    let gamma = if w.de_count % 10 == 0 {
+        1.0
+    } else {
+        let z: f64 = rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut w.rng);
+        2.38 / (2.0 * d as f64).sqrt() * (1.0 + 0.1 * z)
+    };
+    w.x.iter()
+        .zip(fixed[a].x.iter().zip(&fixed[b].x))
+        .map(|(x, (p, q))| x + gamma * (p - q))
+        .collect()
+}
+
+/// Walker `w`'s stretch proposal y = x_j + z·(x − x_j) towards a walker j of `fixed`, and
+/// its log-Jacobian (d − 1)·ln z (Goodman & Weare; the module documentation).
+fn stretch_proposal(w: &mut Walker, fixed: &[Walker], d: usize) -> (Vec<f64>, f64) {
+    let j = w.rng.random_range(0..fixed.len());
+    let z = stretch(w.rng.random::<f64>());
+    let partner = &fixed[j].x;
+    let y = partner
+        .iter()
+        .zip(&w.x)
+        .map(|(p, x)| p + z * (x - p))
+        .collect();
+    (y, (d as f64 - 1.0) * z.ln())
+}
+
 /// Moves one half of the walkers (the first or the second) against the other half held
 /// fixed, in parallel; `count` tallies the accepted proposals.
 fn half_step(
@@ -237,32 +270,9 @@ fn half_step(
             Moves::Mixed { de } => w.rng.random::<f64>() < de,
         };
         let (y, log_jacobian) = if de && fixed.len() >= 2 {
-            let a = w.rng.random_range(0..fixed.len());
-            let b = (a + w.rng.random_range(1..fixed.len())) % fixed.len();
-            w.de_count += 1;
-            let gamma = if w.de_count % 10 == 0 {
-                1.0
-            } else {
-                let z: f64 =
-                    rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut w.rng);
-                2.38 / (2.0 * d as f64).sqrt() * (1.0 + 0.1 * z)
-            };
-            let y: Vec<f64> =
-                w.x.iter()
-                    .zip(fixed[a].x.iter().zip(&fixed[b].x))
-                    .map(|(x, (p, q))| x + gamma * (p - q))
-                    .collect();
-            (y, 0.0)
+            (de_proposal(w, fixed, d), 0.0)
         } else {
-            let j = w.rng.random_range(0..fixed.len());
-            let z = stretch(w.rng.random::<f64>());
-            let partner = &fixed[j].x;
-            let y: Vec<f64> = partner
-                .iter()
-                .zip(&w.x)
-                .map(|(p, x)| p + z * (x - p))
-                .collect();
-            (y, (d as f64 - 1.0) * z.ln())
+            stretch_proposal(w, fixed, d)
         };
         let u: f64 = w.rng.random();
         let lp = density.log_density(&y);
