@@ -156,17 +156,59 @@ OUT=$F/slurm-run
 # units in the shard of array task i of 4: datasets i and i+4 (round robin), fit then predict.
 count_starts() { [ -f "$1" ] && echo $(($(wc -l <"$1") - 1)) || echo 0; }
 unit_state() { sed -n 's/.*"status": "\([a-z]*\)".*/\1/p' "$OUT/$1/status.json" 2>/dev/null; }
-# Waits until the fit of dataset $1 has finished at least one start and is still running.
-wait_mid_fit() {
-  local ds=$1
-  for _ in $(seq 1200); do
-    local n
-    n=$(count_starts "$OUT/$ds/fit/fit.starts.jsonl")
-    if [ "$(unit_state "$ds/fit")" = running ] && [ "$n" -ge 1 ]; then
-      echo "$n"
-      return 0
+
+# Catching a fit in the middle of its starts, under any load. A start takes about 0.1 s of
+# one core and a fit's ten about 1 s, so a poll that forks (sed, wc, sleep) several times per
+# look fell behind on a loaded machine: beside pytest it first saw m6's fit after all its
+# starts and the requeue came too late to test a resume. So: the poll looks with bash
+# builtins only (no process started per look); it holds the array task's processes
+# (SIGSTOP) the moment it sees the fit running with a start done, so that the fit cannot
+# finish while scontrol is slow to requeue or cancel (Slurm sends SIGCONT before it ends
+# a job's processes); and the task's pids are looked up before the fit begins.
+exec {NAP_FD}<> <(:) # a pipe nobody writes to: `read -t` on it is a sleep without a fork
+nap() { read -r -t "$1" -u "$NAP_FD" _ || true; }
+# Sets N_STARTS and UNIT_STATE of unit $1 (dataset/task), with builtins only.
+look_at_unit() {
+  local starts=$OUT/$1/fit.starts.jsonl status=$OUT/$1/status.json text=
+  local -a lines=()
+  N_STARTS=0
+  UNIT_STATE=
+  if [ -f "$starts" ] && mapfile -t lines <"$starts" 2>/dev/null && [ "${#lines[@]}" -gt 1 ]; then
+    N_STARTS=$((${#lines[@]} - 1))
+  fi
+  [ -f "$status" ] && { IFS= read -r -d '' text <"$status" 2>/dev/null || true; }
+  if [[ $text =~ \"status\":\ \"([a-z]*)\" ]]; then UNIT_STATE=${BASH_REMATCH[1]}; fi
+}
+# Sets TASK_PIDS to the processes of running array task $1 (waits up to 60 s for it to run).
+task_pids() {
+  local task=$1 job
+  TASK_PIDS=()
+  for _ in $(seq 300); do
+    job=$(scontrol show job "${ARRAY}_$task" 2>/dev/null)
+    if [[ $job =~ JobId=([0-9]+).*JobState=RUNNING ]]; then
+      mapfile -t TASK_PIDS < <(scontrol listpids "${BASH_REMATCH[1]}" 2>/dev/null |
+        awk '$1 ~ /^[0-9]+$/ && $1 > 1 { print $1 }')
+      [ "${#TASK_PIDS[@]}" -gt 0 ] && return 0
     fi
-    sleep 0.1
+    sleep 0.2
+  done
+  return 1
+}
+# Waits until the fit of dataset $1, run by array task $2, has finished at least one start
+# and is still running, then holds the task's processes; prints the starts done.
+hold_mid_fit() {
+  local ds=$1 task=$2
+  task_pids "$task" || { say "array task $task never ran"; return 1; }
+  for _ in $(seq 12000); do
+    look_at_unit "$ds/fit"
+    if [ "$UNIT_STATE" = running ] && [ "$N_STARTS" -ge 1 ]; then
+      kill -STOP "${TASK_PIDS[@]}" 2>/dev/null
+      look_at_unit "$ds/fit" # what it did between the look and the hold
+      echo "$N_STARTS"
+      [ "$UNIT_STATE" = running ] && [ "$N_STARTS" -lt 10 ]
+      return
+    fi
+    nap 0.01
   done
   return 1
 }
@@ -183,7 +225,7 @@ check "array script next to the results, with --requeue and --open-mode=append" 
 
 # Requeue task 2 while dataset m6's fit (its second unit) is running, as a preemption or a
 # node failure would; cancel task 3 while m7's fit is running, as a time limit would.
-if n=$(wait_mid_fit m6); then
+if n=$(hold_mid_fit m6 2); then
   scontrol requeue "${ARRAY}_2" && pass "requeued array task 2 in the middle of m6/fit ($n of 10 starts done)"
   # Slurm holds a requeued job back (BeginTime, about 3 min here) once its old allocation
   # has been cleaned up; let it go at once.
@@ -196,13 +238,13 @@ if n=$(wait_mid_fit m6); then
   done
   say "array task 2: $(scontrol show job "${ARRAY}_2" | grep -o 'JobState=[A-Z_]* Reason=[A-Za-z_]*')"
 else
-  fail "m6/fit was never seen running"
+  fail "m6/fit was never held in the middle of its starts (${n:-0} of 10 done when held)"
 fi
-if n=$(wait_mid_fit m7); then
+if n=$(hold_mid_fit m7 3); then
   scancel "${ARRAY}_3" && pass "cancelled array task 3 in the middle of m7/fit ($n of 10 starts done)"
   CANCELLED_AT=$n
 else
-  fail "m7/fit was never seen running"
+  fail "m7/fit was never held in the middle of its starts (${n:-0} of 10 done when held)"
   CANCELLED_AT=0
 fi
 for _ in $(seq 900); do
