@@ -51,6 +51,9 @@ pub(crate) fn refit_singles(cx: &Context, baseline: Fitted) -> Result<Refits, Di
     let mut baseline = baseline;
     let mut singles = Vec::new();
     for (job, r) in jobs.into_iter().zip(results) {
+        if let Ok(f) = &r {
+            cx.count(f.evaluations);
+        }
         match r {
             Ok(f) if job.label == "null refit" => {
                 if f.cost < baseline.cost {
@@ -261,6 +264,7 @@ fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
         .collect();
     let effects = EffectSet::empty().with(Effect::BreakawayFriction);
     let (cost, target, solver) = (&cx.cost, &cx.target, &cx.solver);
+    cx.count(grid.len() as u64);
     let chi2 = cx.engine.map(&grid, |(_, p)| {
         let motor = crate::model::motor::Motor::new(p.clone(), effects.clone());
         target.chi2(cost, &motor, solver).unwrap_or(f64::INFINITY)

@@ -66,6 +66,7 @@ impl Models {
         {
             match r {
                 Ok(f) => {
+                    cx.count(f.evaluations);
                     let c = self.score(cx, &job.label, *kind, f)?;
                     cx.say(Progress::Scored(&c));
                     out.push(c);
