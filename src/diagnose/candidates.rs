@@ -85,8 +85,14 @@ pub(crate) fn rank_singles(
     singles: Vec<(FitJob, Fitted)>,
 ) -> Result<(), DiagnoseError> {
     for (job, f) in singles {
-        let c = models.score(cx, &job.label, ModelKind::Single, f)?;
-        models.all.push(c);
+        // As in `Models::refit`: a fitted point that does not simulate is a failed fit.
+        match models.score(cx, &job.label, ModelKind::Single, f) {
+            Ok(c) => models.all.push(c),
+            Err(e) => cx.say(Progress::Failed {
+                what: "candidate",
+                error: &e.to_string(),
+            }),
+        }
     }
     models.sort();
     for c in &models.all {
