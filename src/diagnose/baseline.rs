@@ -14,6 +14,7 @@ pub(crate) fn fit(cx: &Context) -> Result<Fitted, DiagnoseError> {
         channels: cx.cost.n_channels(),
     });
     let baseline = fitting::run_job(&cx.cost, &cx.target, &cx.base_job(), cx.threads())?;
+    cx.count(baseline.evaluations);
     cx.say(Progress::BaselineFitted(&baseline));
     Ok(baseline)
 }

@@ -51,6 +51,9 @@ pub(crate) fn refit_singles(cx: &Context, baseline: Fitted) -> Result<Refits, Di
     let mut baseline = baseline;
     let mut singles = Vec::new();
     for (job, r) in jobs.into_iter().zip(results) {
+        if let Ok(f) = &r {
+            cx.count(f.evaluations);
+        }
         match r {
             Ok(f) if job.label == "null refit" => {
                 if f.cost < baseline.cost {
@@ -82,8 +85,14 @@ pub(crate) fn rank_singles(
     singles: Vec<(FitJob, Fitted)>,
 ) -> Result<(), DiagnoseError> {
     for (job, f) in singles {
-        let c = models.score(cx, &job.label, ModelKind::Single, f)?;
-        models.all.push(c);
+        // As in `Models::refit`: a fitted point that does not simulate is a failed fit.
+        match models.score(cx, &job.label, ModelKind::Single, f) {
+            Ok(c) => models.all.push(c),
+            Err(e) => cx.say(Progress::Failed {
+                what: "candidate",
+                error: &e.to_string(),
+            }),
+        }
     }
     models.sort();
     for c in &models.all {
@@ -261,6 +270,7 @@ fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
         .collect();
     let effects = EffectSet::empty().with(Effect::BreakawayFriction);
     let (cost, target, solver) = (&cx.cost, &cx.target, &cx.solver);
+    cx.count(grid.len() as u64);
     let chi2 = cx.engine.map(&grid, |(_, p)| {
         let motor = crate::model::motor::Motor::new(p.clone(), effects.clone());
         target.chi2(cost, &motor, solver).unwrap_or(f64::INFINITY)

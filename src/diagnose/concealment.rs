@@ -176,10 +176,12 @@ fn fit_tasks(cx: &Context, split: &Split, tasks: &[Task]) -> Result<Vec<Fitted>,
         };
         fitting::run_job(c, t, job, threads)
     });
-    results
+    let fitted: Vec<Fitted> = results
         .into_iter()
         .map(|r| r.map_err(DiagnoseError::from))
-        .collect()
+        .collect::<Result<_, _>>()?;
+    cx.count(fitted.iter().map(|f| f.evaluations).sum());
+    Ok(fitted)
 }
 
 /// The check of experiment `i` fitted alone (`f`) against the joint baseline.

@@ -41,6 +41,12 @@ pub(crate) struct Context<'a> {
     t0: Instant,
     phase_start: Cell<Instant>,
     phases: RefCell<Vec<(String, f64)>>,
+    /// Cost evaluations (whole simulations of every experiment) so far.
+    evaluations: Cell<u64>,
+    /// `evaluations` when the current phase began.
+    phase_evaluations_start: Cell<u64>,
+    /// (phase, evaluations).
+    phase_evaluations: RefCell<Vec<(String, u64)>>,
 }
 
 impl<'a> Context<'a> {
@@ -70,6 +76,9 @@ impl<'a> Context<'a> {
             t0,
             phase_start,
             phases: RefCell::new(Vec::new()),
+            evaluations: Cell::new(0),
+            phase_evaluations_start: Cell::new(0),
+            phase_evaluations: RefCell::new(Vec::new()),
         })
     }
 
@@ -84,7 +93,27 @@ impl<'a> Context<'a> {
         let seconds = self.phase_start.get().elapsed().as_secs_f64();
         self.phases.borrow_mut().push((name.to_string(), seconds));
         self.phase_start.set(Instant::now());
+        let n = self.evaluations.get();
+        self.phase_evaluations
+            .borrow_mut()
+            .push((name.to_string(), n - self.phase_evaluations_start.get()));
+        self.phase_evaluations_start.set(n);
         self.observer.phase(name, seconds);
+    }
+
+    /// Counts `n` cost evaluations (the work of a fit, a regression or a grid).
+    pub(crate) fn count(&self, n: u64) {
+        self.evaluations.set(self.evaluations.get() + n);
+    }
+
+    /// (phase, evaluations) so far.
+    pub fn phase_evaluations(&self) -> Vec<(String, u64)> {
+        self.phase_evaluations.borrow().clone()
+    }
+
+    /// Cost evaluations so far.
+    pub fn evaluations(&self) -> u64 {
+        self.evaluations.get()
     }
 
     /// (phase, seconds) so far.
@@ -138,6 +167,7 @@ impl<'a> Context<'a> {
 
     /// A fitted model's channels against the data.
     pub fn channels(&self, f: &Fitted) -> Result<Vec<ChannelData>, SimError> {
+        self.count(1);
         analysis::channel_data(&self.cost, &self.target, &f.motor(), &self.solver)
     }
 }

@@ -299,6 +299,12 @@ pub(crate) fn regress(
     })
 }
 
+/// Simulations of a regression with `nuisance` estimated parameters: the model once, then
+/// every nuisance and library column at ±δ.
+pub(crate) fn evaluations(nuisance: usize) -> u64 {
+    (1 + 2 * (nuisance + library().len())) as u64
+}
+
 /// The sensitivity columns: how many lead as nuisance, then every column (`None` where a
 /// perturbed model does not simulate).
 type Sensitivities = (usize, Vec<Option<Vec<f64>>>);

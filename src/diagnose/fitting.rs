@@ -13,6 +13,7 @@ use crate::estimate::error::EstimateError;
 use crate::estimate::least_squares::polish_residuals;
 use crate::estimate::likelihood::Likelihood;
 use crate::estimate::multistart::{self, Silent};
+use crate::estimate::objective::Evaluation;
 use crate::estimate::objective::{Coordinates, Objective, Problem};
 use crate::estimate::optimize::{self, Layout, NelderMeadSettings, Restart};
 use crate::estimate::settings::MultiStartConfig;
@@ -156,6 +157,34 @@ struct Found {
     evaluations: u64,
 }
 
+/// The likelihood of a diagnosis fit, with its cost residuals: χ²'s residuals over √n (their
+/// squares sum to the cost χ²/n). They let every start hand over to Levenberg–Marquardt
+/// after one round of Nelder–Mead (`MultiStartConfig::handoff_after_rounds`, the project's
+/// fit does the same with J): Nelder–Mead brings a start into its basin, the Gauss–Newton
+/// steps cross the curved valley to its floor in a few iterations, where Nelder–Mead
+/// crawled for hundreds (docs/diagnosis.md, "Fits").
+struct HandOver<'a>(Likelihood<'a>);
+
+impl Objective for HandOver<'_> {
+    fn evaluate(&self, motor: &Motor) -> Evaluation {
+        self.0.evaluate(motor)
+    }
+
+    fn residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
+        self.0.residuals(motor)
+    }
+
+    fn cost_residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
+        let scale = 1.0 / (self.0.target.n_points().max(1) as f64).sqrt();
+        let r = self.0.residuals(motor)?;
+        Some(r.into_iter().map(|v| v * scale).collect())
+    }
+
+    fn has_cost_residuals(&self) -> bool {
+        true
+    }
+}
+
 /// Runs one fit of `target` (built on `cost`) on the engine's threads.
 pub fn run_job(
     cost: &CostModel,
@@ -165,11 +194,11 @@ pub fn run_job(
 ) -> Result<Fitted, FitError> {
     let t0 = Instant::now();
     let solver = DefaultSolver::default();
-    let objective = Likelihood {
+    let objective = HandOver(Likelihood {
         cost,
         target,
         solver: DefaultSolver::default(),
-    };
+    });
     let names: Vec<&str> = job.names.iter().map(String::as_str).collect();
     let first = job
         .starts
@@ -198,7 +227,7 @@ pub fn run_job(
 /// A catalog model: the project's multi-start with the job's points as given starts.
 fn catalog_fit(
     engine: &Engine,
-    objective: &Likelihood<'_>,
+    objective: &HandOver<'_>,
     space: &ParamSpace,
     job: &FitJob,
 ) -> Result<Found, FitError> {
@@ -237,12 +266,8 @@ fn catalog_fit(
 }
 
 /// A model with discovered terms ([`TermSpace`]): [`REFIT`] from every start point in turn,
-/// keeping the best.
-fn term_fit(
-    objective: &Likelihood<'_>,
-    space: &ParamSpace,
-    job: &FitJob,
-) -> Result<Found, FitError> {
+/// keeping the best. No hand-over to Levenberg–Marquardt here (see [`HandOver`]).
+fn term_fit(objective: &HandOver<'_>, space: &ParamSpace, job: &FitJob) -> Result<Found, FitError> {
     if job
         .extra
         .iter()

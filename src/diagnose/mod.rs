@@ -187,6 +187,8 @@ pub(crate) fn diagnose_observed(
         estimated: cx.base_names.clone(),
         inputs,
         phases: cx.phases(),
+        phase_evaluations: cx.phase_evaluations(),
+        evaluations: cx.evaluations(),
         wall_s: cx.elapsed_s(),
         threads: engine.threads(),
     };

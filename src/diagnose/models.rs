@@ -66,9 +66,19 @@ impl Models {
         {
             match r {
                 Ok(f) => {
-                    let c = self.score(cx, &job.label, *kind, f)?;
-                    cx.say(Progress::Scored(&c));
-                    out.push(c);
+                    cx.count(f.evaluations);
+                    // A fitted point whose simulation then fails (a datasheet row without
+                    // steady state) is a failed fit, not a failed diagnosis.
+                    match self.score(cx, &job.label, *kind, f) {
+                        Ok(c) => {
+                            cx.say(Progress::Scored(&c));
+                            out.push(c);
+                        }
+                        Err(e) => cx.say(Progress::Failed {
+                            what: what.unwrap_or(&job.label),
+                            error: &e.to_string(),
+                        }),
+                    }
                 }
                 Err(e) => cx.say(Progress::Failed {
                     what: what.unwrap_or(&job.label),

@@ -235,6 +235,11 @@ pub struct Diagnosis {
     pub inputs: Vec<likelihood::InputSmoothing>,
     /// (phase, seconds).
     pub phases: Vec<(String, f64)>,
+    /// (phase, cost evaluations): every fit's, the regressions' and the Stribeck grid's
+    /// simulations of the whole dataset.
+    pub phase_evaluations: Vec<(String, u64)>,
+    /// Cost evaluations of the whole diagnosis (the sum of `phase_evaluations`).
+    pub evaluations: u64,
     /// Wall time of the whole diagnosis, s.
     pub wall_s: f64,
     /// Worker threads used.

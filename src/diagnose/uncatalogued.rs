@@ -24,6 +24,7 @@ pub(crate) fn search(
     }
     cx.say(Progress::RegressionStart);
     let reg = discover::regress(&cx.cost, &cx.target, baseline, &cx.base_names, cx.threads())?;
+    cx.count(discover::evaluations(cx.base_names.len()));
     let mut jobs = on_the_baseline(cx, baseline, &reg);
     jobs.extend(on_the_best_catalog_model(cx, limit, models)?);
     if !jobs.is_empty() {
@@ -100,6 +101,7 @@ fn on_the_best_catalog_model(
     }
     let names = names_for(&bc.fitted.effects);
     let reg = discover::regress(&cx.cost, &cx.target, &bc.fitted, &names, cx.threads())?;
+    cx.count(discover::evaluations(names.len()));
     let Some(first) = reg.selected.first() else {
         return Ok(None);
     };

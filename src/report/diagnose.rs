@@ -96,11 +96,11 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), ReportError> {
     for (file, o, r) in &figures {
         let _ = writeln!(md, "### {file}\n\n![overlay]({o})\n\n![residuals]({r})\n");
     }
-    let _ = writeln!(md, "## Run\n\n| phase | s |\n|---|---|");
-    for (p, s) in &d.phases {
-        let _ = writeln!(md, "| {p} | {s:.1} |");
+    let _ = writeln!(md, "## Run\n\n| phase | s | evaluations |\n|---|---|---|");
+    for ((p, s), (_, n)) in d.phases.iter().zip(&d.phase_evaluations) {
+        let _ = writeln!(md, "| {p} | {s:.1} | {n} |");
     }
-    let _ = writeln!(md, "| total | {:.1} |", d.wall_s);
+    let _ = writeln!(md, "| total | {:.1} | {} |", d.wall_s, d.evaluations);
     write_file(out.join("report.md"), md.as_bytes())
 }
 
