@@ -357,20 +357,62 @@ fn long_ramp(dir: &Path, rows: usize) {
     .unwrap();
 }
 
+/// CPU seconds (user + system) that `vanefit check <dir>` takes, of that process alone
+/// (wait4's resource usage, not the wall clock: the tests share the machine with others),
+/// and what it printed.
+#[cfg(unix)]
+fn check_cpu_s(dir: &Path) -> (f64, String) {
+    use std::io::Read;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(["check", dir.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = String::new();
+    child
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut out)
+        .unwrap();
+    let pid = child.id() as libc::pid_t;
+    let mut status = 0;
+    // SAFETY: a zeroed rusage is a valid value of this plain C struct, and wait4 writes
+    // into it and `status` only; `pid` is our own child, not yet waited for.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let got = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    assert_eq!(got, pid, "wait4 failed");
+    assert!(
+        libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
+        "{out}"
+    );
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    (secs(usage.ru_utime) + secs(usage.ru_stime), out)
+}
+
+#[cfg(unix)]
 #[test]
 fn check_is_linear_in_the_rows() {
     // Before the fix: 6k rows 0.55 s, 20k 3.5 s, 60k 26 s (a split search refined at every
-    // index around its best coarse step). Now 60k rows take about 0.4 s in release; the
-    // bound leaves room for a busy machine and a debug build.
-    let dir = tempfile::tempdir().unwrap();
-    long_ramp(dir.path(), 60_000);
-    let t0 = Instant::now();
-    let o = vanefit(&["check", dir.path().to_str().unwrap()]);
-    let took = t0.elapsed();
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("(60000 rows)"));
-    let limit = if cfg!(debug_assertions) { 60 } else { 8 };
-    assert!(took < Duration::from_secs(limit), "check took {took:?}");
+    // index around its best coarse step: quadratic, ×47 for ten times the rows). The cost
+    // of ten times the rows is compared with the cost of the rows themselves, in CPU
+    // seconds of the check alone, so that neither a busy machine nor a debug build decides:
+    // linear gives at most ×10 (less with the fixed start-up cost), quadratic ×100.
+    let small = tempfile::tempdir().unwrap();
+    let large = tempfile::tempdir().unwrap();
+    long_ramp(small.path(), 6_000);
+    long_ramp(large.path(), 60_000);
+    let (cpu_small, out_small) = check_cpu_s(small.path());
+    let (cpu_large, out_large) = check_cpu_s(large.path());
+    assert!(out_small.contains("(6000 rows)"), "{out_small}");
+    assert!(out_large.contains("(60000 rows)"), "{out_large}");
+    let ratio = cpu_large / cpu_small.max(1e-3);
+    println!("check: {cpu_small:.3} CPU-s for 6 000 rows, {cpu_large:.3} for 60 000 (×{ratio:.1})");
+    assert!(
+        ratio < 25.0,
+        "check: {cpu_small:.3} CPU-s for 6 000 rows, {cpu_large:.3} for 60 000 (×{ratio:.1})"
+    );
 }
 
 #[test]
