@@ -361,6 +361,8 @@ fn long_ramp(dir: &Path, rows: usize) {
 /// (wait4's resource usage, not the wall clock: the tests share the machine with others),
 /// and what it printed.
 #[cfg(unix)]
+// The child is reaped by wait4 (for its resource usage), which clippy cannot see.
+#[allow(clippy::zombie_processes)]
 fn check_cpu_s(dir: &Path) -> (f64, String) {
     use std::io::Read;
     let mut child = Command::new(env!("CARGO_BIN_EXE_vanefit"))
