@@ -275,6 +275,7 @@ impl Motor {
     /// smooth rest, N·m. The base T_c passes through every effect's [`Term::coulomb_nm`]
     /// (`pressure_dependent_friction`), then [`Term::dry_nm`] (`breakaway_friction`); the
     /// viscous d·ω through [`Term::wet_nm`] (`vane_friction_speed_squared`).
+    #[inline]
     fn friction_parts(&self, omega: f64, p_inlet: f64, p_e: f64) -> (f64, f64) {
         let p = &self.params;
         let t_base = p.t_coulomb();
