@@ -7,7 +7,8 @@
 //! a tight-tolerance reference run in units of that channel's noise σ, and the cost jitter:
 //! the largest residual of a quadratic fitted to the cost at 21 values of c_12, t_coulomb
 //! and c_in1 each spread over ±1e-5 relative (a smooth cost leaves only rounding there).
-//! `GRID="rtol,atol_p,atol_w;…"` sets the Rodas4 tolerances to try, `MOTOR=leaky` a motor
+//! `GRID="rtol,atol_p,atol_w;…"` sets the Rodas4 tolerances to try (or
+//! `rtol,atol_p1,atol_p2,atol_pe,atol_w` with one absolute tolerance per state), `MOTOR=leaky` a motor
 //! far from the data.
 #[path = "common/support.rs"]
 mod support;
@@ -108,10 +109,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let grid = std::env::var("GRID").unwrap_or_default();
     for item in grid.split(';').filter(|i| !i.is_empty()) {
         let v: Vec<f64> = item.split(',').map(|x| x.parse().unwrap()).collect();
-        let tol = Tolerances {
-            rtol: v[0],
-            atol: [v[1], v[1], v[1], v[2]],
+        // Three numbers: rtol, atol on every pressure, atol on speed; five: rtol, then
+        // atol on p_1, p_2, p_e and ω each.
+        let atol = if v.len() == 5 {
+            [v[1], v[2], v[3], v[4]]
+        } else {
+            [v[1], v[1], v[1], v[2]]
         };
+        let tol = Tolerances { rtol: v[0], atol };
         cases.push(("rodas4", item.to_string(), Box::new(Rodas4 { tol })));
     }
     for (name, rtol, solver) in &cases {

@@ -98,7 +98,13 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
         (down.c_m3_s_pa * RHO0_KG_M3).powi(2),
     );
     let (b1, b2) = (up.b_crit, down.b_crit);
-    let (s1, s2) = (1.0 / (1.0 - b1).powi(2), 1.0 / (1.0 - b2).powi(2));
+    // The motor's nozzles share one critical ratio: one division instead of two.
+    let s1 = 1.0 / (1.0 - b1).powi(2);
+    let s2 = if b2 == b1 {
+        s1
+    } else {
+        1.0 / (1.0 - b2).powi(2)
+    };
     // ṁ² = a·p² + l·p + c as a polynomial in p = p_m, for each nozzle's subsonic regime; a
     // choked nozzle passes k1·p_u² (the first) or k2·p² (the second). Each polynomial is
     // formed once (formed per use, they were a third of this function's instructions).
@@ -154,10 +160,7 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
         };
         p > p_d && p < p_u && up_ok && down_ok
     };
-    let p_m = quadratic_roots(a1 - a2, l1 - l2, c1 - c2)
-        .into_iter()
-        .flatten()
-        .find(|p| in_regimes(*p))?;
+    let p_m = quadratic_root_where(a1 - a2, l1 - l2, c1 - c2, in_regimes)?;
     let flow_squared = if up_choked {
         choked_up
     } else {
@@ -166,7 +169,27 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
     Some((p_m, flow_squared))
 }
 
+/// The first real root of a·x² + b·x + c = 0 (in the order of `quadratic_roots`) that
+/// `accept` takes; the second root is only formed when the first is refused (the series
+/// flow's root is usually the first).
+fn quadratic_root_where(a: f64, b: f64, c: f64, accept: impl Fn(f64) -> bool) -> Option<f64> {
+    if a.abs() <= 1e-14 * (b.abs() + c.abs() / 1e5) {
+        return (b != 0.0).then(|| -c / b).filter(|x| accept(*x));
+    }
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    let q = -0.5 * (b + b.signum() * disc.sqrt());
+    let first = q / a;
+    if accept(first) {
+        return Some(first);
+    }
+    (q != 0.0).then(|| c / q).filter(|x| accept(*x))
+}
+
 /// Real roots of a·x² + b·x + c = 0, computed without cancellation.
+#[cfg(test)]
 fn quadratic_roots(a: f64, b: f64, c: f64) -> [Option<f64>; 2] {
     if a.abs() <= 1e-14 * (b.abs() + c.abs() / 1e5) {
         return [(b != 0.0).then(|| -c / b), None];
@@ -302,6 +325,26 @@ mod tests {
                 (db - fd_b).abs() <= 1e-5 * db.abs().max(1e-12),
                 "{pa} {pb}: {db} vs {fd_b}"
             );
+        }
+    }
+
+    #[test]
+    fn the_first_accepted_root_is_the_first_accepted_of_both() {
+        let accept = |x: f64| x > 0.5 && x < 3.0;
+        for (a, b, c) in [
+            (1.0, -3.0, 2.0),
+            (1.0, -5.0, 6.0),
+            (-2.0, 1.0, 3.0),
+            (1.0, 2.0, 5.0),
+            (0.0, 2.0, -3.0),
+            (1e-20, 2.0, -3.0),
+            (1.0, 0.0, -4.0),
+        ] {
+            let eager = quadratic_roots(a, b, c)
+                .into_iter()
+                .flatten()
+                .find(|x| accept(*x));
+            assert_eq!(quadratic_root_where(a, b, c, accept), eager, "{a} {b} {c}");
         }
     }
 
