@@ -65,6 +65,16 @@ impl Check {
             / self.truth
             - 1.0
     }
+    /// Relative error of the band's minimax centre 2·lo·hi/(lo + hi): the prediction whose
+    /// worst error over the figures the band spans is least (docs/validation.md, "What a
+    /// page cannot tell"). The value itself where there is no band.
+    fn minimax_error(&self) -> f64 {
+        self.band
+            .filter(|(lo, hi)| *lo > 0.0 && *hi > 0.0)
+            .map_or(self.value, |(lo, hi)| 2.0 * lo * hi / (lo + hi))
+            / self.truth
+            - 1.0
+    }
 }
 
 /// One motor's evaluation.
@@ -413,6 +423,11 @@ struct Stats {
     worst_error: f64,
     /// The same for the bands' geometric centres ([`Check::centre_error`]).
     worst_centre_error: f64,
+    /// Checks whose point prediction is more than 10 % off.
+    over_10: usize,
+    /// Worst error, median |error| and count over 10 % of the bands' minimax centres
+    /// ([`Check::minimax_error`]).
+    minimax: (f64, f64, usize),
 }
 
 fn stats<'a>(checks: impl Iterator<Item = &'a Check>) -> Stats {
@@ -428,7 +443,14 @@ fn stats<'a>(checks: impl Iterator<Item = &'a Check>) -> Stats {
     };
     let worst = signed_worst(&Check::error);
     let worst_centre = signed_worst(&Check::centre_error);
+    let minimax = (
+        signed_worst(&Check::minimax_error),
+        median(c.iter().map(|x| x.minimax_error().abs()).collect()),
+        c.iter().filter(|x| x.minimax_error().abs() > 0.1).count(),
+    );
     Stats {
+        over_10: c.iter().filter(|x| x.error().abs() > 0.1).count(),
+        minimax,
         held: c.iter().filter(|x| x.holds()).count(),
         total: c.len(),
         no_band: c.iter().filter(|x| x.band.is_none()).count(),
@@ -441,7 +463,7 @@ fn stats<'a>(checks: impl Iterator<Item = &'a Check>) -> Stats {
 
 fn line(name: &str, s: &Stats) -> String {
     format!(
-        "| {name} | {}/{} ({:.0} %) | {:.1} % | {:.1} % | {:+.1} % | {} | {:+.1} % |",
+        "| {name} | {}/{} ({:.0} %) | {:.1} % | {:.1} % | {:+.1} % | {} | {:+.1} % | {} | {:+.1} % | {:.1} % | {} |",
         s.held,
         s.total,
         100.0 * s.held as f64 / s.total.max(1) as f64,
@@ -449,11 +471,15 @@ fn line(name: &str, s: &Stats) -> String {
         100.0 * s.median_abs_error,
         100.0 * s.worst_error,
         s.no_band,
-        100.0 * s.worst_centre_error
+        100.0 * s.worst_centre_error,
+        s.over_10,
+        100.0 * s.minimax.0,
+        100.0 * s.minimax.1,
+        s.minimax.2
     )
 }
 
-const HEAD: &str = "| | bands holding the truth | median half-width | median |error| | worst error | no band | worst error of √(lo·hi) |\n|---|---|---|---|---|---|---|";
+const HEAD: &str = "| | bands holding the truth | median half-width | median |error| | worst error | no band | worst error of √(lo·hi) | > 10 % off | worst error of 2·lo·hi/(lo+hi) | its median |error| | its > 10 % |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// The markdown tables of the figures and factors of `motors`.
 fn report(motors: &[&Motor]) -> String {

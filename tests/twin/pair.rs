@@ -40,7 +40,7 @@ const STEP: f64 = 0.05;
 /// Farthest the continuation goes in ln T_c (×/÷ 4.5).
 const S_MAX: f64 = 1.5;
 /// Largest printed-value residual accepted, in rounding half-intervals (< 1: inside).
-const FEASIBLE: f64 = 0.98;
+const FEASIBLE: f64 = 0.99;
 
 const RPM: f64 = 30.0 / std::f64::consts::PI;
 
@@ -102,10 +102,7 @@ impl<'a> Bench<'a> {
                     jac[(i, j)] = (qp[i] - q[i]) / h;
                 }
             }
-            let Some(dp) = jac
-                .lu()
-                .solve(&nalgebra::Vector3::new(q[0], q[1], q[2]))
-            else {
+            let Some(dp) = jac.lu().solve(&nalgebra::Vector3::new(q[0], q[1], q[2])) else {
                 break;
             };
             let mut lambda = 1.0;
@@ -267,6 +264,9 @@ pub enum Printed {
     Cell(f64, usize),
     /// The free speed's range that keeps the curve file's speeds (step and rows).
     Grid,
+    /// Key figure k of [`FIGURES`] at another supply pressure (bar g): a second measurement
+    /// added to the page ([`extra_items`]).
+    Extra(usize, f64),
 }
 
 /// A number of the page: what it is, its factor from SI to the page's unit, and the interval
@@ -318,7 +318,11 @@ pub fn page_items(dir: &Path, style: &PageStyle, w_free: f64) -> Result<Vec<Item
     let Ok(csv) = std::fs::read_to_string(dir.join("curves.csv")) else {
         return Ok(items);
     };
-    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
     for row in &rows {
         let w = row[0].parse::<f64>().map_err(|e| e.to_string())? / RPM;
         for (j, unit) in [torque, power, air].iter().enumerate() {
@@ -326,7 +330,9 @@ pub fn page_items(dir: &Path, style: &PageStyle, w_free: f64) -> Result<Vec<Item
             if cell.is_empty() {
                 continue;
             }
-            let v: f64 = cell.parse().map_err(|e: std::num::ParseFloatError| e.to_string())?;
+            let v: f64 = cell
+                .parse()
+                .map_err(|e: std::num::ParseFloatError| e.to_string())?;
             let h = half_unit(cell);
             items.push(Item {
                 what: Printed::Cell(w, j),
@@ -357,6 +363,25 @@ pub fn page_items(dir: &Path, style: &PageStyle, w_free: f64) -> Result<Vec<Item
     Ok(items)
 }
 
+/// Items for figures of `m` at other supply pressures, `(figure k, bar g)`, printed in SI to
+/// 3 significant digits: a second measurement added to a page.
+pub fn extra_items(m: &TwinMotor, extra: &[(usize, f64)]) -> Result<Vec<Item>, String> {
+    extra
+        .iter()
+        .map(|&(k, bar_g)| {
+            let v = super::page::row_values(&fast_row(m, bar_g, 500.0)?)[k];
+            let text = super::page::significant(v, 3);
+            let (v, h) = (text.parse::<f64>().unwrap(), half_unit(&text));
+            Ok(Item {
+                what: Printed::Extra(k, bar_g),
+                per_si: 1.0,
+                lo: v - h,
+                hi: v + h,
+            })
+        })
+        .collect()
+}
+
 /// Values of the page's items for motor `m` at `bar_g`, in page units, and its row.
 fn page_values(
     m: &TwinMotor,
@@ -370,9 +395,18 @@ fn page_values(
     let mut warm = [bench.bc.p_port1_pa, P_ATM_PA, P_ATM_PA];
     let mut cache: Vec<(f64, Point)> = Vec::new();
     let mut values = Vec::with_capacity(items.len());
+    let mut other: Vec<(f64, [f64; 7])> = Vec::new();
     for it in items {
         let si = match it.what {
             Printed::Figure(k) => figs[k],
+            Printed::Extra(k, b) => match other.iter().find(|(x, _)| *x == b) {
+                Some((_, f)) => f[k],
+                None => {
+                    let f = super::page::row_values(&fast_row(m, b, row.free_speed_rad_s)?);
+                    other.push((b, f));
+                    f[k]
+                }
+            },
             Printed::Grid => row.free_speed_rad_s,
             Printed::Cell(w, j) => {
                 let pt = match cache.iter().find(|(x, _)| *x == w) {
@@ -392,12 +426,25 @@ fn page_values(
     Ok((values, row))
 }
 
-/// Residuals of the items in half-intervals: 0 at the interval's centre, ±1 at its ends.
+/// Share of its rounding interval a figure at max power may use (the speed, torque and air
+/// there): the reference printer finds that speed on a flat maximum by golden section on
+/// steady states of residual 1e-7, which places it within a few 1e-5 of itself; kept this far
+/// from the interval's ends, the reference prints the same digits.
+const AT_MAX_POWER_SHARE: f64 = 0.9;
+
+/// Residuals of the items in half-intervals: 0 at the interval's centre, ±1 at its ends
+/// (±1 at [`AT_MAX_POWER_SHARE`] of the half-interval for the figures at max power).
 fn residuals(items: &[Item], values: &[f64]) -> Vec<f64> {
     items
         .iter()
         .zip(values)
-        .map(|(it, v)| (v - 0.5 * (it.lo + it.hi)) / (0.5 * (it.hi - it.lo)))
+        .map(|(it, v)| {
+            let share = match it.what {
+                Printed::Figure(2 | 3 | 5) | Printed::Extra(2 | 3 | 5, _) => AT_MAX_POWER_SHARE,
+                _ => 1.0,
+            };
+            (v - 0.5 * (it.lo + it.hi)) / (0.5 * (it.hi - it.lo) * share)
+        })
         .collect()
 }
 
@@ -408,12 +455,21 @@ fn residuals(items: &[Item], values: &[f64]) -> Vec<f64> {
 const NP: usize = 11;
 /// Their names, in the order of [`to_x`].
 pub const FREE: [&str; NP] = [
-    "c_in1", "c_out2", "c_ext", "c_1e", "c_2e", "c_12", "v_dead", "visc", "eps", "n_poly",
-    "b_crit",
+    "c_in1", "c_out2", "c_ext", "c_1e", "c_2e", "c_12", "v_dead", "visc", "eps", "n_poly", "b_crit",
 ];
 
-/// The re-solved parameters as unconstrained coordinates: ln of each, ln(ε − 1),
-/// ln(n − 1), ln b.
+/// x in (lo, hi) as an unconstrained coordinate, ln((x − lo)/(hi − x)).
+fn logit(v: f64, r: (f64, f64)) -> f64 {
+    ((v - r.0) / (r.1 - v)).ln()
+}
+
+/// The inverse of [`logit`].
+fn expit(x: f64, r: (f64, f64)) -> f64 {
+    r.0 + (r.1 - r.0) / (1.0 + (-x).exp())
+}
+
+/// The re-solved parameters as unconstrained coordinates: ln of each, ln(ε − 1), and n
+/// and b mapped from their population ranges by [`logit`] (so that they stay inside).
 fn to_x(m: &TwinMotor) -> [f64; NP] {
     [
         m.c_in1.ln(),
@@ -425,8 +481,8 @@ fn to_x(m: &TwinMotor) -> [f64; NP] {
         m.v_dead.ln(),
         m.visc.ln(),
         (m.eps - 1.0).ln(),
-        (m.n_poly - 1.0).ln(),
-        m.b_crit.ln(),
+        logit(m.n_poly, SPREAD.n_poly),
+        logit(m.b_crit, SPREAD.b_crit),
     ]
 }
 
@@ -441,8 +497,8 @@ fn from_x(base: &TwinMotor, x: &[f64], ln_tc: f64) -> TwinMotor {
         v_dead: x[6].exp(),
         visc: x[7].exp(),
         eps: 1.0 + x[8].exp(),
-        n_poly: 1.0 + x[9].exp(),
-        b_crit: x[10].exp(),
+        n_poly: expit(x[9], SPREAD.n_poly),
+        b_crit: expit(x[10], SPREAD.b_crit),
         t_coulomb: ln_tc.exp(),
         ..base.clone()
     }
@@ -520,9 +576,7 @@ fn objective(
     let (values, _) = page_values(&m, supply_bar_g, items, w_guess).ok()?;
     let r = residuals(items, &values);
     let worst = r.iter().fold(0.0f64, |a, r| a.max(r.abs()));
-    let sigma = [
-        0.35, 0.35, 0.35, 0.35, 0.35, 0.35, 0.4, 0.5, 0.5, 0.3, 0.1,
-    ];
+    let sigma = [0.35, 0.35, 0.35, 0.35, 0.35, 0.35, 0.4, 0.5, 0.5, 1.0, 1.0];
     let mut out: Vec<f64> = r.into_iter().map(sharp).collect();
     out.extend((0..NP).map(|i| PULL * (x[i] - x0[i]) / sigma[i]));
     Some((out, worst))
@@ -543,7 +597,7 @@ fn solve(
     let mut x = x;
     let mut mu = 1e-3;
     let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-    for _ in 0..12 {
+    for _ in 0..30 {
         if worst < 0.5 {
             break;
         }
@@ -588,18 +642,21 @@ fn solve(
     Some((x, worst))
 }
 
-/// Motors printing the same page as `m` (printed in `page_dir` in `style`), from T_c·e^s for
-/// s walking from 0 up and down in steps of 0.05 until no motor of the twin's population
-/// prints that page; each with its rows at `bar_g`. Sorted by s.
+/// Motors printing the same page as `m` (printed in `page_dir` in `style`, with the
+/// figures `extra` of [`extra_items`] beside it), from T_c·e^s for s walking from 0 up and
+/// down in steps of 0.05 until no motor of the twin's population prints that page; each
+/// with its rows at `bar_g`. Sorted by s.
 pub fn friction_path(
     m: &TwinMotor,
     style: &PageStyle,
     page_dir: &Path,
+    extra: &[(usize, f64)],
     bar_g: &[f64],
 ) -> Result<Vec<PathPoint>, String> {
     let supply = style.supply.1;
     let row0 = fast_row(m, supply, 500.0)?;
-    let items = page_items(page_dir, style, row0.free_speed_rad_s)?;
+    let mut items = page_items(page_dir, style, row0.free_speed_rad_s)?;
+    items.extend(extra_items(m, extra)?);
     let x0 = to_x(m);
     let ln_tc0 = m.t_coulomb.ln();
     let rows_at = |mm: &TwinMotor, w_guess: f64| -> Result<Vec<TwinRow>, String> {
@@ -617,20 +674,30 @@ pub fn friction_path(
     }];
     for dir in [1.0, -1.0] {
         let (mut s, mut x): (f64, [f64; NP]) = (0.0, x0);
+        // dx/ds from the last two path motors: the start of the next solve.
+        let mut slope = [0.0; NP];
         let mut step = STEP;
-        while s.abs() < S_MAX && step >= STEP / 8.0 {
+        while s.abs() < S_MAX && step >= STEP / 16.0 {
             let s_try = s + dir * step;
+            let guess: [f64; NP] = std::array::from_fn(|i| x[i] + slope[i] * (s_try - s));
             let found = solve(
                 m,
                 &items,
                 supply,
-                x,
+                guess,
                 &x0,
                 ln_tc0 + s_try,
                 row0.free_speed_rad_s,
             );
             let ok = found.and_then(|(xn, worst)| {
                 let mm = from_x(m, &xn, ln_tc0 + s_try);
+                if std::env::var_os("PAIR_DEBUG").is_some() {
+                    eprintln!(
+                        "s {s_try:+.4} worst {worst:.3} z {:.2} {:?}",
+                        population_distance(&mm),
+                        population_z(&mm)
+                    );
+                }
                 (worst < FEASIBLE && population_distance(&mm) <= Z_MAX).then_some((xn, worst, mm))
             });
             match ok {
@@ -642,8 +709,9 @@ pub fn friction_path(
                         worst_residual: worst,
                         rows,
                     });
+                    slope = std::array::from_fn(|i| (xn[i] - x[i]) / (s_try - s));
                     (s, x) = (s_try, xn);
-                    step = STEP;
+                    step = (2.0 * step).min(STEP);
                 }
                 None => step *= 0.5,
             }
@@ -697,4 +765,16 @@ pub fn verify_same_page(
     Ok(["rig.toml", "curves.csv"]
         .iter()
         .all(|f| read(&da, f) == read(&db, f)))
+}
+
+/// The page's worst residual for its own motor and the item it is at (diagnostics).
+pub fn own_residuals(
+    m: &TwinMotor,
+    style: &PageStyle,
+    page_dir: &Path,
+) -> Result<Vec<(Item, f64)>, String> {
+    let row0 = fast_row(m, style.supply.1, 500.0)?;
+    let items = page_items(page_dir, style, row0.free_speed_rad_s)?;
+    let (v, _) = page_values(m, style.supply.1, &items, row0.free_speed_rad_s)?;
+    Ok(items.iter().copied().zip(residuals(&items, &v)).collect())
 }
