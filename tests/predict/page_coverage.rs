@@ -186,6 +186,7 @@ fn evaluate_styled(
     let page = print_page(&page_dir, &motor, &style).map_err(|e| format!("twin: {e}"))?;
     let oracle = Oracle::from_env(&motor);
     oracle.tell_page(&page_dir)?;
+    second_pressure(&page_dir, &motor)?;
     let (rows, factors) =
         truth(&motor, &BAR_G, REFERENCE_BAR_G).map_err(|e| format!("twin: {e}"))?;
     let fit = dir.join("fit.json");
@@ -366,6 +367,52 @@ impl Oracle {
         }
         args
     }
+}
+
+/// PAGE_EXTRA adds a second catalogue experiment to the page: figures of the twin's motor
+/// at another supply pressure, "name,name@bar_g" (names as in [`FIGURES`], e.g.
+/// "stall_torque@4" or "free_speed,max_power,speed_at_max_power@4"), each to 3 digits in
+/// rpm, W, N·m or l/s ANR (what a user measures at a second pressure; docs/validation.md,
+/// "What a page cannot tell"). Empty: the page as printed.
+fn second_pressure(page_dir: &Path, motor: &twin::motor::TwinMotor) -> Result<(), String> {
+    let spec = std::env::var("PAGE_EXTRA").unwrap_or_default();
+    let Some((names, bar)) = spec.split_once('@') else {
+        return Ok(());
+    };
+    let bar_g: f64 = bar
+        .trim()
+        .parse()
+        .map_err(|_| format!("PAGE_EXTRA: {spec}"))?;
+    let (rows, _) = truth(motor, &[bar_g], bar_g).map_err(|e| format!("twin: {e}"))?;
+    let values = row_values(&rows[0]);
+    let rpm = 30.0 / std::f64::consts::PI;
+    let units = [
+        (rpm, "rpm"),
+        (1.0, "W"),
+        (rpm, "rpm"),
+        (1.0, "N·m"),
+        (1.0, "N·m"),
+        (1.0 / 1.185e-3, "l/s ANR"),
+        (1.0 / 1.185e-3, "l/s ANR"),
+    ];
+    let mut text = format!(
+        "\n[[experiment]]\nkind = \"catalogue\"\np_supply = \"{bar_g} bar(g)\"\n\n[experiment.figures]\n"
+    );
+    for name in names.split(',').map(str::trim) {
+        let k = FIGURES
+            .iter()
+            .position(|f| *f == name)
+            .ok_or(format!("PAGE_EXTRA: no figure {name}"))?;
+        let (per_si, unit) = units[k];
+        text += &format!(
+            "{name} = \"{} {unit}\"\n",
+            twin::page::significant(values[k] * per_si, 3)
+        );
+    }
+    let path = page_dir.join("rig.toml");
+    let mut toml = std::fs::read_to_string(&path).map_err(|e| e.to_string())?;
+    toml += &text;
+    std::fs::write(&path, toml).map_err(|e| e.to_string())
 }
 
 /// The displacement of a fit file, m³, and its 95 % interval where it has one.
