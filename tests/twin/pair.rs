@@ -22,6 +22,7 @@
 //! of the shaft torque; the max power by golden section), ~100× faster than the twin's
 //! reference path in [`super::catalogue`] (pseudo-transient continuation at each point), which
 //! [`verify_same_page`] then uses to print both pages and compare them byte for byte.
+//! `PAIR_DEBUG=1` prints each step of the continuation to stderr.
 
 use super::catalogue::TwinRow;
 use super::motor::{self, TwinMotor, P_ATM_PA};
@@ -765,16 +766,4 @@ pub fn verify_same_page(
     Ok(["rig.toml", "curves.csv"]
         .iter()
         .all(|f| read(&da, f) == read(&db, f)))
-}
-
-/// The page's worst residual for its own motor and the item it is at (diagnostics).
-pub fn own_residuals(
-    m: &TwinMotor,
-    style: &PageStyle,
-    page_dir: &Path,
-) -> Result<Vec<(Item, f64)>, String> {
-    let row0 = fast_row(m, style.supply.1, 500.0)?;
-    let items = page_items(page_dir, style, row0.free_speed_rad_s)?;
-    let (v, _) = page_values(m, style.supply.1, &items, row0.free_speed_rad_s)?;
-    Ok(items.iter().copied().zip(residuals(&items, &v)).collect())
 }
