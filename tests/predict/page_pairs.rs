@@ -78,8 +78,9 @@ fn a_second_motor_prints_the_same_page_and_differs_at_3_bar_g() {
         assert!(pt.worst_residual < 1.0, "{pt:?}");
         assert!(twin::pair::population_distance(&pt.motor) <= twin::pair::Z_MAX);
     }
-    // Max power at 3 bar g differs by more than 30 % between two motors of the path, and the
-    // twin's reference printer prints the same two files for both.
+    // Max power at 3 bar g differs by more than 50 % between two motors of the path (a
+    // forced error above 20 %; measured 98.8 %), and the twin's reference printer prints
+    // the same two files for both.
     let (d, lo, hi) = spread(&path, 0, 1);
     println!(
         "max power at 3 bar g: {:.2} W and {:.2} W (T_c {:.4} and {:.4} N·m), spread {:.1} %, forced error {:.1} %",
@@ -90,7 +91,7 @@ fn a_second_motor_prints_the_same_page_and_differs_at_3_bar_g() {
         100.0 * d,
         100.0 * forced_error(d)
     );
-    assert!(d > 0.3, "spread {d}");
+    assert!(d > 0.5, "spread {d}");
     assert!(verify_same_page(
         &path[lo].motor,
         &path[hi].motor,
@@ -136,7 +137,7 @@ fn summary(label: &str, values: &[f64]) -> String {
 }
 
 #[test]
-#[ignore = "long: 60 motors; run with --ignored --nocapture (PAIR_EXTRA=\"4@3\" adds the stall torque at 3 bar g to every page)"]
+#[ignore = "long: 60 motors; run with --ignored --nocapture (PAIR_EXTRA=\"0@4,1@4\" adds the free speed and max power at 4 bar g to every page)"]
 fn page_pairs_table_over_random_motors() {
     // PAIR_EXTRA: figures added to each page, "k@bar_g" comma-separated (k in FIGURES order).
     let extra: Vec<(usize, f64)> = std::env::var("PAIR_EXTRA").map_or(Vec::new(), |v| {
