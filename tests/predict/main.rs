@@ -4,6 +4,7 @@
 
 mod catalogue_predict;
 mod page_coverage;
+mod page_pairs;
 mod predict;
 mod sampled_bands;
 extern crate twin;

@@ -65,6 +65,16 @@ impl Check {
             / self.truth
             - 1.0
     }
+    /// Relative error of the band's minimax centre 2·lo·hi/(lo + hi): the prediction whose
+    /// worst error over the figures the band spans is least (docs/validation.md, "What a
+    /// page cannot tell"). The value itself where there is no band.
+    fn minimax_error(&self) -> f64 {
+        self.band
+            .filter(|(lo, hi)| *lo > 0.0 && *hi > 0.0)
+            .map_or(self.value, |(lo, hi)| 2.0 * lo * hi / (lo + hi))
+            / self.truth
+            - 1.0
+    }
 }
 
 /// One motor's evaluation.
@@ -176,6 +186,7 @@ fn evaluate_styled(
     let page = print_page(&page_dir, &motor, &style).map_err(|e| format!("twin: {e}"))?;
     let oracle = Oracle::from_env(&motor);
     oracle.tell_page(&page_dir)?;
+    second_pressure(&page_dir, &motor)?;
     let (rows, factors) =
         truth(&motor, &BAR_G, REFERENCE_BAR_G).map_err(|e| format!("twin: {e}"))?;
     let fit = dir.join("fit.json");
@@ -358,6 +369,52 @@ impl Oracle {
     }
 }
 
+/// PAGE_EXTRA adds a second catalogue experiment to the page: figures of the twin's motor
+/// at another supply pressure, "name,name@bar_g" (names as in [`FIGURES`], e.g.
+/// "stall_torque@4" or "free_speed,max_power,speed_at_max_power@4"), each to 3 digits in
+/// rpm, W, N·m or l/s ANR (what a user measures at a second pressure; docs/validation.md,
+/// "What a page cannot tell"). Empty: the page as printed.
+fn second_pressure(page_dir: &Path, motor: &twin::motor::TwinMotor) -> Result<(), String> {
+    let spec = std::env::var("PAGE_EXTRA").unwrap_or_default();
+    let Some((names, bar)) = spec.split_once('@') else {
+        return Ok(());
+    };
+    let bar_g: f64 = bar
+        .trim()
+        .parse()
+        .map_err(|_| format!("PAGE_EXTRA: {spec}"))?;
+    let (rows, _) = truth(motor, &[bar_g], bar_g).map_err(|e| format!("twin: {e}"))?;
+    let values = row_values(&rows[0]);
+    let rpm = 30.0 / std::f64::consts::PI;
+    let units = [
+        (rpm, "rpm"),
+        (1.0, "W"),
+        (rpm, "rpm"),
+        (1.0, "N·m"),
+        (1.0, "N·m"),
+        (1.0 / 1.185e-3, "l/s ANR"),
+        (1.0 / 1.185e-3, "l/s ANR"),
+    ];
+    let mut text = format!(
+        "\n[[experiment]]\nkind = \"catalogue\"\np_supply = \"{bar_g} bar(g)\"\n\n[experiment.figures]\n"
+    );
+    for name in names.split(',').map(str::trim) {
+        let k = FIGURES
+            .iter()
+            .position(|f| *f == name)
+            .ok_or(format!("PAGE_EXTRA: no figure {name}"))?;
+        let (per_si, unit) = units[k];
+        text += &format!(
+            "{name} = \"{} {unit}\"\n",
+            twin::page::significant(values[k] * per_si, 3)
+        );
+    }
+    let path = page_dir.join("rig.toml");
+    let mut toml = std::fs::read_to_string(&path).map_err(|e| e.to_string())?;
+    toml += &text;
+    std::fs::write(&path, toml).map_err(|e| e.to_string())
+}
+
 /// The displacement of a fit file, m³, and its 95 % interval where it has one.
 fn fit_displacement(fit: &Path) -> Result<(f64, Option<[f64; 2]>), String> {
     let text = std::fs::read_to_string(fit).map_err(|e| e.to_string())?;
@@ -413,6 +470,11 @@ struct Stats {
     worst_error: f64,
     /// The same for the bands' geometric centres ([`Check::centre_error`]).
     worst_centre_error: f64,
+    /// Checks whose point prediction is more than 10 % off.
+    over_10: usize,
+    /// Worst error, median |error| and count over 10 % of the bands' minimax centres
+    /// ([`Check::minimax_error`]).
+    minimax: (f64, f64, usize),
 }
 
 fn stats<'a>(checks: impl Iterator<Item = &'a Check>) -> Stats {
@@ -428,7 +490,14 @@ fn stats<'a>(checks: impl Iterator<Item = &'a Check>) -> Stats {
     };
     let worst = signed_worst(&Check::error);
     let worst_centre = signed_worst(&Check::centre_error);
+    let minimax = (
+        signed_worst(&Check::minimax_error),
+        median(c.iter().map(|x| x.minimax_error().abs()).collect()),
+        c.iter().filter(|x| x.minimax_error().abs() > 0.1).count(),
+    );
     Stats {
+        over_10: c.iter().filter(|x| x.error().abs() > 0.1).count(),
+        minimax,
         held: c.iter().filter(|x| x.holds()).count(),
         total: c.len(),
         no_band: c.iter().filter(|x| x.band.is_none()).count(),
@@ -441,7 +510,7 @@ fn stats<'a>(checks: impl Iterator<Item = &'a Check>) -> Stats {
 
 fn line(name: &str, s: &Stats) -> String {
     format!(
-        "| {name} | {}/{} ({:.0} %) | {:.1} % | {:.1} % | {:+.1} % | {} | {:+.1} % |",
+        "| {name} | {}/{} ({:.0} %) | {:.1} % | {:.1} % | {:+.1} % | {} | {:+.1} % | {} | {:+.1} % | {:.1} % | {} |",
         s.held,
         s.total,
         100.0 * s.held as f64 / s.total.max(1) as f64,
@@ -449,11 +518,15 @@ fn line(name: &str, s: &Stats) -> String {
         100.0 * s.median_abs_error,
         100.0 * s.worst_error,
         s.no_band,
-        100.0 * s.worst_centre_error
+        100.0 * s.worst_centre_error,
+        s.over_10,
+        100.0 * s.minimax.0,
+        100.0 * s.minimax.1,
+        s.minimax.2
     )
 }
 
-const HEAD: &str = "| | bands holding the truth | median half-width | median |error| | worst error | no band | worst error of √(lo·hi) |\n|---|---|---|---|---|---|---|";
+const HEAD: &str = "| | bands holding the truth | median half-width | median |error| | worst error | no band | worst error of √(lo·hi) | > 10 % off | worst error of 2·lo·hi/(lo+hi) | its median |error| | its > 10 % |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// The markdown tables of the figures and factors of `motors`.
 fn report(motors: &[&Motor]) -> String {

@@ -21,6 +21,7 @@ pub mod laws;
 pub mod motor;
 pub mod ode;
 pub mod page;
+pub mod pair;
 pub mod record;
 pub mod rig;
 pub mod steady;
