@@ -169,9 +169,9 @@ fn series_closed_form(up: &Nozzle, down: &Nozzle, p_u: f64, p_d: f64) -> Option<
     Some((p_m, flow_squared))
 }
 
-/// The first real root of a·x² + b·x + c = 0 (in the order of `quadratic_roots`) that
-/// `accept` takes; the second root is only formed when the first is refused (the series
-/// flow's root is usually the first).
+/// The first real root of a·x² + b·x + c = 0 that `accept` takes, in the order q/a, c/q with
+/// q = −(b + sign(b)·√(b² − 4ac))/2 (both without cancellation); the second root is only
+/// formed when the first is refused (the series flow's root is usually the first).
 fn quadratic_root_where(a: f64, b: f64, c: f64, accept: impl Fn(f64) -> bool) -> Option<f64> {
     if a.abs() <= 1e-14 * (b.abs() + c.abs() / 1e5) {
         return (b != 0.0).then(|| -c / b).filter(|x| accept(*x));
@@ -186,20 +186,6 @@ fn quadratic_root_where(a: f64, b: f64, c: f64, accept: impl Fn(f64) -> bool) ->
         return Some(first);
     }
     (q != 0.0).then(|| c / q).filter(|x| accept(*x))
-}
-
-/// Real roots of a·x² + b·x + c = 0, computed without cancellation.
-#[cfg(test)]
-fn quadratic_roots(a: f64, b: f64, c: f64) -> [Option<f64>; 2] {
-    if a.abs() <= 1e-14 * (b.abs() + c.abs() / 1e5) {
-        return [(b != 0.0).then(|| -c / b), None];
-    }
-    let disc = b * b - 4.0 * a * c;
-    if disc < 0.0 {
-        return [None, None];
-    }
-    let q = -0.5 * (b + b.signum() * disc.sqrt());
-    [Some(q / a), (q != 0.0).then(|| c / q)]
 }
 
 /// Safeguarded Newton solve of the series balance (used in the laminar ranges).
@@ -326,6 +312,21 @@ mod tests {
                 "{pa} {pb}: {db} vs {fd_b}"
             );
         }
+    }
+
+    /// Both real roots of a·x² + b·x + c = 0, without cancellation: the reference that
+    /// `quadratic_root_where` (which forms the second only when the first is refused)
+    /// must agree with.
+    fn quadratic_roots(a: f64, b: f64, c: f64) -> [Option<f64>; 2] {
+        if a.abs() <= 1e-14 * (b.abs() + c.abs() / 1e5) {
+            return [(b != 0.0).then(|| -c / b), None];
+        }
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 {
+            return [None, None];
+        }
+        let q = -0.5 * (b + b.signum() * disc.sqrt());
+        [Some(q / a), (q != 0.0).then(|| c / q)]
     }
 
     #[test]

@@ -95,13 +95,12 @@ fn steady_sweep(
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|a, b| speeds[*a].total_cmp(&speeds[*b]));
     let mut results = vec![[0.0; 3]; n];
-    let mut guess: Option<State> = None;
-    // The solution before the last one and its row, for a secant guess.
+    // The last two solutions and their rows: each solve starts from the line through them.
+    let mut last: Option<(usize, State)> = None;
     let mut before: Option<(usize, State)> = None;
-    let mut last: Option<usize> = None;
     for &i in &order {
         let bc = Boundary::supplied(p_supply[i], setting.p_atm_pa, Load::None);
-        let start = guess.map(|g| secant_guess(speeds, p_supply, i, last, before, g));
+        let start = last.map(|l| secant_guess(speeds, p_supply, i, l, before));
         let near = start.map(|g| steady::at_speed_from_neighbour(motor, &bc, speeds[i], &g));
         let x = near
             .filter(Result::is_ok)
@@ -111,27 +110,27 @@ fn steady_sweep(
         // At standstill the brake holds the rotor against the full dry friction.
         let torque = shaft_torque(motor, &x, &b);
         results[i] = [torque, b.flow_port1_kg_s, b.flow_port2_kg_s];
-        before = last.zip(guess);
-        last = Some(i);
-        guess = Some(x);
+        before = last;
+        last = Some((i, x));
     }
     Ok(results)
 }
 
 /// The start of row `i`'s steady solve: the pressures extrapolated along the line through
-/// the last two solutions (rows `last` and `before`, at the same supply pressure and two
-/// different speeds), else the last solution `x` itself. On the shipped 25-speed datasheet
-/// the line's guess saves about one Newton iteration per speed (callgrind, see
-/// docs/performance.md); a guess with a pressure at or below zero falls back to `x`.
+/// the last two solutions (`last` and `before`, each a row and its state, at the same supply
+/// pressure and two different speeds), else the last solution itself. On the shipped
+/// 25-speed datasheet the line's guess saves about one Newton iteration per speed
+/// (callgrind, see docs/performance.md); a guess with a pressure at or below zero falls back
+/// to the last solution.
 fn secant_guess(
     speeds: &[f64],
     p_supply: &[f64],
     i: usize,
-    last: Option<usize>,
+    last: (usize, State),
     before: Option<(usize, State)>,
-    x: State,
 ) -> State {
-    let (Some(l), Some((b, xb))) = (last, before) else {
+    let (l, x) = last;
+    let Some((b, xb)) = before else {
         return x;
     };
     let span = speeds[l] - speeds[b];
