@@ -318,25 +318,24 @@ impl Motor {
     /// work and torque", N·m.
     fn ideal_torque(&self, p1: f64, p2: f64, pe: f64, omega: f64) -> f64 {
         let w_fwd = forward_weight(omega);
-        let t_fwd = || {
-            self.cycle
-                .torque_one_way(self.filling_pressure(p1, pe, omega), p2, pe)
-        };
-        let t_rev = || {
-            -self
-                .cycle
-                .torque_one_way(self.filling_pressure(p2, pe, omega), p1, pe)
-        };
         // A saturated blend (|ω| ≳ 19 ω_b, most of a run) weighs one direction by exactly 1
-        // and the other by exactly 0, so the blend is that direction's torque as it stands
-        // (up to the sign of a zero): the other direction is not formed.
+        // and the other by exactly 0, so the sum below is that direction's torque as it
+        // stands (up to the sign of a zero): the other direction is not formed.
         if w_fwd == 1.0 {
-            t_fwd()
-        } else if w_fwd == 0.0 {
-            t_rev()
-        } else {
-            w_fwd * t_fwd() + (1.0 - w_fwd) * t_rev()
+            return self
+                .cycle
+                .torque_one_way(self.filling_pressure(p1, pe, omega), p2, pe);
         }
+        if w_fwd == 0.0 {
+            return -self
+                .cycle
+                .torque_one_way(self.filling_pressure(p2, pe, omega), p1, pe);
+        }
+        let fill_fwd = self.filling_pressure(p1, pe, omega);
+        let fill_rev = self.filling_pressure(p2, pe, omega);
+        let t_fwd = self.cycle.torque_one_way(fill_fwd, p2, pe);
+        let t_rev = -self.cycle.torque_one_way(fill_rev, p1, pe);
+        w_fwd * t_fwd + (1.0 - w_fwd) * t_rev
     }
 
     /// The air torque on the rotor at state x, N·m: the ideal motor's torque T of the torque
