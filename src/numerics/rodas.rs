@@ -25,13 +25,8 @@
 //! shipped ramp the leak between chamber 2 and the exhaust hovers at its threshold and
 //! crosses it a dozen times). Given the model's kink indicators
 //! ([`StiffSolver::solve_with_kinks`]), a rejected step whose indicators change sign is
-//! retried to end just past the first crossing (estimated from the indicators' rate at the
-//! step's start; at most twice from one point, since a landing can cross the next kink of
-//! a cluster), and the step after it returns towards the step before. The indicators are
-//! evaluated at every step's end, so their secant over the last step is known before the
-//! next one: where it says a kink lies inside the step, the step lands just past it
-//! (placed by the indicators' tangent) without first being tried whole and rejected
-//! (docs/performance.md, "Ninth pass").
+//! retried once to end just past the first crossing (estimated from the indicators' rate
+//! at the step's start), and the step after it returns towards the step before.
 
 use super::lu::Lu;
 use super::ode::{
@@ -307,87 +302,6 @@ fn kink_fraction(
         .min_by(f64::total_cmp)
 }
 
-/// Most landings just past a kink tried from one point before the controller alone
-/// shrinks the step.
-const MAX_LANDINGS: u32 = 2;
-
-/// The kink indicators along the solution: their values at the current point, their
-/// secant rate over the last accepted step (free: the indicators are evaluated at every
-/// step's end) and their tangent rate at the current point (one more evaluation, made only
-/// where a kink is near).
-struct KinkWatch<'a> {
-    kinks: &'a Kinks<'a>,
-    /// g at the current point.
-    here: [f64; N_KINKS],
-    /// (g_here − g_before)/h over the last accepted step, per second.
-    secant: Option<[f64; N_KINKS]>,
-    /// dg/dt along the solution at the current point, per second, once computed.
-    tangent: Option<[f64; N_KINKS]>,
-}
-
-impl<'a> KinkWatch<'a> {
-    fn new(kinks: &'a Kinks<'a>, t: f64, y: &State) -> Self {
-        Self {
-            kinks,
-            here: kinks(t, y),
-            secant: None,
-            tangent: None,
-        }
-    }
-
-    /// Each indicator's rate along the solution at (t, y) (f = f(t, y)), per second, by a
-    /// forward difference along the tangent.
-    fn tangent(&mut self, t: f64, y: &State, f: &State) -> [f64; N_KINKS] {
-        let (kinks, here) = (self.kinks, self.here);
-        *self.tangent.get_or_insert_with(|| {
-            let d = 1e-6 * t.abs().max(1.0);
-            let ahead = kinks(t + d, &std::array::from_fn(|i| y[i] + d * f[i]));
-            std::array::from_fn(|i| (ahead[i] - here[i]) / d)
-        })
-    }
-
-    /// Where in a step of size h the first kink lies, as a fraction of the step, when the
-    /// secant says one is inside it: from the tangent (the secant screens, the tangent,
-    /// which holds at the step's start, places). `None` when neither says so.
-    fn predicted(&mut self, t: f64, y: &State, f: &State, h: f64) -> Option<f64> {
-        first_zero(&self.here, &self.secant?, h)?;
-        let tangent = self.tangent(t, y, f);
-        first_zero(&self.here, &tangent, h)
-    }
-
-    /// Where the first kink lies in a rejected step of size h that ends at indicators
-    /// `g_end` ([`kink_fraction`]).
-    fn landing(
-        &mut self,
-        t: f64,
-        y: &State,
-        f: &State,
-        g_end: &[f64; N_KINKS],
-        h: f64,
-    ) -> Option<f64> {
-        if (0..N_KINKS).all(|i| (self.here[i] > 0.0) == (g_end[i] > 0.0)) {
-            return None;
-        }
-        let tangent = self.tangent(t, y, f);
-        kink_fraction(&self.here, &tangent, g_end, h)
-    }
-
-    /// Moves to the end of an accepted step of size h, where the indicators are `g_end`.
-    fn advance(&mut self, g_end: [f64; N_KINKS], h: f64) {
-        self.secant = Some(std::array::from_fn(|i| (g_end[i] - self.here[i]) / h));
-        self.here = g_end;
-        self.tangent = None;
-    }
-}
-
-/// The first θ in (0, 1) where an indicator g + θ·h·rate reaches zero, if any.
-fn first_zero(g: &[f64; N_KINKS], rate: &[f64; N_KINKS], h: f64) -> Option<f64> {
-    (0..N_KINKS)
-        .map(|i| -g[i] / (rate[i] * h))
-        .filter(|theta| *theta > 0.0 && *theta < 1.0)
-        .min_by(f64::total_cmp)
-}
-
 /// Step-size control of Hairer & Wanner's RODAS: the classical h·err^(−1/4) rule combined
 /// with Gustafsson's predictive controller, which uses the previous accepted step as well
 /// and so rejects fewer steps where the error changes steadily (a ramp). Factors: at most
@@ -529,39 +443,35 @@ impl StiffSolver for Rodas4 {
         let mut lin = Linearisation::at(rhs, jacobian, t, &y);
         let mut h = self.initial_step(rhs, t, &y, &lin.f, t_end - t0);
         let mut control = StepControl::default();
-        let mut watch = KinkWatch::new(kinks, t, &y);
-        // The step to resume with after landing just past a kink, and how many landings
-        // were tried from the current point.
+        // The kink indicators at the current point (computed when a step is rejected), and
+        // the step to resume with after landing just past a kink.
+        let mut g0: Option<([f64; N_KINKS], [f64; N_KINKS])> = None;
         let mut resume: Option<f64> = None;
-        let mut landings_here = 0;
         for _ in 0..MAX_STEPS {
-            if resume.is_none() {
-                // A kink that the indicators' course says lies inside the step: land just
-                // past it without first trying (and failing) the whole step.
-                if let Some(theta) = watch.predicted(t, &y, &lin.f, h) {
-                    resume = Some(h);
-                    h *= (theta + KINK_OVERSHOOT).min(1.0);
-                }
-            }
             // Land exactly on t_end; stretch a step that would leave a sliver before it.
             let remaining = t_end - t;
             let last = h >= remaining * (1.0 - 1e-12) || remaining - h < 1e-3 * h;
             let h_try = if last { remaining } else { h };
             let step = step(rhs, t, &y, &lin, h_try);
             let err = step.map_or(f64::INFINITY, |s| self.error_norm(&y, &s));
-            let g_end = step.map(|s| kinks(t + h_try, &s.y1));
-            let (Some(s), Some(g_end), true) = (step, g_end, err <= 1.0) else {
+            let (Some(s), true) = (step, err <= 1.0) else {
                 // Rejected: if the trial crossed a kink, retry with a step that ends just past
                 // it (the part after the kink is then too short to matter, and the next step
                 // starts on the kink's far side); else shrink as the controller says. Either
-                // way from the same point (J and ∂f/∂t still hold). A landing may itself
-                // cross a second kink (they come in clusters at the pressure ramp's start),
-                // so a second one is allowed from the same point.
-                let landing = g_end.and_then(|g| watch.landing(t, &y, &lin.f, &g, h_try));
+                // way from the same point (J and ∂f/∂t still hold).
+                let landing = step.and_then(|s| {
+                    let (g_start, g_rate) = *g0.get_or_insert_with(|| {
+                        let g = kinks(t, &y);
+                        // Each indicator's rate along the solution, per second.
+                        let d = 1e-6 * t.abs().max(1.0);
+                        let ahead = kinks(t + d, &std::array::from_fn(|i| y[i] + d * lin.f[i]));
+                        (g, std::array::from_fn(|i| (ahead[i] - g[i]) / d))
+                    });
+                    kink_fraction(&g_start, &g_rate, &kinks(t + h_try, &s.y1), h_try)
+                });
                 h = match landing {
-                    Some(theta) if landings_here < MAX_LANDINGS => {
-                        landings_here += 1;
-                        resume.get_or_insert(h_try);
+                    Some(theta) if resume.is_none() => {
+                        resume = Some(h_try);
                         h_try * (theta + KINK_OVERSHOOT).min(1.0)
                     }
                     _ => control.rejected(h_try, err),
@@ -587,8 +497,7 @@ impl StiffSolver for Rodas4 {
             t = t_new;
             y = s.y1;
             lin = Linearisation::at(rhs, jacobian, t, &y);
-            watch.advance(g_end, h_try);
-            landings_here = 0;
+            g0 = None;
             h = control.accepted(h_try, err);
             if let Some(h_before) = resume.take() {
                 // Past the kink the solution is smooth again at the scale it had before it:
