@@ -260,6 +260,95 @@ fn diagnostics_match_chains_of_known_autocorrelation() {
     assert!((mean - 1.0).abs() < 0.1, "AR(1) ESS / theory: {ratios:?}");
 }
 
+/// The ESS by Geyer's initial monotone sequence (Vehtari et al. 2021), one autocovariance
+/// sum per lag and chain, each over i in ascending order (`ess` forms several lags in one
+/// pass): the reference the library's ESS must equal bit for bit.
+fn ess_one_lag_at_a_time(x: &[Vec<f64>]) -> f64 {
+    let (m, n) = (x.len(), x[0].len());
+    let nf = n as f64;
+    let means: Vec<f64> = x.iter().map(|c| c.iter().sum::<f64>() / nf).collect();
+    let acov = |c: &[f64], mu: f64, t: usize| -> f64 {
+        (0..n - t)
+            .map(|i| (c[i] - mu) * (c[i + t] - mu))
+            .sum::<f64>()
+            / nf
+    };
+    let mean_acov = |t: usize| -> f64 {
+        x.iter()
+            .zip(&means)
+            .map(|(c, mu)| acov(c, *mu, t))
+            .sum::<f64>()
+            / m as f64
+    };
+    let mean_var = mean_acov(0) * nf / (nf - 1.0);
+    let mut var_plus = mean_var * (nf - 1.0) / nf;
+    if m > 1 {
+        let mm = means.iter().sum::<f64>() / m as f64;
+        var_plus += means.iter().map(|v| (v - mm).powi(2)).sum::<f64>() / (m as f64 - 1.0);
+    }
+    let rho = |t: usize| 1.0 - (mean_var - mean_acov(t)) / var_plus;
+    let mut rho_hat = vec![0.0; n];
+    rho_hat[0] = 1.0;
+    let (mut even, mut odd) = (1.0, rho(1));
+    rho_hat[1] = odd;
+    let mut t = 1;
+    while t < n - 3 && even + odd > 0.0 {
+        even = rho(t + 1);
+        odd = rho(t + 2);
+        if even + odd >= 0.0 {
+            rho_hat[t + 1] = even;
+            rho_hat[t + 2] = odd;
+        }
+        t += 2;
+    }
+    let max_t = t.saturating_sub(2);
+    if even > 0.0 {
+        rho_hat[max_t + 1] = even;
+    }
+    let mut t = 1;
+    while t + 2 <= max_t {
+        if rho_hat[t + 1] + rho_hat[t + 2] > rho_hat[t - 1] + rho_hat[t] {
+            rho_hat[t + 1] = (rho_hat[t - 1] + rho_hat[t]) / 2.0;
+            rho_hat[t + 2] = rho_hat[t + 1];
+        }
+        t += 2;
+    }
+    let total = (m * n) as f64;
+    let tau = -1.0 + 2.0 * rho_hat[..=max_t].iter().sum::<f64>() + rho_hat[max_t + 1];
+    total / tau.max(1.0 / total.log10())
+}
+
+#[test]
+fn ess_equals_the_one_lag_at_a_time_sums_bit_for_bit() {
+    // Lengths around the multiples of the lags formed together (4), one chain and several,
+    // chains that mix fast (few lags) and slowly (hundreds of lags), and a rare indicator
+    // (long runs of zeros, as the banana's tail probability has).
+    let mut cases = Vec::new();
+    for (i, n) in [4, 5, 6, 7, 8, 9, 10, 11, 33, 1000, 1001, 1003]
+        .into_iter()
+        .enumerate()
+    {
+        for (m, rho) in [(1, 0.0), (3, 0.5), (4, 0.99)] {
+            cases.push(ar1(m, n, rho, 0.1, 300 + i as u64));
+        }
+    }
+    let rare: Vec<Vec<f64>> = ar1(8, 2000, 0.995, 0.0, 7)
+        .into_iter()
+        .map(|c| c.iter().map(|v| f64::from(u8::from(*v > 2.0))).collect())
+        .collect();
+    cases.push(rare);
+    for x in &cases {
+        let (got, want) = (vanefit::estimate::ess(x), ess_one_lag_at_a_time(x));
+        assert_eq!(
+            got.to_bits(),
+            want.to_bits(),
+            "{} chains of {}: {got} against {want}",
+            x.len(),
+            x[0].len()
+        );
+    }
+}
+
 /// An eight-dimensional Gaussian, thin and correlated: x₀ ~ N(0, s₀²), x_i | x_{i−1} ~
 /// N(ρ·(s_i/s_{i−1})·x_{i−1}, s_i²·(1 − ρ²)), so that Var x_i = s_i² and
 /// corr(x_i, x_{i+1}) = ρ, with scales s_i = 10^(−i/4) (a factor 56 apart) and ρ = 0.95.
