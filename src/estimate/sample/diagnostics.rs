@@ -193,6 +193,18 @@ fn autocovs(d: &[f64], t: usize) -> [f64; LAGS] {
     sums.map(|s| s / n as f64)
 }
 
+/// The mean over the chains of [`autocovs`] at lags t, …, t + [`LAGS`] − 1, from each
+/// chain's deviations from its mean: (1/m)·Σ_chains, the chains added in order.
+fn mean_autocovs(deviations: &[Vec<f64>], t: usize) -> [f64; LAGS] {
+    let mut block = [-0.0; LAGS];
+    for d in deviations {
+        for (b, a) in block.iter_mut().zip(autocovs(d, t)) {
+            *b += a;
+        }
+    }
+    block.map(|b| b / deviations.len() as f64)
+}
+
 /// Effective sample size of equal-length chains by Geyer's initial monotone sequence.
 pub fn ess(x: &[Vec<f64>]) -> f64 {
     let m = x.len();
@@ -219,13 +231,7 @@ pub fn ess(x: &[Vec<f64>]) -> f64 {
     let mut acov: Vec<f64> = Vec::new();
     let mut mean_acov = |t: usize| -> f64 {
         while acov.len() <= t {
-            let mut block = [-0.0; LAGS];
-            for d in &deviations {
-                for (b, a) in block.iter_mut().zip(autocovs(d, acov.len())) {
-                    *b += a;
-                }
-            }
-            acov.extend(block.map(|b| b / m as f64));
+            acov.extend(mean_autocovs(&deviations, acov.len()));
         }
         acov[t]
     };
@@ -273,3 +279,89 @@ fn mean_var_of(v: &[f64]) -> f64 {
 }
 
 pub use crate::numerics::normal::normal_quantile;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The mean autocovariance at lag t as it was formed before several lags shared a
+    /// pass: one sum per lag and chain over i in ascending order, (1/n)·Σ (x_i − x̄)(x_{i+t}
+    /// − x̄), then the chains' mean.
+    fn one_lag_at_a_time(x: &[Vec<f64>], t: usize) -> f64 {
+        let n = x[0].len();
+        let acov = |c: &[f64]| {
+            let mu = c.iter().sum::<f64>() / n as f64;
+            (0..n.saturating_sub(t))
+                .map(|i| (c[i] - mu) * (c[i + t] - mu))
+                .sum::<f64>()
+                / n as f64
+        };
+        x.iter().map(|c| acov(c)).sum::<f64>() / x.len() as f64
+    }
+
+    /// m chains of n draws of an AR(1) process with coefficient rho (a fixed linear
+    /// congruential sequence as its innovations), shifted by `shift`.
+    fn ar1(m: usize, n: usize, rho: f64, shift: f64, seed: u64) -> Vec<Vec<f64>> {
+        let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        (0..m)
+            .map(|_| {
+                let mut v = 0.0;
+                (0..n)
+                    .map(|_| {
+                        v = rho * v + uniform();
+                        v + shift
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn several_lags_per_pass_equal_the_one_lag_sums_bit_for_bit() {
+        // Lengths around the multiples of the lags formed together, one chain and several,
+        // chains that mix fast and slowly, and a rare indicator (long runs of zeros, as the
+        // banana's tail probability has); every lag up to the chain's length and past it.
+        let mut cases = Vec::new();
+        for (i, n) in [4, 5, 7, 8, 9, 11, 16, 17, 33, 1000, 1003]
+            .into_iter()
+            .enumerate()
+        {
+            for (m, rho) in [(1, 0.0), (3, 0.5), (4, 0.99)] {
+                cases.push(ar1(m, n, rho, 0.1, 300 + i as u64));
+            }
+        }
+        let rare = ar1(8, 2000, 0.995, 0.0, 7)
+            .into_iter()
+            .map(|c| c.iter().map(|v| f64::from(u8::from(*v > 2.0))).collect())
+            .collect();
+        cases.push(rare);
+        for x in &cases {
+            let n = x[0].len();
+            let deviations: Vec<Vec<f64>> = x
+                .iter()
+                .map(|c| {
+                    let mu = c.iter().sum::<f64>() / n as f64;
+                    c.iter().map(|v| v - mu).collect()
+                })
+                .collect();
+            for t0 in (0..n + LAGS).step_by(LAGS) {
+                for (k, got) in mean_autocovs(&deviations, t0).into_iter().enumerate() {
+                    let want = one_lag_at_a_time(x, t0 + k);
+                    assert_eq!(
+                        got.to_bits(),
+                        want.to_bits(),
+                        "{} chains of {n}, lag {}: {got} against {want}",
+                        x.len(),
+                        t0 + k
+                    );
+                }
+            }
+        }
+    }
+}
