@@ -40,13 +40,10 @@ pub(crate) struct Context<'a> {
     observer: &'a dyn DiagnoseObserver,
     t0: Instant,
     phase_start: Cell<Instant>,
-    phases: RefCell<Vec<(String, f64)>>,
-    /// Cost evaluations (whole simulations of every experiment) so far.
-    evaluations: Cell<u64>,
-    /// `evaluations` when the current phase began.
-    phase_evaluations_start: Cell<u64>,
-    /// (phase, evaluations).
-    phase_evaluations: RefCell<Vec<(String, u64)>>,
+    /// (phase, seconds, cost evaluations) of each finished phase.
+    phases: RefCell<Vec<(String, f64, u64)>>,
+    /// Cost evaluations (whole simulations of every experiment) of the current phase.
+    phase_evaluations: Cell<u64>,
 }
 
 impl<'a> Context<'a> {
@@ -76,9 +73,7 @@ impl<'a> Context<'a> {
             t0,
             phase_start,
             phases: RefCell::new(Vec::new()),
-            evaluations: Cell::new(0),
-            phase_evaluations_start: Cell::new(0),
-            phase_evaluations: RefCell::new(Vec::new()),
+            phase_evaluations: Cell::new(0),
         })
     }
 
@@ -91,34 +86,29 @@ impl<'a> Context<'a> {
     /// Ends the phase `name` (its time counts from the end of the previous one).
     pub(crate) fn end_phase(&self, name: &str) {
         let seconds = self.phase_start.get().elapsed().as_secs_f64();
-        self.phases.borrow_mut().push((name.to_string(), seconds));
-        self.phase_start.set(Instant::now());
-        let n = self.evaluations.get();
-        self.phase_evaluations
+        let evaluations = self.phase_evaluations.replace(0);
+        self.phases
             .borrow_mut()
-            .push((name.to_string(), n - self.phase_evaluations_start.get()));
-        self.phase_evaluations_start.set(n);
+            .push((name.to_string(), seconds, evaluations));
+        self.phase_start.set(Instant::now());
         self.observer.phase(name, seconds);
     }
 
     /// Counts `n` cost evaluations (the work of a fit, a regression or a grid).
     pub(crate) fn count(&self, n: u64) {
-        self.evaluations.set(self.evaluations.get() + n);
+        self.phase_evaluations.set(self.phase_evaluations.get() + n);
     }
 
-    /// (phase, evaluations) so far.
+    /// (phase, evaluations) of the finished phases.
     pub fn phase_evaluations(&self) -> Vec<(String, u64)> {
-        self.phase_evaluations.borrow().clone()
-    }
-
-    /// Cost evaluations so far.
-    pub fn evaluations(&self) -> u64 {
-        self.evaluations.get()
+        let phases = self.phases.borrow();
+        phases.iter().map(|(p, _, n)| (p.clone(), *n)).collect()
     }
 
     /// (phase, seconds) so far.
     pub fn phases(&self) -> Vec<(String, f64)> {
-        self.phases.borrow().clone()
+        let phases = self.phases.borrow();
+        phases.iter().map(|(p, s, _)| (p.clone(), *s)).collect()
     }
 
     /// Seconds since the diagnosis started.

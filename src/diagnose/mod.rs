@@ -188,7 +188,6 @@ pub(crate) fn diagnose_observed(
         inputs,
         phases: cx.phases(),
         phase_evaluations: cx.phase_evaluations(),
-        evaluations: cx.evaluations(),
         wall_s: cx.elapsed_s(),
         threads: engine.threads(),
     };

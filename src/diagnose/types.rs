@@ -238,8 +238,6 @@ pub struct Diagnosis {
     /// (phase, cost evaluations): every fit's, the regressions' and the Stribeck grid's
     /// simulations of the whole dataset.
     pub phase_evaluations: Vec<(String, u64)>,
-    /// Cost evaluations of the whole diagnosis (the sum of `phase_evaluations`).
-    pub evaluations: u64,
     /// Wall time of the whole diagnosis, s.
     pub wall_s: f64,
     /// Worker threads used.
@@ -247,6 +245,12 @@ pub struct Diagnosis {
 }
 
 impl Diagnosis {
+    /// Cost evaluations of the whole diagnosis: the sum of `phase_evaluations` (no phase
+    /// is left unfinished when a diagnosis is returned).
+    pub fn evaluations(&self) -> u64 {
+        self.phase_evaluations.iter().map(|(_, n)| n).sum()
+    }
+
     /// Noise ratio of the baseline and of the extended model.
     pub fn noise_ratios(&self) -> (f64, f64) {
         (self.baseline.noise_ratio, self.extended.noise_ratio)

@@ -100,7 +100,7 @@ pub fn write(d: &Diagnosis, out: &Path) -> Result<(), ReportError> {
     for ((p, s), (_, n)) in d.phases.iter().zip(&d.phase_evaluations) {
         let _ = writeln!(md, "| {p} | {s:.1} | {n} |");
     }
-    let _ = writeln!(md, "| total | {:.1} | {} |", d.wall_s, d.evaluations);
+    let _ = writeln!(md, "| total | {:.1} | {} |", d.wall_s, d.evaluations());
     write_file(out.join("report.md"), md.as_bytes())
 }
 
