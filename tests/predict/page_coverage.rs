@@ -14,6 +14,7 @@ use rayon::prelude::*;
 use std::path::Path;
 use std::process::Command;
 use twin::page::{page_style, print_page, random_motor, row_values, truth, FIGURES, SPREAD};
+use twin::page::{AIR_UNITS, POWER_UNITS, SPEED_UNITS, TORQUE_UNITS};
 
 /// Pressures of the prediction, bar g.
 const BAR_G: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 7.0];
@@ -385,16 +386,10 @@ fn second_pressure(page_dir: &Path, motor: &twin::motor::TwinMotor) -> Result<()
         .map_err(|_| format!("PAGE_EXTRA: {spec}"))?;
     let (rows, _) = truth(motor, &[bar_g], bar_g).map_err(|e| format!("twin: {e}"))?;
     let values = row_values(&rows[0]);
-    let rpm = 30.0 / std::f64::consts::PI;
-    let units = [
-        (rpm, "rpm"),
-        (1.0, "W"),
-        (rpm, "rpm"),
-        (1.0, "N·m"),
-        (1.0, "N·m"),
-        (1.0 / 1.185e-3, "l/s ANR"),
-        (1.0 / 1.185e-3, "l/s ANR"),
-    ];
+    // Each figure in the unit the twin's pages print it in most plainly.
+    let (speed, power, torque) = (&SPEED_UNITS[0], &POWER_UNITS[0], &TORQUE_UNITS[0]);
+    let air = &AIR_UNITS[1];
+    let units = [speed, power, speed, torque, torque, air, air];
     let mut text = format!(
         "\n[[experiment]]\nkind = \"catalogue\"\np_supply = \"{bar_g} bar(g)\"\n\n[experiment.figures]\n"
     );
@@ -403,10 +398,10 @@ fn second_pressure(page_dir: &Path, motor: &twin::motor::TwinMotor) -> Result<()
             .iter()
             .position(|f| *f == name)
             .ok_or(format!("PAGE_EXTRA: no figure {name}"))?;
-        let (per_si, unit) = units[k];
         text += &format!(
-            "{name} = \"{} {unit}\"\n",
-            twin::page::significant(values[k] * per_si, 3)
+            "{name} = \"{} {}\"\n",
+            twin::page::significant(values[k] * units[k].per_si, 3),
+            units[k].printed
         );
     }
     let path = page_dir.join("rig.toml");
