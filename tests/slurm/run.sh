@@ -154,8 +154,6 @@ chmod -R a+rX "$WORK"
 OUT=$F/slurm-run
 
 # units in the shard of array task i of 4: datasets i and i+4 (round robin), fit then predict.
-count_starts() { [ -f "$1" ] && echo $(($(wc -l <"$1") - 1)) || echo 0; }
-unit_state() { sed -n 's/.*"status": "\([a-z]*\)".*/\1/p' "$OUT/$1/status.json" 2>/dev/null; }
 
 # Catching a fit in the middle of its starts, under any load. A start takes about 0.1 s of
 # one core and a fit's ten about 1 s, so a poll that forks (sed, wc, sleep) several times per
@@ -258,8 +256,8 @@ check "task 2 ran again after its requeue (its log is appended to)" \
 check "the requeued task resumed m6/fit from its starts file" \
   grep -q "m6/fit: 10 starts, [0-9]* read back from its starts file (resumed)" "$OUT/slurm/shard-2.log"
 check "the requeued task skipped m2, finished before" grep -q "m2/predict: done before, skipped" "$OUT/slurm/shard-2.log"
-state7=$(unit_state m7/fit)
-n7=$(count_starts "$OUT/m7/fit/fit.starts.jsonl")
+look_at_unit m7/fit
+state7=$UNIT_STATE n7=$N_STARTS
 # Interrupted means not done: Slurm signals the step's processes after scancel returns, so
 # on a fast machine the fit may have finished its ten starts (and be in its profiles) when
 # the kill lands; how many starts it kept is the scheduler's timing, not vanefit's doing.
