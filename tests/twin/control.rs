@@ -60,7 +60,7 @@ impl Rig {
     }
 }
 
-/// Mass flow supply → V_1, kg/s: supply → [throttle] → in_1 → V_1 (negative when V_1 blows
+/// Mass flow supply → V_1, kg/s: supply → \[throttle\] → in_1 → V_1 (negative when V_1 blows
 /// back into the supply line; the throttle stays on the supply side).
 pub fn port1_flow_kg_s(m: &TwinMotor, rig: &Rig, p1_pa: f64) -> f64 {
     match rig.inlet_throttle {
@@ -69,7 +69,7 @@ pub fn port1_flow_kg_s(m: &TwinMotor, rig: &Rig, p1_pa: f64) -> f64 {
     }
 }
 
-/// Mass flow V_2 → atmosphere, kg/s: V_2 → out_2 → [throttle] → atmosphere.
+/// Mass flow V_2 → atmosphere, kg/s: V_2 → out_2 → \[throttle\] → atmosphere.
 pub fn port2_flow_kg_s(m: &TwinMotor, rig: &Rig, p2_pa: f64) -> f64 {
     match rig.outlet_throttle {
         None => motor::nozzle_flow_kg_s(m.c_out2, m.b_crit, p2_pa, rig.p_atm_pa),

@@ -454,7 +454,7 @@ fn residuals(items: &[Item], values: &[f64]) -> Vec<f64> {
 
 /// Number of re-solved parameters.
 const NP: usize = 11;
-/// Their names, in the order of [`to_x`].
+/// Their names, in the order of `to_x`.
 pub const FREE: [&str; NP] = [
     "c_in1", "c_out2", "c_ext", "c_1e", "c_2e", "c_12", "v_dead", "visc", "eps", "n_poly", "b_crit",
 ];

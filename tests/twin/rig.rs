@@ -59,7 +59,7 @@ pub fn flow1_kg_s(m: &TwinMotor, bc: &Boundary, p1_pa: f64) -> f64 {
     motor::nozzle_flow_kg_s(m.c_in1, m.b_crit, bc.p_port1_pa, p1_pa)
 }
 
-/// Port-2 mass flow OUT of the motor (V_2 → out_2 → [throttle] → atmosphere), kg/s.
+/// Port-2 mass flow OUT of the motor (V_2 → out_2 → \[throttle\] → atmosphere), kg/s.
 pub fn flow2_kg_s(m: &TwinMotor, bc: &Boundary, p2_pa: f64) -> f64 {
     match bc.port2 {
         Port2::Open => motor::nozzle_flow_kg_s(m.c_out2, m.b_crit, p2_pa, bc.p_atm_pa),

@@ -14,7 +14,7 @@ fn residual_norm(g: &State, y: &State) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Steady state of dy/dt = f(y) reached from y0. With `hold_speed` the speed stays y0[3]
+/// Steady state of dy/dt = f(y) reached from y0. With `hold_speed` the speed stays `y0[3]`
 /// (f must then return dω/dt = 0) and only the pressures settle.
 pub fn steady_state(
     f: impl Fn(&State) -> State,
