@@ -137,6 +137,26 @@ def _prior_chi2(p, kinds: Optional[tuple] = None) -> float:
     return total
 
 
+def _noise_parameter_rows(problem):
+    """The rows of the parameter table that the noise model can name: the parameters in the
+    observables' ``noiseFormula`` and in the measurements' ``noiseParameters``.
+    ``petab.calculate_chi2`` reads the parameter table only to evaluate each row's noise
+    formula, and for every row it puts each parameter of the table into a sympy
+    substitution (``petab.v1.calculate.evaluate_noise_formula``). vanefit's noise formulas
+    are constants, so none is needed, and the same χ² comes out bit for bit in less time
+    (the shipped fit's export, 3 795 rows, 17 parameters: 16.0 → 13.9 s of one core)."""
+    from petab.v1.math import sympify_petab
+
+    names = set()
+    for formula in problem.observable_df.get("noiseFormula", []):
+        names |= {str(sym) for sym in sympify_petab(formula).free_symbols}
+    if "noiseParameters" in problem.measurement_df:
+        for cell in problem.measurement_df["noiseParameters"].dropna():
+            names |= {part.strip() for part in str(cell).split(";")}
+    table = problem.parameter_df
+    return table.loc[[name for name in table.index if name in names]]
+
+
 def chi2(
     problem_yaml: PathLike,
     dataset: Optional[PathLike] = None,
@@ -154,7 +174,10 @@ def chi2(
     sim = _simulation_table(problem, problem_yaml, dataset, fit)
     rows = float(
         petab.calculate_chi2(
-            problem.measurement_df, sim, problem.observable_df, problem.parameter_df
+            problem.measurement_df,
+            sim,
+            problem.observable_df,
+            _noise_parameter_rows(problem),
         )
     )
     priors = _prior_chi2(problem.parameter_df, ("normal",))
