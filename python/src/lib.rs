@@ -14,6 +14,7 @@ mod tasks;
 
 use errors::{data_err, param_err, DataError, ParameterError, VanefitError};
 use pyo3::prelude::*;
+use pyo3::types::PyByteArray;
 use std::path::PathBuf;
 use tasks::load_fit;
 use vanefit::data::Dataset;
@@ -350,15 +351,23 @@ impl PyLikelihood {
     /// The residual vector at `x` (SI): the compared rows after the nuisances' correction,
     /// then one row per nuisance prior, then (when `priors`) one per motor prior term; its
     /// squares sum to χ². Raises like `chi2`.
-    fn residuals(&self, py: Python<'_>, x: Vec<f64>) -> PyResult<Vec<f64>> {
-        py.detach(|| {
-            let mut r = self.inner.residuals(&x)?;
-            if self.priors {
-                r.extend(self.inner.prior_residuals(&x)?);
-            }
-            Ok(r)
-        })
-        .map_err(likelihood_err)
+    ///
+    /// As the bytes of the values (little-endian f64, 8 bytes each), which the Python
+    /// wrapper reads as a NumPy array in place: least-squares optimizers and finite
+    /// differences call this tens of thousands of times, and a list of 3 812 floats and its
+    /// conversion to an array took 0.28 of 0.74 ms per call on the shipped dataset.
+    fn residuals<'py>(&self, py: Python<'py>, x: Vec<f64>) -> PyResult<Bound<'py, PyByteArray>> {
+        let r = py
+            .detach(|| {
+                let mut r = self.inner.residuals(&x)?;
+                if self.priors {
+                    r.extend(self.inner.prior_residuals(&x)?);
+                }
+                Ok(r)
+            })
+            .map_err(likelihood_err)?;
+        let bytes: Vec<u8> = r.iter().flat_map(|v| v.to_le_bytes()).collect();
+        Ok(PyByteArray::new(py, &bytes))
     }
 
     /// χ² at `x` for an optimizer: always finite (a large penalty where `x` is invalid or

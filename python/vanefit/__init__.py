@@ -318,7 +318,9 @@ class Likelihood:
         nuisance prior (β̂/τ), then with :attr:`priors` one per motor prior term
         ((ln v − ln m)/σ, in :attr:`prior_terms`' order). For least-squares optimizers (pyPESTO's ``res``, SciPy's
         ``least_squares``). Raises like :meth:`chi2`."""
-        return np.asarray(self._core.residuals([float(v) for v in x]))
+        # The core hands the values over as bytes (little-endian f64): read in place, no
+        # list of floats in between.
+        return np.frombuffer(self._core.residuals([float(v) for v in x]), dtype="<f8")
 
     def breakdown(self, x: Sequence[float]) -> Dict[str, Any]:
         """χ² at ``x`` split into the rows' part (``chi2_data``), the nuisance priors' part
