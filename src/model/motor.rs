@@ -171,6 +171,10 @@ pub struct Motor {
     /// Terms found by `vanefit diagnose` outside the catalog (empty: the model as specified).
     pub extra: Vec<ExtraTerm>,
     cycle: Cycle,
+    /// R·T0/V_1, R·T0/V_2, R·T0/V_e, Pa/kg: each volume's pressure rise per kilogram
+    /// (paper eqs. 14–15), computed once. The right-hand side and the linearisation
+    /// divided by the volumes on every call for values the parameters fix.
+    rt_over_vol: [f64; 3],
 }
 
 impl Motor {
@@ -183,11 +187,17 @@ impl Motor {
             params.eps(),
             params.n_poly(),
         );
+        let rt_over_vol = [
+            RT0 / params.vol1(),
+            RT0 / params.vol2(),
+            RT0 / params.vole(),
+        ];
         Self {
             params,
             effects,
             extra: Vec::new(),
             cycle,
+            rt_over_vol,
         }
     }
 
@@ -205,6 +215,11 @@ impl Motor {
     /// The ideal motor's polytropic cycle (docs/model.md, "Cycle work and torque").
     pub fn cycle(&self) -> &Cycle {
         &self.cycle
+    }
+
+    /// R·T0/V_i of the three volumes (V_1, V_2, V_e), Pa/kg, as [`Motor::new`] computed them.
+    pub(crate) fn rt_over_vol(&self) -> [f64; 3] {
+        self.rt_over_vol
     }
 
     fn nozzle(&self, c: f64) -> Nozzle {
@@ -506,10 +521,11 @@ impl Motor {
         let dm2 = leak_12 - port2 - leak_2e + d.into_2_kg_s;
         let dme = leak_1e + leak_2e - exhaust + d.into_e_kg_s;
         let friction = self.friction_torque(omega, p_in, pe);
+        let [s1, s2, se] = self.rt_over_vol;
         [
-            RT0 / p.vol1() * dm1,
-            RT0 / p.vol2() * dm2,
-            RT0 / p.vole() * dme,
+            s1 * dm1,
+            s2 * dm2,
+            se * dme,
             (torque_ideal - friction - bc.load.torque(omega)) / p.inertia(),
         ]
     }
@@ -517,10 +533,11 @@ impl Motor {
     /// dx/dt from an already evaluated balance.
     pub fn derivatives_from(&self, b: &Balance) -> State {
         let p = &self.params;
+        let [s1, s2, se] = self.rt_over_vol;
         [
-            RT0 / p.vol1() * b.dm1_kg_s,
-            RT0 / p.vol2() * b.dm2_kg_s,
-            RT0 / p.vole() * b.dme_kg_s,
+            s1 * b.dm1_kg_s,
+            s2 * b.dm2_kg_s,
+            se * b.dme_kg_s,
             (b.torque_ideal_nm - b.torque_friction_nm - b.torque_load_nm) / p.inertia(),
         ]
     }
