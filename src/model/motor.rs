@@ -19,7 +19,7 @@ use crate::model::extra::slot;
 pub use crate::model::extra::{
     BalanceId, Chamber, ExtraTerm, LeakPath, PressureFactor, SpeedFactor,
 };
-use crate::model::nozzle::{series_flow, Nozzle, R_LAMINAR};
+use crate::model::nozzle::{series_flow, Nozzle, PreparedNozzle, R_LAMINAR};
 use crate::model::params::MotorParams;
 use crate::model::thermo::{displacement_flows, forward_weight, Cycle, DisplacementFlows};
 use crate::numerics::ode::N_KINKS;
@@ -175,6 +175,21 @@ pub struct Motor {
     /// (paper eqs. 14–15), computed once. The right-hand side and the linearisation
     /// divided by the volumes on every call for values the parameters fix.
     rt_over_vol: [f64; 3],
+    /// The base model's six nozzles (C·ρ0 and 1 − b formed once; the same flows as
+    /// [`Nozzle::flow`]).
+    nozzles: BaseNozzles,
+}
+
+/// The base model's nozzles, prepared by [`Motor::new`]: the ducts in_1 and out_2, the
+/// exhaust and the three leakage paths.
+#[derive(Debug, Clone, Copy)]
+struct BaseNozzles {
+    in1: PreparedNozzle,
+    out2: PreparedNozzle,
+    ext: PreparedNozzle,
+    leak_1e: PreparedNozzle,
+    leak_2e: PreparedNozzle,
+    leak_12: PreparedNozzle,
 }
 
 impl Motor {
@@ -192,12 +207,22 @@ impl Motor {
             RT0 / params.vol2(),
             RT0 / params.vole(),
         ];
+        let prepared = |c: f64| PreparedNozzle::new(&Nozzle::new(c, params.b_crit()));
+        let nozzles = BaseNozzles {
+            in1: prepared(params.c_in1()),
+            out2: prepared(params.c_out2()),
+            ext: prepared(params.c_ext()),
+            leak_1e: prepared(params.c_1e()),
+            leak_2e: prepared(params.c_2e()),
+            leak_12: prepared(params.c_12()),
+        };
         Self {
             params,
             effects,
             extra: Vec::new(),
             cycle,
             rt_over_vol,
+            nozzles,
         }
     }
 
@@ -446,22 +471,16 @@ impl Motor {
     /// [`Balance`]. Recorded rows need only these, and a ramp has a thousand rows.
     pub fn port_flows(&self, x: &State, bc: &Boundary) -> (f64, f64) {
         let p = &self.params;
-        (
-            self.port_flow(
-                p.c_in1(),
-                bc.c_port1_m3_s_pa,
-                ThrottleSide::AtA,
-                bc.p_port1_pa,
-                x[idx::P1],
-            ),
-            self.port_flow(
-                p.c_out2(),
-                bc.c_port2_m3_s_pa,
-                ThrottleSide::AtB,
-                x[idx::P2],
-                bc.p_port2_pa,
-            ),
-        )
+        // Without a throttle the duct alone, prepared once (what `port_flow` computes).
+        let port1 = match bc.c_port1_m3_s_pa {
+            None => self.nozzles.in1.flow(bc.p_port1_pa, x[idx::P1]),
+            c => self.port_flow(p.c_in1(), c, ThrottleSide::AtA, bc.p_port1_pa, x[idx::P1]),
+        };
+        let port2 = match bc.c_port2_m3_s_pa {
+            None => self.nozzles.out2.flow(x[idx::P2], bc.p_port2_pa),
+            c => self.port_flow(p.c_out2(), c, ThrottleSide::AtB, x[idx::P2], bc.p_port2_pa),
+        };
+        (port1, port2)
     }
 
     /// Flow through a port's duct (conductance `c_duct`, m³/(s·Pa)) with an optional
@@ -510,10 +529,11 @@ impl Motor {
         let p = &self.params;
         let [p1, p2, pe, omega] = *x;
         let (port1, port2) = self.port_flows(x, bc);
-        let exhaust = self.nozzle(p.c_ext()).flow(pe, bc.p_atm_pa);
-        let leak_1e = self.nozzle(p.c_1e()).flow(p1, pe);
-        let leak_2e = self.nozzle(p.c_2e()).flow(p2, pe);
-        let leak_12 = self.nozzle(p.c_12()).flow(p1, p2);
+        let n = &self.nozzles;
+        let exhaust = n.ext.flow(pe, bc.p_atm_pa);
+        let leak_1e = n.leak_1e.flow(p1, pe);
+        let leak_2e = n.leak_2e.flow(p2, pe);
+        let leak_12 = n.leak_12.flow(p1, p2);
         let p_in = if omega >= 0.0 { p1 } else { p2 };
         let torque_ideal = self.ideal_torque(p1, p2, pe, omega);
         let d = displacement_flows(&self.cycle, omega, p_in, pe, 0.0);
