@@ -357,22 +357,35 @@ impl Motor {
     /// Torque of the ideal motor with the forward/reverse blend of docs/model.md, "Cycle
     /// work and torque", N·m.
     fn ideal_torque(&self, p1: f64, p2: f64, pe: f64, omega: f64) -> f64 {
+        self.blended_torque(p1, p2, pe, omega, |p_inlet| {
+            self.filling_pressure(p_inlet, pe, omega)
+        })
+    }
+
+    /// [`Motor::ideal_torque`] with the filling pressure of each inlet pressure given by
+    /// `fill`: the effects' [`Motor::filling_pressure`], or the inlet pressure itself in the
+    /// base model (whose right-hand side then inlines it all, without the effect checks).
+    #[inline]
+    fn blended_torque(
+        &self,
+        p1: f64,
+        p2: f64,
+        pe: f64,
+        omega: f64,
+        fill: impl Fn(f64) -> f64,
+    ) -> f64 {
         let w_fwd = forward_weight(omega);
         // A saturated blend (|ω| ≳ 19 ω_b, most of a run) weighs one direction by exactly 1
         // and the other by exactly 0, so the sum below is that direction's torque as it
         // stands (up to the sign of a zero): the other direction is not formed.
         if w_fwd == 1.0 {
-            return self
-                .cycle
-                .torque_one_way(self.filling_pressure(p1, pe, omega), p2, pe);
+            return self.cycle.torque_one_way(fill(p1), p2, pe);
         }
         if w_fwd == 0.0 {
-            return -self
-                .cycle
-                .torque_one_way(self.filling_pressure(p2, pe, omega), p1, pe);
+            return -self.cycle.torque_one_way(fill(p2), p1, pe);
         }
-        let fill_fwd = self.filling_pressure(p1, pe, omega);
-        let fill_rev = self.filling_pressure(p2, pe, omega);
+        let fill_fwd = fill(p1);
+        let fill_rev = fill(p2);
         let t_fwd = self.cycle.torque_one_way(fill_fwd, p2, pe);
         let t_rev = -self.cycle.torque_one_way(fill_rev, p1, pe);
         w_fwd * t_fwd + (1.0 - w_fwd) * t_rev
@@ -535,12 +548,14 @@ impl Motor {
         let leak_2e = n.leak_2e.flow(p2, pe);
         let leak_12 = n.leak_12.flow(p1, p2);
         let p_in = if omega >= 0.0 { p1 } else { p2 };
-        let torque_ideal = self.ideal_torque(p1, p2, pe, omega);
+        let torque_ideal = self.blended_torque(p1, p2, pe, omega, |p_inlet| p_inlet);
         let d = displacement_flows(&self.cycle, omega, p_in, pe, 0.0);
         let dm1 = port1 - leak_1e - leak_12 + d.into_1_kg_s;
         let dm2 = leak_12 - port2 - leak_2e + d.into_2_kg_s;
         let dme = leak_1e + leak_2e - exhaust + d.into_e_kg_s;
-        let friction = self.friction_torque(omega, p_in, pe);
+        // friction_torque's base parts (dry T_c, wet d·ω) in its order of operations.
+        let friction =
+            p.t_coulomb() * crate::numerics::scalar::tanh(omega / p.w_reg()) + p.visc() * omega;
         let [s1, s2, se] = self.rt_over_vol;
         [
             s1 * dm1,
