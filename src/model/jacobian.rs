@@ -25,8 +25,7 @@ use crate::model::motor::ThrottleSide::{self, AtA, AtB};
 use crate::model::motor::{idx, Balance, Boundary, Load, Motor, State, N_STATES};
 use crate::model::nozzle::{series_flow, Nozzle};
 use crate::model::thermo::{displacement_flows, Cycle, DisplacementFlows};
-use crate::units::constants::{OMEGA_BLEND_RAD_S, RT0};
-use std::f64::consts::PI;
+use crate::units::constants::OMEGA_BLEND_RAD_S;
 
 /// A Jacobian ∂f/∂x, row-major: `j[i][k] = ∂f_i/∂x_k`.
 pub type Jacobian = [State; N_STATES];
@@ -165,7 +164,7 @@ fn displacement_with_slopes(cycle: &Cycle, x: &State) -> (DisplacementFlows, Sta
     let forward = omega >= 0.0;
     let p_fill = if forward { p1 } else { p2 };
     let flows = displacement_flows(cycle, omega, p_fill, pe, 0.0);
-    let k = cycle.v_disp_m3() / (2.0 * PI * RT0);
+    let k = cycle.displacement_k();
     let (speed, sign) = (omega.abs(), if forward { 1.0 } else { -1.0 });
     let mut d_in = [0.0; N_STATES];
     if p_fill * speed * k >= 0.0 {
@@ -196,11 +195,7 @@ fn ideal_torque_with_slopes(cycle: &Cycle, x: &State) -> (f64, State) {
     let t_fwd = cycle.torque_one_way(p1, p2, pe);
     let t_rev = -cycle.torque_one_way(p2, p1, pe);
     let torque = w * t_fwd + (1.0 - w) * t_rev;
-    let (a, b, e) = (
-        cycle.torque_one_way(1.0, 0.0, 0.0),
-        cycle.torque_one_way(0.0, 1.0, 0.0),
-        cycle.torque_one_way(0.0, 0.0, 1.0),
-    );
+    let [a, b, e] = cycle.unit_torques();
     let dw = 0.5 * (1.0 - th * th) / OMEGA_BLEND_RAD_S;
     let grad = [
         w * a - (1.0 - w) * b,
@@ -256,12 +251,8 @@ impl Motor {
         let (mut b, mut g, inputs) = self.flows_with_slopes(x, bc);
         self.torques_with_slopes(x, bc, &mut b, &mut g);
         let p = &self.params;
-        let scale = [
-            RT0 / p.vol1(),
-            RT0 / p.vol2(),
-            RT0 / p.vole(),
-            1.0 / p.inertia(),
-        ];
+        let [s1, s2, se] = self.rt_over_vol();
+        let scale = [s1, s2, se, 1.0 / p.inertia()];
         for (row, s) in g.iter_mut().zip(scale) {
             row.iter_mut().for_each(|v| *v *= s);
         }
@@ -305,10 +296,11 @@ impl Motor {
     /// ∂(dx/dt)/∂t from the port flows' slopes in the moving inputs (see
     /// [`Motor::time_slope`]).
     fn time_slope_from(&self, [d_supply, d_ln_c]: &[f64; 2], rate: &BoundaryRate) -> State {
-        let p = &self.params;
+        let [s1, s2, _] = self.rt_over_vol();
         let mut f_t = [0.0; N_STATES];
-        f_t[idx::P1] = RT0 / p.vol1() * d_supply * rate.p_port1_pa_s;
-        f_t[idx::P2] = -RT0 / p.vol2() * d_ln_c * rate.ln_c_port2_per_s;
+        // −(R·T0/V_2) is exactly (−R·T0)/V_2: negation commutes with rounding.
+        f_t[idx::P1] = s1 * d_supply * rate.p_port1_pa_s;
+        f_t[idx::P2] = -s2 * d_ln_c * rate.ln_c_port2_per_s;
         f_t
     }
 

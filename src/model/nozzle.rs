@@ -27,18 +27,74 @@ pub struct Nozzle {
 /// Flow function ψ(r) for 0 ≤ r ≤ 1: continuous, monotone non-increasing, ψ(1) = 0,
 /// with finite slope everywhere (the laminar branch removes the infinite slope at r = 1).
 pub fn psi(r: f64, b_crit: f64) -> f64 {
+    psi_given(r, b_crit, 1.0 - b_crit)
+}
+
+/// [`psi`] with 1 − b given (formed once per nozzle by [`PreparedNozzle`]).
+#[inline]
+fn psi_given(r: f64, b_crit: f64, one_minus_b: f64) -> f64 {
     if r <= b_crit {
         1.0
     } else if r <= R_LAMINAR {
-        subsonic(r, b_crit)
+        subsonic_given(r, b_crit, one_minus_b)
     } else {
-        subsonic(R_LAMINAR, b_crit) * ((1.0 - r) / (1.0 - R_LAMINAR)).max(0.0)
+        subsonic_given(R_LAMINAR, b_crit, one_minus_b) * ((1.0 - r) / (1.0 - R_LAMINAR)).max(0.0)
     }
 }
 
 fn subsonic(r: f64, b_crit: f64) -> f64 {
-    let x = (r - b_crit) / (1.0 - b_crit);
+    subsonic_given(r, b_crit, 1.0 - b_crit)
+}
+
+#[inline]
+fn subsonic_given(r: f64, b_crit: f64, one_minus_b: f64) -> f64 {
+    let x = (r - b_crit) / one_minus_b;
     (1.0 - x * x).max(0.0).sqrt()
+}
+
+/// A nozzle with C·ρ0 (kg/(s·Pa)) and 1 − b formed once, for the motor's own nozzles, whose
+/// flows the right-hand side evaluates thousands of times per simulation with the same
+/// parameters. [`PreparedNozzle::flow`] is [`Nozzle::flow`] (which builds one per call):
+/// the same operations on the same values, so the same bits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PreparedNozzle {
+    /// C·ρ0, kg/(s·Pa).
+    k: f64,
+    /// Critical ratio b, 1.
+    b_crit: f64,
+    /// 1 − b.
+    one_minus_b: f64,
+}
+
+impl PreparedNozzle {
+    /// The nozzle `n` prepared.
+    #[inline]
+    pub(crate) fn new(n: &Nozzle) -> Self {
+        Self {
+            k: n.c_m3_s_pa * RHO0_KG_M3,
+            b_crit: n.b_crit,
+            one_minus_b: 1.0 - n.b_crit,
+        }
+    }
+
+    /// Mass flow from the port at `p_a` to the port at `p_b`, kg/s (negative when
+    /// p_b > p_a): ṁ = C·ρ0·p_u·ψ(p_d/p_u).
+    #[inline]
+    pub(crate) fn flow(&self, p_a: f64, p_b: f64) -> f64 {
+        if p_a >= p_b {
+            self.forward(p_a, p_b)
+        } else {
+            -self.forward(p_b, p_a)
+        }
+    }
+
+    #[inline]
+    fn forward(&self, p_u: f64, p_d: f64) -> f64 {
+        if p_u <= 0.0 {
+            return 0.0;
+        }
+        self.k * p_u * psi_given(p_d / p_u, self.b_crit, self.one_minus_b)
+    }
 }
 
 impl Nozzle {
@@ -49,18 +105,7 @@ impl Nozzle {
 
     /// Mass flow from the port at `p_a` to the port at `p_b`, kg/s (negative when p_b > p_a).
     pub fn flow(&self, p_a: f64, p_b: f64) -> f64 {
-        if p_a >= p_b {
-            self.forward(p_a, p_b)
-        } else {
-            -self.forward(p_b, p_a)
-        }
-    }
-
-    fn forward(&self, p_u: f64, p_d: f64) -> f64 {
-        if p_u <= 0.0 {
-            return 0.0;
-        }
-        self.c_m3_s_pa * RHO0_KG_M3 * p_u * psi(p_d / p_u, self.b_crit)
+        PreparedNozzle::new(self).flow(p_a, p_b)
     }
 }
 

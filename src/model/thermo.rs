@@ -25,6 +25,16 @@ pub struct Cycle {
     /// right-hand side evaluates the work many thousand times per simulation.
     expansion_m3: f64,
     compression_m3: f64,
+    /// V_fill − V_d, m³, computed once (the displacement term of every [`Cycle::work`]).
+    swept_m3: f64,
+    /// k = V_disp/(2π·R·T0) of the displacement flows (eqs. 16–17), kg/(s·Pa·rad/s),
+    /// computed once: the right-hand side and the linearisation divided by 2π·R·T0 on
+    /// every call for a value the parameters fix.
+    displacement_k: f64,
+    /// The cycle torque at the unit pressures (1, 0, 0), (0, 1, 0) and (0, 0, 1): its
+    /// gradient, the torque being linear and homogeneous in its three pressures; computed
+    /// once for every linearisation.
+    unit_torques: [f64; 3],
 }
 
 /// `(ε^(n−1) − 1)/(n−1)`, continuous through n = 1 where it equals ln ε.
@@ -54,7 +64,7 @@ fn expansion_factor(eps: f64, n_poly: f64) -> f64 {
 impl Cycle {
     /// A cycle from its volumes, m³, expansion ratio and polytropic index.
     pub fn new(vanes: f64, v_fill_m3: f64, v_dead_m3: f64, eps: f64, n_poly: f64) -> Self {
-        Self {
+        let mut cycle = Self {
             vanes,
             v_fill_m3,
             v_dead_m3,
@@ -62,7 +72,30 @@ impl Cycle {
             n_poly,
             expansion_m3: v_fill_m3 * expansion_factor(eps, n_poly),
             compression_m3: eps * v_fill_m3 * compression_factor(eps, n_poly),
-        }
+            swept_m3: v_fill_m3 - v_dead_m3,
+            displacement_k: 0.0,
+            unit_torques: [0.0; 3],
+        };
+        // The same expressions as on every call before they were cached, so the same bits.
+        cycle.displacement_k = cycle.v_disp_m3() / (2.0 * PI * RT0);
+        cycle.unit_torques = [
+            cycle.torque_one_way(1.0, 0.0, 0.0),
+            cycle.torque_one_way(0.0, 1.0, 0.0),
+            cycle.torque_one_way(0.0, 0.0, 1.0),
+        ];
+        cycle
+    }
+
+    /// k = V_disp/(2π·R·T0), the displacement mass flow per pascal of pressure and rad/s of
+    /// speed, kg/(s·Pa·rad/s) (eqs. 16–17), as computed once by [`Cycle::new`].
+    pub(crate) fn displacement_k(&self) -> f64 {
+        self.displacement_k
+    }
+
+    /// ∂T/∂(p_fill, p_dis, p_e) of [`Cycle::torque_one_way`], N·m/Pa: its value at the
+    /// unit pressures, as computed once by [`Cycle::new`].
+    pub(crate) fn unit_torques(&self) -> [f64; 3] {
+        self.unit_torques
     }
 
     /// Expanded volume V_exp = ε·V_fill, m³.
@@ -86,7 +119,7 @@ impl Cycle {
     ///
     /// `p_a`: filling pressure, `p_b`: discharge pressure, `p_e`: exhaust pressure, all Pa.
     pub fn work(&self, p_a: f64, p_b: f64, p_e: f64) -> f64 {
-        let displacement = (p_a - p_b) * (self.v_fill_m3 - self.v_dead_m3);
+        let displacement = (p_a - p_b) * self.swept_m3;
         displacement + p_a * self.expansion_m3 - p_e * self.compression_m3
     }
 
@@ -134,7 +167,7 @@ pub(crate) fn displacement_flows(
     p_e: f64,
     carry_kg_s: f64,
 ) -> DisplacementFlows {
-    let k = cycle.v_disp_m3() / (2.0 * PI * RT0);
+    let k = cycle.displacement_k();
     let speed = omega.abs();
     let from_inlet = (p_fill * speed * k - carry_kg_s).max(0.0);
     let to_outlet = (p_e * speed * cycle.eps * k - carry_kg_s).max(0.0);

@@ -15,16 +15,33 @@
 /// knots make the integrator follow wiggles that are not in the applied input).
 const MAX_KNOTS: usize = 16;
 
+/// One segment of a [`Schedule`]: the cubic v + τ·(slope + τ·(c2 + τ·c3)) in τ = time − t
+/// from its left knot.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Piece {
+    /// The left knot's time, s.
+    t: f64,
+    /// The value at the left knot.
+    v: f64,
+    /// The slope at the left knot, per second.
+    slope: f64,
+    /// The coefficients of τ² and τ³.
+    c2: f64,
+    c3: f64,
+}
+
 /// A C¹ monotone-cubic function of time.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Schedule {
     t: Vec<f64>,
     v: Vec<f64>,
     slope: Vec<f64>,
-    /// Per segment k, the cubic in τ = time − t_k: v_k + τ·(s_k + τ·(c2_k + τ·c3_k)), stored
-    /// as [c2, c3]. Computed once: the integrator asks for the input at every evaluation of
-    /// the right-hand side, and Horner's form there is a handful of multiply-adds.
-    cubic: Vec<[f64; 2]>,
+    /// Per segment k, the cubic in τ = time − t_k: v_k + τ·(s_k + τ·(c2_k + τ·c3_k)).
+    /// Computed once: the integrator asks for the input at every evaluation of the
+    /// right-hand side, and Horner's form there is a handful of multiply-adds. Each segment's
+    /// five numbers sit together (one bounds check and one cache line per lookup instead of
+    /// four of each: the lookups were ~5 % of an evaluation's instructions).
+    pieces: Vec<Piece>,
     /// Knots per second, (n − 1)/(t_last − t_first): bin means of evenly sampled rows are
     /// nearly evenly spaced, so the segment of a time is found from this guess in a step
     /// or two instead of a binary search (the integrator asks at every right-hand side).
@@ -50,16 +67,19 @@ impl Schedule {
     /// The monotone cubic through the given knots (times increasing).
     pub fn through(t: Vec<f64>, v: Vec<f64>) -> Self {
         let slope = pchip_slopes(&t, &v);
-        let cubic = (1..t.len())
+        let pieces = (1..t.len())
             .map(|k| {
                 // Hermite cubic through (t, v, slope) at both ends, in powers of τ.
                 let h = t[k] - t[k - 1];
                 let secant = (v[k] - v[k - 1]) / h;
                 let (s0, s1) = (slope[k - 1], slope[k]);
-                [
-                    (3.0 * secant - 2.0 * s0 - s1) / h,
-                    (s0 + s1 - 2.0 * secant) / (h * h),
-                ]
+                Piece {
+                    t: t[k - 1],
+                    v: v[k - 1],
+                    slope: s0,
+                    c2: (3.0 * secant - 2.0 * s0 - s1) / h,
+                    c3: (s0 + s1 - 2.0 * secant) / (h * h),
+                }
             })
             .collect();
         let n = t.len();
@@ -72,7 +92,7 @@ impl Schedule {
             t,
             v,
             slope,
-            cubic,
+            pieces,
             knots_per_s,
         }
     }
@@ -94,10 +114,15 @@ impl Schedule {
         if time >= self.t[n - 1] {
             return self.v[n - 1] + self.slope[n - 1] * (time - self.t[n - 1]);
         }
-        let k = self.segment(time);
-        let tau = time - self.t[k];
-        let [c2, c3] = self.cubic[k];
-        self.v[k] + tau * (self.slope[k] + tau * (c2 + tau * c3))
+        let Piece {
+            t,
+            v,
+            slope,
+            c2,
+            c3,
+        } = self.pieces[self.segment(time)];
+        let tau = time - t;
+        v + tau * (slope + tau * (c2 + tau * c3))
     }
 
     /// Time derivative at `time`, per second: the cubic's slope inside the knots, the end
@@ -113,10 +138,11 @@ impl Schedule {
         if time >= self.t[n - 1] {
             return self.slope[n - 1];
         }
-        let k = self.segment(time);
-        let tau = time - self.t[k];
-        let [c2, c3] = self.cubic[k];
-        self.slope[k] + tau * (2.0 * c2 + tau * 3.0 * c3)
+        let Piece {
+            t, slope, c2, c3, ..
+        } = self.pieces[self.segment(time)];
+        let tau = time - t;
+        slope + tau * (2.0 * c2 + tau * 3.0 * c3)
     }
 
     /// The last knot k with t_k ≤ `time`, for t_0 < time < t_last: a guess from the mean
