@@ -19,8 +19,10 @@ pub(crate) struct Lu {
 impl Lu {
     /// Factors `a`; `None` when a pivot is zero or not finite (a singular step matrix).
     /// Plain index loops over the fixed size, so that the compiler unrolls them
-    /// (with iterator adapters one factorisation took ~700 instructions).
-    #[inline]
+    /// (with iterator adapters one factorisation took ~700 instructions). Always inlined:
+    /// with vanefit compiled as one unit (Cargo.toml, [profile.release]), LLVM left it a
+    /// call in Rodas4's step (+35 k instructions per evaluation).
+    #[inline(always)]
     // Index loops on purpose: the pivot row and the row it updates are rows of one array.
     #[allow(clippy::needless_range_loop)]
     pub fn new(mut a: [State; N_STATES]) -> Option<Self> {

@@ -212,9 +212,13 @@ impl Linearisation {
 /// One Rodas4 step of size h from (t, y) with the linearisation `lin` at that point.
 /// `None` when the step matrix I/(γh) − J is singular.
 pub fn step(rhs: &Rhs<'_>, t: f64, y: &State, lin: &Linearisation, h: f64) -> Option<Step> {
-    let w: [State; N_STATES] = std::array::from_fn(|i| {
-        std::array::from_fn(|j| f64::from(u8::from(i == j)) / (GAMMA * h) - lin.jac[i][j])
-    });
+    // Index loops, not nested `array::from_fn`: compiled as one unit, LLVM left that a call.
+    let mut w = [[0.0; N_STATES]; N_STATES];
+    for (i, row) in w.iter_mut().enumerate() {
+        for (j, wij) in row.iter_mut().enumerate() {
+            *wij = f64::from(u8::from(i == j)) / (GAMMA * h) - lin.jac[i][j];
+        }
+    }
     let lu = Lu::new(w)?;
     let inv_h = 1.0 / h;
     let mut k = [[0.0; N_STATES]; 6];
