@@ -164,7 +164,9 @@ impl Balance {
 /// A motor model: checked parameters plus the effects switched on.
 #[derive(Debug, Clone)]
 pub struct Motor {
-    /// Checked parameters, SI.
+    /// Checked parameters, SI. Read them, don't assign them: [`Motor::new`] derives the
+    /// cycle, the volumes' R·T0/V and the prepared nozzles from them once, so a motor with
+    /// other parameters is a new `Motor` (an assignment here would leave those stale).
     pub params: MotorParams,
     /// The catalog effects switched on.
     pub effects: EffectSet,
