@@ -299,6 +299,7 @@ impl Motor {
     }
 
     /// All friction torques at speed ω, N·m (base Coulomb + viscous, or the effects).
+    #[inline(always)]
     pub fn friction_torque(&self, omega: f64, p_inlet: f64, p_e: f64) -> f64 {
         let p = &self.params;
         let (dry, wet) = self.friction_parts(omega, p_inlet, p_e);
@@ -317,7 +318,7 @@ impl Motor {
     /// smooth rest, N·m. The base T_c passes through every effect's [`Term::coulomb_nm`]
     /// (`pressure_dependent_friction`), then [`Term::dry_nm`] (`breakaway_friction`); the
     /// viscous d·ω through [`Term::wet_nm`] (`vane_friction_speed_squared`).
-    #[inline]
+    #[inline(always)]
     fn friction_parts(&self, omega: f64, p_inlet: f64, p_e: f64) -> (f64, f64) {
         let p = &self.params;
         let t_base = p.t_coulomb();
@@ -488,17 +489,23 @@ impl Motor {
     /// instructions.)
     #[inline]
     pub fn port_flows(&self, x: &State, bc: &Boundary) -> (f64, f64) {
-        let p = &self.params;
-        // Without a throttle the duct alone, prepared once (what `port_flow` computes).
-        let port1 = match bc.c_port1_m3_s_pa {
-            None => self.nozzles.in1.flow(bc.p_port1_pa, x[idx::P1]),
-            c => self.port_flow(p.c_in1(), c, ThrottleSide::AtA, bc.p_port1_pa, x[idx::P1]),
-        };
-        let port2 = match bc.c_port2_m3_s_pa {
-            None => self.nozzles.out2.flow(x[idx::P2], bc.p_port2_pa),
-            c => self.port_flow(p.c_out2(), c, ThrottleSide::AtB, x[idx::P2], bc.p_port2_pa),
-        };
-        (port1, port2)
+        let n = &self.nozzles;
+        (
+            self.flow_through(
+                &n.in1,
+                bc.c_port1_m3_s_pa,
+                ThrottleSide::AtA,
+                bc.p_port1_pa,
+                x[idx::P1],
+            ),
+            self.flow_through(
+                &n.out2,
+                bc.c_port2_m3_s_pa,
+                ThrottleSide::AtB,
+                x[idx::P2],
+                bc.p_port2_pa,
+            ),
+        )
     }
 
     /// Flow through a port's duct (conductance `c_duct`, m³/(s·Pa)) with an optional
@@ -518,11 +525,29 @@ impl Motor {
         p_a: f64,
         p_b: f64,
     ) -> f64 {
-        let duct = self.nozzle(c_duct);
+        let duct = PreparedNozzle::new(&self.nozzle(c_duct));
+        self.flow_through(&duct, c_throttle, side, p_a, p_b)
+    }
+
+    /// [`Motor::port_flow`] through a prepared duct (the motor's own ports: prepared once
+    /// by [`Motor::new`]).
+    #[inline(always)]
+    fn flow_through(
+        &self,
+        duct: &PreparedNozzle,
+        c_throttle: Option<f64>,
+        side: ThrottleSide,
+        p_a: f64,
+        p_b: f64,
+    ) -> f64 {
         match (c_throttle, side) {
             (None, _) => duct.flow(p_a, p_b),
-            (Some(c), ThrottleSide::AtA) => series_flow(&self.nozzle(c), &duct, p_a, p_b).0,
-            (Some(c), ThrottleSide::AtB) => series_flow(&duct, &self.nozzle(c), p_a, p_b).0,
+            (Some(c), ThrottleSide::AtA) => {
+                series_flow(&self.nozzle(c), &duct.nozzle(), p_a, p_b).0
+            }
+            (Some(c), ThrottleSide::AtB) => {
+                series_flow(&duct.nozzle(), &self.nozzle(c), p_a, p_b).0
+            }
         }
     }
 
@@ -558,9 +583,7 @@ impl Motor {
         let dm1 = port1 - leak_1e - leak_12 + d.into_1_kg_s;
         let dm2 = leak_12 - port2 - leak_2e + d.into_2_kg_s;
         let dme = leak_1e + leak_2e - exhaust + d.into_e_kg_s;
-        // friction_torque's base parts (dry T_c, wet d·ω) in its order of operations.
-        let friction =
-            p.t_coulomb() * crate::numerics::scalar::tanh(omega / p.w_reg()) + p.visc() * omega;
+        let friction = self.friction_torque(omega, p_in, pe);
         let [s1, s2, se] = self.rt_over_vol;
         [
             s1 * dm1,

@@ -58,6 +58,8 @@ fn subsonic_given(r: f64, b_crit: f64, one_minus_b: f64) -> f64 {
 /// the same operations on the same values, so the same bits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct PreparedNozzle {
+    /// The nozzle as given (for the series flow, which reads C and b).
+    nozzle: Nozzle,
     /// C·ρ0, kg/(s·Pa).
     k: f64,
     /// Critical ratio b, 1.
@@ -71,10 +73,17 @@ impl PreparedNozzle {
     #[inline]
     pub(crate) fn new(n: &Nozzle) -> Self {
         Self {
+            nozzle: *n,
             k: n.c_m3_s_pa * RHO0_KG_M3,
             b_crit: n.b_crit,
             one_minus_b: 1.0 - n.b_crit,
         }
+    }
+
+    /// The nozzle as given.
+    #[inline]
+    pub(crate) fn nozzle(&self) -> Nozzle {
+        self.nozzle
     }
 
     /// Mass flow from the port at `p_a` to the port at `p_b`, kg/s (negative when
