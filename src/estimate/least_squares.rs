@@ -24,7 +24,8 @@ const H: f64 = 1e-3;
 /// When Levenberg–Marquardt stops.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct LmSettings {
-    /// Most iterations (each costs k + 1 residual evaluations, plus refused steps).
+    /// Most iterations (each costs the residual evaluation of its trial step, plus k for the
+    /// Jacobian at a new point after an accepted one).
     pub max_iters: usize,
     /// Stop when an accepted step lowers χ² by less than this plus `rel_tol`·χ².
     pub tol: f64,
@@ -98,13 +99,23 @@ pub(crate) fn levenberg_marquardt_run(
     x0: &[f64],
     settings: LmSettings,
 ) -> LmOutcome {
-    let Some(mut r) = f(x0) else {
+    let Some(r0) = f(x0) else {
         return LmOutcome {
             x: x0.to_vec(),
             chi2: f64::INFINITY,
             converged: false,
         };
     };
+    levenberg_marquardt_from(f, x0, r0, settings)
+}
+
+/// [`levenberg_marquardt_run`] from `x0` whose residuals `r0 = f(x0)` the caller has.
+fn levenberg_marquardt_from(
+    f: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
+    x0: &[f64],
+    mut r: Vec<f64>,
+    settings: LmSettings,
+) -> LmOutcome {
     let mut x = x0.to_vec();
     let mut c = chi2(&r);
     if x.is_empty() {
@@ -116,16 +127,24 @@ pub(crate) fn levenberg_marquardt_run(
     }
     let mut converged = false;
     let (mut mu, mut nu): (Option<f64>, f64) = (None, 2.0);
+    // J, JᵀJ and Jᵀr at x. A refused step leaves x, so they are kept and only μ grows: a
+    // refusal costs one simulation instead of k + 1 (the same J, formed again from the same
+    // points, would be the same bit for bit).
+    let mut at_x: Option<(DMatrix<f64>, DMatrix<f64>, DVector<f64>)> = None;
     for _ in 0..settings.max_iters {
-        let Some(j) = jacobian(f, &x, &r) else { break };
-        let jtj = j.transpose() * &j;
-        let g = j.transpose() * DVector::from_column_slice(&r);
+        if at_x.is_none() {
+            let Some(j) = jacobian(f, &x, &r) else { break };
+            let jtj = j.transpose() * &j;
+            let g = j.transpose() * DVector::from_column_slice(&r);
+            at_x = Some((j, jtj, g));
+        }
+        let Some((j, jtj, g)) = &at_x else { break };
         let m = *mu.get_or_insert(1e-3);
         let mut a = jtj.clone();
         for i in 0..x.len() {
             a[(i, i)] += m * jtj[(i, i)].max(1e-12);
         }
-        let Some(mut delta) = a.lu().solve(&(-&g)) else {
+        let Some(mut delta) = a.lu().solve(&(-g)) else {
             break;
         };
         let longest = delta.amax();
@@ -133,7 +152,7 @@ pub(crate) fn levenberg_marquardt_run(
             delta *= settings.max_step / longest;
         }
         let trial: Vec<f64> = x.iter().zip(delta.iter()).map(|(a, b)| a + b).collect();
-        let predicted = -(delta.dot(&g) * 2.0 + (&j * &delta).norm_squared());
+        let predicted = -(delta.dot(g) * 2.0 + (j * &delta).norm_squared());
         let tol = settings.tol + settings.rel_tol * c;
         if predicted < tol {
             // The linear model sees no gain worth a simulation: converged.
@@ -147,6 +166,7 @@ pub(crate) fn levenberg_marquardt_run(
                 nu = 2.0;
                 let gain = c - ct;
                 (x, r, c) = (trial, rt, ct);
+                at_x = None;
                 if gain < tol {
                     converged = true;
                     break;
@@ -172,9 +192,11 @@ pub(crate) fn polish_residuals<C: Coordinates + ?Sized>(
     problem: &Problem<'_, C>,
     x: &[f64],
 ) -> Option<(Vec<f64>, f64)> {
-    let start: f64 = problem.residuals(x)?.iter().map(|v| v * v).sum();
+    let r0 = problem.residuals(x)?;
+    let start = chi2(&r0);
     let residuals = |t: &[f64]| problem.residuals(t);
-    let (polished, chi2) = levenberg_marquardt(&residuals, x, LmSettings::default());
+    let polished = levenberg_marquardt_from(&residuals, x, r0, LmSettings::default());
+    let (polished, chi2) = (polished.x, polished.chi2);
     Some(if chi2 < start {
         (polished, chi2)
     } else {
