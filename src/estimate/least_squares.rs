@@ -229,6 +229,36 @@ mod tests {
         );
     }
 
+    /// A refused step leaves x, so its Jacobian is not formed again: no point is simulated
+    /// twice. The residuals fail (a failed simulation) beyond x₀ = 0.5, where the nearly
+    /// Gauss–Newton steps towards the minimum at (2, 2) land, so steps are refused until μ
+    /// has grown enough.
+    #[test]
+    fn a_refused_step_costs_only_its_trial() {
+        let seen = std::cell::RefCell::new(Vec::<Vec<f64>>::new());
+        let refused = std::cell::Cell::new(0);
+        let f = |p: &[f64]| {
+            seen.borrow_mut().push(p.to_vec());
+            if p[0] > 0.5 {
+                refused.set(refused.get() + 1);
+                return None;
+            }
+            Some(vec![p[0] - 2.0, 3.0 * (p[1] - 2.0)])
+        };
+        let out = levenberg_marquardt_run(&f, &[0.0, 0.0], LmSettings::default());
+        assert!(refused.get() >= 2, "{} refusals", refused.get());
+        // It went down towards the minimum from χ² = 40, never into the failing region.
+        assert!(out.x[0] <= 0.5 && out.chi2 < 40.0, "{out:?}");
+        let points = seen.into_inner();
+        for (i, p) in points.iter().enumerate() {
+            assert!(
+                !points[..i].contains(p),
+                "{p:?} simulated again (call {i} of {})",
+                points.len()
+            );
+        }
+    }
+
     /// A linear least-squares problem is solved in one or two steps to its closed form.
     #[test]
     fn linear_fit_matches_the_normal_equations() {
