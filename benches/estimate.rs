@@ -26,7 +26,10 @@ use vanefit::numerics::{DiffsolBdf, StiffSolver};
 use vanefit::objective::{CostModel, CostOptions};
 
 fn bench(c: &mut Criterion) {
-    let ds = Dataset::load(Path::new("measurements/ar034-synthetic")).unwrap();
+    let ds = Dataset::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../measurements/ar034-synthetic"),
+    )
+    .unwrap();
     let cost = CostModel::new(&ds, CostOptions::default()).unwrap();
     let motor = Motor::default_motor();
     let solvers: [(&str, Box<dyn StiffSolver>); 2] = [
