@@ -196,9 +196,8 @@ pub(crate) fn polish_residuals<C: Coordinates + ?Sized>(
     let start = chi2(&r0);
     let residuals = |t: &[f64]| problem.residuals(t);
     let polished = levenberg_marquardt_from(&residuals, x, r0, LmSettings::default());
-    let (polished, chi2) = (polished.x, polished.chi2);
-    Some(if chi2 < start {
-        (polished, chi2)
+    Some(if polished.chi2 < start {
+        (polished.x, polished.chi2)
     } else {
         (x.to_vec(), start)
     })
