@@ -366,8 +366,13 @@ impl PyLikelihood {
                 Ok(r)
             })
             .map_err(likelihood_err)?;
-        let bytes: Vec<u8> = r.iter().flat_map(|v| v.to_le_bytes()).collect();
-        Ok(PyByteArray::new(py, &bytes))
+        // Written straight into the bytearray (no byte vector in between).
+        PyByteArray::new_with(py, 8 * r.len(), |bytes| {
+            for (chunk, v) in bytes.chunks_exact_mut(8).zip(&r) {
+                chunk.copy_from_slice(&v.to_le_bytes());
+            }
+            Ok(())
+        })
     }
 
     /// χ² at `x` for an optimizer: always finite (a large penalty where `x` is invalid or

@@ -542,12 +542,8 @@ impl Motor {
     ) -> f64 {
         match (c_throttle, side) {
             (None, _) => duct.flow(p_a, p_b),
-            (Some(c), ThrottleSide::AtA) => {
-                series_flow(&self.nozzle(c), &duct.nozzle(), p_a, p_b).0
-            }
-            (Some(c), ThrottleSide::AtB) => {
-                series_flow(&duct.nozzle(), &self.nozzle(c), p_a, p_b).0
-            }
+            (Some(c), ThrottleSide::AtA) => series_flow(&self.nozzle(c), duct.nozzle(), p_a, p_b).0,
+            (Some(c), ThrottleSide::AtB) => series_flow(duct.nozzle(), &self.nozzle(c), p_a, p_b).0,
         }
     }
 

@@ -58,12 +58,10 @@ fn subsonic_given(r: f64, b_crit: f64, one_minus_b: f64) -> f64 {
 /// the same operations on the same values, so the same bits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct PreparedNozzle {
-    /// The nozzle as given (for the series flow, which reads C and b).
+    /// The nozzle as given: C and b (the series flow reads them).
     nozzle: Nozzle,
     /// C·ρ0, kg/(s·Pa).
     k: f64,
-    /// Critical ratio b, 1.
-    b_crit: f64,
     /// 1 − b.
     one_minus_b: f64,
 }
@@ -75,15 +73,14 @@ impl PreparedNozzle {
         Self {
             nozzle: *n,
             k: n.c_m3_s_pa * RHO0_KG_M3,
-            b_crit: n.b_crit,
             one_minus_b: 1.0 - n.b_crit,
         }
     }
 
     /// The nozzle as given.
     #[inline]
-    pub(crate) fn nozzle(&self) -> Nozzle {
-        self.nozzle
+    pub(crate) fn nozzle(&self) -> &Nozzle {
+        &self.nozzle
     }
 
     /// Mass flow from the port at `p_a` to the port at `p_b`, kg/s (negative when
@@ -102,7 +99,7 @@ impl PreparedNozzle {
         if p_u <= 0.0 {
             return 0.0;
         }
-        self.k * p_u * psi_given(p_d / p_u, self.b_crit, self.one_minus_b)
+        self.k * p_u * psi_given(p_d / p_u, self.nozzle.b_crit, self.one_minus_b)
     }
 }
 
