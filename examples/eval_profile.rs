@@ -6,8 +6,8 @@
 mod support;
 
 use vanefit::model::Motor;
+use vanefit::numerics::Rodas4;
 use vanefit::numerics::{DiffsolBdf, QuasiSteady, StiffSolver, Tolerances};
-use vanefit::numerics::{Rodas4, Rodas5P};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (n, _, cost) = support::shipped(200)?;
@@ -26,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         tol
     });
-    let solvers: [(&str, Box<dyn StiffSolver>); 4] = [
+    let solvers: [(&str, Box<dyn StiffSolver>); 3] = [
         (
             "bdf",
             Box::new(given.map_or_else(DiffsolBdf::default, |tol| DiffsolBdf { tol })),
@@ -36,10 +36,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Box::new(given.map_or_else(Rodas4::default, |tol| Rodas4 { tol })),
         ),
         ("quasi_steady", Box::new(QuasiSteady::default())),
-        (
-            "rodas5p",
-            Box::new(given.map_or_else(Rodas5P::default, |tol| Rodas5P { tol })),
-        ),
     ];
     let only = std::env::var("SOLVER").ok();
     for (name, solver) in &solvers {

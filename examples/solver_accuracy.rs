@@ -17,8 +17,8 @@ mod support;
 use vanefit::model::EffectSet;
 use vanefit::model::Motor;
 use vanefit::model::MotorParams;
+use vanefit::numerics::Rodas4;
 use vanefit::numerics::{DiffsolBdf, StiffSolver, Tolerances};
-use vanefit::numerics::{Rodas4, Rodas5P};
 use vanefit::objective::CostModel;
 
 fn outputs(cost: &CostModel, motor: &Motor, solver: &dyn StiffSolver) -> Vec<(f64, Vec<f64>)> {
@@ -104,9 +104,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "solver  rtol,atol_p,atol_w  µs/eval  rhs/eval  max dev (σ)  jitter (cost)  cost  cost − reference"
     );
     let mut cases: Vec<(&str, String, Box<dyn StiffSolver>)> = Vec::new();
-    if std::env::var("R5").is_err() {
-        cases.push(("bdf", "3e-8".into(), Box::new(DiffsolBdf::default())));
-    }
+    cases.push(("bdf", "3e-8".into(), Box::new(DiffsolBdf::default())));
     if std::env::var("GRID").is_err() {
         let tol = Rodas4::default().tol;
         let name = format!("{:.0e},{},{}", tol.rtol, tol.atol[0], tol.atol[3]);
@@ -123,11 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             [v[1], v[1], v[1], v[2]]
         };
         let tol = Tolerances { rtol: v[0], atol };
-        if std::env::var("R5").is_ok() {
-            cases.push(("rodas5p", item.to_string(), Box::new(Rodas5P { tol })));
-        } else {
-            cases.push(("rodas4", item.to_string(), Box::new(Rodas4 { tol })));
-        }
+        cases.push(("rodas4", item.to_string(), Box::new(Rodas4 { tol })));
     }
     for (name, rtol, solver) in &cases {
         let (c, calls, us) = support::count_and_time(&cost, &motor, solver.as_ref(), n);

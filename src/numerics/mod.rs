@@ -5,14 +5,12 @@ pub(crate) mod lu;
 pub(crate) mod normal;
 pub(crate) mod ode;
 pub(crate) mod rodas;
-pub(crate) mod rodas5p;
 pub(crate) mod scalar;
 
 #[cfg(feature = "bdf")]
 pub use ode::DiffsolBdf;
 pub use ode::{Jacobian, Kinks, Rhs, Slopes, SolveError, State, StiffSolver, Tolerances};
 pub use rodas::Rodas4;
-pub use rodas5p::Rodas5P;
 
 /// The stiff solver every simulation uses unless it asks for another: Rodas4 (see
 /// `rodas` for why, and `examples/solver_accuracy.rs` for the measurements behind it).
