@@ -471,7 +471,7 @@ impl Loop {
         let n = (scenario.duration_s / ts).round() as usize;
         let mut tr = Trace::default();
         let (mut x, mut valve, mut integral) = (start.x, start.valve, start.integral_v);
-        let inertia = motor.params.inertia();
+        let inertia = motor.params().inertia();
         for k in 0..=n {
             let t = k as f64 * ts;
             let r = scenario.setpoint_rad_s.at(t);

@@ -41,7 +41,7 @@ impl OperatingPoint {
 /// Lowest speed at which the motor counts as running for linearisation, rad/s:
 /// 50·ω_reg (so that the Coulomb friction is saturated, tanh(50) = 1) and at least 10 rad/s.
 fn min_running_speed_rad_s(motor: &Motor) -> f64 {
-    (50.0 * motor.params.w_reg()).max(10.0)
+    (50.0 * motor.params().w_reg()).max(10.0)
 }
 
 /// Steady state with free speed under `bc`, started from standstill (so that, where several
@@ -102,7 +102,7 @@ impl LinearModel {
         bm.p_port1_pa -= h;
         let (fp, fm) = (f(&op.x, &bp), f(&op.x, &bm));
         let b = Vector4::from_fn(|i, _| (fp[i] - fm[i]) / (2.0 * h));
-        let e = Vector4::new(0.0, 0.0, 0.0, -1.0 / motor.params.inertia());
+        let e = Vector4::new(0.0, 0.0, 0.0, -1.0 / motor.params().inertia());
         let lin = Self { a, b, e, op: *op };
         if let Some(p) = lin.poles().iter().find(|p| p.re >= 0.0 || p.re.is_nan()) {
             return Err(ControlError::Unstable {

@@ -63,7 +63,7 @@ pub struct StartUp {
 /// standing there.
 pub(crate) fn lowest_running_speed_rad_s(motor: &Motor) -> f64 {
     5.0 * motor
-        .params
+        .params()
         .w_reg()
         .max(crate::units::constants::OMEGA_BLEND_RAD_S)
 }
@@ -159,7 +159,7 @@ fn breakaway_pressure(
     p_atm: f64,
     p_max: f64,
 ) -> Result<Option<f64>, ControlError> {
-    let w_st = 5.0 * motor.params.w_reg();
+    let w_st = 5.0 * motor.params().w_reg();
     let mut g = steady::initial_guess(&Boundary::supplied(p_max, p_atm, load));
     increasing_root(p_atm, p_max, &mut |p| {
         let (_, x) = pressures_at(motor, load, p_atm, p, 0.0, &g)?;

@@ -301,7 +301,7 @@ pub fn write_dataset(
     let io = |e: std::io::Error| DataError::new(dir, format!("cannot write: {e}"));
     std::fs::create_dir_all(dir).map_err(io)?;
     let mut rig = String::new();
-    let p = &motor.params;
+    let p = motor.params();
     let _ = writeln!(
         rig,
         "# Synthetic dataset written by vanefit synth. {description}"

@@ -116,7 +116,7 @@ pub(crate) fn write_catalogue(
 ) -> Result<Vec<CatalogueRow>, DataError> {
     let fail = |m: String| DataError::new(dir, m);
     std::fs::create_dir_all(dir).map_err(|e| fail(format!("cannot create: {e}")))?;
-    let p = &motor.params;
+    let p = motor.params();
     let mut rig = format!(
         "synthetic = true\ndescription = \"Catalogue pages made by vanefit synth --catalogue from the simulator ({description}); numbers printed to {} digits.\"\n\n[motor]\nname = \"AR034-11 (synthetic catalogue)\"\nvanes = {}\ndisplacement_m3 = {:e}\nexpansion_ratio = {}\n\n[conditions]\np_atm_pa = {}\n",
         plan.digits,

@@ -215,7 +215,7 @@ pub fn run_job(
         effects: job.effects.clone(),
         extra: found.motor.extra.clone(),
         cost: cost.evaluate(&found.motor, &solver).total,
-        params: found.motor.params,
+        params: found.motor.params().clone(),
         chi2: e.chi2,
         n_points: e.n_points,
         k: found.k,

@@ -267,7 +267,7 @@ pub fn fit(
         .names()
         .into_iter()
         .map(|n| {
-            let v = ml_fit.linearised_at.params.get(&n).unwrap_or(f64::NAN);
+            let v = ml_fit.linearised_at.params().get(&n).unwrap_or(f64::NAN);
             (n, v)
         })
         .collect();
@@ -423,9 +423,9 @@ pub(crate) fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kin
     use crate::units::Quantity;
     let plan = SynthPlan::default();
     let noise = SensorNoise::typical();
-    let value = motor.params.get(name)?;
+    let value = motor.params().get(name)?;
     let changed = Motor::new(
-        motor.params.with(name, value * 1.2).ok()?,
+        motor.params().with(name, value * 1.2).ok()?,
         motor.effects.clone(),
     );
     let w_free = free_speed(motor, plan.p_supply_pa, plan.p_atm_pa).ok()?;

@@ -132,13 +132,15 @@ fn levenberg_marquardt_from(
     // points, would be the same bit for bit).
     let mut at_x: Option<(DMatrix<f64>, DMatrix<f64>, DVector<f64>)> = None;
     for _ in 0..settings.max_iters {
-        if at_x.is_none() {
-            let Some(j) = jacobian(f, &x, &r) else { break };
-            let jtj = j.transpose() * &j;
-            let g = j.transpose() * DVector::from_column_slice(&r);
-            at_x = Some((j, jtj, g));
-        }
-        let Some((j, jtj, g)) = &at_x else { break };
+        let (j, jtj, g) = match at_x {
+            Some(ref kept) => kept,
+            None => {
+                let Some(j) = jacobian(f, &x, &r) else { break };
+                let jtj = j.transpose() * &j;
+                let g = j.transpose() * DVector::from_column_slice(&r);
+                &*at_x.insert((j, jtj, g))
+            }
+        };
         let m = *mu.get_or_insert(1e-3);
         let mut a = jtj.clone();
         for i in 0..x.len() {

@@ -519,7 +519,7 @@ mod tests {
             let bottom = MotorParams::default();
             DEFAULT_ESTIMATED
                 .iter()
-                .map(|n| motor.params.get(n).unwrap().ln() - (2.0 * bottom.get(n).unwrap()).ln())
+                .map(|n| motor.params().get(n).unwrap().ln() - (2.0 * bottom.get(n).unwrap()).ln())
                 .collect()
         }
     }

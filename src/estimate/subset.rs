@@ -41,9 +41,9 @@ fn sensitivities(data: &FitData, motor: &Motor, names: &[String]) -> Option<DMat
     let n = residuals(motor)?.len();
     let mut jac = DMatrix::zeros(n, names.len());
     for (j, name) in names.iter().enumerate() {
-        let v = motor.params.get(name)?;
+        let v = motor.params().get(name)?;
         let at = |f: f64| {
-            let p = motor.params.with(name, v * f).ok()?;
+            let p = motor.params().with(name, v * f).ok()?;
             residuals(&Motor::new(p, motor.effects.clone()))
         };
         let (plus, minus) = (at(LOG_STEP.exp())?, at((-LOG_STEP).exp())?);

@@ -250,7 +250,7 @@ impl Motor {
         }
         let (mut b, mut g, inputs) = self.flows_with_slopes(x, bc);
         self.torques_with_slopes(x, bc, &mut b, &mut g);
-        let p = &self.params;
+        let p = self.params();
         let [s1, s2, se] = self.rt_over_vol();
         let scale = [s1, s2, se, 1.0 / p.inertia()];
         for (row, s) in g.iter_mut().zip(scale) {
@@ -275,7 +275,7 @@ impl Motor {
         if !self.effects.is_empty() || !self.extra.is_empty() {
             return None;
         }
-        let p = &self.params;
+        let p = self.params();
         let (_, d_supply, _, _) = self.port_flow_with_slopes(
             p.c_in1(),
             bc.c_port1_m3_s_pa,
@@ -306,7 +306,7 @@ impl Motor {
 
     /// A nozzle of conductance `c` with the motor's critical ratio (as the motor builds it).
     fn sloped_nozzle(&self, c: f64) -> Nozzle {
-        Nozzle::new(c, self.params.b_crit())
+        Nozzle::new(c, self.params().b_crit())
     }
 
     /// [`Motor::port_flow`] with its slopes (ṁ, ∂ṁ/∂p_a, ∂ṁ/∂p_b, ∂ṁ/∂ln C_throttle; the
@@ -340,7 +340,7 @@ impl Motor {
     /// (∂ṁ_port1/∂p_port1, ∂ṁ_port2/∂ln C_port2).
     fn flows_with_slopes(&self, x: &State, bc: &Boundary) -> (Balance, Jacobian, [f64; 2]) {
         use idx::{P1, P2, PE};
-        let p = &self.params;
+        let p = self.params();
         let [p1, p2, pe, _] = *x;
         let port1 =
             self.port_flow_with_slopes(p.c_in1(), bc.c_port1_m3_s_pa, AtA, bc.p_port1_pa, p1);
@@ -394,7 +394,7 @@ impl Motor {
     /// T − T_f − T_load, N·m per state unit. T_f = T_c·tanh(ω/ω_reg) + d·ω, so
     /// dT_f/dω = T_c·(1 − tanh²(ω/ω_reg))/ω_reg + d.
     fn torques_with_slopes(&self, x: &State, bc: &Boundary, b: &mut Balance, g: &mut Jacobian) {
-        let p = &self.params;
+        let p = self.params();
         let omega = x[idx::OMEGA];
         let (torque, mut grad) = ideal_torque_with_slopes(self.cycle(), x);
         b.torque_ideal_nm = torque;

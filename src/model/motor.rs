@@ -164,10 +164,10 @@ impl Balance {
 /// A motor model: checked parameters plus the effects switched on.
 #[derive(Debug, Clone)]
 pub struct Motor {
-    /// Checked parameters, SI. Read them, don't assign them: [`Motor::new`] derives the
-    /// cycle, the volumes' R·T0/V and the prepared nozzles from them once, so a motor with
-    /// other parameters is a new `Motor` (an assignment here would leave those stale).
-    pub params: MotorParams,
+    /// Checked parameters, SI (read through [`Motor::params`]): private because
+    /// [`Motor::new`] derives the cycle, the volumes' R·T0/V and the prepared nozzles from
+    /// them once, so a motor with other parameters is a new `Motor`.
+    params: MotorParams,
     /// The catalog effects switched on.
     pub effects: EffectSet,
     /// Terms found by `vanefit diagnose` outside the catalog (empty: the model as specified).
@@ -226,6 +226,11 @@ impl Motor {
             rt_over_vol,
             nozzles,
         }
+    }
+
+    /// The checked parameters, SI.
+    pub fn params(&self) -> &MotorParams {
+        &self.params
     }
 
     /// The same motor with discovered terms added to its balances.

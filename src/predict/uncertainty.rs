@@ -463,7 +463,11 @@ mod tests {
     fn variance_shares_are_what_knowing_a_parameter_removes() {
         let f = fit_file();
         let u = ParamUncertainty::of(&f, None);
-        let y = |m: &Motor| Ok(vec![m.params.c_in1().ln() + 2.0 * m.params.c_ext().ln()]);
+        let y = |m: &Motor| {
+            Ok(vec![
+                m.params().c_in1().ln() + 2.0 * m.params().c_ext().ln(),
+            ])
+        };
         let (s1, s2) = (0.02 / Z95, 0.04 / Z95);
         let want = 4.0 * s2 * s2 / (s1 * s1 + 4.0 * s2 * s2);
         let shares = u
@@ -485,7 +489,11 @@ mod tests {
         let f = fit_file();
         let u = ParamUncertainty::of(&f, None);
         // y = ln c_in1 + 2 ln c_ext: exactly linear in the log-parameters.
-        let y = |m: &Motor| Ok(vec![m.params.c_in1().ln() + 2.0 * m.params.c_ext().ln()]);
+        let y = |m: &Motor| {
+            Ok(vec![
+                m.params().c_in1().ln() + 2.0 * m.params().c_ext().ln(),
+            ])
+        };
         let center = y(&u.motor_at(&f, &u.log_values).unwrap()).unwrap();
         let delta = u.delta_bands(&f, &center, &y).unwrap().unwrap()[0];
         let sd = ((0.02f64 / Z95).powi(2) + (2.0 * 0.04 / Z95).powi(2)).sqrt();

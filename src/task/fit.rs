@@ -397,7 +397,7 @@ fn catalogue_estimates(
     }
     let motor = Motor::new(ds.nominal_params()?, EffectSet::empty());
     let prior = if o.priors {
-        Prior::for_motor(&motor.params)
+        Prior::for_motor(motor.params())
     } else {
         Prior::none()
     };
@@ -432,7 +432,7 @@ fn catalogue_estimates(
             name: p.name.clone(),
             relative_sd: p.relative_sd,
             pinned: p.pinned,
-            value: motor.params.get(&p.name).unwrap_or(f64::NAN),
+            value: motor.params().get(&p.name).unwrap_or(f64::NAN),
             pinned_by: most_sensitive_experiment(&motor, &p.name),
             prior_factor: (!p.pinned)
                 .then(|| prior.term(&p.name).map(|t| t.factor95()))

@@ -109,7 +109,7 @@ pub fn synth_motor(
     }
     let extra = fit.map(|f| f.extra.clone()).unwrap_or_default();
     let motor = Motor::new(p, fx.clone()).with_extra(&extra);
-    let mut truth = FitFile::from_params(name, motor.params.clone(), fx);
+    let mut truth = FitFile::from_params(name, motor.params().clone(), fx);
     truth.extra = extra;
     (motor, truth)
 }

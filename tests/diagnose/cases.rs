@@ -265,7 +265,7 @@ pub(crate) fn check(c: &Case, motor: &Motor, d: &Diagnosis) -> Result<(), String
                 return Err(format!("selected {ids:?}, expected [{}]", e.id()));
             }
             let got = d.extended.fitted.params.get(main).unwrap();
-            let want = motor.params.get(main).unwrap();
+            let want = motor.params().get(main).unwrap();
             if ((got - want) / want).abs() > *tol {
                 return Err(format!("{main} {got:.4e}, true {want:.4e}"));
             }
@@ -292,7 +292,7 @@ pub(crate) fn check(c: &Case, motor: &Motor, d: &Diagnosis) -> Result<(), String
             }
         }
         Expect::Effects(effects, tolerances) => {
-            check_effects(effects, tolerances, &|n| motor.params.get(n).unwrap(), d)?
+            check_effects(effects, tolerances, &|n| motor.params().get(n).unwrap(), d)?
         }
         Expect::Leak(path, law, tol) => check_leak(*path, *law, *tol, c.extra[0].coefficient, d)?,
     }
@@ -395,7 +395,7 @@ pub(crate) fn run(name: &str, opts: &DiagnoseOptions) -> (Row, Diagnosis) {
         "w_seal",
     ]
     .iter()
-    .map(|n| format!("{n}={:.4e}", motor.params.get(n).unwrap_or(f64::NAN)))
+    .map(|n| format!("{n}={:.4e}", motor.params().get(n).unwrap_or(f64::NAN)))
     .collect();
     eprintln!("  truth: {}", v.join(" "));
     let ds = dataset(&format!("synthetic {name}"), experiments);
@@ -405,13 +405,13 @@ pub(crate) fn run(name: &str, opts: &DiagnoseOptions) -> (Row, Diagnosis) {
     let (truth_s, recovered) = match &c.expect {
         Expect::Nothing => ("-".to_string(), "-".to_string()),
         Expect::Effect(_, main, _) => (
-            format!("{main} = {:.4e}", motor.params.get(main).unwrap()),
+            format!("{main} = {:.4e}", motor.params().get(main).unwrap()),
             format!("{:.4e}", d.extended.fitted.params.get(main).unwrap()),
         ),
         Expect::Effects(_, tolerances) => (
             tolerances
                 .iter()
-                .map(|(n, _)| format!("{n} = {:.4e}", motor.params.get(n).unwrap()))
+                .map(|(n, _)| format!("{n} = {:.4e}", motor.params().get(n).unwrap()))
                 .collect::<Vec<_>>()
                 .join(", "),
             tolerances

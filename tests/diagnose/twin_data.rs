@@ -259,7 +259,10 @@ fn stiction_likelihood_at_the_truth() {
         .map(|s| s.to_string())
         .collect();
     names.extend(["t_static".to_string(), "w_stribeck".to_string()]);
-    for (label, ds, params) in [("synth", ds_synth, synth.params), ("twin", ds_twin, p)] {
+    for (label, ds, params) in [
+        ("synth", ds_synth, synth.params().clone()),
+        ("twin", ds_twin, p),
+    ] {
         let cost = CostModel::new(&ds, CostOptions::default()).unwrap();
         let target = Target::new(&cost, &ds).unwrap();
         let solver = vanefit::numerics::DefaultSolver::default();

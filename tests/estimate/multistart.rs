@@ -35,7 +35,7 @@ impl Objective for Bowl {
         let chi2: f64 = DEFAULT_ESTIMATED
             .iter()
             .map(|n| {
-                let (a, b) = (motor.params.get(n).unwrap(), self.truth.get(n).unwrap());
+                let (a, b) = (motor.params().get(n).unwrap(), self.truth.get(n).unwrap());
                 ((a.ln() - b.ln()) / 0.05).powi(2)
             })
             .sum();
@@ -53,7 +53,7 @@ struct DoubleWell;
 
 impl Objective for DoubleWell {
     fn evaluate(&self, motor: &Motor) -> Evaluation {
-        let x = (motor.params.c_ext() / 1e-8).log10(); // in [-1, 1] over the bounds
+        let x = (motor.params().c_ext() / 1e-8).log10(); // in [-1, 1] over the bounds
         let cost = 10.0 * (x * x - 0.25).powi(2) + 0.3 * x + 1.0;
         Evaluation {
             cost,
@@ -273,7 +273,7 @@ struct Broken;
 
 impl Objective for Broken {
     fn evaluate(&self, motor: &Motor) -> Evaluation {
-        let x = motor.params.c_in1().log10();
+        let x = motor.params().c_in1().log10();
         let cost = if x > -8.2 {
             f64::NAN
         } else if x < -8.8 {

@@ -448,7 +448,7 @@ mod tests {
         assert!(m.set_real(r, -1.0).is_err());
         assert_eq!(m.get_real(r).unwrap(), MotorParams::default().c_in1());
         m.set_real(r, 2e-9).unwrap();
-        assert_eq!(m.motor().params.c_in1(), 2e-9);
+        assert_eq!(m.motor().params().c_in1(), 2e-9);
         assert!(matches!(
             m.set_real(99, 1.0),
             Err(RuntimeError::UnknownReference(99))
