@@ -122,7 +122,7 @@ pub fn fit(
                 .dims
                 .iter()
                 .zip(&r.theta)
-                .map(|(d, t)| (d.name.clone(), d.value(*t).into()))
+                .map(|(d, t)| (d.name().to_string(), d.value(*t).into()))
                 .collect();
             serde_json::json!({
                 "index": r.index, "cost": r.cost,

@@ -288,7 +288,7 @@ impl PyLikelihood {
             .iter()
             .map(|t| {
                 let t = &t.term;
-                (t.name.clone(), t.median, t.sd_ln, t.size_exponent)
+                (t.name().to_string(), t.median, t.sd_ln, t.size_exponent)
             })
             .collect()
     }
@@ -451,7 +451,7 @@ impl PyLikelihood {
             .map(|(t, r)| {
                 let t = &t.term;
                 serde_json::json!({
-                    "parameter": t.name, "median": t.median, "sd_ln": t.sd_ln,
+                    "parameter": t.name(), "median": t.median, "sd_ln": t.sd_ln,
                     "size_exponent": t.size_exponent, "residual": r,
                 })
             })

@@ -132,7 +132,7 @@ pub struct PriorEntry {
     pub sd_ln: f64,
     /// Where the displacement was estimated with the other parameters (a page that does not
     /// print it): k of the size law the median follows, median·(v_disp/v̂_disp)^k with
-    /// v̂_disp the fit's displacement (`data::motor::SIZE_EXPONENTS`). Absent otherwise.
+    /// v̂_disp the fit's displacement (`ParamSpec::size_exponent`). Absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size_exponent: Option<f64>,
 }

@@ -4,7 +4,7 @@
 //! (`VaneGeometry::derived_volumes`) give V_disp,nom = z·V_fill, ε = V_exp/V_fill and V_d.
 
 use crate::model::geometry::{PortTiming, VaneGeometry};
-use crate::model::params::{MotorParams, ParamError, ParamSet};
+use crate::model::params::{MotorParams, ParamError, ParamId, ParamSet};
 use serde::Deserialize;
 
 /// The `[motor]` table of rig.toml (every key optional: defaults are motor AR034-11's).
@@ -89,13 +89,9 @@ impl MotorSpecError {
             MotorSpecError::GeometryAndVolume { key } => key,
             MotorSpecError::BadGeometry { key, .. } => key,
             MotorSpecError::DisplacementTwice => "displacement_cm3",
-            MotorSpecError::Param(e) => match e.name.as_str() {
-                "z" => "vanes",
-                "v_disp" => "displacement_m3",
-                "eps" => "expansion_ratio",
-                "v_dead" => "dead_volume_m3",
-                other => other,
-            },
+            MotorSpecError::Param(e) => crate::model::params::spec(&e.name)
+                .and_then(|s| s.rig_key)
+                .unwrap_or(&e.name),
         }
     }
 }
@@ -196,19 +192,19 @@ impl MotorSection {
         // overrides its default.
         if let Some(v_disp) = volumes[0] {
             let size = v_disp / crate::model::params::MotorParams::default().v_disp();
-            for (name, value) in scaled_defaults(size) {
-                set.set(name, value)?;
+            for (id, value) in scaled_defaults(size) {
+                set.set_value(id, value);
             }
         }
         let given = [
-            ("z", self.vanes.map(f64::from)),
-            ("v_disp", volumes[0]),
-            ("eps", volumes[1]),
-            ("v_dead", volumes[2]),
+            (ParamId::Z, self.vanes.map(f64::from)),
+            (ParamId::V_DISP, volumes[0]),
+            (ParamId::EPS, volumes[1]),
+            (ParamId::V_DEAD, volumes[2]),
         ];
-        for (name, value) in given {
+        for (id, value) in given {
             if let Some(v) = value {
-                set.set(name, v)?;
+                set.set_value(id, v);
             }
         }
         Ok(set.check()?)
@@ -279,41 +275,17 @@ impl MotorSection {
     }
 }
 
-/// How the defaults of the parameters a rig file does not give grow with the motor:
-/// geometric similarity with s = V_disp/V_disp,AR034 (lengths ∝ s^⅓; docs/model.md,
-/// "Defaults that follow the motor's size"). Sonic conductances are areas (∝ s^⅔); lumped
-/// volumes and the dead volume per compartment ∝ s; Coulomb friction is a force from the
-/// pressure on vane and seal areas times a radius (∝ s); viscous friction is a sheared area
-/// times a radius squared over an unchanged clearance (∝ s^{4/3}); inertia is a mass times a
-/// radius squared (∝ s^{5/3}). Dimensionless parameters (z, ε, b_crit, n_poly) do not
-/// change with size; `w_reg` is a numerical regularisation speed and is kept.
-pub const SIZE_EXPONENTS: [(&str, f64); 13] = [
-    ("v_dead", 1.0),
-    ("c_in1", 2.0 / 3.0),
-    ("c_out2", 2.0 / 3.0),
-    ("c_ext", 2.0 / 3.0),
-    ("c_1e", 2.0 / 3.0),
-    ("c_2e", 2.0 / 3.0),
-    ("c_12", 2.0 / 3.0),
-    ("vol1", 1.0),
-    ("vol2", 1.0),
-    ("vole", 1.0),
-    ("t_coulomb", 1.0),
-    ("visc", 4.0 / 3.0),
-    ("inertia", 5.0 / 3.0),
-];
-
-/// The AR034-11 defaults of [`SIZE_EXPONENTS`] scaled to a motor `size` times its
-/// displacement (nothing when the size is 1, so the default motor keeps its exact values).
-fn scaled_defaults(size: f64) -> Vec<(&'static str, f64)> {
+/// The defaults that follow the motor's size (`ParamSpec::size_exponent`: geometric
+/// similarity with s = V_disp/V_disp,AR034; docs/model.md, "Defaults that follow the
+/// motor's size"), scaled to a motor `size` times AR034-11's displacement (nothing when the
+/// size is 1, so the default motor keeps its exact values).
+fn scaled_defaults(size: f64) -> Vec<(ParamId, f64)> {
     if size == 1.0 || !(size.is_finite() && size > 0.0) {
         return Vec::new();
     }
-    SIZE_EXPONENTS
-        .iter()
-        .filter_map(|(name, k)| {
-            crate::model::params::spec(name).map(|s| (*name, s.default * size.powf(*k)))
-        })
+    ParamId::all()
+        .filter(|id| id.spec().size_exponent.is_some())
+        .map(|id| (id, id.spec().scaled_default(size)))
         .collect()
 }
 
@@ -418,7 +390,7 @@ mod tests {
     }
 
     /// Each default with a physical size, by name, against the exponent geometric similarity
-    /// gives it (written out here, not read from [`SIZE_EXPONENTS`]): a default that stays at
+    /// gives it (written out here, not read from the registry's size exponents): a default that stays at
     /// AR034's value whatever the displacement fails its own line.
     #[test]
     fn every_dimensional_default_follows_the_displacement() {
@@ -455,7 +427,7 @@ mod tests {
     }
 
     /// No default with a unit of length, area, volume, mass or force is left unscaled: a
-    /// parameter added later with such a unit must be added to [`SIZE_EXPONENTS`].
+    /// parameter added later with such a unit needs a size exponent in the registry.
     #[test]
     fn no_dimensional_base_default_is_left_out() {
         let kept = ["v_disp", "w_reg"];
@@ -463,7 +435,7 @@ mod tests {
             let dimensional = ["m3", "kg", "N*m"].iter().any(|u| s.unit.contains(u));
             if dimensional && !kept.contains(&s.name) {
                 assert!(
-                    SIZE_EXPONENTS.iter().any(|(n, _)| *n == s.name),
+                    s.size_exponent.is_some(),
                     "{} ({}) does not follow the motor's size",
                     s.name,
                     s.unit

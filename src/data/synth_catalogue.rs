@@ -121,8 +121,8 @@ pub(crate) fn write_catalogue(
         "synthetic = true\ndescription = \"Catalogue pages made by vanefit synth --catalogue from the simulator ({description}); numbers printed to {} digits.\"\n\n[motor]\nname = \"AR034-11 (synthetic catalogue)\"\nvanes = {}\ndisplacement_m3 = {:e}\nexpansion_ratio = {}\n\n[conditions]\np_atm_pa = {}\n",
         plan.digits,
         p.vanes(),
-        p.get("v_disp").unwrap_or(f64::NAN),
-        p.get("eps").unwrap_or(f64::NAN),
+        p.v_disp(),
+        p.eps(),
         plan.p_atm_pa
     );
     let mut rows = Vec::new();

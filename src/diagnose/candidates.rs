@@ -11,7 +11,7 @@ use super::observe::Progress;
 use super::{analysis, applicable_effects, off_value, Candidate, ModelKind, Skipped};
 use super::{Effect, SELECT_DELTA_BIC};
 use crate::model::effects::EffectSet;
-use crate::model::params::{spec, MotorParams};
+use crate::model::params::{spec, MotorParams, ParamId, DEFAULT_ESTIMATED_IDS};
 
 /// The refits of phase 2.
 pub(crate) struct Refits {
@@ -260,10 +260,10 @@ fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
         .filter_map(|(s, h, k, w)| {
             let t_c = COULOMB_SCALE[s] * base.t_coulomb();
             let visc = base.visc() + (base.t_coulomb() - t_c) / h;
-            base.with("t_coulomb", t_c)
-                .and_then(|p| p.with("visc", visc))
-                .and_then(|p| p.with("t_static", k * t_c))
-                .and_then(|p| p.with("w_stribeck", *w))
+            base.with_value(ParamId::T_COULOMB, t_c)
+                .and_then(|p| p.with_value(ParamId::VISC, visc))
+                .and_then(|p| p.with_value(ParamId::T_STATIC, k * t_c))
+                .and_then(|p| p.with_value(ParamId::W_STRIBECK, *w))
                 .ok()
                 .map(|p| (s, p))
         })
@@ -293,11 +293,10 @@ fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
 /// there never brings it back.
 fn unpinned(base: &MotorParams) -> MotorParams {
     let mut p = base.clone();
-    for name in crate::estimate::space::DEFAULT_ESTIMATED {
-        if let (Some(s), Some(v)) = (crate::model::params::spec(name), base.get(name)) {
-            if v <= s.search.0 * 1.01 {
-                p = p.with(name, s.default).unwrap_or(p);
-            }
+    for id in DEFAULT_ESTIMATED_IDS {
+        let s = id.spec();
+        if base.value(id) <= s.search.0 * 1.01 {
+            p = p.with_value(id, s.default).unwrap_or(p);
         }
     }
     p

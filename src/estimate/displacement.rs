@@ -24,11 +24,11 @@
 
 use super::fit_data::FitData;
 use super::prior::Prior;
-use super::space::DEFAULT_ESTIMATED;
 use crate::data::motor::MotorSection;
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;
+use crate::model::params::{ParamId, DEFAULT_ESTIMATED_IDS};
 use crate::numerics::scalar::brent_minimize;
 use crate::numerics::DefaultSolver;
 use nalgebra::DMatrix;
@@ -151,12 +151,12 @@ fn size_sd(data: &FitData, section: &MotorSection, v: f64) -> Option<f64> {
     let prior = Prior::for_motor(&nominal);
     let r0 = residuals(data, nominal.clone())?;
     let n = r0.len();
-    let names: Vec<&str> = DEFAULT_ESTIMATED
+    let ids: Vec<ParamId> = DEFAULT_ESTIMATED_IDS
         .iter()
         .copied()
-        .filter(|name| prior.term(name).is_some())
+        .filter(|id| prior.term(*id).is_some())
         .collect();
-    let mut jac = DMatrix::<f64>::zeros(n, names.len() + 1);
+    let mut jac = DMatrix::<f64>::zeros(n, ids.len() + 1);
     let column = |plus: Vec<f64>, minus: Vec<f64>, jac: &mut DMatrix<f64>, j: usize| {
         for i in 0..n.min(plus.len()).min(minus.len()) {
             jac[(i, j)] = (plus[i] - minus[i]) / (2.0 * LOG_STEP);
@@ -169,17 +169,17 @@ fn size_sd(data: &FitData, section: &MotorSection, v: f64) -> Option<f64> {
         &mut jac,
         0,
     );
-    for (j, name) in names.iter().enumerate() {
-        let x = nominal.get(name)?;
+    for (j, id) in ids.iter().enumerate() {
+        let x = nominal.value(*id);
         let at = |f: f64| {
-            let p = nominal.with(name, x * f).ok()?;
+            let p = nominal.with_value(*id, x * f).ok()?;
             residuals(data, p)
         };
         column(at(LOG_STEP.exp())?, at((-LOG_STEP).exp())?, &mut jac, j + 1);
     }
     let mut h = jac.transpose() * &jac;
-    for (j, name) in names.iter().enumerate() {
-        let sd = prior.term(name)?.sd_ln;
+    for (j, id) in ids.iter().enumerate() {
+        let sd = prior.term(*id)?.sd_ln;
         h[(j + 1, j + 1)] += 1.0 / (sd * sd);
     }
     let cov = h.try_inverse()?;

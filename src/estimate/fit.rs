@@ -35,7 +35,7 @@ use crate::data::fitfile::{
     RunInfo, Starts,
 };
 use crate::model::motor::Motor;
-use crate::model::params::MotorParams;
+use crate::model::params::{MotorParams, ParamId};
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
 use nalgebra::DMatrix;
@@ -464,7 +464,7 @@ pub(crate) fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kin
 /// The fit file of an outcome (docs/formats.md, "Fit files", with identifiability and
 /// statistics).
 pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) -> FitFile {
-    let displacement_estimated = setup.space.dims.iter().any(|d| d.name == "v_disp");
+    let displacement_estimated = setup.space.estimates(ParamId::V_DISP);
     FitFile {
         dataset: dataset.to_string(),
         effects: setup.space.effects.clone(),
@@ -535,16 +535,15 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             likelihood_chi2: Some(out.chi2),
             prior: setup
                 .space
-                .prior
-                .terms
+                .dims
                 .iter()
-                .filter(|t| setup.space.dims.iter().any(|d| d.name == t.name))
+                .filter_map(|d| setup.space.prior.term(d.id))
                 .map(|t| {
                     // Stated at the fit's displacement; where it was estimated, the median
                     // follows it (a page without one).
                     let size = setup.space.prior.size_of(&out.params);
                     PriorEntry {
-                        parameter: t.name.clone(),
+                        parameter: t.name().to_string(),
                         median: t.median_at_size(size),
                         sd_ln: t.sd_ln,
                         size_exponent: displacement_estimated.then_some(t.size_exponent),

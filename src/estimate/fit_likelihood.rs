@@ -44,7 +44,7 @@ use crate::data::fitfile::FitFile;
 use crate::model::effects::EffectSet;
 use crate::model::extra::ExtraTerm;
 use crate::model::motor::Motor;
-use crate::model::params::{MotorParams, ParamError};
+use crate::model::params::{MotorParams, ParamError, ParamId};
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{CostError, CostOptions, FAILURE_PENALTY};
 use crate::objective::likelihood::Target;
@@ -229,10 +229,11 @@ impl FitLikelihood {
             .enumerate()
             .filter_map(|(index, n)| {
                 let e = stats.prior.iter().find(|e| e.parameter == *n)?;
+                let id = ParamId::from_name(n)?;
                 (e.median > 0.0 && e.sd_ln > 0.0).then(|| MotorPriorTerm {
                     index,
                     term: PriorTerm {
-                        name: n.clone(),
+                        id,
                         median: e.median,
                         sd_ln: e.sd_ln,
                         size_exponent: e.size_exponent.unwrap_or(0.0),
@@ -240,7 +241,10 @@ impl FitLikelihood {
                 })
             })
             .collect();
-        let size_index = fit.estimated.iter().position(|n| n == "v_disp");
+        let size_index = fit
+            .estimated
+            .iter()
+            .position(|n| ParamId::from_name(n) == Some(ParamId::V_DISP));
         let mut out = Self {
             data,
             target,
@@ -272,7 +276,7 @@ impl FitLikelihood {
 
     /// Names of the estimated parameters, in the fit file's order.
     pub fn names(&self) -> Vec<String> {
-        self.dims.iter().map(|d| d.name.clone()).collect()
+        self.dims.iter().map(|d| d.name().to_string()).collect()
     }
 
     /// Each estimated parameter's default search bounds (lower, upper), SI.
@@ -311,7 +315,7 @@ impl FitLikelihood {
         }
         let mut p = self.params.clone();
         for (d, v) in self.dims.iter().zip(values) {
-            p = p.with(&d.name, *v)?;
+            p = p.with_value(d.id, *v)?;
         }
         Ok(Motor::new(p, self.effects.clone()).with_extra(&self.extra))
     }

@@ -2,14 +2,15 @@
 //! any of its data are seen (docs/estimation.md, "Priors").
 //!
 //! Each parameter with a prior is log-normal around its default scaled to the motor's
-//! displacement (`data::motor::scaled_defaults`, geometric similarity):
+//! displacement (`ParamSpec::size_exponent`, geometric similarity):
 //!
 //! ```text
 //!     ln v ~ N(ln v₀(V_disp), σ²),    σ = ln F / 1.96
 //! ```
 //!
-//! with F the factor within which 95 % of real motors of that size lie ([`PRIOR_SPREADS`];
-//! where each F comes from is in docs/estimation.md). A fit minimises the likelihood's χ²
+//! with F the factor within which 95 % of real motors of that size lie
+//! (`ParamSpec::prior_factor95` in the parameter registry; where each F comes from is in
+//! docs/estimation.md). A fit minimises the likelihood's χ²
 //! plus the prior's `χ²_prior = Σ ((ln v − ln v₀)/σ)²` (maximum a posteriori, the mode in
 //! ln v), so its curvature (the Laplace covariance the fit file stores) holds the prior's
 //! precision 1/σ² beside the data's. Where data pin a parameter to a few per cent, the
@@ -20,31 +21,10 @@
 //! to the log-likelihood −χ²/2: the log-density of θ, the Jacobian of θ → ln v included.
 
 use super::space::ParamSpace;
-use crate::data::motor::SIZE_EXPONENTS;
-use crate::model::params::MotorParams;
+use crate::model::params::{MotorParams, ParamId};
 
 /// The normal quantile of a two-sided 95 % range.
 const Z95: f64 = 1.959_963_984_540_054;
-
-/// For each parameter with a prior: F, the factor (95 %, either way) within which real
-/// vane motors of the same displacement lie around the size-scaled default. Where the
-/// numbers come from: docs/estimation.md, "Priors".
-pub const PRIOR_SPREADS: [(&str, f64); 14] = [
-    ("c_in1", 2.0),
-    ("c_out2", 2.0),
-    ("c_ext", 2.0),
-    ("c_1e", 4.0),
-    ("c_2e", 4.0),
-    ("c_12", 4.0),
-    ("t_coulomb", 3.0),
-    ("visc", 3.0),
-    ("v_dead", 2.0),
-    ("vol1", 3.0),
-    ("vol2", 3.0),
-    ("vole", 3.0),
-    ("inertia", 2.0),
-    ("b_crit", 1.6),
-];
 
 /// The residual of a prior term whose value (or size) has no logarithm: large and finite,
 /// so that a cost built on it stays finite.
@@ -54,18 +34,23 @@ pub(crate) const NO_LOG_RESIDUAL: f64 = 1e6;
 #[derive(Debug, Clone, PartialEq)]
 pub struct PriorTerm {
     /// The parameter (docs/model.md, "Parameters").
-    pub name: String,
+    pub id: ParamId,
     /// The median v₀, SI (the default scaled to the motor's displacement).
     pub median: f64,
     /// σ of ln v.
     pub sd_ln: f64,
     /// k of the size law the median follows when the displacement is estimated too:
     /// v₀(V) = `median`·(V/V_ref)^k with V_ref [`Prior::size_reference_m3`]
-    /// (`data::motor::SIZE_EXPONENTS`; 0 for a dimensionless parameter).
+    /// (`ParamSpec::size_exponent`; 0 for a parameter that does not follow the size).
     pub size_exponent: f64,
 }
 
 impl PriorTerm {
+    /// The parameter's name (fit files, reports).
+    pub fn name(&self) -> &'static str {
+        self.id.name()
+    }
+
     /// The 95 % factor F = exp(1.96·σ).
     pub fn factor95(&self) -> f64 {
         (Z95 * self.sd_ln).exp()
@@ -114,21 +99,19 @@ impl Prior {
 
     /// The prior of a motor whose nominal parameters (defaults scaled to its displacement,
     /// and whatever its rig file gives) are `nominal`: a term for every parameter of
-    /// `PRIOR_SPREADS` with a positive nominal value.
+    /// the registry with a prior (`ParamSpec::prior_factor95`) and a positive nominal value,
+    /// in the registry's order.
     pub fn for_motor(nominal: &MotorParams) -> Self {
-        let terms = PRIOR_SPREADS
-            .iter()
-            .filter_map(|(name, f)| {
-                let median = nominal.get(name).filter(|v| *v > 0.0 && v.is_finite())?;
-                let size_exponent = SIZE_EXPONENTS
-                    .iter()
-                    .find(|(n, _)| n == name)
-                    .map_or(0.0, |(_, k)| *k);
-                Some(PriorTerm {
-                    name: name.to_string(),
+        let terms = ParamId::all()
+            .filter_map(|id| {
+                let spec = id.spec();
+                let f = spec.prior_factor95?;
+                let median = nominal.value(id);
+                (median > 0.0 && median.is_finite()).then(|| PriorTerm {
+                    id,
                     median,
                     sd_ln: f.ln() / Z95,
-                    size_exponent,
+                    size_exponent: spec.size_exponent.unwrap_or(0.0),
                 })
             })
             .collect();
@@ -150,8 +133,8 @@ impl Prior {
     }
 
     /// The term of a parameter.
-    pub fn term(&self, name: &str) -> Option<&PriorTerm> {
-        self.terms.iter().find(|t| t.name == name)
+    pub fn term(&self, id: ParamId) -> Option<&PriorTerm> {
+        self.terms.iter().find(|t| t.id == id)
     }
 
     /// The prior's residuals of the space's estimated parameters that have a term, in θ
@@ -163,8 +146,8 @@ impl Prior {
             .dims
             .iter()
             .filter_map(|d| {
-                let t = self.term(&d.name)?;
-                Some(t.residual_at_size(params.get(&d.name).unwrap_or(f64::NAN), size))
+                let t = self.term(d.id)?;
+                Some(t.residual_at_size(params.value(d.id), size))
             })
             .collect()
     }
@@ -189,7 +172,7 @@ impl Prior {
             .dims
             .iter()
             .zip(theta)
-            .find(|(d, _)| d.name == "v_disp")
+            .find(|(d, _)| d.id == ParamId::V_DISP)
             .zip(self.size_reference_m3)
             .map_or(1.0, |((d, t), v_ref)| d.value(*t) / v_ref);
         let mut lp = 0.0;
@@ -198,7 +181,7 @@ impl Prior {
             let du_dtheta = u * (1.0 - u);
             // ln of the logistic density; written via softplus to stay finite for large |θ|.
             let ln_logistic = -t.abs() - 2.0 * (-t.abs()).exp().ln_1p();
-            match self.term(&d.name) {
+            match self.term(d.id) {
                 None => lp += ln_logistic,
                 Some(term) => {
                     let v = d.value(*t);
@@ -229,7 +212,7 @@ impl Prior {
             .iter()
             .zip(theta)
             .map(|(d, t)| {
-                let Some(term) = self.term(&d.name) else {
+                let Some(term) = self.term(d.id) else {
                     return 0.0;
                 };
                 let u = 1.0 / (1.0 + (-t).exp());
@@ -263,7 +246,7 @@ mod tests {
     fn the_prior_is_centred_on_the_nominal_motor_with_its_stated_spread() {
         let p = MotorParams::default().with("c_in1", 2e-8).unwrap();
         let prior = Prior::for_motor(&p);
-        let t = prior.term("c_in1").unwrap();
+        let t = prior.term(ParamId::C_IN1).unwrap();
         assert_eq!(t.median, 2e-8);
         assert!((t.factor95() - 2.0).abs() < 1e-12);
         // One F above the median is 1.96 σ: χ² = 1.96².
@@ -323,7 +306,7 @@ mod tests {
         assert!(r.iter().all(|x| x.abs() < 1e-9), "{r:?}");
         let same_size = nominal.with("c_in1", scaled_c).unwrap();
         let r = prior.residuals(&space, &same_size);
-        let sd = prior.term("c_in1").unwrap().sd_ln;
+        let sd = prior.term(ParamId::C_IN1).unwrap().sd_ln;
         assert!((r[0] - 2.0 / 3.0 * 2f64.ln() / sd).abs() < 1e-9, "{r:?}");
         // ln p(θ) follows the same medians: at the scaled point it beats the unscaled one.
         let (a, b) = (

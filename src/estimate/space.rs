@@ -7,15 +7,15 @@
 //! strictly inside the bounds (log for positive parameters, logistic for boxed ones).
 
 use super::prior::Prior;
-use crate::data::motor::SIZE_EXPONENTS;
 use crate::model::effects::EffectSet;
-use crate::model::params::{spec, Domain, MotorParams, ParamSet};
+pub use crate::model::params::DEFAULT_ESTIMATED;
+use crate::model::params::{Domain, MotorParams, ParamId, ParamSet};
 
 /// One estimated parameter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dimension {
-    /// Parameter name (docs/model.md, "Parameters").
-    pub name: String,
+    /// The parameter (docs/model.md, "Parameters").
+    pub id: ParamId,
     /// Lower bound, SI.
     pub lo: f64,
     /// Upper bound, SI.
@@ -42,8 +42,9 @@ pub struct ParamSpace {
     pub prior: Prior,
     /// The displacement, m³, that `fixed` was scaled to, when the fixed size-dependent
     /// parameters follow an estimated displacement (a page that does not print it): with
-    /// `v_disp` estimated at V, each fixed parameter of `data::motor::SIZE_EXPONENTS` is
-    /// its `fixed` value × (V/V_ref)^k (geometric similarity). `None`: they stay as fixed.
+    /// `v_disp` estimated at V, each fixed parameter with a size law
+    /// (`ParamSpec::size_exponent`) is its `fixed` value × (V/V_ref)^k (geometric
+    /// similarity). `None`: they stay as fixed.
     pub size_reference_m3: Option<f64>,
 }
 
@@ -51,19 +52,6 @@ pub struct ParamSpace {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{0}")]
 pub struct SpaceError(pub String);
-
-/// The base model's estimated parameters by default (docs/model.md, "Parameters", "What is
-/// estimated"): six conductances and the two friction terms.
-pub const DEFAULT_ESTIMATED: [&str; 8] = [
-    "c_in1",
-    "c_out2",
-    "c_ext",
-    "c_1e",
-    "c_2e",
-    "c_12",
-    "t_coulomb",
-    "visc",
-];
 
 fn logit(u: f64) -> f64 {
     (u / (1.0 - u)).ln()
@@ -74,37 +62,52 @@ fn logistic(theta: f64) -> f64 {
 }
 
 impl Dimension {
+    /// The parameter of a name, or the error that names it.
+    fn id_of(name: &str) -> Result<ParamId, SpaceError> {
+        ParamId::from_name(name).ok_or_else(|| SpaceError(format!("unknown parameter '{name}'")))
+    }
+
     /// A dimension with the default bounds of its parameter (`ParamSpec::search`).
     pub fn for_param(name: &str) -> Result<Self, SpaceError> {
-        let s = spec(name).ok_or_else(|| SpaceError(format!("unknown parameter '{name}'")))?;
+        Self::for_id(Self::id_of(name)?)
+    }
+
+    /// A dimension with the default bounds of its parameter (`ParamSpec::search`).
+    pub fn for_id(id: ParamId) -> Result<Self, SpaceError> {
+        let s = id.spec();
         if matches!(s.domain, Domain::Integer(..)) {
             return Err(SpaceError(format!(
-                "parameter '{name}' is a whole number and cannot be estimated"
+                "parameter '{id}' is a whole number and cannot be estimated"
             )));
         }
-        Self::with_bounds(name, s.search.0, s.search.1)
+        Self::with_id_bounds(id, s.search.0, s.search.1)
     }
 
     /// A dimension with explicit bounds (SI).
     pub fn with_bounds(name: &str, lo: f64, hi: f64) -> Result<Self, SpaceError> {
-        let s = spec(name).ok_or_else(|| SpaceError(format!("unknown parameter '{name}'")))?;
+        Self::with_id_bounds(Self::id_of(name)?, lo, hi)
+    }
+
+    /// A dimension of a parameter with explicit bounds (SI).
+    pub fn with_id_bounds(id: ParamId, lo: f64, hi: f64) -> Result<Self, SpaceError> {
+        let s = id.spec();
         let log_scale = matches!(s.domain, Domain::Positive | Domain::NonNegative);
         let ok = lo.is_finite() && hi.is_finite() && lo < hi && (!log_scale || lo > 0.0);
         if !ok {
             return Err(SpaceError(format!(
-                "bounds of '{name}': need finite lo < hi{} (got {lo:e}..{hi:e})",
+                "bounds of '{id}': need finite lo < hi{} (got {lo:e}..{hi:e})",
                 if log_scale { " and lo > 0" } else { "" }
             )));
         }
         if let Domain::Interval(a, b) = s.domain {
             if lo < a || hi > b {
                 return Err(SpaceError(format!(
-                    "bounds of '{name}' must lie in [{a}, {b}]"
+                    "bounds of '{id}' must lie in [{a}, {b}]"
                 )));
             }
         }
         Ok(Self {
-            name: name.to_string(),
+            id,
             lo,
             hi,
             log_scale,
@@ -113,13 +116,18 @@ impl Dimension {
         })
     }
 
+    /// The parameter's name (fit files, reports).
+    pub fn name(&self) -> &'static str {
+        self.id.name()
+    }
+
     /// Draws start points from [lo, hi] ∩ the bounds (refused if empty or not finite).
     pub fn with_start_range(mut self, lo: f64, hi: f64) -> Result<Self, SpaceError> {
         let (lo, hi) = (lo.max(self.lo), hi.min(self.hi));
         if !(lo.is_finite() && hi.is_finite() && lo < hi) {
             return Err(SpaceError(format!(
                 "start range of '{}' must be a non-empty part of its bounds [{:e}, {:e}]",
-                self.name, self.lo, self.hi
+                self.id, self.lo, self.hi
             )));
         }
         self.start_lo = lo;
@@ -175,14 +183,14 @@ impl ParamSpace {
         effects: EffectSet,
     ) -> Result<Self, SpaceError> {
         for (i, d) in dims.iter().enumerate() {
-            if dims[..i].iter().any(|e| e.name == d.name) {
-                return Err(SpaceError(format!("parameter '{}' listed twice", d.name)));
+            if dims[..i].iter().any(|e| e.id == d.id) {
+                return Err(SpaceError(format!("parameter '{}' listed twice", d.id)));
             }
-            if let Some(e) = spec(&d.name).and_then(|s| s.effect) {
+            if let Some(e) = d.id.spec().effect {
                 if !effects.contains(e) {
                     return Err(SpaceError(format!(
                         "parameter '{}' belongs to effect '{e}', which is not switched on",
-                        d.name
+                        d.id
                     )));
                 }
             }
@@ -225,7 +233,17 @@ impl ParamSpace {
 
     /// Names of the estimated parameters, in θ order.
     pub fn names(&self) -> Vec<String> {
-        self.dims.iter().map(|d| d.name.clone()).collect()
+        self.dims.iter().map(|d| d.name().to_string()).collect()
+    }
+
+    /// The estimated parameters, in θ order.
+    pub fn ids(&self) -> Vec<ParamId> {
+        self.dims.iter().map(|d| d.id).collect()
+    }
+
+    /// Whether a parameter is estimated.
+    pub fn estimates(&self, id: ParamId) -> bool {
+        self.dims.iter().any(|d| d.id == id)
     }
 
     /// Checked parameters at optimizer coordinates θ. Values strictly inside the bounds can
@@ -235,19 +253,19 @@ impl ParamSpace {
         let mut v_disp = None;
         for (d, t) in self.dims.iter().zip(theta) {
             let v = d.value(*t);
-            set.set(&d.name, v)?;
-            if d.name == "v_disp" {
+            set.set_value(d.id, v);
+            if d.id == ParamId::V_DISP {
                 v_disp = Some(v);
             }
         }
         if let (Some(v), Some(v_ref)) = (v_disp, self.size_reference_m3) {
             let size = v / v_ref;
-            for (name, k) in SIZE_EXPONENTS {
-                if self.dims.iter().any(|d| d.name == name) {
+            for id in ParamId::all() {
+                let Some(k) = id.spec().size_exponent else {
                     continue;
-                }
-                if let Some(fixed) = self.fixed.get(name) {
-                    set.set(name, fixed * size.powf(k))?;
+                };
+                if !self.estimates(id) {
+                    set.set_value(id, self.fixed.value(id) * size.powf(k));
                 }
             }
         }
@@ -256,10 +274,7 @@ impl ParamSpace {
 
     /// Optimizer coordinates of a parameter set.
     pub fn theta(&self, p: &MotorParams) -> Vec<f64> {
-        self.dims
-            .iter()
-            .map(|d| d.theta(p.get(&d.name).unwrap_or(d.lo)))
-            .collect()
+        self.dims.iter().map(|d| d.theta(p.value(d.id))).collect()
     }
 
     /// Optimizer coordinates of a point of the unit cube of start ranges (for start designs).
@@ -296,8 +311,8 @@ mod tests {
         let th = s.theta(&p);
         let back = s.params(&th).unwrap();
         for d in &s.dims {
-            let (a, b) = (p.get(&d.name).unwrap(), back.get(&d.name).unwrap());
-            assert!((a - b).abs() < 1e-12 * a.abs(), "{}: {a} vs {b}", d.name);
+            let (a, b) = (p.value(d.id), back.value(d.id));
+            assert!((a - b).abs() < 1e-12 * a.abs(), "{}: {a} vs {b}", d.id);
         }
         for t in [-40.0, -3.0, 0.0, 5.0, 40.0] {
             for d in &s.dims {

@@ -212,7 +212,7 @@ pub fn curvature_intervals(
                 .map(f64::sqrt);
             let within = |t: f64| (t.abs() < THETA_EDGE).then(|| d.value(t));
             Interval {
-                name: d.name.clone(),
+                name: d.name().to_string(),
                 value: d.value(theta[j]),
                 lo: sd.and_then(|s| within(theta[j] - 1.96 * s)),
                 hi: sd.and_then(|s| within(theta[j] + 1.96 * s)),
@@ -420,7 +420,7 @@ pub(crate) fn profile_intervals_observed(
             let (lo, below) = &ends[2 * j];
             let (hi, above) = &ends[2 * j + 1];
             Interval {
-                name: d.name.clone(),
+                name: d.name().to_string(),
                 value,
                 lo: *lo,
                 hi: *hi,

@@ -58,7 +58,7 @@ use crate::data::fitfile::FitFile;
 use crate::estimate::fit_likelihood::{
     Breakdown, ChannelRows, FitLikelihood, FitLikelihoodError, MotorPriorTerm,
 };
-use crate::model::params::{spec, PARAMS};
+use crate::model::params::{ParamId, PARAMS};
 use crate::sim::recording::ExperimentData;
 use crate::units::Quantity;
 use std::fmt::Write as _;
@@ -477,8 +477,8 @@ fn parameter_table(
         "parameterId\tparameterName\tparameterScale\tlowerBound\tupperBound\tnominalValue\testimate\tobjectivePriorType\tobjectivePriorParameters\n",
     );
     for (i, d) in likelihood.dimensions().iter().enumerate() {
-        let value = fit.params.get(&d.name).unwrap_or(f64::NAN);
-        let meaning = spec(&d.name).map_or("", |p| p.meaning);
+        let value = fit.params.value(d.id);
+        let meaning = d.id.spec().meaning;
         let scale = if d.log_scale { "log10" } else { "lin" };
         let prior = likelihood
             .prior_terms()
@@ -488,7 +488,7 @@ fn parameter_table(
         let _ = writeln!(
             s,
             "{}\t{meaning}\t{scale}\t{}\t{}\t{value}\t1\t{prior}",
-            d.name, d.lo, d.hi
+            d.id, d.lo, d.hi
         );
     }
     for ((label, beta, tau), id) in b.nuisances.iter().zip(nuisance_ids) {
@@ -590,7 +590,8 @@ fn summary_json(
         "recorded inputs as time functions (a transient experiment is one condition driven by its recording)",
         "the fitting cost J (per-channel means and reference polynomials)",
     ];
-    if likelihood.names().iter().any(|n| n == "v_disp") && !likelihood.prior_terms().is_empty() {
+    let v_disp = ParamId::V_DISP.name();
+    if likelihood.names().iter().any(|n| n == v_disp) && !likelihood.prior_terms().is_empty() {
         not_carried.push(
             "the motor priors' medians following the estimated displacement (parameters.tsv states them at the fit's displacement)",
         );

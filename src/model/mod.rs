@@ -22,5 +22,8 @@ pub use motor::{
     SpeedFactor, State, ThrottleSide, N_STATES,
 };
 pub use nozzle::{psi, Nozzle, R_LAMINAR};
-pub use params::{spec, MotorParams, OffValue, ParamError, ParamSpec, PARAMS};
+pub use params::{
+    page_prior_extra, spec, Estimated, MotorParams, OffValue, ParamError, ParamId, ParamSpec,
+    DEFAULT_ESTIMATED, DEFAULT_ESTIMATED_IDS, PARAMS,
+};
 pub use thermo::{Cycle, DisplacementFlows};

@@ -32,7 +32,7 @@ pub use uncertainty::{BandBasis, ParamUncertainty};
 
 use crate::data::fitfile::FitFile;
 use crate::model::motor::Motor;
-use crate::model::params::{ParamError, PARAMS};
+use crate::model::params::{spec, ParamError, ParamId, ParamSpec, PARAMS};
 use crate::objective::likelihood::calibration_tolerance;
 use crate::sim::operating_point::{CatalogueRow, OperatingPointError};
 use crate::units::Quantity;
@@ -199,21 +199,12 @@ impl RestsOnPrior {
 }
 
 /// The one extra measurement a catalogue's reader can most easily get that pins a
-/// parameter: friction and the pressure-shaping parameters separate from the air's torque
-/// only across supply pressures (the Coulomb friction is a constant, the air torque ∝ the
-/// pressure); the leaks carry all the air at stall, where no air passes through the
-/// displacement; the outlet and exhaust ports set the air at free speed, where the flow
-/// through them peaks.
+/// parameter (`ParamSpec::pinned_by`; a rig experiment for a name the registry does not
+/// know).
 pub fn measurement_that_pins(name: &str) -> &'static str {
-    match name {
-        "t_coulomb" | "visc" | "v_dead" | "b_crit" => {
-            "the torque curve (or stall torque) at a second supply pressure"
-        }
-        "c_1e" | "c_2e" | "c_12" => "the air flow at stall (the internal leakage)",
-        "c_out2" | "c_ext" => "the air consumption at free speed",
-        "c_in1" => "the air consumption at max power",
-        "v_disp" => "the displacement (a datasheet row)",
-        _ => "a rig experiment (docs/estimation.md, \"Catalogue pages\")",
+    match spec(name) {
+        Some(s) => s.pinned_by,
+        None => ParamSpec::EFFECT.pinned_by,
     }
 }
 
@@ -266,15 +257,12 @@ pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
 pub fn displacement_from_page(fit: &FitFile) -> Option<String> {
     let st = fit.statistics.as_ref()?;
     let follows = st.prior.iter().any(|p| p.size_exponent.is_some());
-    if !(follows && fit.estimated.iter().any(|n| n == "v_disp")) {
+    let v_disp = ParamId::V_DISP.name();
+    if !(follows && fit.estimated.iter().any(|n| n == v_disp)) {
         return None;
     }
     let v = fit.params.v_disp();
-    let ci = fit
-        .ci95
-        .iter()
-        .find(|(n, _)| n == "v_disp")
-        .map(|(_, c)| *c);
+    let ci = fit.ci95.iter().find(|(n, _)| n == v_disp).map(|(_, c)| *c);
     let text = match ci {
         Some(c) => crate::estimate::displacement::describe_cm3(v, c),
         None => format!(

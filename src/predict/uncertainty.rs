@@ -31,10 +31,9 @@
 
 use super::PredictError;
 use crate::data::fitfile::FitFile;
-use crate::data::motor::SIZE_EXPONENTS;
 use crate::estimate::space::DEFAULT_ESTIMATED;
 use crate::model::motor::Motor;
-use crate::model::params::{MotorParams, ParamSet};
+use crate::model::params::{MotorParams, ParamId, ParamSet};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -209,14 +208,15 @@ impl ParamUncertainty {
         }
         // An estimated displacement (a page that did not print it): what the fit held fixed
         // and scales with the size follows it, as in the fit (geometric similarity).
-        if let Some(j) = self.names.iter().position(|n| n == "v_disp") {
+        let v_disp = ParamId::V_DISP.name();
+        if let Some(j) = self.names.iter().position(|n| n == v_disp) {
             let size = log_values[j].exp() / fit.params.v_disp();
-            for (name, k) in SIZE_EXPONENTS {
-                if fit.estimated.iter().any(|n| n == name) {
+            for id in ParamId::all() {
+                let Some(k) = id.spec().size_exponent else {
                     continue;
-                }
-                if let Some(v) = fit.params.get(name) {
-                    set.set(name, v * size.powf(k))?;
+                };
+                if !fit.estimated.iter().any(|n| n == id.name()) {
+                    set.set_value(id, fit.params.value(id) * size.powf(k));
                 }
             }
         }

@@ -59,10 +59,10 @@ pub fn parameter_rows(ds: &Dataset, setup: &FitSetup, out: &FitOutcome) -> Vec<P
         .dims
         .iter()
         .map(|d| {
-            let s = spec(&d.name);
-            let iv = out.intervals.iter().find(|i| i.name == d.name);
+            let s = Some(d.id.spec());
+            let iv = out.intervals.iter().find(|i| i.name == d.name());
             let not_identifiable = iv.and_then(|i| i.why_not()).map(|why| {
-                let hint = match most_sensitive_experiment(&motor, &d.name) {
+                let hint = match most_sensitive_experiment(&motor, d.name()) {
                     Some(k) if !ds.experiments.iter().any(|e| e.kind == k) => {
                         format!("; adding the {} experiment would pin it down", k.id())
                     }
@@ -71,9 +71,9 @@ pub fn parameter_rows(ds: &Dataset, setup: &FitSetup, out: &FitOutcome) -> Vec<P
                 format!("{why}{hint}")
             });
             ParamRow {
-                name: d.name.clone(),
+                name: d.name().to_string(),
                 description: s.map_or("", ParamSpec::description),
-                value: out.params.get(&d.name).unwrap_or(f64::NAN),
+                value: out.params.value(d.id),
                 unit: s.map_or("", |s| s.unit),
                 interval: iv.map(|i| (i.lo, i.hi)),
                 conductance: s.is_some_and(ParamSpec::is_conductance),
@@ -89,7 +89,7 @@ pub fn fixed_parameters(setup: &FitSetup, out: &FitOutcome) -> Vec<(&'static Par
     PARAMS
         .iter()
         .filter(|s| s.effect.is_none_or(|e| setup.space.effects.contains(e)))
-        .filter(|s| !setup.space.dims.iter().any(|d| d.name == s.name))
+        .filter(|s| !setup.space.dims.iter().any(|d| d.name() == s.name))
         .map(|s| (s, out.params.get(s.name).unwrap_or(s.default)))
         .collect()
 }
@@ -408,15 +408,15 @@ pub(crate) fn parameters_across_starts(
                     (a.min(*v), b.max(*v))
                 });
             let positive = lo > 0.0 && hi > 10.0 * lo;
-            let unit = spec(&d.name).map_or("", |s| s.unit);
+            let unit = d.id.spec().unit;
             let mut chart = Chart::new(
-                &d.name,
+                d.name(),
                 "start (by final cost)",
-                &format!("{} / {unit}", d.name),
+                &format!("{} / {unit}", d.id),
             )
             .with(Series::points("end of start", points))
             .legend(Legend::Below);
-            if let Some(v) = estimate.get(&d.name) {
+            if let Some(v) = estimate.get(d.name()) {
                 let n = order.len().max(1) as f64;
                 chart = chart.with(Series::line("estimate", vec![(1.0, v), (n, v)]));
             }

@@ -21,7 +21,7 @@ use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
-use crate::model::params::spec;
+use crate::model::params::{page_prior_extra, ParamId};
 use crate::objective::cost::{CostError, CostOptions};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
@@ -238,15 +238,16 @@ fn search_space(
     let dims = names
         .iter()
         .map(|n| {
+            let id = ParamId::from_name(n);
             let d = match (find(&o.bounds, n), displacement) {
                 (Some(r), _) => Dimension::with_bounds(n, r.lo, r.hi)?,
-                (None, Some(e)) if n == "v_disp" => displacement_dimension(e)?,
-                (None, _) if n == "v_dead" && fixed.v_dead() > 0.0 => {
+                (None, Some(e)) if id == Some(ParamId::V_DISP) => displacement_dimension(e)?,
+                (None, _) if id == Some(ParamId::V_DEAD) && fixed.v_dead() > 0.0 => {
                     dead_volume_dimension(fixed.v_dead(), fixed.v_disp() / fixed.z())?
                 }
                 (None, _) => Dimension::for_param(n)?,
             };
-            if n == "v_disp" && find(&o.start_ranges, n).is_none() {
+            if id == Some(ParamId::V_DISP) && find(&o.start_ranges, n).is_none() {
                 if let Some(e) = displacement {
                     return d.with_start_range(e.ci95_m3[0], e.ci95_m3[1]);
                 }
@@ -255,9 +256,7 @@ fn search_space(
                 Some(r) => d.with_start_range(r.lo, r.hi),
                 None => {
                     // The rig's nominal value: defaults scaled with the displacement.
-                    let centre = fixed
-                        .get(n)
-                        .unwrap_or_else(|| spec(n).map_or(0.0, |s| s.default));
+                    let centre = fixed.get(n).unwrap_or(0.0);
                     if d.log_scale && centre > 0.0 {
                         d.clone()
                             .with_start_range(centre / o.start_spread, centre * o.start_spread)
@@ -286,27 +285,21 @@ fn search_space(
     })
 }
 
-/// Parameters a fit of catalogue pages alone estimates besides [`DEFAULT_ESTIMATED`] when
-/// it has the motor prior: the dead volume (the share of the supply pressure's work lost to
-/// refilling it) and the nozzles' critical pressure ratio (where the ports choke), both of
-/// which shape how the figures change with the supply pressure.
-pub const PAGE_PRIOR_EXTRA: [&str; 2] = ["v_dead", "b_crit"];
-
 /// The search dimension of the dead volume (whose default search range starts at 0, no
 /// logarithm): 1/10 to 10 times its nominal value `v0`, and below 0.9 of the filling volume
 /// `v_fill` (it must stay below it).
 fn dead_volume_dimension(v0: f64, v_fill: f64) -> Result<Dimension, SpaceError> {
     let hi = (10.0 * v0).min(0.9 * v_fill);
-    Dimension::with_bounds("v_dead", (v0 / 10.0).min(0.5 * hi), hi)
+    Dimension::with_id_bounds(ParamId::V_DEAD, (v0 / 10.0).min(0.5 * hi), hi)
 }
 
 /// The search dimension of a displacement estimated from a page: bounds ×/÷ 5 around the
 /// page's estimate (wider where its interval is), within the parameter's own domain.
 fn displacement_dimension(e: &DisplacementEstimate) -> Result<Dimension, SpaceError> {
-    let (domain_lo, domain_hi) = spec("v_disp").map_or((1e-8, 1e-2), |s| s.search);
+    let (domain_lo, domain_hi) = ParamId::V_DISP.spec().search;
     let lo = (e.v_disp_m3 / 5.0).min(e.ci95_m3[0] / 2.0).max(domain_lo);
     let hi = (e.v_disp_m3 * 5.0).max(e.ci95_m3[1] * 2.0).min(domain_hi);
-    Dimension::with_bounds("v_disp", lo, hi)
+    Dimension::with_id_bounds(ParamId::V_DISP, lo, hi)
 }
 
 /// For a dataset of catalogue pages only whose `[motor]` gives neither a displacement nor
@@ -409,10 +402,10 @@ fn catalogue_estimates(
         // friction, a constant that eats a growing share of the torque at lower pressures
         // (docs/estimation.md, "What a page cannot pin").
         names.extend(
-            PAGE_PRIOR_EXTRA
-                .iter()
-                .filter(|n| prior.term(n).is_some())
-                .map(|n| n.to_string()),
+            page_prior_extra()
+                .into_iter()
+                .filter(|id| prior.term(*id).is_some())
+                .map(|id| id.name().to_string()),
         );
     }
     let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
@@ -435,7 +428,11 @@ fn catalogue_estimates(
             value: motor.params().get(&p.name).unwrap_or(f64::NAN),
             pinned_by: most_sensitive_experiment(&motor, &p.name),
             prior_factor: (!p.pinned)
-                .then(|| prior.term(&p.name).map(|t| t.factor95()))
+                .then(|| {
+                    ParamId::from_name(&p.name)
+                        .and_then(|id| prior.term(id))
+                        .map(|t| t.factor95())
+                })
                 .flatten(),
         })
         .collect();
@@ -453,7 +450,7 @@ fn catalogue_estimates(
     let mut chosen = chosen;
     if displacement.is_some() {
         // Not printed: the displacement is estimated with the rest, from the page.
-        chosen.push("v_disp".to_string());
+        chosen.push(ParamId::V_DISP.name().to_string());
     }
     Ok(FitOptions {
         estimate: Some(chosen),
@@ -552,7 +549,7 @@ impl Fit {
             .file
             .ci95
             .iter()
-            .find(|(n, _)| n == "v_disp")
+            .find(|(n, _)| n == ParamId::V_DISP.name())
             .map_or(first.ci95_m3, |(_, c)| *c);
         Some(describe_cm3(v, ci))
     }

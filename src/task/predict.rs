@@ -11,6 +11,7 @@ use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
 use crate::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use crate::estimate::sample::posterior::LogPrior;
+use crate::model::params::ParamId;
 use crate::predict::Prediction;
 use crate::predict::{
     BandChoice, BandRequest, Nozzle, NozzlePort, PosteriorSource, PredictError, SamplingOptions,
@@ -371,7 +372,7 @@ fn motor_log_prior(fit: &FitFile, names: &[String]) -> Option<impl Fn(&[f64]) ->
         .collect();
     // Where the displacement was estimated too, the medians follow it (size exponent k):
     // ln v₀ = ln median + k·ln(V/V̂).
-    let size_index = names.iter().position(|n| n == "v_disp");
+    let size_index = names.iter().position(|n| n == ParamId::V_DISP.name());
     let ln_v_hat = fit.params.v_disp().ln();
     (!terms.is_empty()).then_some(move |values: &[f64]| {
         let ln_size = size_index.map_or(0.0, |j| {

@@ -5,7 +5,7 @@
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::friction;
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::params::{Domain, MotorParams, OffValue, ParamId, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct BreakawayFriction;
@@ -23,8 +23,9 @@ pub const PARAMS: &[ParamSpec] = &[
         domain: Domain::NonNegative,
         search: (1e-3, 0.5),
         effect: Some(Effect::BreakawayFriction),
-        off: OffValue::BaseClamped("t_coulomb"),
+        off: OffValue::BaseClamped(ParamId::T_COULOMB),
         meaning: "static (breakaway) friction torque",
+        ..ParamSpec::EFFECT
     },
     ParamSpec {
         name: "w_stribeck",
@@ -35,6 +36,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::BreakawayFriction),
         off: OffValue::Default,
         meaning: "Stribeck speed (the excess over Coulomb falls to 1/e)",
+        ..ParamSpec::EFFECT
     },
 ];
 
@@ -59,6 +61,13 @@ impl CatalogEffect for BreakawayFriction {
     fn specs(&self) -> &'static [ParamSpec] {
         PARAMS
     }
+}
+
+impl ParamId {
+    /// `t_static`: static (breakaway) friction torque T_s, N·m.
+    pub const T_STATIC: ParamId = ParamId::of_effect(Effect::BreakawayFriction, T_STATIC);
+    /// `w_stribeck`: Stribeck speed ω_s, rad/s.
+    pub const W_STRIBECK: ParamId = ParamId::of_effect(Effect::BreakawayFriction, W_STRIBECK);
 }
 
 impl MotorParams {

@@ -22,6 +22,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::DeadVolumeCarryover),
     off: OffValue::SearchLower,
     meaning: "volume carried back at discharge pressure per compartment",
+    ..ParamSpec::EFFECT
 }];
 
 impl Term for DeadVolumeCarryover {

@@ -21,6 +21,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::IncompleteFilling),
     off: OffValue::SearchUpper,
     meaning: "speed at which filling reaches half the pressure difference",
+    ..ParamSpec::EFFECT
 }];
 
 impl Term for IncompleteFilling {

@@ -239,8 +239,8 @@ pub struct Effect(u8);
 
 impl Effect {
     /// Position in the registry.
-    pub fn index(self) -> usize {
-        usize::from(self.0)
+    pub const fn index(self) -> usize {
+        self.0 as usize
     }
 
     /// The effect's definition.

@@ -20,6 +20,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::PressureDependentFriction),
     off: OffValue::SearchLower,
     meaning: "Coulomb friction per Pa of p_1 - p_e",
+    ..ParamSpec::EFFECT
 }];
 
 impl Term for PressureDependentFriction {

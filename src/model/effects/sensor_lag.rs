@@ -20,6 +20,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::SensorLag),
     off: OffValue::SearchLower,
     meaning: "first-order lag of the flow and speed sensors",
+    ..ParamSpec::EFFECT
 }];
 
 impl Term for SensorLag {

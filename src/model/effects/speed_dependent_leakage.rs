@@ -23,6 +23,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::SpeedDependentLeakage),
         off: OffValue::SearchLower,
         meaning: "extra leakage at standstill, relative",
+        ..ParamSpec::EFFECT
     },
     ParamSpec {
         name: "w_seal",
@@ -33,6 +34,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::SpeedDependentLeakage),
         off: OffValue::Default,
         meaning: "speed at which vane sealing halves the extra leakage",
+        ..ParamSpec::EFFECT
     },
 ];
 

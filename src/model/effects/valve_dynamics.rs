@@ -24,6 +24,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::ValveDynamics),
         off: OffValue::SearchLower,
         meaning: "time constant of the pressure control valve",
+        ..ParamSpec::EFFECT
     },
     ParamSpec {
         name: "valve_zeta",
@@ -34,6 +35,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::ValveDynamics),
         off: OffValue::SearchLower,
         meaning: "damping ratio of the second-order valve",
+        ..ParamSpec::EFFECT
     },
 ];
 

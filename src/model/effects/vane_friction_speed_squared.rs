@@ -21,6 +21,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::VaneFrictionSpeedSquared),
     off: OffValue::SearchLower,
     meaning: "friction torque per (rad/s)² (vane tips, windage)",
+    ..ParamSpec::EFFECT
 }];
 
 impl Term for VaneFrictionSpeedSquared {
