@@ -9,9 +9,8 @@ use crate::model::motor::ExtraTerm;
 use crate::model::params::MotorParams;
 use crate::objective::likelihood;
 
-/// Nelder–Mead iterations per start of a warm refit. It was 2000 (command line) and 1500
-/// (quick); at 400 every named case of `tests/diagnose` gives the same answer within its
-/// tolerance (the Levenberg–Marquardt polish of every start finishes the convergence) and
+/// Nelder–Mead iterations per start of a warm refit: at 400 (against 2000 or 1500) every
+/// named case of `tests/diagnose` gives the same answer within its tolerance (the Levenberg–Marquardt polish of every start finishes the convergence) and
 /// a refit costs about half the evaluations (docs/validation.md, "Diagnosis time").
 pub(crate) const REFIT_ITERS: u64 = 400;
 

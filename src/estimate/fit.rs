@@ -337,9 +337,9 @@ pub fn fit(
 /// The best start carried on to a tight convergence (simplex costs within 1e-6, restarts
 /// until one gains less than 1e-6 relative). The starts themselves stop at the looser
 /// [`MultiStartConfig::sd_tolerance`], enough to rank them; the one that is exported and
-/// that intervals are measured from is finished as every start used to be (this
-/// keeps the estimate where a run with the tight tolerance for every start ends,
-/// for a few hundred evaluations instead of a third of all of them).
+/// that intervals are measured from is finished to the tight tolerance alone (this keeps
+/// the estimate where a run with the tight tolerance for every start ends, for a few
+/// hundred evaluations instead of a third of all of them).
 ///
 /// `f0` is the cost at `theta`, as the multi-start recorded it.
 fn finish(

@@ -61,8 +61,9 @@ pub struct MultiStartConfig {
     /// Nelder–Mead's later iterations crawl along the cost's narrow valleys at about 1.6
     /// evaluations an iteration; Levenberg–Marquardt crosses them from the linearised
     /// residuals in steps of k + 1 evaluations. Measured on the shipped dataset, 32 starts
-    /// (docs/performance.md, "Sixth pass"): 37 057 evaluations with Nelder–Mead alone,
-    /// 9 712 with the hand-over after one round, every start at the best minimum.
+    /// (docs/performance.md, "The hand-over to Levenberg–Marquardt"): 37 057 evaluations
+    /// with Nelder–Mead alone, 9 712 with the hand-over after one round, every start at
+    /// the best minimum.
     pub handoff_after_rounds: usize,
     /// Most Levenberg–Marquardt iterations of a hand-over.
     pub handoff_iters: usize,

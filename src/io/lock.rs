@@ -1,6 +1,6 @@
 //! One run per output: a lock file beside the output, holding the owner's pid.
 //!
-//! Two `fit --out X` at once used to interleave their starts in one results file; now the
+//! Two `fit --out X` at once would interleave their starts in one results file, so the
 //! second run finds the lock and stops before any work. The lock is an OS file lock
 //! (`flock`) on `<output>.lock`, so a run killed with `SIGKILL` cannot leave a lock that
 //! blocks the next run: the OS drops the lock with the process, and the next run takes the

@@ -5,8 +5,8 @@
 //!
 //! A missing output folder (or a fit file's missing parent folder) is created, and the
 //! command says so on stderr: batch scripts on clusters name fresh folders, and refusing them
-//! would only move the `mkdir` into every script. Creating them is also what `write_atomic`
-//! always did; now it is said, and done before the work.
+//! would only move the `mkdir` into every script. It is done before the work and said on
+//! stderr.
 //!
 //! Both return the output's [`OutputLock`], held until the command ends.
 

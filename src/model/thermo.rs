@@ -76,7 +76,8 @@ impl Cycle {
             displacement_k: 0.0,
             unit_torques: [0.0; 3],
         };
-        // The same expressions as on every call before they were cached, so the same bits.
+        // Cached once per motor; written as the per-call expressions they stand for, so
+        // that the cached values are the same bits.
         cycle.displacement_k = cycle.v_disp_m3() / (2.0 * PI * RT0);
         cycle.unit_torques = [
             cycle.torque_one_way(1.0, 0.0, 0.0),

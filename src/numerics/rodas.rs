@@ -11,7 +11,8 @@
 //!     error estimate = k_6                   (y_1 minus the order-3 embedded solution)
 //! ```
 //!
-//! with J = ∂f/∂y and ∂f/∂t at (t, y), both by forward differences. Why this and not a BDF:
+//! with J = ∂f/∂y and ∂f/∂t at (t, y), the model's own where it has them, else forward
+//! differences ([`Linearisation`]). Why this and not a BDF:
 //! the motor has four states, so the per-step bookkeeping of a general-purpose BDF
 //! (dynamic vectors and matrices, Nordsieck history, Newton iterations with convergence
 //! tests) cost more than the model itself; a Rosenbrock step is linearly implicit (no Newton

@@ -88,8 +88,8 @@ pub struct FitOptions {
     /// Iteration budget of each start.
     pub max_iters: u64,
     /// Hand each start still running after its first round of Nelder–Mead over to
-    /// Levenberg–Marquardt on the cost's residuals (docs/performance.md, "Sixth pass").
-    /// `false` runs Nelder–Mead alone, round after round, as before the hand-over.
+    /// Levenberg–Marquardt on the cost's residuals (docs/performance.md, "The hand-over to Levenberg–Marquardt").
+    /// `false` runs Nelder–Mead alone, round after round.
     pub handoff: bool,
     /// How 95 % intervals are computed.
     pub uncertainty: UncertaintyMethod,
