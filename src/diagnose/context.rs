@@ -4,13 +4,13 @@
 use super::analysis::{self, ChannelData};
 use super::error::DiagnoseError;
 use super::fitting::{FitJob, Fitted};
-use super::models::names_for;
 use super::observe::{DiagnoseObserver, Progress};
 use super::DiagnoseOptions;
 use crate::data::dataset::Dataset;
 use crate::estimate::Engine;
 use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
+use crate::model::params::estimated_names as names_for;
 use crate::model::params::MotorParams;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{CostModel, CostOptions};

@@ -2,9 +2,9 @@
 //! "Diagnosis") and the extended model's fit file.
 
 use super::analysis::Location;
-use super::models::names_for;
 use super::{discover, Diagnosis, ModelKind, FORMAT};
 use crate::data::fitfile::FitFile;
+use crate::model::params::estimated_names as names_for;
 use serde_json::{json, Value};
 
 /// `diagnosis.json` (docs/formats.md, "Diagnosis"). Uncatalogued entries of `selected` also

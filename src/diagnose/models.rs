@@ -6,7 +6,6 @@ use super::fitting::{self, FitJob, Fitted};
 use super::observe::Progress;
 use super::{analysis, Candidate, ModelKind};
 use crate::data::dataset::Dataset;
-use crate::estimate::space::DEFAULT_ESTIMATED;
 use crate::model::effects::EffectSet;
 
 /// Every refitted model so far, scored against the baseline's BIC.
@@ -88,16 +87,6 @@ impl Models {
         }
         Ok(out)
     }
-}
-
-/// Names estimated in a model: the base model's (docs/model.md, "Parameters") and the
-/// effects' parameters.
-pub(crate) fn names_for(effects: &EffectSet) -> Vec<String> {
-    let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
-    for e in effects.iter() {
-        names.extend(e.parameters().iter().map(|s| s.to_string()));
-    }
-    names
 }
 
 /// Number of parts (catalog effects and discovered terms) of a model.

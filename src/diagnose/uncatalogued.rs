@@ -6,9 +6,10 @@ use super::context::Context;
 use super::discover::{self, Regression};
 use super::error::DiagnoseError;
 use super::fitting::{FitJob, Fitted};
-use super::models::{label_of, names_for, Models};
+use super::models::{label_of, Models};
 use super::observe::{Progress, Proposal};
 use super::{ModelKind, SELECT_DELTA_BIC};
+use crate::model::params::estimated_names as names_for;
 
 /// Regresses the baseline's misfit, refits the proposed models into `models` and returns the
 /// baseline's regression (None when discovery is off). `limit` is the noise ratio that noise

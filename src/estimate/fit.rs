@@ -281,7 +281,7 @@ pub fn fit(
     let best_i = lowest(&polished);
     let (theta, posterior_chi2) = polished.swap_remove(best_i);
     let params = setup.space.params(&theta)?;
-    let prior_chi2 = setup.space.prior.chi2(&setup.space, &params);
+    let prior_chi2 = setup.space.prior.chi2(&setup.space.dims, &params);
     let chi2 = posterior_chi2 - prior_chi2;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
     let k = theta.len();

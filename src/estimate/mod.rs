@@ -6,6 +6,7 @@
 //! of a dataset (`fit`). Progress goes to a [`RunObserver`]; nothing here prints.
 
 pub(crate) mod derivatives;
+pub(crate) mod dimension;
 pub(crate) mod displacement;
 pub(crate) mod engine;
 pub(crate) mod error;

@@ -86,7 +86,7 @@ impl Coordinates for ParamSpace {
         if self.prior.is_empty() {
             return Vec::new();
         }
-        self.prior.residuals(self, motor.params())
+        self.prior.residuals(&self.dims, motor.params())
     }
 }
 

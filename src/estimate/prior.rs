@@ -17,10 +17,10 @@
 //! prior's pull moves it by a fraction (σ_data/σ)² of its distance from v₀: nothing; where
 //! they do not (a catalogue page), the posterior is the prior and the bands carry it.
 //!
-//! A sampler of the estimator's coordinates θ (`estimate::space`) adds [`Prior::ln_prior`]
+//! A sampler of the estimator's coordinates θ (`estimate::dimension`) adds [`Prior::ln_prior`]
 //! to the log-likelihood −χ²/2: the log-density of θ, the Jacobian of θ → ln v included.
 
-use super::space::ParamSpace;
+use super::dimension::Dimension;
 use crate::model::params::{MotorParams, ParamId};
 
 /// The normal quantile of a two-sided 95 % range.
@@ -140,11 +140,9 @@ impl Prior {
     /// The prior's residuals of the space's estimated parameters that have a term, in θ
     /// order: their squares sum to χ²_prior. Parameters held fixed add nothing (they do not
     /// move).
-    pub fn residuals(&self, space: &ParamSpace, params: &MotorParams) -> Vec<f64> {
+    pub fn residuals(&self, dims: &[Dimension], params: &MotorParams) -> Vec<f64> {
         let size = self.size_of(params);
-        space
-            .dims
-            .iter()
+        dims.iter()
             .filter_map(|d| {
                 let t = self.term(d.id)?;
                 Some(t.residual_at_size(params.value(d.id), size))
@@ -154,8 +152,8 @@ impl Prior {
 
     /// χ²_prior = Σ ((ln v − ln v₀)/σ)² over the space's estimated parameters with a term:
     /// −2 ln p(ln v) up to a constant.
-    pub fn chi2(&self, space: &ParamSpace, params: &MotorParams) -> f64 {
-        self.residuals(space, params).iter().map(|r| r * r).sum()
+    pub fn chi2(&self, dims: &[Dimension], params: &MotorParams) -> f64 {
+        self.residuals(dims, params).iter().map(|r| r * r).sum()
     }
 
     /// ln p(θ), the log-density of the estimator's coordinates θ (normalised, up to the prior's mass that the search bounds cut off): for a
@@ -163,20 +161,19 @@ impl Prior {
     /// without, uniform over its bounds in the space's own scale (log for positive
     /// parameters), i.e. the logistic density of θ. −∞ where θ is not finite. A sampler
     /// adds this to the log-likelihood −χ²/2.
-    pub fn ln_prior(&self, space: &ParamSpace, theta: &[f64]) -> f64 {
-        if theta.len() != space.len() || theta.iter().any(|t| !t.is_finite()) {
+    pub fn ln_prior(&self, dims: &[Dimension], theta: &[f64]) -> f64 {
+        if theta.len() != dims.len() || theta.iter().any(|t| !t.is_finite()) {
             return f64::NEG_INFINITY;
         }
         // The size the medians follow, where the displacement is estimated too.
-        let size = space
-            .dims
+        let size = dims
             .iter()
             .zip(theta)
             .find(|(d, _)| d.id == ParamId::V_DISP)
             .zip(self.size_reference_m3)
             .map_or(1.0, |((d, t), v_ref)| d.value(*t) / v_ref);
         let mut lp = 0.0;
-        for (d, t) in space.dims.iter().zip(theta) {
+        for (d, t) in dims.iter().zip(theta) {
             let u = 1.0 / (1.0 + (-t).exp());
             let du_dtheta = u * (1.0 - u);
             // ln of the logistic density; written via softplus to stay finite for large |θ|.
@@ -206,10 +203,8 @@ impl Prior {
     /// parameter with a term, 0 for the others; the Gauss–Newton curvature of χ²_prior/2
     /// where the displacement is fixed (where it is estimated, the medians' dependence on it
     /// adds off-diagonal terms, which the fit's curvature takes from the residuals instead).
-    pub fn precision_theta(&self, space: &ParamSpace, theta: &[f64]) -> Vec<f64> {
-        space
-            .dims
-            .iter()
+    pub fn precision_theta(&self, dims: &[Dimension], theta: &[f64]) -> Vec<f64> {
+        dims.iter()
             .zip(theta)
             .map(|(d, t)| {
                 let Some(term) = self.term(d.id) else {
@@ -231,6 +226,7 @@ impl Prior {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::space::ParamSpace;
     use crate::model::effects::EffectSet;
 
     fn space() -> ParamSpace {
@@ -252,11 +248,11 @@ mod tests {
         // One F above the median is 1.96 σ: χ² = 1.96².
         let s = space();
         let at = MotorParams::default().with("c_in1", 4e-8).unwrap();
-        let chi2 = prior.chi2(&s, &at);
+        let chi2 = prior.chi2(&s.dims, &at);
         // b_crit sits at its median; n_poly has no term.
         assert!((chi2 - Z95 * Z95).abs() < 1e-9, "{chi2}");
-        assert_eq!(prior.residuals(&s, &at).len(), 2);
-        assert!(Prior::none().chi2(&s, &at) == 0.0);
+        assert_eq!(prior.residuals(&s.dims, &at).len(), 2);
+        assert!(Prior::none().chi2(&s.dims, &at) == 0.0);
     }
 
     /// ln p(θ) is a density of θ: its integral is 1 for a parameter whose bounds hold the
@@ -272,14 +268,17 @@ mod tests {
             let integral: f64 = (0..=n)
                 .map(|i| {
                     let w = if i == 0 || i == n { 0.5 } else { 1.0 };
-                    w * prior.ln_prior(&single, &[a + h * i as f64]).exp()
+                    w * prior.ln_prior(&single.dims, &[a + h * i as f64]).exp()
                 })
                 .sum::<f64>()
                 * h;
             assert!((integral - 1.0).abs() < 1e-4, "{name}: {integral}");
         }
         let s = space();
-        assert_eq!(prior.ln_prior(&s, &[f64::NAN, 0.0, 0.0]), f64::NEG_INFINITY);
+        assert_eq!(
+            prior.ln_prior(&s.dims, &[f64::NAN, 0.0, 0.0]),
+            f64::NEG_INFINITY
+        );
     }
 
     /// Where the displacement is estimated, each median follows it by its size law: a motor
@@ -301,11 +300,11 @@ mod tests {
             .unwrap()
             .with("c_in1", scaled_c)
             .unwrap();
-        let r = prior.residuals(&space, &twice);
+        let r = prior.residuals(&space.dims, &twice);
         assert_eq!(r.len(), 2, "{r:?}");
         assert!(r.iter().all(|x| x.abs() < 1e-9), "{r:?}");
         let same_size = nominal.with("c_in1", scaled_c).unwrap();
-        let r = prior.residuals(&space, &same_size);
+        let r = prior.residuals(&space.dims, &same_size);
         let sd = prior.term(ParamId::C_IN1).unwrap().sd_ln;
         assert!((r[0] - 2.0 / 3.0 * 2f64.ln() / sd).abs() < 1e-9, "{r:?}");
         // ln p(θ) follows the same medians: at the scaled point it beats the unscaled one.
@@ -313,7 +312,7 @@ mod tests {
             space.theta(&twice),
             space.theta(&nominal.with("v_disp", 7.6e-6).unwrap()),
         );
-        assert!(prior.ln_prior(&space, &a) > prior.ln_prior(&space, &b));
+        assert!(prior.ln_prior(&space.dims, &a) > prior.ln_prior(&space.dims, &b));
     }
 
     #[test]
@@ -321,13 +320,13 @@ mod tests {
         let s = space();
         let prior = Prior::for_motor(&MotorParams::default());
         let th = vec![0.3, -0.2, 0.1];
-        let prec = prior.precision_theta(&s, &th);
+        let prec = prior.precision_theta(&s.dims, &th);
         let h = 1e-4;
         for j in 0..2 {
             let f = |d: f64| {
                 let mut t = th.clone();
                 t[j] += d;
-                prior.residuals(&s, &s.params(&t).unwrap())[j]
+                prior.residuals(&s.dims, &s.params(&t).unwrap())[j]
             };
             let slope = (f(h) - f(-h)) / (2.0 * h);
             assert!((prec[j] - slope * slope).abs() < 1e-6 * prec[j], "{j}");

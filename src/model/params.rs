@@ -5,7 +5,7 @@
 //! Every parameter is SI. The names are the contract used in fit files and on the command
 //! line; they must not change.
 
-use crate::model::effects::{Effect, N_EFFECTS, PARAM_LISTS};
+use crate::model::effects::{Effect, EffectSet, N_EFFECTS, PARAM_LISTS};
 use std::fmt;
 
 /// What values a parameter may take.
@@ -404,6 +404,16 @@ pub const DEFAULT_ESTIMATED_IDS: [ParamId; N_DEFAULT_ESTIMATED] = default_estima
 
 /// The names of [`DEFAULT_ESTIMATED_IDS`], for code that names parameters by string.
 pub const DEFAULT_ESTIMATED: [&str; N_DEFAULT_ESTIMATED] = names_of(DEFAULT_ESTIMATED_IDS);
+
+/// The names a model with `effects` switched on estimates unasked: the default ones
+/// ([`DEFAULT_ESTIMATED`]), then each effect's parameters in registry order.
+pub fn estimated_names(effects: &EffectSet) -> Vec<String> {
+    let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    for e in effects.iter() {
+        names.extend(e.parameters().iter().map(|s| s.to_string()));
+    }
+    names
+}
 
 /// The parameters a fit of catalogue pages alone with the motor prior estimates besides
 /// the default ones ([`Estimated::OnPagesWithPrior`]), in their θ order.

@@ -21,7 +21,7 @@ use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
-use crate::model::params::{page_prior_extra, ParamId};
+use crate::model::params::{estimated_names, page_prior_extra, ParamId};
 use crate::objective::cost::{CostError, CostOptions};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
@@ -221,7 +221,7 @@ fn search_space(
             .map(|s| s.trim().to_string())
             .filter(|s| !s.is_empty())
             .collect(),
-        None => DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect(),
+        None => estimated_names(&EffectSet::empty()),
     };
     for e in o.effects.iter() {
         for p in e.parameters() {
