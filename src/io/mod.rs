@@ -10,8 +10,15 @@ pub use out::{check_dir, prepare_dir, prepare_file, OutputError};
 pub use stale::temporary_name;
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Where a run's side files go: `<out without .json>.<suffix>` (`fit.json` →
+/// `fit.report.md`, `fit.starts.jsonl`).
+pub fn side_path(out: &Path, suffix: &str) -> PathBuf {
+    let stem = out.with_extension("");
+    PathBuf::from(format!("{}.{suffix}", stem.display()))
+}
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, synced, then
 /// renamed over the target, so that a reader sees either the old or the new file, never half.

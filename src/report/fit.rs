@@ -7,6 +7,7 @@ use crate::data::dataset::Dataset;
 use crate::estimate::fit::{most_sensitive_experiment, FitOutcome, FitSetup};
 use crate::estimate::space::ParamSpace;
 use crate::estimate::uncertainty::Interval;
+use crate::io::side_path;
 use crate::model::motor::Motor;
 use crate::model::params::{conductance_dm3_s_bar, spec, MotorParams, ParamSpec, PARAMS};
 use crate::numerics::DefaultSolver;
@@ -305,6 +306,37 @@ fn parameter_section(md: &mut String, rows: &[ParamRow]) {
         );
     }
     let _ = writeln!(md);
+}
+
+/// Every plot of a fit, written next to its fit file `out` (`<stem>.waterfall.svg`,
+/// `.parameters.svg`, `.profiles.svg`, one overlay per experiment): the paths written.
+pub(crate) fn plots(
+    dataset: &Dataset,
+    cost: &CostModel,
+    space: &ParamSpace,
+    outcome: &FitOutcome,
+    best: &Motor,
+    out: &Path,
+) -> Result<Vec<PathBuf>, PlotError> {
+    let results = &outcome.run.results;
+    let waterfall_svg = side_path(out, "waterfall.svg");
+    waterfall(results, &waterfall_svg)?;
+    let across = side_path(out, "parameters.svg");
+    parameters_across_starts(results, space, &outcome.params, &across)?;
+    let mut written = vec![waterfall_svg, across];
+    let profiles_svg = side_path(out, "profiles.svg");
+    written.extend(profiles(
+        &outcome.intervals,
+        outcome.threshold,
+        &profiles_svg,
+    )?);
+    written.extend(overlays(
+        dataset,
+        cost,
+        &[("fit", best)],
+        &out.with_extension(""),
+    )?);
+    Ok(written)
 }
 
 /// Sorted final costs of every start (log scale): a flat floor reached by many starts is a

@@ -19,6 +19,7 @@ use crate::estimate::multistart::RunObserver;
 use crate::estimate::prior::Prior;
 use crate::estimate::settings::MultiStartConfig;
 use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
+use crate::io::side_path;
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::{estimated_names, page_prior_extra, ParamId};
@@ -309,12 +310,6 @@ fn page_displacement(ds: &Dataset, data: &FitData) -> Option<DisplacementEstimat
     (catalogue_only && displacement_missing(&ds.motor))
         .then(|| displacement_from_page(data, &ds.motor))
         .flatten()
-}
-
-/// Where the run's side files go: `<out without .json>.<suffix>`.
-pub fn side_path(out: &Path, suffix: &str) -> PathBuf {
-    let stem = out.with_extension("");
-    PathBuf::from(format!("{}.{suffix}", stem.display()))
 }
 
 /// One parameter of a catalogue's pinning: how well the catalogue pins it, and whether it
@@ -657,28 +652,14 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
     let mut written = FitWritten::default();
     if plots {
         let best = Motor::new(run.outcome.params.clone(), run.setup.space.effects.clone());
-        let waterfall = side_path(out, "waterfall.svg");
-        report::waterfall(&run.outcome.run.results, &waterfall)?;
-        written.plots.push(waterfall);
-        let across = side_path(out, "parameters.svg");
-        report::parameters_across_starts(
-            &run.outcome.run.results,
-            &run.setup.space,
-            &run.outcome.params,
-            &across,
-        )?;
-        written.plots.push(across);
-        written.plots.extend(report::profiles(
-            &run.outcome.intervals,
-            run.outcome.threshold,
-            &side_path(out, "profiles.svg"),
-        )?);
-        written.plots.extend(report::overlays(
+        written.plots = report::plots(
             &run.dataset,
             &run.data.cost,
-            &[("fit", &best)],
-            &out.with_extension(""),
-        )?);
+            &run.setup.space,
+            &run.outcome,
+            &best,
+            out,
+        )?;
     }
     let md = side_path(out, "report.md");
     let text = report::markdown(

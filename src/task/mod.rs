@@ -19,6 +19,7 @@ pub(crate) mod predict;
 pub(crate) mod simulate;
 pub(crate) mod synth;
 
+pub use crate::io::side_path;
 pub use control::{run_study, write_study, CheckedStudy, ControlStudy, Study, StudyResult};
 pub use diagnose::{
     diagnose, diagnose_dataset, write_diagnosis, DiagnoseOptions, DiagnoseSettings,
@@ -26,8 +27,8 @@ pub use diagnose::{
 };
 pub use export::{export_fmu, petab_problem, ExportError, FmuExport, FmuOptions, PetabProblem};
 pub use fit::{
-    displacement_first_line, fit, page_displacement_of, pinning_lines, side_path, write_fit, Fit,
-    FitError, FitObserver, FitOptions, FitSettings, FitWritten, ParamRange, Pinning, RangeSyntax,
+    displacement_first_line, fit, page_displacement_of, pinning_lines, write_fit, Fit, FitError,
+    FitObserver, FitOptions, FitSettings, FitWritten, ParamRange, Pinning, RangeSyntax,
 };
 pub use predict::{
     fit_atmosphere_pa, predict, predict_observed, pressure_unit, pressure_units, source_name,
