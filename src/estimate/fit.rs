@@ -37,7 +37,8 @@ use crate::data::fitfile::{
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamId};
 use crate::numerics::DefaultSolver;
-use crate::objective::cost::CostModel;
+use crate::objective::cost::{ChannelResiduals, CostModel};
+use crate::sim::experiment::SimError;
 use nalgebra::DMatrix;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -171,6 +172,13 @@ pub struct FitOutcome {
     pub conditions: FitConditions,
     /// Local minima found by the starts.
     pub clusters: Vec<Cluster>,
+    /// The estimate's simulation of every channel the cost J compares, beside its reference
+    /// (what the fit's overlay plots draw), or why it could not be simulated.
+    pub channels: Result<Vec<ChannelResiduals>, SimError>,
+    /// For each estimated parameter that the data leave open (its interval says why), the
+    /// reference experiment that would pin it ([`most_sensitive_experiment`]), where one is
+    /// found.
+    pub would_pin: Vec<(ParamId, Kind)>,
     /// Every start.
     pub run: MultiStartOutcome,
     /// Cost evaluations in all.
@@ -310,6 +318,10 @@ pub fn fit(
         None => (Vec::new(), None),
     };
     let at = problem.evaluate(&theta);
+    let channels = data.cost.residuals(&motor, &DefaultSolver::default());
+    let would_pin = open_parameters(&setup.space, &intervals)
+        .filter_map(|id| Some((id, most_sensitive_experiment(&motor, id.name())?)))
+        .collect();
     Ok(FitOutcome {
         params,
         cost: at.cost,
@@ -328,9 +340,23 @@ pub fn fit(
         covariance,
         conditions: data.conditions,
         clusters,
+        channels,
+        would_pin,
         evaluations: run.evaluations + problem.evaluations() + ml.evaluations(),
         run,
         wall_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The estimated parameters whose interval says why the data leave them open.
+fn open_parameters<'a>(
+    space: &'a ParamSpace,
+    intervals: &'a [Interval],
+) -> impl Iterator<Item = ParamId> + 'a {
+    space.dims.iter().map(|d| d.id).filter(|id| {
+        intervals
+            .iter()
+            .any(|i| i.name == id.name() && i.why_not().is_some())
     })
 }
 

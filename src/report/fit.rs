@@ -4,13 +4,11 @@
 //! reference polynomial and simulation for every channel.
 
 use crate::data::dataset::Dataset;
-use crate::estimate::fit::{most_sensitive_experiment, FitOutcome, FitSetup};
+use crate::estimate::fit::{FitOutcome, FitSetup};
 use crate::estimate::space::ParamSpace;
 use crate::estimate::uncertainty::Interval;
 use crate::io::side_path;
-use crate::model::motor::Motor;
 use crate::model::params::{conductance_dm3_s_bar, spec, MotorParams, ParamSpec, PARAMS};
-use crate::numerics::DefaultSolver;
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
 use crate::report::explain::{self, number};
@@ -54,16 +52,16 @@ impl ParamRow {
 
 /// The estimated parameters of a fit, in the order of its search space.
 pub fn parameter_rows(ds: &Dataset, setup: &FitSetup, out: &FitOutcome) -> Vec<ParamRow> {
-    let motor = Motor::new(out.params.clone(), setup.space.effects.clone());
     setup
         .space
         .dims
         .iter()
         .map(|d| {
-            let s = Some(d.id.spec());
+            let s = d.id.spec();
             let iv = out.intervals.iter().find(|i| i.name == d.name());
             let not_identifiable = iv.and_then(|i| i.why_not()).map(|why| {
-                let hint = match most_sensitive_experiment(&motor, d.name()) {
+                let would_pin = out.would_pin.iter().find(|(id, _)| *id == d.id);
+                let hint = match would_pin.map(|(_, k)| *k) {
                     Some(k) if !ds.experiments.iter().any(|e| e.kind == k) => {
                         format!("; adding the {} experiment would pin it down", k.id())
                     }
@@ -73,11 +71,11 @@ pub fn parameter_rows(ds: &Dataset, setup: &FitSetup, out: &FitOutcome) -> Vec<P
             });
             ParamRow {
                 name: d.name().to_string(),
-                description: s.map_or("", ParamSpec::description),
+                description: s.description(),
                 value: out.params.value(d.id),
-                unit: s.map_or("", |s| s.unit),
+                unit: s.unit,
                 interval: iv.map(|i| (i.lo, i.hi)),
-                conductance: s.is_some_and(ParamSpec::is_conductance),
+                conductance: s.is_conductance(),
                 not_identifiable,
             }
         })
@@ -315,7 +313,6 @@ pub(crate) fn plots(
     cost: &CostModel,
     space: &ParamSpace,
     outcome: &FitOutcome,
-    best: &Motor,
     out: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let results = &outcome.run.results;
@@ -330,10 +327,14 @@ pub(crate) fn plots(
         outcome.threshold,
         &profiles_svg,
     )?);
+    let fit = outcome
+        .channels
+        .as_deref()
+        .map_err(|e| PlotError(e.to_string()))?;
     written.extend(overlays(
         dataset,
         cost,
-        &[("fit", best)],
+        &[("fit", fit)],
         &out.with_extension(""),
     )?);
     Ok(written)
@@ -466,18 +467,9 @@ pub(crate) fn parameters_across_starts(
 pub(crate) fn overlays(
     ds: &Dataset,
     cost: &CostModel,
-    models: &[(&str, &Motor)],
+    runs: &[(&str, &[ChannelResiduals])],
     prefix: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
-    let solver = DefaultSolver::default();
-    let runs: Vec<(&str, Vec<ChannelResiduals>)> = models
-        .iter()
-        .map(|(name, m)| {
-            cost.residuals(m, &solver)
-                .map(|r| (*name, r))
-                .map_err(|e| PlotError(e.to_string()))
-        })
-        .collect::<Result<_, _>>()?;
     let mut written = Vec::new();
     for ex in &ds.experiments {
         let rec = &ex.recording;
@@ -503,10 +495,10 @@ pub(crate) fn overlays(
             if ax.log10 {
                 chart = chart.log_x();
             }
-            chart = with_simulations(chart, &runs, &ex.file, reference, p_atm);
+            chart = with_simulations(chart, runs, &ex.file, reference, p_atm);
             panels.push(chart);
             residuals.push(residual_panel(
-                &runs,
+                runs,
                 &ex.file,
                 reference,
                 (&x_meas, y_meas),
@@ -534,7 +526,7 @@ pub(crate) fn overlays(
 /// channel `reference` of experiment `file`, sorted along the abscissa.
 fn with_simulations(
     mut chart: Chart,
-    runs: &[(&str, Vec<ChannelResiduals>)],
+    runs: &[(&str, &[ChannelResiduals])],
     file: &str,
     reference: &ChannelReference,
     p_atm: f64,
@@ -583,7 +575,7 @@ fn with_simulations(
 /// zero line. `data` holds the recording's abscissa (as [`Abscissa::measured`]) and channel
 /// values, SI, indexed by row.
 fn residual_panel(
-    runs: &[(&str, Vec<ChannelResiduals>)],
+    runs: &[(&str, &[ChannelResiduals])],
     file: &str,
     reference: &ChannelReference,
     (x_meas, y_meas): (&[f64], &[f64]),
@@ -775,10 +767,8 @@ mod tests {
         let x = [100.0, 200.0, 300.0, 400.0];
         let y = [0.30, 0.9, 0.20, 0.10];
         let reference = torque_reference(&x, &y);
-        let runs = vec![(
-            "fit",
-            vec![channel_residuals(&reference, vec![0, 2], vec![0.25, 0.26])],
-        )];
+        let fit = vec![channel_residuals(&reference, vec![0, 2], vec![0.25, 0.26])];
+        let runs = [("fit", fit.as_slice())];
         let chart = residual_panel(&runs, "page.csv", &reference, (&x, &y), 101_325.0);
         assert_eq!(chart.y_label, "data − fit, torque [N·m]");
         assert_eq!(chart.series[0].name, "data − fit");
@@ -803,10 +793,8 @@ mod tests {
     #[test]
     fn single_point_channel_gets_a_fit_marker() {
         let reference = torque_reference(&[100.0, 200.0, 300.0, 400.0], &[0.3, 0.2, 0.1, 0.0]);
-        let one = vec![(
-            "fit",
-            vec![channel_residuals(&reference, vec![1], vec![0.21])],
-        )];
+        let fit = vec![channel_residuals(&reference, vec![1], vec![0.21])];
+        let one = [("fit", fit.as_slice())];
         let chart = with_simulations(Chart::new("t", "x", "y"), &one, "page.csv", &reference, 1e5);
         assert_eq!(chart.series.len(), 1);
         assert_eq!(chart.series[0].name, "fit");
@@ -819,10 +807,8 @@ mod tests {
             svg.contains(">fit<") || svg.contains(">\nfit"),
             "no legend entry"
         );
-        let many = vec![(
-            "fit",
-            vec![channel_residuals(&reference, vec![0, 1, 2], vec![0.3; 3])],
-        )];
+        let fit = vec![channel_residuals(&reference, vec![0, 1, 2], vec![0.3; 3])];
+        let many = [("fit", fit.as_slice())];
         let chart = with_simulations(
             Chart::new("t", "x", "y"),
             &many,

@@ -651,13 +651,11 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
     run.file.write(out).map_err(write_error(out))?;
     let mut written = FitWritten::default();
     if plots {
-        let best = Motor::new(run.outcome.params.clone(), run.setup.space.effects.clone());
         written.plots = report::plots(
             &run.dataset,
             &run.data.cost,
             &run.setup.space,
             &run.outcome,
-            &best,
             out,
         )?;
     }
