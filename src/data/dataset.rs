@@ -241,33 +241,9 @@ impl Recording {
         p_atm_pa: f64,
         sparse: bool,
     ) -> Result<Self, DataError> {
-        // A byte-order mark (as spreadsheet programs write) is not part of the first name.
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        // CRLF line ends (Windows exports): the csv reader places a record after CR on the
-        // line before, so located errors would name the line above the bad one.
-        let unix;
-        let text = if text.contains('\r') {
-            unix = text.replace("\r\n", "\n");
-            unix.as_str()
-        } else {
-            text
-        };
-        if text.trim().is_empty() {
-            return Err(DataError::new(
-                path,
-                "file is empty (expected a header row and data rows)",
-            )
-            .at(1));
-        }
-        if text.len() > Cells::MAX_TEXT {
-            return Err(DataError::new(
-                path,
-                format!(
-                    "file of {} bytes is larger than the 4 GiB vanefit reads; split the recording",
-                    text.len()
-                ),
-            ));
-        }
+        let text = Self::unix_text(text);
+        let text = text.as_ref();
+        Self::check_text_size(path, text)?;
         refuse_other_separators(path, text)?;
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(true)
@@ -286,49 +262,9 @@ impl Recording {
         }
         let mut lines: Vec<u64> = Vec::with_capacity(rows);
         for record in reader.records() {
-            let record = record.map_err(|e| {
-                let next = lines.last().map_or(2, |l| l + 1);
-                let line = e.position().map_or(next, |p| p.line());
-                let what = decimal_commas(&e, text, line).unwrap_or_else(|| e.to_string());
-                DataError::new(path, format!("malformed row: {what}")).at(line)
-            })?;
+            let record = record.map_err(|e| Self::malformed_row(path, text, &e, &lines))?;
             let line = record.position().map(|p| p.line()).unwrap_or(0);
-            if record.len() != columns.len() {
-                return Err(DataError::new(
-                    path,
-                    format!(
-                        "row has {} fields, header has {}",
-                        record.len(),
-                        columns.len()
-                    ),
-                )
-                .at(line));
-            }
-            for (i, (field, col)) in record.iter().zip(columns.iter_mut()).enumerate() {
-                if sparse && field.is_empty() {
-                    col.si.push(f64::NAN);
-                    col.raw.push("");
-                    continue;
-                }
-                let v: f64 = field.parse().map_err(|_| {
-                    DataError::new(
-                        path,
-                        format!("'{field}' is not a number (use '.' as decimal mark)"),
-                    )
-                    .at(line)
-                    .col(i, &col.name)
-                })?;
-                let si = col.unit.parsed_si(field, v, p_atm_pa).unwrap_or(f64::NAN);
-                if !(v.is_finite() && si.is_finite()) {
-                    return Err(
-                        DataError::new(path, format!("'{field}' is not a finite number"))
-                            .at(line)
-                            .col(i, &col.name),
-                    );
-                }
-                col.si.push(si);
-                col.raw.push(field);
-            }
+            Self::push_row(path, &record, line, &mut columns, p_atm_pa, sparse)?;
             lines.push(line);
         }
         if lines.is_empty() {
@@ -341,6 +277,99 @@ impl Recording {
         };
         rec.check_time()?;
         Ok(rec)
+    }
+
+    /// The CSV text as the reader should see it: without a byte-order mark (as spreadsheet
+    /// programs write; it is not part of the first name) and with CRLF line ends made LF
+    /// (Windows exports: the csv reader places a record after CR on the line before, so
+    /// located errors would name the line above the bad one).
+    fn unix_text(text: &str) -> std::borrow::Cow<'_, str> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        if text.contains('\r') {
+            std::borrow::Cow::Owned(text.replace("\r\n", "\n"))
+        } else {
+            std::borrow::Cow::Borrowed(text)
+        }
+    }
+
+    /// Refuses a text with nothing in it, or one too large for the cells' offsets.
+    fn check_text_size(path: &Path, text: &str) -> Result<(), DataError> {
+        if text.trim().is_empty() {
+            return Err(DataError::new(
+                path,
+                "file is empty (expected a header row and data rows)",
+            )
+            .at(1));
+        }
+        if text.len() > Cells::MAX_TEXT {
+            return Err(DataError::new(
+                path,
+                format!(
+                    "file of {} bytes is larger than the 4 GiB vanefit reads; split the recording",
+                    text.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A row the csv reader could not read, located at its line (the one after the last
+    /// row read where the reader does not say), naming decimal commas where they are why.
+    fn malformed_row(path: &Path, text: &str, e: &csv::Error, lines: &[u64]) -> DataError {
+        let next = lines.last().map_or(2, |l| l + 1);
+        let line = e.position().map_or(next, |p| p.line());
+        let what = decimal_commas(e, text, line).unwrap_or_else(|| e.to_string());
+        DataError::new(path, format!("malformed row: {what}")).at(line)
+    }
+
+    /// Appends one data row (at `line`) to the columns, in SI and as written; with `sparse`
+    /// an empty cell is NaN. A row with another count of fields than the header is refused
+    /// at its line, a field that is not a finite number at its cell.
+    fn push_row(
+        path: &Path,
+        record: &csv::StringRecord,
+        line: u64,
+        columns: &mut [Column],
+        p_atm_pa: f64,
+        sparse: bool,
+    ) -> Result<(), DataError> {
+        if record.len() != columns.len() {
+            return Err(DataError::new(
+                path,
+                format!(
+                    "row has {} fields, header has {}",
+                    record.len(),
+                    columns.len()
+                ),
+            )
+            .at(line));
+        }
+        for (i, (field, col)) in record.iter().zip(columns.iter_mut()).enumerate() {
+            if sparse && field.is_empty() {
+                col.si.push(f64::NAN);
+                col.raw.push("");
+                continue;
+            }
+            let v: f64 = field.parse().map_err(|_| {
+                DataError::new(
+                    path,
+                    format!("'{field}' is not a number (use '.' as decimal mark)"),
+                )
+                .at(line)
+                .col(i, &col.name)
+            })?;
+            let si = col.unit.parsed_si(field, v, p_atm_pa).unwrap_or(f64::NAN);
+            if !(v.is_finite() && si.is_finite()) {
+                return Err(
+                    DataError::new(path, format!("'{field}' is not a finite number"))
+                        .at(line)
+                        .col(i, &col.name),
+                );
+            }
+            col.si.push(si);
+            col.raw.push(field);
+        }
+        Ok(())
     }
 
     fn check_time(&self) -> Result<(), DataError> {
@@ -580,71 +609,9 @@ fn experiment_data(
 ) -> Result<ExperimentData, DataError> {
     let at = |key: &str, message: String| located(rig.0, rig.1, Table::Experiment(k), key, message);
     let catalogue = ex.kind == Kind::Catalogue;
-    let p_supply_pa = match (&ex.p_supply, ex.p_supply_mpa) {
-        (Some(_), Some(_)) => {
-            return Err(at(
-                "p_supply",
-                "give p_supply or p_supply_mpa, not both".into(),
-            ))
-        }
-        (Some(text), None) => {
-            let (p, _, _) = catalogue::parse_value(text, Quantity::PPort1, p_atm_pa)
-                .map_err(|m| at("p_supply", format!("p_supply: {m}")))?;
-            if !(p > p_atm_pa && p < 5e6) {
-                return Err(at(
-                    "p_supply",
-                    format!(
-                        "p_supply = '{text}' must be above atmosphere and below 5 MPa absolute"
-                    ),
-                ));
-            }
-            Some(p)
-        }
-        (None, mpa) => mpa.map(|p| p * 1e6),
-    };
-    if !catalogue {
-        for key in ["figures", "tolerance"] {
-            let given = if key == "figures" {
-                ex.figures.is_some()
-            } else {
-                ex.tolerance.is_some()
-            };
-            if given {
-                return Err(at(key, format!("{key} is for kind = \"catalogue\" only")));
-            }
-        }
-    }
-    let tolerance = ex.tolerance.unwrap_or(catalogue::DEFAULT_TOLERANCE);
-    if !(tolerance.is_finite() && tolerance > 0.0 && tolerance < 0.5) {
-        return Err(at("tolerance", format!("tolerance = {tolerance} must be in (0, 0.5): the reading tolerance as a fraction of full scale")));
-    }
-    let recording = match &ex.file {
-        None if !catalogue => {
-            return Err(at(
-                "kind",
-                format!("{} needs a recording: file = \"…\"", ex.kind.id()),
-            ))
-        }
-        None => None,
-        Some(file) => {
-            let csv = dir.join(file);
-            if !csv.is_file() {
-                return Err(at(
-                    "file",
-                    format!(
-                        "recording '{file}' not found (looked for {})",
-                        csv.display()
-                    ),
-                ));
-            }
-            let text = read_text(&csv)?;
-            Some(if catalogue {
-                Recording::parse_sparse(&csv, &text, p_atm_pa)?
-            } else {
-                Recording::parse(&csv, &text, p_atm_pa)?
-            })
-        }
-    };
+    let p_supply_pa = supply_pressure_pa(ex, p_atm_pa, &at)?;
+    let tolerance = reading_tolerance(ex, &at)?;
+    let recording = read_recording(dir, ex, p_atm_pa, &at)?;
     let (recording, figures) = if catalogue {
         let src = catalogue::Source {
             rig,
@@ -670,17 +637,116 @@ fn experiment_data(
             .as_ref()
             .and_then(|_| key_location(rig.1, Table::Experiment(k), "p_supply"))
             .map(|l| l.0),
-        load: match ex.load {
-            None | Some(LoadSection::None) => Load::None,
-            Some(LoadSection::ViscousBrake { c_nm_s_rad }) => Load::ViscousBrake { c_nm_s_rad },
-            Some(LoadSection::Torque { t_nm }) => Load::Torque { t_nm },
-        },
+        load: experiment_load(ex),
         weight: ex.weight.unwrap_or(1.0),
         channel_weights: ex.weights.clone().unwrap_or_default(),
         recording,
         tolerance: catalogue.then_some(tolerance),
         figures,
     })
+}
+
+/// The experiment's supply pressure, Pa absolute, from `p_supply` as printed or from
+/// `p_supply_mpa` (not both); `None` where neither is given. `at` locates a key's error.
+fn supply_pressure_pa(
+    ex: &ExperimentSection,
+    p_atm_pa: f64,
+    at: &impl Fn(&str, String) -> DataError,
+) -> Result<Option<f64>, DataError> {
+    Ok(match (&ex.p_supply, ex.p_supply_mpa) {
+        (Some(_), Some(_)) => {
+            return Err(at(
+                "p_supply",
+                "give p_supply or p_supply_mpa, not both".into(),
+            ))
+        }
+        (Some(text), None) => {
+            let (p, _, _) = catalogue::parse_value(text, Quantity::PPort1, p_atm_pa)
+                .map_err(|m| at("p_supply", format!("p_supply: {m}")))?;
+            if !(p > p_atm_pa && p < 5e6) {
+                return Err(at(
+                    "p_supply",
+                    format!(
+                        "p_supply = '{text}' must be above atmosphere and below 5 MPa absolute"
+                    ),
+                ));
+            }
+            Some(p)
+        }
+        (None, mpa) => mpa.map(|p| p * 1e6),
+    })
+}
+
+/// The relative reading tolerance of the experiment's stated data (a catalogue's; other
+/// kinds may give neither it nor figures), checked to lie in (0, 0.5).
+fn reading_tolerance(
+    ex: &ExperimentSection,
+    at: &impl Fn(&str, String) -> DataError,
+) -> Result<f64, DataError> {
+    if ex.kind != Kind::Catalogue {
+        for key in ["figures", "tolerance"] {
+            let given = if key == "figures" {
+                ex.figures.is_some()
+            } else {
+                ex.tolerance.is_some()
+            };
+            if given {
+                return Err(at(key, format!("{key} is for kind = \"catalogue\" only")));
+            }
+        }
+    }
+    let tolerance = ex.tolerance.unwrap_or(catalogue::DEFAULT_TOLERANCE);
+    if !(tolerance.is_finite() && tolerance > 0.0 && tolerance < 0.5) {
+        return Err(at("tolerance", format!("tolerance = {tolerance} must be in (0, 0.5): the reading tolerance as a fraction of full scale")));
+    }
+    Ok(tolerance)
+}
+
+/// The experiment's CSV recording read from `dir` (a catalogue's with empty cells
+/// allowed); `None` only for a catalogue of key figures alone, which needs no file.
+fn read_recording(
+    dir: &Path,
+    ex: &ExperimentSection,
+    p_atm_pa: f64,
+    at: &impl Fn(&str, String) -> DataError,
+) -> Result<Option<Recording>, DataError> {
+    let catalogue = ex.kind == Kind::Catalogue;
+    Ok(match &ex.file {
+        None if !catalogue => {
+            return Err(at(
+                "kind",
+                format!("{} needs a recording: file = \"…\"", ex.kind.id()),
+            ))
+        }
+        None => None,
+        Some(file) => {
+            let csv = dir.join(file);
+            if !csv.is_file() {
+                return Err(at(
+                    "file",
+                    format!(
+                        "recording '{file}' not found (looked for {})",
+                        csv.display()
+                    ),
+                ));
+            }
+            let text = read_text(&csv)?;
+            Some(if catalogue {
+                Recording::parse_sparse(&csv, &text, p_atm_pa)?
+            } else {
+                Recording::parse(&csv, &text, p_atm_pa)?
+            })
+        }
+    })
+}
+
+/// The experiment's load on the shaft (none where rig.toml gives none).
+fn experiment_load(ex: &ExperimentSection) -> Load {
+    match ex.load {
+        None | Some(LoadSection::None) => Load::None,
+        Some(LoadSection::ViscousBrake { c_nm_s_rad }) => Load::ViscousBrake { c_nm_s_rad },
+        Some(LoadSection::Torque { t_nm }) => Load::Torque { t_nm },
+    }
 }
 
 fn locate_toml_error(path: &Path, text: &str, e: &toml::de::Error) -> DataError {
@@ -816,7 +882,33 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
     if let Err(e) = rig.motor.nominal_params() {
         return Err(located(path, text, Table::Motor, e.key(), e.to_string()));
     }
-    let c = &rig.conditions;
+    check_conditions(path, text, &rig.conditions)?;
+    if rig.experiment.is_empty() {
+        return Err(located(
+            path,
+            text,
+            Table::Top,
+            "experiment",
+            "no [[experiment]] tables".into(),
+        ));
+    }
+    for (k, ex) in rig.experiment.iter().enumerate() {
+        let label = ex.name(k);
+        let at =
+            |key: &str, message: String| located(path, text, Table::Experiment(k), key, message);
+        if let Some(p) = ex.p_supply_mpa {
+            if !(p.is_finite() && p * 1e6 > rig.conditions.p_atm_pa && p < 5.0) {
+                return Err(at("p_supply_mpa", format!("experiment '{}': p_supply_mpa = {p} must be an absolute pressure above atmosphere and below 5 MPa", label)));
+            }
+        }
+        check_weights(ex, &label, &at)?;
+        check_load(ex, &label, &at)?;
+    }
+    Ok(())
+}
+
+/// Refuses an atmosphere outside 50 to 150 kPa or an implausible supply temperature.
+fn check_conditions(path: &Path, text: &str, c: &ConditionsSection) -> Result<(), DataError> {
     if !(c.p_atm_pa.is_finite() && (50e3..=150e3).contains(&c.p_atm_pa)) {
         return Err(located(
             path,
@@ -841,76 +933,74 @@ fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
             ),
         ));
     }
-    if rig.experiment.is_empty() {
-        return Err(located(
-            path,
-            text,
-            Table::Top,
-            "experiment",
-            "no [[experiment]] tables".into(),
+    Ok(())
+}
+
+/// Refuses an experiment's `weight` or channel `weights` that is negative or not finite,
+/// and a channel weight naming no channel of the experiment's kind. `label` names the
+/// experiment, `at` locates a key's error.
+fn check_weights(
+    ex: &ExperimentSection,
+    label: &str,
+    at: &impl Fn(&str, String) -> DataError,
+) -> Result<(), DataError> {
+    let bad_weight = |w: f64| !(w.is_finite() && w >= 0.0);
+    if ex.weight.is_some_and(bad_weight) {
+        return Err(at(
+            "weight",
+            format!("experiment '{}': weight must be finite and >= 0", label),
         ));
     }
-    for (k, ex) in rig.experiment.iter().enumerate() {
-        let label = ex.name(k);
-        let at =
-            |key: &str, message: String| located(path, text, Table::Experiment(k), key, message);
-        if let Some(p) = ex.p_supply_mpa {
-            if !(p.is_finite() && p * 1e6 > c.p_atm_pa && p < 5.0) {
-                return Err(at("p_supply_mpa", format!("experiment '{}': p_supply_mpa = {p} must be an absolute pressure above atmosphere and below 5 MPa", label)));
-            }
-        }
-        let bad_weight = |w: f64| !(w.is_finite() && w >= 0.0);
-        if ex.weight.is_some_and(bad_weight) {
-            return Err(at(
-                "weight",
-                format!("experiment '{}': weight must be finite and >= 0", label),
-            ));
-        }
-        if let Some(weights) = &ex.weights {
-            let channels = ex.kind.channels();
-            for (name, w) in weights {
-                if !channels.iter().any(|q| q.prefix() == name) {
-                    let known: Vec<_> = channels.iter().map(|q| q.prefix()).collect();
-                    return Err(at(
-                        name,
-                        format!(
-                            "experiment '{}': weights names '{name}', which is not a channel of {} (channels: {})",
-                            label,
-                            ex.kind.id(),
-                            known.join(", ")
-                        ),
-                    ));
-                }
-                if bad_weight(*w) {
-                    return Err(at(
-                        name,
-                        format!(
-                            "experiment '{}': weight of {name} must be finite and >= 0",
-                            label
-                        ),
-                    ));
-                }
-            }
-        }
-        match ex.load {
-            Some(LoadSection::ViscousBrake { c_nm_s_rad })
-                if !(c_nm_s_rad.is_finite() && c_nm_s_rad >= 0.0) =>
-            {
+    if let Some(weights) = &ex.weights {
+        let channels = ex.kind.channels();
+        for (name, w) in weights {
+            if !channels.iter().any(|q| q.prefix() == name) {
+                let known: Vec<_> = channels.iter().map(|q| q.prefix()).collect();
                 return Err(at(
-                    "c_nm_s_rad",
-                    format!("experiment '{}': load c_nm_s_rad must be >= 0", label),
+                    name,
+                    format!(
+                        "experiment '{}': weights names '{name}', which is not a channel of {} (channels: {})",
+                        label,
+                        ex.kind.id(),
+                        known.join(", ")
+                    ),
                 ));
             }
-            Some(LoadSection::Torque { t_nm }) if !t_nm.is_finite() => {
+            if bad_weight(*w) {
                 return Err(at(
-                    "t_nm",
-                    format!("experiment '{}': load t_nm must be finite", label),
+                    name,
+                    format!(
+                        "experiment '{}': weight of {name} must be finite and >= 0",
+                        label
+                    ),
                 ));
             }
-            _ => {}
         }
     }
     Ok(())
+}
+
+/// Refuses a negative viscous brake or a torque load that is not finite.
+fn check_load(
+    ex: &ExperimentSection,
+    label: &str,
+    at: &impl Fn(&str, String) -> DataError,
+) -> Result<(), DataError> {
+    match ex.load {
+        Some(LoadSection::ViscousBrake { c_nm_s_rad })
+            if !(c_nm_s_rad.is_finite() && c_nm_s_rad >= 0.0) =>
+        {
+            Err(at(
+                "c_nm_s_rad",
+                format!("experiment '{}': load c_nm_s_rad must be >= 0", label),
+            ))
+        }
+        Some(LoadSection::Torque { t_nm }) if !t_nm.is_finite() => Err(at(
+            "t_nm",
+            format!("experiment '{}': load t_nm must be finite", label),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Runs one of the input checks of an experiment's kind.

@@ -407,31 +407,6 @@ impl FitFile {
     /// The JSON document (parameters in the fixed order of `params::PARAMS`; effect
     /// parameters only for the effects switched on).
     pub fn to_json(&self) -> Value {
-        let mut parameters = Map::new();
-        for s in PARAMS {
-            if s.effect.is_some_and(|e| !self.effects.contains(e)) {
-                continue;
-            }
-            let ci = self.ci95.iter().find(|(n, _)| n == s.name).map(|(_, c)| *c);
-            let entry = ParamEntry {
-                value: self.params.get(s.name).unwrap_or(s.default),
-                unit: s.unit.to_string(),
-                estimated: self.estimated.iter().any(|n| n == s.name),
-                ci95: ci,
-            };
-            let mut value = serde_json::to_value(entry).expect("plain data");
-            if let Some(v) = self.verdicts.iter().find(|v| v.name == s.name) {
-                value["identifiable"] = v.identifiable.into();
-                value["bounds95"] = serde_json::to_value(v.bounds95).expect("plain data");
-                if let Some(why) = &v.why {
-                    value["why"] = why.clone().into();
-                }
-            } else if self.statistics.is_some() && self.estimated.iter().any(|n| n == s.name) {
-                // Estimated, but no interval asked for: not computed, said as null.
-                value["identifiable"] = Value::Null;
-            }
-            parameters.insert(s.name.to_string(), value);
-        }
         let mut doc = Map::new();
         doc.insert("format".into(), FORMAT.into());
         doc.insert("dataset".into(), self.dataset.clone().into());
@@ -440,7 +415,7 @@ impl FitFile {
             model["discovered"] = Value::Array(self.extra.iter().map(term_to_json).collect());
         }
         doc.insert("model".into(), model);
-        doc.insert("parameters".into(), Value::Object(parameters));
+        doc.insert("parameters".into(), Value::Object(self.parameters_json()));
         doc.insert("cost".into(), self.cost.map_or(Value::Null, Value::from));
         doc.insert(
             "starts".into(),
@@ -474,18 +449,52 @@ impl FitFile {
             );
         }
         if !self.profiles.is_empty() {
-            let profiles: Map<String, Value> = self
-                .profiles
-                .iter()
-                .map(|p| {
-                    let v = serde_json::to_value(p).expect("plain data");
-                    (p.parameter.clone(), v)
-                })
-                .collect();
-            doc.insert("profiles".into(), Value::Object(profiles));
+            doc.insert("profiles".into(), Value::Object(self.profiles_json()));
         }
         doc.insert("version".into(), env!("CARGO_PKG_VERSION").into());
         Value::Object(doc)
+    }
+
+    /// The `parameters` object: one entry per parameter of `params::PARAMS` in that order
+    /// (effect parameters only for the effects switched on), with its interval and verdict.
+    fn parameters_json(&self) -> Map<String, Value> {
+        let mut parameters = Map::new();
+        for s in PARAMS {
+            if s.effect.is_some_and(|e| !self.effects.contains(e)) {
+                continue;
+            }
+            let ci = self.ci95.iter().find(|(n, _)| n == s.name).map(|(_, c)| *c);
+            let entry = ParamEntry {
+                value: self.params.get(s.name).unwrap_or(s.default),
+                unit: s.unit.to_string(),
+                estimated: self.estimated.iter().any(|n| n == s.name),
+                ci95: ci,
+            };
+            let mut value = serde_json::to_value(entry).expect("plain data");
+            if let Some(v) = self.verdicts.iter().find(|v| v.name == s.name) {
+                value["identifiable"] = v.identifiable.into();
+                value["bounds95"] = serde_json::to_value(v.bounds95).expect("plain data");
+                if let Some(why) = &v.why {
+                    value["why"] = why.clone().into();
+                }
+            } else if self.statistics.is_some() && self.estimated.iter().any(|n| n == s.name) {
+                // Estimated, but no interval asked for: not computed, said as null.
+                value["identifiable"] = Value::Null;
+            }
+            parameters.insert(s.name.to_string(), value);
+        }
+        parameters
+    }
+
+    /// The `profiles` object: each likelihood profile under its parameter's name.
+    fn profiles_json(&self) -> Map<String, Value> {
+        self.profiles
+            .iter()
+            .map(|p| {
+                let v = serde_json::to_value(p).expect("plain data");
+                (p.parameter.clone(), v)
+            })
+            .collect()
     }
 
     /// Writes the file atomically (temporary file, then rename).

@@ -77,12 +77,35 @@ const MASS_STEP: f64 = 1e-5;
 
 /// The library of candidate terms (coefficient 1).
 pub fn library() -> Vec<ExtraTerm> {
-    let term = |balance, pressure, speed| ExtraTerm {
+    let mut out = torque_terms();
+    // Leak paths (mass leaves one balance and enters the other): every path, every flow
+    // law, constant or scaled by the speed's magnitude.
+    for path in LeakPath::ALL {
+        for law in P::LAWS {
+            for w in [W::One, W::AbsOmega] {
+                out.push(unit_term(BalanceId::Path(path), law, w));
+            }
+        }
+    }
+    for b in [BalanceId::Mass1, BalanceId::Mass2, BalanceId::MassE] {
+        out.extend(mass_terms(b));
+    }
+    out
+}
+
+/// A library term: `pressure`·`speed` in `balance`, coefficient 1.
+fn unit_term(balance: BalanceId, pressure: P, speed: W) -> ExtraTerm {
+    ExtraTerm {
         balance,
         pressure,
         speed,
         coefficient: 1.0,
-    };
+    }
+}
+
+/// The library's loss torques: pressures times speed, pressure- and load-dependent
+/// Coulomb-like terms, and friction laws beyond Coulomb and viscous.
+fn torque_terms() -> Vec<ExtraTerm> {
     let mut out = Vec::new();
     // Speed only: ω is `visc`, ω·|ω| is `vane_friction_speed_squared`; pressure times speed:
     for p in [
@@ -93,7 +116,7 @@ pub fn library() -> Vec<ExtraTerm> {
         P::P2MinusPe,
         P::P1MinusP2,
     ] {
-        out.push(term(BalanceId::Torque, p, W::Omega));
+        out.push(unit_term(BalanceId::Torque, p, W::Omega));
     }
     // Coulomb-like, pressure-dependent ((p_1 − p_e)·tanh is `pressure_dependent_friction`;
     // the chamber sum is vanes pressed by both chambers, one law where the catalog effect
@@ -109,54 +132,50 @@ pub fn library() -> Vec<ExtraTerm> {
         P::P2Gauge,
         P::PeGauge,
     ] {
-        out.push(term(BalanceId::Torque, p, W::Sign));
+        out.push(unit_term(BalanceId::Torque, p, W::Sign));
     }
     // Friction laws beyond Coulomb and viscous: a power-law viscous loss and the exponential
     // Stribeck curve (the Gaussian one is `breakaway_friction`):
-    out.push(term(BalanceId::Torque, P::One, W::OmegaPow15));
-    out.push(term(BalanceId::Torque, P::One, W::StribeckExp));
-    // Leak paths (mass leaves one balance and enters the other): every path, every flow
-    // law, constant or scaled by the speed's magnitude.
-    for path in LeakPath::ALL {
-        for law in P::LAWS {
-            for w in [W::One, W::AbsOmega] {
-                out.push(term(BalanceId::Path(path), law, w));
-            }
+    out.push(unit_term(BalanceId::Torque, P::One, W::OmegaPow15));
+    out.push(unit_term(BalanceId::Torque, P::One, W::StribeckExp));
+    out
+}
+
+/// The library's flows into the one mass balance `b` alone: pressure-driven and
+/// speed-driven.
+fn mass_terms(b: BalanceId) -> Vec<ExtraTerm> {
+    let mut out = Vec::new();
+    // Pressure-driven flows into one balance (gauge pressures and differences; an
+    // absolute pressure alone would blow at vacuum). A volume's own gauge pressure is
+    // the laminar leak path to atmosphere, so it is left to the paths:
+    let own = match b {
+        BalanceId::Mass1 => P::P1Gauge,
+        BalanceId::Mass2 => P::P2Gauge,
+        _ => P::PeGauge,
+    };
+    for p in [
+        P::P1Gauge,
+        P::P2Gauge,
+        P::PeGauge,
+        P::P1MinusPe,
+        P::P2MinusPe,
+        P::P1MinusP2,
+    ] {
+        if p != own {
+            out.push(unit_term(b, p, W::One));
         }
     }
-    for b in [BalanceId::Mass1, BalanceId::Mass2, BalanceId::MassE] {
-        // Pressure-driven flows into one balance (gauge pressures and differences; an
-        // absolute pressure alone would blow at vacuum). A volume's own gauge pressure is
-        // the laminar leak path to atmosphere, so it is left to the paths:
-        let own = match b {
-            BalanceId::Mass1 => P::P1Gauge,
-            BalanceId::Mass2 => P::P2Gauge,
-            _ => P::PeGauge,
-        };
-        for p in [
-            P::P1Gauge,
-            P::P2Gauge,
-            P::PeGauge,
-            P::P1MinusPe,
-            P::P2MinusPe,
-            P::P1MinusP2,
-        ] {
-            if p != own {
-                out.push(term(b, p, W::One));
-            }
-        }
-        // Speed-driven flows (pumping, carry-over: density times swept volume):
-        out.push(term(b, P::One, W::Omega));
-        for p in [
-            P::P1,
-            P::P2,
-            P::Pe,
-            P::P1MinusPe,
-            P::P2MinusPe,
-            P::P1MinusP2,
-        ] {
-            out.push(term(b, p, W::Omega));
-        }
+    // Speed-driven flows (pumping, carry-over: density times swept volume):
+    out.push(unit_term(b, P::One, W::Omega));
+    for p in [
+        P::P1,
+        P::P2,
+        P::Pe,
+        P::P1MinusPe,
+        P::P2MinusPe,
+        P::P1MinusP2,
+    ] {
+        out.push(unit_term(b, p, W::Omega));
     }
     out
 }

@@ -175,10 +175,7 @@ impl StiffSolver for DiffsolBdf {
         x0: State,
         t_out: &[f64],
     ) -> Result<Vec<State>, SolveError> {
-        use diffsol::{
-            NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector,
-        };
-        let err = |e: diffsol::DiffsolError| SolveError(e.to_string());
+        use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder};
         // diffsol builds its Jacobian column by column from J·e_j at one state: keep f(t, x)
         // of the last state so that each column costs one evaluation, not two.
         let last = std::cell::RefCell::new((f64::NAN, [f64::NAN; N_STATES], [0.0; N_STATES]));
@@ -207,51 +204,79 @@ impl StiffSolver for DiffsolBdf {
                 N_STATES,
             )
             .build()
-            .map_err(err)?;
-        let mut solver = problem.bdf::<NalgebraLU<f64>>().map_err(err)?;
-        // Step freely and interpolate each output time from the step that covers it.
-        // (diffsol's `solve_dense` can panic when its internal time stops a rounding error
-        // short of the last output time; stepping ourselves keeps that a plain error.)
-        let mut out = Vec::with_capacity(t_out.len());
-        let Some(&t_end) = t_out.last() else {
+            .map_err(diffsol_error)?;
+        let mut solver = problem.bdf::<NalgebraLU<f64>>().map_err(diffsol_error)?;
+        step_to_outputs(&mut solver, t0, t_out)
+    }
+}
+
+/// diffsol's error as the integrator's message.
+#[cfg(feature = "bdf")]
+fn diffsol_error(e: diffsol::DiffsolError) -> SolveError {
+    SolveError(e.to_string())
+}
+
+/// The states at the times `t_out` (increasing, all ≥ `t0`, the solver's start): steps
+/// `solver` freely and interpolates each output time from the step that covers it.
+/// (diffsol's `solve_dense` can panic when its internal time stops a rounding error short
+/// of the last output time; stepping ourselves keeps that a plain error.)
+#[cfg(feature = "bdf")]
+fn step_to_outputs<'a, Eqn, S>(
+    solver: &mut S,
+    t0: f64,
+    t_out: &[f64],
+) -> Result<Vec<State>, SolveError>
+where
+    Eqn: diffsol::OdeEquations<T = f64, V = diffsol::NalgebraVec<f64>> + 'a,
+    S: diffsol::OdeSolverMethod<'a, Eqn>,
+{
+    use diffsol::OdeSolverStopReason;
+    let mut out = Vec::with_capacity(t_out.len());
+    let Some(&t_end) = t_out.last() else {
+        return Ok(out);
+    };
+    if t_out.windows(2).any(|w| w[1] < w[0]) || t_out[0] < t0 {
+        return Err(SolveError("output times must increase from t0".into()));
+    }
+    if t_end > t0 {
+        solver.set_stop_time(t_end).map_err(diffsol_error)?;
+    }
+    let mut k = 0;
+    loop {
+        let now = solver.state().t;
+        while k < t_out.len() && t_out[k] <= now {
+            out.push(if t_out[k] == now {
+                read_state(solver.state().y)
+            } else {
+                read_state(&solver.interpolate(t_out[k]).map_err(diffsol_error)?)
+            });
+            k += 1;
+        }
+        if k == t_out.len() {
             return Ok(out);
-        };
-        if t_out.windows(2).any(|w| w[1] < w[0]) || t_out[0] < t0 {
-            return Err(SolveError("output times must increase from t0".into()));
         }
-        if t_end > t0 {
-            solver.set_stop_time(t_end).map_err(err)?;
-        }
-        let read =
-            |y: &diffsol::NalgebraVec<f64>| -> State { std::array::from_fn(|i| y.get_index(i)) };
-        let mut k = 0;
-        loop {
+        if let OdeSolverStopReason::TstopReached = solver.step().map_err(diffsol_error)? {
+            // Stopped at t_end, up to rounding: interpolate what lies inside the last
+            // step; an output a rounding error beyond it is the final state.
             let now = solver.state().t;
-            while k < t_out.len() && t_out[k] <= now {
-                out.push(if t_out[k] == now {
-                    read(solver.state().y)
-                } else {
-                    read(&solver.interpolate(t_out[k]).map_err(err)?)
-                });
+            while k < t_out.len() && t_out[k] < now {
+                out.push(read_state(
+                    &solver.interpolate(t_out[k]).map_err(diffsol_error)?,
+                ));
                 k += 1;
             }
-            if k == t_out.len() {
-                return Ok(out);
-            }
-            if let OdeSolverStopReason::TstopReached = solver.step().map_err(err)? {
-                // Stopped at t_end, up to rounding: interpolate what lies inside the last
-                // step; an output a rounding error beyond it is the final state.
-                let now = solver.state().t;
-                while k < t_out.len() && t_out[k] < now {
-                    out.push(read(&solver.interpolate(t_out[k]).map_err(err)?));
-                    k += 1;
-                }
-                let y = read(solver.state().y);
-                out.extend(std::iter::repeat_n(y, t_out.len() - k));
-                return Ok(out);
-            }
+            let y = read_state(solver.state().y);
+            out.extend(std::iter::repeat_n(y, t_out.len() - k));
+            return Ok(out);
         }
     }
+}
+
+/// A diffsol state vector as a [`State`].
+#[cfg(feature = "bdf")]
+fn read_state(y: &diffsol::NalgebraVec<f64>) -> State {
+    use diffsol::Vector;
+    std::array::from_fn(|i| y.get_index(i))
 }
 
 #[cfg(feature = "bdf")]

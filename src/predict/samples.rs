@@ -314,60 +314,18 @@ pub(super) fn sample_bands(
         .iter()
         .map(|x| post.to_values(x))
         .collect();
-    let quantiles = (0..names.len())
-        .map(|i| {
-            let mut v: Vec<f64> = chains.flat().iter().map(|x| post.to_values(x)[i]).collect();
-            v.sort_by(f64::total_cmp);
-            [0.025, 0.5, 0.975].map(|q| percentile(&v, q))
-        })
-        .collect();
-    // The spread's parameters that are not sampled, drawn per sample from one stream.
-    let spread: Vec<(usize, String)> = unc
-        .names
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| unc.spread.contains(n) && !names.contains(n))
-        .map(|(j, n)| (j, n.clone()))
-        .collect();
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(sampling.seed.wrapping_add(0x9e37_79b9));
-    let jobs: Vec<(Vec<String>, Vec<f64>)> = values
-        .into_iter()
-        .map(|v| {
-            let mut n = names.clone();
-            let mut v = v;
-            for (j, name) in &spread {
-                let z: f64 = StandardNormal.sample(&mut rng);
-                n.push(name.clone());
-                v.push((unc.log_values[*j] + unc.sd[*j] * z).exp());
-            }
-            (n, v)
-        })
-        .collect();
+    let quantiles = posterior_quantiles(&post, &chains, names.len());
+    let spread = spread_not_sampled(unc, &names);
+    let jobs = with_spread_draws(values, &names, unc, &spread, sampling.seed);
     let total = jobs.len();
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<Option<Vec<f64>>> = jobs
-        .par_iter()
-        .map(|(n, v)| {
-            let r = motor_with(fit, n, v).and_then(|m| figures(&m)).ok();
-            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress("propagating", k, total);
-            r.filter(|f| f.iter().all(|y| y.is_finite()))
-        })
-        .collect();
+    let results = propagate(fit, &jobs, figures, progress);
     let ok: Vec<&Vec<f64>> = results.iter().flatten().collect();
     let failed = total - ok.len();
     if ok.len() < 2 || failed * 10 > total {
         return Err(PredictError::SampleFigures { failed, total });
     }
-    let bands = (0..ok[0].len())
-        .map(|i| {
-            let mut v: Vec<f64> = ok.iter().map(|d| d[i]).collect();
-            v.sort_by(f64::total_cmp);
-            [percentile(&v, 0.025), percentile(&v, 0.975)]
-        })
-        .collect();
     Ok((
-        bands,
+        percentile_bands(&ok),
         PosteriorSummary {
             names,
             diagnostics,
@@ -382,4 +340,87 @@ pub(super) fn sample_bands(
             spread: spread.into_iter().map(|(_, n)| n).collect(),
         },
     ))
+}
+
+/// The 2.5, 50 and 97.5 % quantiles of each of the `n` sampled parameters over every kept
+/// sample of `chains`, SI.
+fn posterior_quantiles(
+    post: &FitPosterior,
+    chains: &crate::estimate::sample::Chains,
+    n: usize,
+) -> Vec<[f64; 3]> {
+    (0..n)
+        .map(|i| {
+            let mut v: Vec<f64> = chains.flat().iter().map(|x| post.to_values(x)[i]).collect();
+            v.sort_by(f64::total_cmp);
+            [0.025, 0.5, 0.975].map(|q| percentile(&v, q))
+        })
+        .collect()
+}
+
+/// The parameters of the stated spread that are not sampled (`names`), with their index
+/// in `unc`.
+fn spread_not_sampled(unc: &ParamUncertainty, names: &[String]) -> Vec<(usize, String)> {
+    unc.names
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| unc.spread.contains(n) && !names.contains(n))
+        .map(|(j, n)| (j, n.clone()))
+        .collect()
+}
+
+/// The parameter names and SI values to propagate for each sample: its sampled `values`
+/// followed by the `spread` parameters, drawn per sample from one stream seeded by `seed`.
+fn with_spread_draws(
+    values: Vec<Vec<f64>>,
+    names: &[String],
+    unc: &ParamUncertainty,
+    spread: &[(usize, String)],
+    seed: u64,
+) -> Vec<(Vec<String>, Vec<f64>)> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_add(0x9e37_79b9));
+    values
+        .into_iter()
+        .map(|v| {
+            let mut n = names.to_vec();
+            let mut v = v;
+            for (j, name) in spread {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                n.push(name.clone());
+                v.push((unc.log_values[*j] + unc.sd[*j] * z).exp());
+            }
+            (n, v)
+        })
+        .collect()
+}
+
+/// Each sample's figures, in parallel, reporting progress; `None` where the motor fails or
+/// a figure is not finite.
+fn propagate(
+    fit: &FitFile,
+    jobs: &[(Vec<String>, Vec<f64>)],
+    figures: &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync),
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Vec<Option<Vec<f64>>> {
+    let total = jobs.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    jobs.par_iter()
+        .map(|(n, v)| {
+            let r = motor_with(fit, n, v).and_then(|m| figures(&m)).ok();
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress("propagating", k, total);
+            r.filter(|f| f.iter().all(|y| y.is_finite()))
+        })
+        .collect()
+}
+
+/// Each figure's 95 % band: the 2.5 and 97.5 percentiles of its values over the samples.
+fn percentile_bands(samples: &[&Vec<f64>]) -> Vec<[f64; 2]> {
+    (0..samples[0].len())
+        .map(|i| {
+            let mut v: Vec<f64> = samples.iter().map(|d| d[i]).collect();
+            v.sort_by(f64::total_cmp);
+            [percentile(&v, 0.025), percentile(&v, 0.975)]
+        })
+        .collect()
 }

@@ -672,30 +672,15 @@ where
         }
     };
     let (numeric_x, fy) = (label(0), label(1));
-    // Named categories at the integers 1..=n: their names there, nothing between.
     let fx = |v: &f64| {
         if chart.x_names.is_empty() {
-            return numeric_x(v);
+            numeric_x(v)
+        } else {
+            category_label(&chart.x_names, *v)
         }
-        let k = v.round();
-        match chart.x_names.get((k as usize).wrapping_sub(1)) {
-            Some(name) if (v - k).abs() < 1e-9 && k >= 1.0 => name.clone(),
-            _ => String::new(),
-        }
-    };
-    // Long scientific labels on a linear x axis: fewer of them, so that they do not touch.
-    let scientific = |span: Option<(f64, f64)>| {
-        span.is_some_and(|(lo, hi)| !(1e-3..1e5).contains(&lo.abs().max(hi.abs())))
-    };
-    let x_labels = if !chart.x_names.is_empty() {
-        chart.x_names.len()
-    } else if scientific(spans[0]) {
-        6
-    } else {
-        10
     };
     cc.configure_mesh()
-        .x_labels(x_labels)
+        .x_labels(x_label_count(chart, spans[0]))
         .x_desc(chart.x_label.as_str())
         .y_desc(chart.y_label.as_str())
         .x_label_formatter(&fx)
@@ -707,34 +692,77 @@ where
         .map_err(err)?;
     for (k, s) in chart.series.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()];
-        // Split at points that cannot be shown, so that a line is broken there.
-        let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
-        for p in &s.points {
-            if chart.visible(p) {
-                runs.last_mut().expect("never empty").push(*p);
-            } else if !runs.last().expect("never empty").is_empty() {
-                runs.push(Vec::new());
-            }
-        }
-        for run in runs.into_iter().filter(|r| !r.is_empty()) {
-            match s.style {
-                Style::Line => cc
-                    .draw_series(LineSeries::new(run, colour.stroke_width(2)))
-                    .map_err(err)?,
-                Style::Points => cc
-                    .draw_series(run.into_iter().map(|p| Circle::new(p, 3, colour.filled())))
-                    .map_err(err)?,
-                Style::Marker => cc
-                    .draw_series(
-                        run.into_iter()
-                            .map(|p| Cross::new(p, MARKER_SIZE, colour.stroke_width(2))),
-                    )
-                    .map_err(err)?,
-            };
+        for run in visible_runs(chart, s) {
+            draw_run(&mut cc, s.style, run, colour)?;
         }
     }
     let (xs, ys) = cc.plotting_area().get_pixel_range();
     Ok([xs.start, ys.start, xs.end, ys.end])
+}
+
+/// The label of named categories at the integers 1..=n: their names there, nothing
+/// between.
+fn category_label(names: &[String], v: f64) -> String {
+    let k = v.round();
+    match names.get((k as usize).wrapping_sub(1)) {
+        Some(name) if (v - k).abs() < 1e-9 && k >= 1.0 => name.clone(),
+        _ => String::new(),
+    }
+}
+
+/// How many labels the x axis asks for: one per named category, else fewer of the long
+/// scientific labels of a linear axis spanning `span`, so that they do not touch.
+fn x_label_count(chart: &Chart, span: Option<(f64, f64)>) -> usize {
+    let scientific = span.is_some_and(|(lo, hi)| !(1e-3..1e5).contains(&lo.abs().max(hi.abs())));
+    if !chart.x_names.is_empty() {
+        chart.x_names.len()
+    } else if scientific {
+        6
+    } else {
+        10
+    }
+}
+
+/// The series' points split at points the chart cannot show, so that a line is broken
+/// there; each run is non-empty.
+fn visible_runs(chart: &Chart, s: &Series) -> Vec<Vec<(f64, f64)>> {
+    let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    for p in &s.points {
+        if chart.visible(p) {
+            runs.last_mut().expect("never empty").push(*p);
+        } else if !runs.last().expect("never empty").is_empty() {
+            runs.push(Vec::new());
+        }
+    }
+    runs.into_iter().filter(|r| !r.is_empty()).collect()
+}
+
+/// Draws one run of a series' points in its style and colour.
+fn draw_run<DB, CT>(
+    cc: &mut ChartContext<'_, DB, CT>,
+    style: Style,
+    run: Vec<(f64, f64)>,
+    colour: RGBColor,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend,
+    CT: CoordTranslate<From = (f64, f64)>,
+{
+    match style {
+        Style::Line => cc
+            .draw_series(LineSeries::new(run, colour.stroke_width(2)))
+            .map_err(err)?,
+        Style::Points => cc
+            .draw_series(run.into_iter().map(|p| Circle::new(p, 3, colour.filled())))
+            .map_err(err)?,
+        Style::Marker => cc
+            .draw_series(
+                run.into_iter()
+                    .map(|p| Cross::new(p, MARKER_SIZE, colour.stroke_width(2))),
+            )
+            .map_err(err)?,
+    };
+    Ok(())
 }
 
 #[cfg(test)]

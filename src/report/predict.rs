@@ -347,7 +347,35 @@ pub fn tables_markdown(pr: &Prediction, display: &PressureDisplay) -> String {
 /// it leaves out, extrapolation, nozzle and atmosphere.
 pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
     let o = &pr.options;
-    let mut notes = vec![
+    let mut notes = figure_notes(pr, display);
+    if pr.uncertainty.basis == crate::predict::uncertainty::BandBasis::Independent {
+        notes.push(
+            "WARNING: the parameters are treated as INDEPENDENT (no covariance in the fit file): where they trade off, the bands are wrong, too wide or too narrow."
+                .into(),
+        );
+    }
+    notes.extend(pr.fit_warnings.iter().cloned());
+    notes.extend(resting_notes(pr, display));
+    notes.extend(band_notes(pr));
+    notes.extend(uncovered_notes(pr));
+    notes.push(supply_range_note(pr, display));
+    notes.push(match o.nozzle {
+        Some(n) => format!(
+            "With an extra nozzle of C = {:e} m3/(s*Pa) in series at the {}.",
+            n.c_m3_s_pa,
+            n.port.name()
+        ),
+        None => "No extra nozzle.".into(),
+    });
+    notes.push(format!("Atmosphere {:.0} Pa.", o.p_atm_pa));
+    notes
+}
+
+/// What the figures are: the speed grid of maximum power, the operating points of the
+/// other figures, and what each factor compares.
+fn figure_notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
+    let o = &pr.options;
+    vec![
         format!(
             "Maximum power is exact on a grid of {} rpm: the grid speed of largest power near \
              the continuous optimum of P(ω) = T(ω)·ω; torque and air at maximum power are at \
@@ -363,16 +391,13 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
             display.text(o.reference_pa),
             display.label()
         ),
-    ];
-    if pr.uncertainty.basis == crate::predict::uncertainty::BandBasis::Independent {
-        notes.push(
-            "WARNING: the parameters are treated as INDEPENDENT (no covariance in the fit file): where they trade off, the bands are wrong, too wide or too narrow."
-                .into(),
-        );
-    }
-    notes.extend(pr.fit_warnings.iter().cloned());
-    notes.extend(resting_notes(pr, display));
-    notes.extend(band_notes(pr));
+    ]
+}
+
+/// What the band leaves out or covers only by a stated spread: parameters neither
+/// sampled nor in the covariance, those held fixed, discovered terms' coefficients.
+fn uncovered_notes(pr: &Prediction) -> Vec<String> {
+    let mut notes = Vec::new();
     let sampled: &[String] = pr.bands.sampling.as_ref().map_or(&[], |s| &s.names);
     for (name, why) in &pr.uncertainty.uncovered {
         if !sampled.contains(name) {
@@ -400,46 +425,40 @@ pub fn notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
             pr.discovered_terms
         ));
     }
-    notes.push(match pr.supply_range_pa {
-        Some([lo, hi]) => {
-            let out: Vec<String> = pr
-                .pressures
-                .iter()
-                .filter(|p| p.extrapolated == Some(true))
-                .map(|p| display.text(p.p_supply_pa))
-                .collect();
-            let verdict = if out.is_empty() {
-                "every asked pressure lies within it".to_string()
-            } else {
-                format!(
-                    "EXTRAPOLATED (marked *): {} {}",
-                    out.join(", "),
-                    display.label()
-                )
-            };
-            format!(
-                "The fitted data covered supply pressures {} to {} {} (± {:.0} kPa, the \
-                 pressure sensor's tolerance); {verdict}.",
-                short((display.value(lo) * 1e4).round() / 1e4),
-                short((display.value(hi) * 1e4).round() / 1e4),
-                display.label(),
-                pr.range_tolerance_pa / 1e3
-            )
-        }
-        None => "The fit file does not say which supply pressures its data covered: \
-                 extrapolation cannot be flagged."
-            .into(),
-    });
-    notes.push(match o.nozzle {
-        Some(n) => format!(
-            "With an extra nozzle of C = {:e} m3/(s*Pa) in series at the {}.",
-            n.c_m3_s_pa,
-            n.port.name()
-        ),
-        None => "No extra nozzle.".into(),
-    });
-    notes.push(format!("Atmosphere {:.0} Pa.", o.p_atm_pa));
     notes
+}
+
+/// The supply pressures the fitted data covered and which asked pressures lie outside
+/// them (extrapolated), or that the fit file does not say.
+fn supply_range_note(pr: &Prediction, display: &PressureDisplay) -> String {
+    let Some([lo, hi]) = pr.supply_range_pa else {
+        return "The fit file does not say which supply pressures its data covered: \
+                extrapolation cannot be flagged."
+            .into();
+    };
+    let out: Vec<String> = pr
+        .pressures
+        .iter()
+        .filter(|p| p.extrapolated == Some(true))
+        .map(|p| display.text(p.p_supply_pa))
+        .collect();
+    let verdict = if out.is_empty() {
+        "every asked pressure lies within it".to_string()
+    } else {
+        format!(
+            "EXTRAPOLATED (marked *): {} {}",
+            out.join(", "),
+            display.label()
+        )
+    };
+    format!(
+        "The fitted data covered supply pressures {} to {} {} (± {:.0} kPa, the \
+         pressure sensor's tolerance); {verdict}.",
+        short((display.value(lo) * 1e4).round() / 1e4),
+        short((display.value(hi) * 1e4).round() / 1e4),
+        display.label(),
+        pr.range_tolerance_pa / 1e3
+    )
 }
 
 /// One note per pressure naming the figures whose band rests on the motor prior, the
@@ -503,72 +522,11 @@ pub fn resting_notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> 
 /// method), why, and how well the samples converged.
 pub fn band_notes(pr: &Prediction) -> Vec<String> {
     let b = &pr.bands;
-    let mut out = Vec::new();
     match (&b.sampling, &b.delta_unreliable) {
-        (Some(s), _) => {
-            let why = match &b.delta_unreliable {
-                Some(w) if b.choice == BandChoice::Auto => {
-                    format!(" (--bands auto: the delta method is not to be trusted here: {w})")
-                }
-                _ => format!(" (--bands {})", b.choice.name()),
-            };
-            out.push(format!(
-                "EVERY band is made from POSTERIOR SAMPLES{why}: the 2.5 and 97.5 percentiles \
-                 of each figure over {} samples of {} ({} walkers × {} steps after {} burn-in, \
-                 affine-invariant ensemble of differential-evolution and stretch moves, seed {}, \
-                 acceptance {:.2}); the value is the \
-                 figure at the estimate.",
-                s.draws - s.failed_draws,
-                s.names.join(", "),
-                s.walkers,
-                s.steps,
-                s.burn_in,
-                s.seed,
-                s.acceptance
-            ));
-            let worst_rhat = s.diagnostics.iter().map(|d| d.rhat).fold(0.0, f64::max);
-            let least_ess = s
-                .diagnostics
-                .iter()
-                .map(|d| d.ess_bulk.min(d.ess_tail))
-                .fold(f64::INFINITY, f64::min);
-            out.push(if s.converged() {
-                format!(
-                    "The samples converged: largest R̂ {worst_rhat:.3} (< 1.01), smallest \
-                     effective sample size {least_ess:.0} (≥ 400)."
-                )
-            } else {
-                format!(
-                    "The samples did NOT converge by the usual rules (R̂ < 1.01, effective \
-                     sample size ≥ 400): largest R̂ {worst_rhat:.3}, smallest effective sample \
-                     size {least_ess:.0}; run longer (--steps) before trusting the bands."
-                )
-            });
-            let outside = outside_own_band(pr);
-            if outside > 0 {
-                out.push(format!(
-                    "{outside} figure(s) at the estimate lie OUTSIDE their own band: the \
-                     posterior's mass lies away from the best fit (a lopsided valley, or a \
-                     parameter the data do not pin and the prior does not hold)."
-                ));
-            }
-            if s.failed_draws > 0 {
-                out.push(format!(
-                    "{} of {} samples gave no figures (the motor fails at some pressure) and \
-                     are left out.",
-                    s.failed_draws, s.draws
-                ));
-            }
-            if !s.spread.is_empty() {
-                out.push(format!(
-                    "{} not sampled: drawn for each sample within the stated spread.",
-                    s.spread.join(", ")
-                ));
-            }
-        }
-        (None, Some(w)) => {
-            out.push(format!("{}.", pr.uncertainty.basis.describe()));
-            out.push(match b.choice {
+        (Some(s), _) => sampled_band_notes(pr, s),
+        (None, Some(w)) => vec![
+            format!("{}.", pr.uncertainty.basis.describe()),
+            match b.choice {
                 BandChoice::Delta => format!(
                     "The delta method is NOT to be trusted here ({w}); --bands samples (with \
                      the fit's dataset, --data) bands from posterior samples instead."
@@ -577,15 +535,88 @@ pub fn band_notes(pr: &Prediction) -> Vec<String> {
                     "The delta method is NOT to be trusted here ({w}), but the fit's dataset \
                      was not given (--data): the bands above may be far off."
                 ),
-            });
-        }
-        (None, None) => out.push(format!(
+            },
+        ],
+        (None, None) => vec![format!(
             "{} (--bands {}).",
             pr.uncertainty.basis.describe(),
             b.choice.name()
-        )),
+        )],
+    }
+}
+
+/// The notes on bands made from the posterior samples `s`: why samples, how they were
+/// drawn, whether they converged, and what they leave out or found amiss.
+fn sampled_band_notes(pr: &Prediction, s: &crate::predict::PosteriorSummary) -> Vec<String> {
+    let b = &pr.bands;
+    let why = match &b.delta_unreliable {
+        Some(w) if b.choice == BandChoice::Auto => {
+            format!(" (--bands auto: the delta method is not to be trusted here: {w})")
+        }
+        _ => format!(" (--bands {})", b.choice.name()),
+    };
+    let mut out = vec![
+        format!(
+            "EVERY band is made from POSTERIOR SAMPLES{why}: the 2.5 and 97.5 percentiles \
+             of each figure over {} samples of {} ({} walkers × {} steps after {} burn-in, \
+             affine-invariant ensemble of differential-evolution and stretch moves, seed {}, \
+             acceptance {:.2}); the value is the \
+             figure at the estimate.",
+            s.draws - s.failed_draws,
+            s.names.join(", "),
+            s.walkers,
+            s.steps,
+            s.burn_in,
+            s.seed,
+            s.acceptance
+        ),
+        convergence_note(s),
+    ];
+    let outside = outside_own_band(pr);
+    if outside > 0 {
+        out.push(format!(
+            "{outside} figure(s) at the estimate lie OUTSIDE their own band: the \
+             posterior's mass lies away from the best fit (a lopsided valley, or a \
+             parameter the data do not pin and the prior does not hold)."
+        ));
+    }
+    if s.failed_draws > 0 {
+        out.push(format!(
+            "{} of {} samples gave no figures (the motor fails at some pressure) and \
+             are left out.",
+            s.failed_draws, s.draws
+        ));
+    }
+    if !s.spread.is_empty() {
+        out.push(format!(
+            "{} not sampled: drawn for each sample within the stated spread.",
+            s.spread.join(", ")
+        ));
     }
     out
+}
+
+/// Whether the samples converged by the usual rules, with their largest R̂ and smallest
+/// effective sample size.
+fn convergence_note(s: &crate::predict::PosteriorSummary) -> String {
+    let worst_rhat = s.diagnostics.iter().map(|d| d.rhat).fold(0.0, f64::max);
+    let least_ess = s
+        .diagnostics
+        .iter()
+        .map(|d| d.ess_bulk.min(d.ess_tail))
+        .fold(f64::INFINITY, f64::min);
+    if s.converged() {
+        format!(
+            "The samples converged: largest R̂ {worst_rhat:.3} (< 1.01), smallest \
+             effective sample size {least_ess:.0} (≥ 400)."
+        )
+    } else {
+        format!(
+            "The samples did NOT converge by the usual rules (R̂ < 1.01, effective \
+             sample size ≥ 400): largest R̂ {worst_rhat:.3}, smallest effective sample \
+             size {least_ess:.0}; run longer (--steps) before trusting the bands."
+        )
+    }
 }
 
 /// Catalogue figures and factors (all pressures) whose value at the estimate lies outside

@@ -451,21 +451,43 @@ pub(super) fn recording(
     curves: Option<Recording>,
     figures: &[Figure],
 ) -> Result<Recording, DataError> {
-    let quantities = [
-        Quantity::Speed,
-        Quantity::Torque,
-        Quantity::Power,
-        Quantity::Flow1,
-    ];
     let mut rec = curves.unwrap_or_else(|| Recording {
         file: src.rig.0.to_path_buf(),
         columns: Vec::new(),
         lines: Vec::new(),
     });
+    refuse_other_columns(&rec)?;
+    let rows = figure_rows(figures);
+    // Rows from here on are the figures of rig.toml: their errors name the key.
+    let keys = FigureKeys::new(rec.rows(), &rows);
+    add_figure_columns(&mut rec, &rows, figures);
+    append_figure_rows(&mut rec, rows, src.p_atm_pa);
+    check_curves(&rec, src.tolerance, |q, row, message| {
+        keys.locate(src, &rec, q, row, message)
+    })?;
+    Ok(rec)
+}
+
+/// The quantities of a catalogue's curves, in the order of a figure row's cells.
+const CURVE_QUANTITIES: [Quantity; 4] = [
+    Quantity::Speed,
+    Quantity::Torque,
+    Quantity::Power,
+    Quantity::Flow1,
+];
+
+/// The index of `q` among [`CURVE_QUANTITIES`] (0 for any other).
+fn curve_index(q: Quantity) -> usize {
+    CURVE_QUANTITIES.iter().position(|x| *x == q).unwrap_or(0)
+}
+
+/// Refuses a curve file with a column other than speed, torque, power and air, at that
+/// column.
+fn refuse_other_columns(rec: &Recording) -> Result<(), DataError> {
     if let Some(c) = rec
         .columns
         .iter()
-        .position(|c| !quantities.contains(&c.quantity))
+        .position(|c| !CURVE_QUANTITIES.contains(&c.quantity))
     {
         let name = rec.columns[c].name.clone();
         return Err(DataError::new(
@@ -475,14 +497,13 @@ pub(super) fn recording(
         .at(1)
         .col(c, &name));
     }
-    let rows = figure_rows(figures);
-    // Rows from here on are the figures of rig.toml: their errors name the key.
-    let n_curve_rows = rec.rows();
-    let figure_keys: Vec<[Option<String>; 4]> = rows
-        .iter()
-        .map(|(r, _)| r.map(|c| c.and_then(|(_, f)| f.map(|f| f.key.clone()))))
-        .collect();
-    for (k, &q) in quantities.iter().enumerate() {
+    Ok(())
+}
+
+/// Adds a column, empty in the rows so far, for each quantity the figure rows give and
+/// the curves do not; its unit is that of the first figure of the quantity, as printed.
+fn add_figure_columns(rec: &mut Recording, rows: &[([Cell<'_>; 4], u64)], figures: &[Figure]) {
+    for (k, &q) in CURVE_QUANTITIES.iter().enumerate() {
         let n_before = rec.rows();
         if rec.column(q).is_none() && rows.iter().any(|(r, _)| r[k].is_some()) {
             // The column's unit: the first figure of that quantity, as printed.
@@ -499,32 +520,64 @@ pub(super) fn recording(
             });
         }
     }
+}
+
+/// Appends the figure rows to every column: the SI value and the text as printed (with
+/// the figure's unit where it is not the column's), NaN and empty where a row gives none.
+fn append_figure_rows(rec: &mut Recording, rows: Vec<([Cell<'_>; 4], u64)>, p_atm_pa: f64) {
     for (row, line) in rows {
         for col in &mut rec.columns {
-            let k = quantities
-                .iter()
-                .position(|q| *q == col.quantity)
-                .unwrap_or(0);
+            let k = curve_index(col.quantity);
             let (si, raw) = match row[k] {
                 None => (f64::NAN, String::new()),
                 // As printed where the figure's unit is the column's, else with its unit.
                 Some((v, Some(f))) if f.unit == col.unit => (v, format!("{}", f.written)),
                 Some((v, Some(f))) if k > 0 => (v, format!("{} {}", f.written, f.unit.suffix())),
-                Some((v, _)) => (v, format!("{}", col.unit.from_si(v, src.p_atm_pa))),
+                Some((v, _)) => (v, format!("{}", col.unit.from_si(v, p_atm_pa))),
             };
             col.si.push(si);
             col.raw.push(&raw);
         }
         rec.lines.push(line);
     }
-    let locate = |q: Quantity, row: usize, message: String| {
-        let k = quantities.iter().position(|x| *x == q).unwrap_or(0);
+}
+
+/// Where a catalogue recording's figure rows begin and the rig.toml key of each of their
+/// cells, so that an error about a cell is placed at the figure that gave it.
+struct FigureKeys {
+    /// Rows read from the curve file, before the first figure row.
+    n_curve_rows: usize,
+    /// Each figure row's keys, one per quantity of [`CURVE_QUANTITIES`] (`None` where the
+    /// cell was not a figure).
+    keys: Vec<[Option<String>; 4]>,
+}
+
+impl FigureKeys {
+    /// The keys of `rows`, which follow `n_curve_rows` curve rows.
+    fn new(n_curve_rows: usize, rows: &[([Cell<'_>; 4], u64)]) -> Self {
+        let keys = rows
+            .iter()
+            .map(|(r, _)| r.map(|c| c.and_then(|(_, f)| f.map(|f| f.key.clone()))))
+            .collect();
+        Self { n_curve_rows, keys }
+    }
+
+    /// An error about the cell of quantity `q` in row `row` of `rec`: in a figure row at
+    /// the figure's key of rig.toml (the first of the row if the quantity was not a
+    /// figure), in a curve row at the file's line and column.
+    fn locate(
+        &self,
+        src: &Source<'_>,
+        rec: &Recording,
+        q: Quantity,
+        row: usize,
+        message: String,
+    ) -> DataError {
+        let k = curve_index(q);
         match row
-            .checked_sub(n_curve_rows)
-            .and_then(|f| figure_keys.get(f))
+            .checked_sub(self.n_curve_rows)
+            .and_then(|f| self.keys.get(f))
         {
-            // A figure row: at the figure's key of rig.toml (the first of the row if
-            // the quantity was not a figure).
             Some(keys) => match keys[k].as_ref().or(keys.iter().flatten().next()) {
                 Some(key) => src.at(key, message),
                 None => DataError::new(src.rig.0, message),
@@ -540,9 +593,7 @@ pub(super) fn recording(
                     .col(c, &rec.columns[c].name)
             }
         }
-    };
-    check_curves(&rec, src.tolerance, locate)?;
-    Ok(rec)
+    }
 }
 
 /// Every row has a speed ≥ 0; torque, power and air are ≥ 0; power is not above

@@ -190,104 +190,106 @@ fn with_start(mut v: Variable, start: f64) -> Variable {
 
 /// The inputs and outputs.
 fn inputs_and_outputs(fit: &FitFile) -> Vec<Variable> {
-    use Role::{Input, Output};
+    let mut v = inputs(fit);
+    v.extend(outputs());
+    v
+}
+
+/// The inputs (boundary pressures, load torque, extra throttles), each with its start
+/// value: the fit's highest supply pressure and its atmosphere, no load, no throttle.
+fn inputs(fit: &FitFile) -> Vec<Variable> {
     const C: &str = "m3/(s*Pa)";
     let p_atm = p_atm_start(fit);
-    vec![
-        with_start(
-            var(
-                "p_supply",
-                vr::P_SUPPLY,
-                Input,
-                "Pa",
-                "absolute pressure upstream of port 1",
-            ),
+    let inputs = [
+        (
+            "p_supply",
+            vr::P_SUPPLY,
+            "Pa",
+            "absolute pressure upstream of port 1",
             supply_start(fit),
         ),
-        with_start(
-            var(
-                "p_back",
-                vr::P_BACK,
-                Input,
-                "Pa",
-                "absolute pressure downstream of port 2",
-            ),
+        (
+            "p_back",
+            vr::P_BACK,
+            "Pa",
+            "absolute pressure downstream of port 2",
             p_atm,
         ),
-        with_start(
-            var(
-                "t_load",
-                vr::T_LOAD,
-                Input,
-                "N*m",
-                "load torque opposing forward rotation",
-            ),
+        (
+            "t_load",
+            vr::T_LOAD,
+            "N*m",
+            "load torque opposing forward rotation",
             0.0,
         ),
-        with_start(
-            var(
-                "c_throttle1",
-                vr::C_THROTTLE1,
-                Input,
-                C,
-                "sonic conductance of an extra throttle in front of port 1 (0: none)",
-            ),
+        (
+            "c_throttle1",
+            vr::C_THROTTLE1,
+            C,
+            "sonic conductance of an extra throttle in front of port 1 (0: none)",
             0.0,
         ),
-        with_start(
-            var(
-                "c_throttle2",
-                vr::C_THROTTLE2,
-                Input,
-                C,
-                "sonic conductance of an extra throttle behind port 2 (0: none)",
-            ),
+        (
+            "c_throttle2",
+            vr::C_THROTTLE2,
+            C,
+            "sonic conductance of an extra throttle behind port 2 (0: none)",
             0.0,
         ),
-        var("speed", vr::SPEED, Output, "rad/s", "rotor speed"),
-        var(
+    ];
+    inputs
+        .into_iter()
+        .map(|(name, reference, unit, what, start)| {
+            with_start(var(name, reference, Role::Input, unit, what), start)
+        })
+        .collect()
+}
+
+/// The outputs: rotor speed, shaft torque, port flows and chamber pressures.
+fn outputs() -> Vec<Variable> {
+    let outputs = [
+        ("speed", vr::SPEED, "rad/s", "rotor speed"),
+        (
             "torque_shaft",
             vr::TORQUE_SHAFT,
-            Output,
             "N*m",
             "shaft torque: the ideal motor's torque less friction",
         ),
-        var(
+        (
             "flow_port1",
             vr::FLOW_PORT1,
-            Output,
             "kg/s",
             "mass flow into the motor at port 1",
         ),
-        var(
+        (
             "flow_port2",
             vr::FLOW_PORT2,
-            Output,
             "kg/s",
             "mass flow out of the motor at port 2",
         ),
-        var(
+        (
             "p_chamber1",
             vr::P1,
-            Output,
             "Pa",
             "absolute pressure in chamber 1 (inlet side)",
         ),
-        var(
+        (
             "p_chamber2",
             vr::P2,
-            Output,
             "Pa",
             "absolute pressure in chamber 2 (outlet side)",
         ),
-        var(
+        (
             "p_exhaust",
             vr::PE,
-            Output,
             "Pa",
             "absolute pressure in the exhaust chamber",
         ),
-    ]
+    ];
+    outputs
+        .into_iter()
+        .map(|(name, reference, unit, what)| var(name, reference, Role::Output, unit, what))
+        .collect()
 }
 
 /// The states, their derivatives and the fixed parameters.
