@@ -22,7 +22,7 @@ pub use super::fit_data::FitData;
 use super::goodness::{competitors, mark_competitors, GoodnessOfFit};
 use super::history::ResultsFile;
 use super::likelihood::Likelihood;
-use super::max_likelihood::{lowest, maximum_likelihood, Polished};
+use super::max_likelihood::{lowest, maximum_likelihood, MlFit, Polished};
 use super::multistart::{self, cluster, Cluster, MultiStartOutcome, RunObserver};
 use super::objective::{Evaluation, Objective, Problem};
 use super::optimize::{minimize, Restart};
@@ -233,7 +233,9 @@ fn log_covariance(space: &ParamSpace, theta: &[f64], cov: &DMatrix<f64>) -> Opti
     })
 }
 
-/// Fits the space's parameters to the data on the engine's threads (see the module docs).
+/// Fits the space's parameters to the data on the engine's threads (see the module docs):
+/// the multi-start on the cost J ([`search`]), the maximum-likelihood polish of its best
+/// minima, and the estimate's assessment ([`assess`]).
 pub fn fit(
     engine: &Engine,
     data: &FitData,
@@ -246,30 +248,9 @@ pub fn fit(
         cost: &data.cost,
         solver: Box::new(DefaultSolver::default()),
     };
-    let file = setup.results_file.as_deref().map(ResultsFile::new);
-    let run = multistart::run(
-        engine,
-        &objective,
-        &setup.space,
-        &settings,
-        observer,
-        file.as_ref(),
-        setup.resume,
-    )?;
-    let best = run.best().clone();
-    observer.phase("maximum likelihood", 0);
     let problem = Problem::new(&objective, &setup.space, false);
-    let best_theta = finish(&problem, &best.theta, best.cost, &settings);
-    let clusters = cluster(&run.results, &setup.space, 0.02);
-    let mut points = vec![best_theta];
-    points.extend(
-        clusters
-            .iter()
-            .skip(1)
-            .take(RIVALS)
-            .map(|c| c.theta.clone()),
-    );
-    let ml_fit = maximum_likelihood(engine, data, &setup.space, &points)?;
+    let searched = search(engine, &objective, &problem, setup, &settings, observer)?;
+    let ml_fit = maximum_likelihood(engine, data, &setup.space, &searched.points)?;
     let linearised_at = setup
         .space
         .names()
@@ -279,6 +260,111 @@ pub fn fit(
             (n, v)
         })
         .collect();
+    let widening = ml_fit.widening.clone();
+    let a = assess(engine, data, setup, ml_fit, observer)?;
+    let at = problem.evaluate(&a.theta);
+    Ok(FitOutcome {
+        params: a.params,
+        cost: at.cost,
+        best_start_cost: searched.best_cost,
+        chi2: a.chi2,
+        prior_chi2: a.prior_chi2,
+        threshold: a.threshold,
+        n_points: data.target.n_points(),
+        goodness: a.goodness,
+        method: setup.uncertainty,
+        nuisances: a.nuisances,
+        widening,
+        linearised_at,
+        theta: a.theta,
+        intervals: a.intervals,
+        covariance: a.covariance,
+        conditions: data.conditions,
+        clusters: searched.clusters,
+        channels: a.channels,
+        would_pin: a.would_pin,
+        evaluations: searched.run.evaluations + problem.evaluations() + a.evaluations,
+        run: searched.run,
+        wall_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// What the multi-start on the cost J found: every start, its local minima, and the points
+/// the likelihood's polish starts from (the best start carried to a tight convergence, then
+/// the best of the rival minima).
+struct Searched {
+    run: MultiStartOutcome,
+    best_cost: f64,
+    clusters: Vec<Cluster>,
+    points: Vec<Vec<f64>>,
+}
+
+/// The multi-start on the cost J and the tight finish of its best start.
+fn search(
+    engine: &Engine,
+    objective: &DataObjective<'_>,
+    problem: &Problem<'_>,
+    setup: &FitSetup,
+    settings: &MultiStartSettings,
+    observer: &dyn RunObserver,
+) -> Result<Searched, EstimateError> {
+    let file = setup.results_file.as_deref().map(ResultsFile::new);
+    let run = multistart::run(
+        engine,
+        objective,
+        &setup.space,
+        settings,
+        observer,
+        file.as_ref(),
+        setup.resume,
+    )?;
+    let best = run.best().clone();
+    observer.phase("maximum likelihood", 0);
+    let best_theta = finish(problem, &best.theta, best.cost, settings);
+    let clusters = cluster(&run.results, &setup.space, 0.02);
+    let mut points = vec![best_theta];
+    points.extend(
+        clusters
+            .iter()
+            .skip(1)
+            .take(RIVALS)
+            .map(|c| c.theta.clone()),
+    );
+    Ok(Searched {
+        run,
+        best_cost: best.cost,
+        clusters,
+        points,
+    })
+}
+
+/// The estimate and what is known of it (the fields of [`FitOutcome`] of the same names).
+struct Assessed {
+    params: MotorParams,
+    theta: Vec<f64>,
+    chi2: f64,
+    prior_chi2: f64,
+    threshold: Option<f64>,
+    goodness: Option<GoodnessOfFit>,
+    nuisances: Vec<(String, f64)>,
+    intervals: Vec<Interval>,
+    covariance: Option<DMatrix<f64>>,
+    channels: Result<Vec<ChannelResiduals>, SimError>,
+    would_pin: Vec<(ParamId, Kind)>,
+    /// Likelihood evaluations of the intervals.
+    evaluations: u64,
+}
+
+/// The estimate (the lowest of the polished points) and what is known of it: χ² and the
+/// prior's share, goodness of fit, the systematic errors, intervals and covariance, the
+/// simulated channels and what would pin an open parameter.
+fn assess(
+    engine: &Engine,
+    data: &FitData,
+    setup: &FitSetup,
+    ml_fit: MlFit,
+    observer: &dyn RunObserver,
+) -> Result<Assessed, EstimateError> {
     let (target, widened, mut polished) = (ml_fit.target, ml_fit.widened, ml_fit.polished);
     let likelihood = Likelihood {
         cost: &data.smoothed,
@@ -290,7 +376,6 @@ pub fn fit(
     let (theta, posterior_chi2) = polished.swap_remove(best_i);
     let params = setup.space.params(&theta)?;
     let prior_chi2 = setup.space.prior.chi2(&setup.space.dims, &params);
-    let chi2 = posterior_chi2 - prior_chi2;
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
     let k = theta.len();
     let simulated = data.simulate(&motor);
@@ -317,34 +402,23 @@ pub fn fit(
         ),
         None => (Vec::new(), None),
     };
-    let at = problem.evaluate(&theta);
     let channels = data.cost.residuals(&motor, &DefaultSolver::default());
     let would_pin = open_parameters(&setup.space, &intervals)
         .filter_map(|id| Some((id, most_sensitive_experiment(&motor, id.name())?)))
         .collect();
-    Ok(FitOutcome {
+    Ok(Assessed {
         params,
-        cost: at.cost,
-        best_start_cost: best.cost,
-        chi2,
+        chi2: posterior_chi2 - prior_chi2,
         prior_chi2,
         threshold: scored.as_ref().map(GoodnessOfFit::threshold),
-        n_points: data.target.n_points(),
         goodness,
-        method: setup.uncertainty,
         nuisances,
-        widening: ml_fit.widening,
-        linearised_at,
         theta,
         intervals,
         covariance,
-        conditions: data.conditions,
-        clusters,
         channels,
         would_pin,
-        evaluations: run.evaluations + problem.evaluations() + ml.evaluations(),
-        run,
-        wall_s: t0.elapsed().as_secs_f64(),
+        evaluations: ml.evaluations(),
     })
 }
 
