@@ -75,10 +75,51 @@ impl Tolerances {
     }
 }
 
-/// Why an integration failed (the integrator's own message).
+/// Why an integration failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("integration failed: {0}")]
-pub struct SolveError(pub String);
+#[non_exhaustive]
+pub enum SolveError {
+    /// The output times decrease somewhere, or the first lies before the start time.
+    #[error("integration failed: output times must increase from t0")]
+    OutputTimesNotIncreasing,
+    /// The step size fell below rounding at a time.
+    #[error("integration failed: step size underflow at t = {t} s")]
+    StepSizeUnderflow {
+        /// Where the integration stopped, s.
+        t: f64,
+    },
+    /// The step limit was reached before the last output time.
+    #[error(
+        "integration failed: more than {max_steps} steps before t = {t_end} s (stopped at t = \
+         {t} s)"
+    )]
+    TooManySteps {
+        /// The step limit.
+        max_steps: usize,
+        /// The last output time, s.
+        t_end: f64,
+        /// Where the integration stopped, s.
+        t: f64,
+    },
+    /// diffsol's BDF failed (its own message).
+    #[cfg(feature = "bdf")]
+    #[error("integration failed: {0}")]
+    Bdf(#[source] BdfError),
+}
+
+/// An error of diffsol's BDF ([`DiffsolBdf`]). Equal when the messages are (diffsol's
+/// error does not compare).
+#[cfg(feature = "bdf")]
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(transparent)]
+pub struct BdfError(#[from] pub diffsol::DiffsolError);
+
+#[cfg(feature = "bdf")]
+impl PartialEq for BdfError {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.to_string() == other.0.to_string()
+    }
+}
 
 /// A stiff initial-value solver.
 pub trait StiffSolver: Send + Sync {
@@ -178,7 +219,7 @@ impl StiffSolver for DiffsolBdf {
         use diffsol::{
             NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector,
         };
-        let err = |e: diffsol::DiffsolError| SolveError(e.to_string());
+        let err = |e: diffsol::DiffsolError| SolveError::Bdf(BdfError(e));
         // diffsol builds its Jacobian column by column from J·e_j at one state: keep f(t, x)
         // of the last state so that each column costs one evaluation, not two.
         let last = std::cell::RefCell::new((f64::NAN, [f64::NAN; N_STATES], [0.0; N_STATES]));
@@ -217,7 +258,7 @@ impl StiffSolver for DiffsolBdf {
             return Ok(out);
         };
         if t_out.windows(2).any(|w| w[1] < w[0]) || t_out[0] < t0 {
-            return Err(SolveError("output times must increase from t0".into()));
+            return Err(SolveError::OutputTimesNotIncreasing);
         }
         if t_end > t0 {
             solver.set_stop_time(t_end).map_err(err)?;

@@ -443,7 +443,7 @@ pub(crate) fn overlays(
         .map(|(name, m)| {
             cost.residuals(m, &solver)
                 .map(|r| (*name, r))
-                .map_err(|e| PlotError(e.to_string()))
+                .map_err(PlotError::from)
         })
         .collect::<Result<_, _>>()?;
     let mut written = Vec::new();
@@ -452,10 +452,8 @@ pub(crate) fn overlays(
         let (mut panels, mut residuals) = (Vec::new(), Vec::new());
         for reference in cost.references().filter(|r| r.file == ex.file) {
             let ax = &reference.abscissa;
-            let x_meas = ax.measured(rec).map_err(|e| PlotError(e.to_string()))?;
-            let y_meas = rec
-                .values(reference.quantity)
-                .map_err(|e| PlotError(e.to_string()))?;
+            let x_meas = ax.measured(rec)?;
+            let y_meas = rec.values(reference.quantity)?;
             let p_atm = ds.p_atm_pa;
             let data = x_meas
                 .iter()
