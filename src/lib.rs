@@ -84,6 +84,6 @@ pub use task::{
     fit, motor_for, run_study, simulated_tables, synth_motor, write_diagnosis, write_fit,
     write_prediction, write_study, write_synthetic, CheckedStudy, ControlStudy, DiagnoseOptions,
     DiagnoseSettings, DiagnoseTaskError, Effort, Fit, FitError, FitObserver, FitOptions,
-    FitSettings, OptionError, PredictOptions, PredictSettings, PredictTaskError, SimulatedTable,
-    Study, StudyResult, SynthOptions, SynthSettings,
+    FitSettings, Opt, OptionError, PredictOptions, PredictSettings, PredictTaskError,
+    SimulatedTable, Study, StudyResult, SynthOptions, SynthSettings,
 };

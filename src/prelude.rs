@@ -10,7 +10,7 @@ pub use crate::model::{Effect, EffectSet, Motor, MotorParams};
 pub use crate::predict::Prediction;
 pub use crate::task::{
     ControlStudy, DiagnoseOptions, DiagnoseSettings, DiagnoseTaskError, Effort, Fit, FitError,
-    FitObserver, FitOptions, FitSettings, OptionError, ParamRange, PredictOptions, PredictSettings,
-    PredictTaskError, Study, StudyResult, SynthOptions, SynthSettings,
+    FitObserver, FitOptions, FitSettings, Opt, OptionError, ParamRange, PredictOptions,
+    PredictSettings, PredictTaskError, Study, StudyResult, SynthOptions, SynthSettings,
 };
 pub use crate::units::Unit;

@@ -45,7 +45,7 @@ pub fn predict(
     use vanefit::task::PredictOptions;
     let file = load_fit(&fit, fit_text.as_deref())?;
     let settings = PredictOptions {
-        unit: task::pressure_unit("PredictOptions.unit", &unit).map_err(|e| option_err(&e))?,
+        unit: task::pressure_unit(task::Opt::PredictUnit, &unit).map_err(|e| option_err(&e))?,
         pressures,
         reference,
         inlet_nozzle_m3_s_pa: inlet_nozzle,

@@ -24,6 +24,7 @@ use crate::model::effects::EffectSet;
 use crate::task::diagnose::{DiagnoseOptions, Effort};
 use crate::task::fit::{FitOptions, ParamRange};
 use crate::task::predict::{pressure_unit, PredictOptions};
+use crate::task::{Opt, OptionError};
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -417,10 +418,9 @@ fn predict_args(
 ) -> Result<PredictOptions, ManifestError> {
     let mut a = PredictOptions::default();
     let r = raw.get_ref();
-    let fail =
-        |e: crate::task::OptionError| src.at(raw.span(), format!("[predict]: {}", predict_key(&e)));
+    let fail = |e: OptionError| src.at(raw.span(), format!("[predict]: {}", predict_key(&e)));
     if let Some(u) = &r.unit {
-        a.unit = pressure_unit("PredictOptions.unit", u).map_err(fail)?;
+        a.unit = pressure_unit(Opt::PredictUnit, u).map_err(fail)?;
     }
     a.pressures = r.pressures.clone();
     a.reference = r.reference.or(a.reference);
@@ -435,20 +435,18 @@ fn predict_args(
 
 /// A bad `[predict]` value's message, named as the command line names it (the manifest's
 /// keys are the command's options).
-fn predict_key(e: &crate::task::OptionError) -> String {
-    let flag = match e.field() {
-        "PredictOptions.unit" => "--unit",
-        "PredictOptions.pressures" => "--pressures",
-        "PredictOptions.reference" => "--reference",
-        "PredictOptions.inlet_nozzle_m3_s_pa" => "--inlet-nozzle",
-        "PredictOptions.outlet_nozzle_m3_s_pa" => "--outlet-nozzle",
-        "PredictOptions.speed_grid_rpm" => "--speed-grid-rpm",
-        "PredictOptions.curve_points" => "--curve-points",
-        "PredictOptions.fixed_spread" => "--fixed-spread",
-        other => other,
-    };
-    e.message_as(flag)
-        .replace("PredictOptions.outlet_nozzle_m3_s_pa", "--outlet-nozzle")
+fn predict_key(e: &OptionError) -> String {
+    e.message_with(&|o| match o {
+        Opt::PredictUnit => "--unit",
+        Opt::PredictPressures => "--pressures",
+        Opt::PredictReference => "--reference",
+        Opt::PredictInletNozzle => "--inlet-nozzle",
+        Opt::PredictOutletNozzle => "--outlet-nozzle",
+        Opt::PredictSpeedGrid => "--speed-grid-rpm",
+        Opt::PredictCurvePoints => "--curve-points",
+        Opt::PredictFixedSpread => "--fixed-spread",
+        other => other.field(),
+    })
 }
 
 #[cfg(test)]

@@ -29,6 +29,21 @@ pub use run::{run, RunOptions, RunOutcome};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// Why a folder's `batch.json` is not a batch record.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum NotABatchWhy {
+    /// It cannot be read.
+    #[error(transparent)]
+    Read(#[from] std::io::Error),
+    /// It is not a record in JSON.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// It is a record of another format (the format it names).
+    #[error("format '{0}'")]
+    Format(String),
+}
+
 /// Why a batch or a merge could not run (a unit's own failure is no error: it is recorded).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -58,7 +73,7 @@ pub enum BatchError {
         /// The folder.
         path: PathBuf,
         /// What is wrong with its record.
-        why: String,
+        why: NotABatchWhy,
     },
     /// The worker pool cannot be built.
     #[error(transparent)]
@@ -103,23 +118,23 @@ impl BatchRecord {
     /// Reads `out/batch.json`.
     pub fn read(out: &Path) -> Result<Self, BatchError> {
         let path = out.join("batch.json");
-        let not_a_batch = |why: String| BatchError::NotABatch {
+        let not_a_batch = |why: NotABatchWhy| BatchError::NotABatch {
             path: out.to_path_buf(),
             why,
         };
-        let text = std::fs::read_to_string(&path).map_err(|e| not_a_batch(e.to_string()))?;
+        let text = std::fs::read_to_string(&path).map_err(|e| not_a_batch(e.into()))?;
         Self::parse(out, &text)
     }
 
     /// The record whose `batch.json` in `out` holds `text` (as [`BatchRecord::read`]).
     pub fn parse(out: &Path, text: &str) -> Result<Self, BatchError> {
-        let not_a_batch = |why: String| BatchError::NotABatch {
+        let not_a_batch = |why: NotABatchWhy| BatchError::NotABatch {
             path: out.to_path_buf(),
             why,
         };
-        let record: Self = serde_json::from_str(text).map_err(|e| not_a_batch(e.to_string()))?;
+        let record: Self = serde_json::from_str(text).map_err(|e| not_a_batch(e.into()))?;
         if record.format != BATCH_FORMAT {
-            return Err(not_a_batch(format!("format '{}'", record.format)));
+            return Err(not_a_batch(NotABatchWhy::Format(record.format)));
         }
         Ok(record)
     }

@@ -4,7 +4,7 @@
 use super::plan::Shard;
 use super::run::{run, RunOptions, RunOutcome};
 use super::{BatchError, Manifest};
-use crate::task::OptionError;
+use crate::task::{Opt, OptionError};
 use std::path::PathBuf;
 
 /// How to run a shard of a batch, as given (unchecked).
@@ -34,10 +34,7 @@ impl BatchOptions {
     /// Checks `threads` (≥ 1).
     pub fn check(&self) -> Result<BatchSettings, OptionError> {
         if self.threads == Some(0) {
-            return Err(OptionError::new(
-                "BatchOptions.threads",
-                " must be at least 1",
-            ));
+            return Err(OptionError::of(Opt::BatchThreads, " must be at least 1"));
         }
         Ok(BatchSettings(RunOptions {
             out: self.out.clone(),

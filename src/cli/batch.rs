@@ -82,7 +82,8 @@ pub(crate) fn run(args: &BatchArgs) -> Result<(), Failure> {
         threads: args.threads,
         retry_failed: args.retry_failed,
     }
-    .check()?;
+    .check()
+    .map_err(Failure::option)?;
     let o = settings.run(&manifest)?;
     say!(
         "batch shard {}: {} unit(s): {} done now, {} finished before (skipped), {} failed",

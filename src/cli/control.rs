@@ -331,6 +331,17 @@ pub(crate) const FLAGS: &[(&str, &str)] = &[
     ("GainOptions.ki", "--ki"),
 ];
 
+/// A message with every control study's option field replaced by its flag.
+pub(crate) fn flags(message: &str) -> String {
+    let mut m = message.to_string();
+    for (field, flag) in FLAGS {
+        if m.contains(field) {
+            m = m.replace(field, flag);
+        }
+    }
+    m
+}
+
 /// Runs `vanefit control <study>`.
 pub(crate) fn run(args: ControlArgs) -> Result<(), Failure> {
     let (common, study) = study(&args.study);

@@ -41,7 +41,8 @@ pub(crate) fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
         threads: args.run.threads,
         ..DiagnoseOptions::default()
     }
-    .check()?;
+    .check()
+    .map_err(Failure::option)?;
     // The output is checked, then the data (so bad data leaves no folder behind), then the
     // output is created and locked: all before the diagnosis, which takes tens of seconds.
     vanefit::io::check_dir(&args.out)?;

@@ -32,7 +32,7 @@ pub(crate) fn run(args: &ExportPetabArgs) -> Result<(), Failure> {
     // Checked now without writing (nothing is written when an input is bad), created and
     // locked once the tables are made.
     vanefit::io::check_dir(&args.out)?;
-    let problem = petab_problem(&args.fit, args.dataset.as_deref())?;
+    let problem = petab_problem(&args.fit, args.dataset.as_deref()).map_err(Failure::export)?;
     let _lock = vanefit::io::prepare_dir(&args.out)?;
     petab::write(&args.out, &problem.tables)?;
     let summary = &problem.summary;

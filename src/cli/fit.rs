@@ -307,7 +307,7 @@ fn progress() -> Progress {
 pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     // Before the search: an unwritable or busy output fails now, not after the starts.
     let _lock = vanefit::io::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
-    let settings = args.options()?.check()?;
+    let settings = args.options()?.check().map_err(Failure::option)?;
     // A page's reading errors are said before the search, not found in its residuals.
     if let Ok(ds) = vanefit::data::Dataset::load(&args.dataset) {
         for ex in &ds.experiments {
@@ -322,7 +322,7 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
         &progress,
     );
     progress.clear();
-    let fitted = fitted?;
+    let fitted = fitted.map_err(Failure::fit)?;
     let written = write_fit(&fitted, &args.out, !args.no_plots)?;
     print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
     if let Some(line) = fitted.displacement_line() {

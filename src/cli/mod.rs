@@ -29,6 +29,7 @@ use vanefit::data::{Dataset, Kind};
 use vanefit::model::EffectSet;
 use vanefit::task::{motor_for, simulated_tables, write_table};
 use vanefit::task::{synth_motor, write_synthetic, SynthOptions};
+use vanefit::task::{ExportError, FitError, Opt, OptionError, PredictTaskError};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -130,55 +131,66 @@ pub(crate) struct RunArgs {
 pub(crate) struct Failure(pub String);
 
 impl<E: std::error::Error> From<E> for Failure {
-    /// The error's message, with the library's field names (`FitOptions.bounds`) shown as
-    /// the flags that set them (`--bounds`).
+    /// The error's message, with the control studies' option fields
+    /// (`StepOptions.t_step_s`) shown as the flags that set them (`cli::control::FLAGS`).
+    /// The tasks' options are named by their flags where their errors are converted
+    /// ([`Failure::option`] and the like).
     fn from(e: E) -> Self {
-        Failure(flags(&e.to_string()))
+        Failure(crate::cli::control::flags(&e.to_string()))
     }
 }
 
-/// The library's option fields and the flags that set them, longest field first (so that
-/// a field is not replaced by the flag of a field that it starts with).
-const FLAGS: &[(&str, &str)] = &[
-    (
-        "FitOptions.estimate/bounds/start_ranges",
-        "--estimate/--bounds/--start-range",
-    ),
-    ("PredictOptions.outlet_nozzle_m3_s_pa", "--outlet-nozzle"),
-    ("PredictOptions.inlet_nozzle_m3_s_pa", "--inlet-nozzle"),
-    ("PredictOptions.sampling.walkers", "--walkers"),
-    ("PredictOptions.sampling.steps", "--steps"),
-    ("PredictOptions.sampling.draws", "--draws"),
-    ("SynthOptions.pressures_bar_g", "--pressures"),
-    ("PredictOptions.speed_grid_rpm", "--speed-grid-rpm"),
-    ("PredictOptions.curve_points", "--curve-points"),
-    ("PredictOptions.fixed_spread", "--fixed-spread"),
-    ("PredictOptions.pressures", "--pressures"),
-    ("PredictOptions.reference", "--reference"),
-    ("PredictOptions.data", "--data"),
-    ("FitOptions.start_spread", "--start-spread"),
-    ("DiagnoseOptions.threads", "--threads"),
-    ("BatchOptions.threads", "--threads"),
-    ("DiagnoseOptions.starts", "--starts"),
-    ("PredictOptions.unit", "--unit"),
-    ("FitOptions.estimate", "--estimate"),
-    ("FitOptions.threads", "--threads"),
-    ("SynthOptions.noise", "--noise"),
-    ("FitOptions.starts", "--starts"),
-    ("FitOptions.bounds", "--bounds"),
-    ("`dataset`", "--dataset"),
-];
+impl Failure {
+    /// A bad option of a task, named by its flag.
+    pub(crate) fn option(e: OptionError) -> Self {
+        Failure(e.message_with(&flag))
+    }
 
-/// A message with every library field name replaced by its flag (the tasks' here, the
-/// control studies' in `cli::control::FLAGS`).
-pub(crate) fn flags(message: &str) -> String {
-    let mut m = message.to_string();
-    for (field, flag) in FLAGS.iter().chain(crate::cli::control::FLAGS) {
-        if m.contains(field) {
-            m = m.replace(field, flag);
+    /// A failed fit, a bad option named by its flag.
+    pub(crate) fn fit(e: FitError) -> Self {
+        match e {
+            FitError::Option(o) => Self::option(o),
+            e => e.into(),
         }
     }
-    m
+
+    /// A failed prediction, the options it names named by their flags.
+    pub(crate) fn predict(e: PredictTaskError) -> Self {
+        Failure(e.message_with(&flag))
+    }
+
+    /// A failed export, the option it names named by its flag.
+    pub(crate) fn export(e: ExportError) -> Self {
+        Failure(e.message_with(&flag))
+    }
+}
+
+/// The flag that sets a task's option.
+pub(crate) fn flag(o: Opt) -> &'static str {
+    match o {
+        Opt::FitStarts | Opt::DiagnoseStarts => "--starts",
+        Opt::FitThreads | Opt::DiagnoseThreads | Opt::BatchThreads => "--threads",
+        Opt::FitStartSpread => "--start-spread",
+        Opt::FitBounds => "--bounds",
+        Opt::FitEstimate => "--estimate",
+        Opt::FitRanges => "--estimate/--bounds/--start-range",
+        Opt::PredictUnit => "--unit",
+        Opt::PredictPressures | Opt::SynthPressures => "--pressures",
+        Opt::PredictReference => "--reference",
+        Opt::PredictInletNozzle => "--inlet-nozzle",
+        Opt::PredictOutletNozzle => "--outlet-nozzle",
+        Opt::PredictSpeedGrid => "--speed-grid-rpm",
+        Opt::PredictCurvePoints => "--curve-points",
+        Opt::PredictFixedSpread => "--fixed-spread",
+        Opt::PredictData => "--data",
+        Opt::PredictWalkers => "--walkers",
+        Opt::PredictSteps => "--steps",
+        Opt::PredictDraws => "--draws",
+        Opt::SynthNoise => "--noise",
+        Opt::ExportDataset => "--dataset",
+        // An option added to the library without a flag here keeps its field's name.
+        other => other.field(),
+    }
 }
 
 /// Clap value parser of `--effects`: the list as given once every id in it is known, so an
@@ -398,7 +410,7 @@ fn simulate(dir: &Path, params: Option<&Path>, out: &Path) -> Result<(), Failure
 /// `vanefit synth`: a synthetic dataset (rig recordings, or with `--catalogue` catalogue
 /// pages at `--pressures`, bar(g)) and its truth file.
 fn synth(out: &Path, params: Option<&Path>, options: &SynthOptions) -> Result<(), Failure> {
-    let settings = options.check()?;
+    let settings = options.check().map_err(Failure::option)?;
     let fit = params.map(FitFile::read).transpose()?;
     let name = out.file_name().unwrap_or_default().to_string_lossy();
     let (motor, truth) = synth_motor(&name, fit.as_ref(), &settings);
@@ -439,16 +451,13 @@ mod tests {
     use super::Cli;
     use clap::{CommandFactory, Parser};
 
-    /// No library field of the flag tables starts with another field (it would be replaced
-    /// by the other's flag), and a control study's field becomes its flag.
+    /// No library field of the control studies' flag table starts with another field (it
+    /// would be replaced by the other's flag), and a control study's field becomes its flag.
     #[test]
-    fn flag_fields_do_not_clash() {
-        let tasks: Vec<&str> = super::FLAGS.iter().map(|(f, _)| *f).collect();
+    fn control_flag_fields_do_not_clash() {
         let control: Vec<&str> = crate::cli::control::FLAGS.iter().map(|(f, _)| *f).collect();
-        // The tasks' table is ordered longest first; a control field must not start with,
-        // nor be the start of, any other field.
         for a in &control {
-            for b in tasks.iter().chain(&control) {
+            for b in &control {
                 assert!(
                     a == b || !(a.starts_with(b) || b.starts_with(a)),
                     "{a} / {b}"
@@ -456,8 +465,29 @@ mod tests {
             }
         }
         assert_eq!(
-            super::flags("StepOptions.t_step_s 9: must be before StepOptions.duration_s"),
+            crate::cli::control::flags(
+                "StepOptions.t_step_s 9: must be before StepOptions.duration_s"
+            ),
             "--t-step-s 9: must be before --duration-s"
+        );
+    }
+
+    /// Every option of the tasks has a flag of its own (none is shown as its field), and
+    /// a bad option's message names it by its flag.
+    #[test]
+    fn every_task_option_has_a_flag() {
+        for o in vanefit::task::Opt::ALL {
+            let f = super::flag(*o);
+            assert!(f.starts_with("--") && f != o.field(), "{o}: {f}");
+        }
+        let e = vanefit::task::OptionError::pair(
+            vanefit::task::Opt::PredictInletNozzle,
+            vanefit::task::Opt::PredictOutletNozzle,
+            ": give one extra nozzle, not both",
+        );
+        assert_eq!(
+            super::Failure::option(e).0,
+            "--inlet-nozzle and --outlet-nozzle: give one extra nozzle, not both"
         );
     }
 

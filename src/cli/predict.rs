@@ -40,7 +40,7 @@ impl Progress {
         }
     }
 }
-use vanefit::task::OptionError;
+use vanefit::task::{Opt, OptionError};
 
 /// `vanefit predict` arguments. Values may start with a minus sign (`-1e-9`), so that a
 /// negative number is refused with its option named (status 1), not as a usage error.
@@ -117,8 +117,7 @@ fn pressure_suffixes() -> Vec<&'static str> {
 
 /// `--pressures`: a comma-separated list of numbers, at least one.
 fn pressure_list(list: &str) -> Result<Vec<f64>, OptionError> {
-    let fail =
-        |why: String| OptionError::new("PredictOptions.pressures", format!(" '{list}': {why}"));
+    let fail = |why: String| OptionError::of(Opt::PredictPressures, format!(" '{list}': {why}"));
     let items: Vec<&str> = list.split(',').map(str::trim).collect();
     if items.iter().all(|s| s.is_empty()) {
         return Err(fail("give at least one pressure, e.g. 3,4,5".into()));
@@ -136,7 +135,7 @@ impl PredictArgs {
     /// The library's options (the unit and the pressure list parsed).
     pub(crate) fn options(&self) -> Result<PredictOptions, OptionError> {
         Ok(PredictOptions {
-            unit: pressure_unit("PredictOptions.unit", &self.unit)?,
+            unit: pressure_unit(Opt::PredictUnit, &self.unit)?,
             pressures: self.pressures.as_deref().map(pressure_list).transpose()?,
             reference: self.reference,
             inlet_nozzle_m3_s_pa: self.inlet_nozzle,
@@ -166,13 +165,18 @@ pub(crate) fn run(args: &PredictArgs) -> Result<(), Failure> {
     let t0 = Instant::now();
     vanefit::io::check_dir(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
     let fit = FitFile::read(&args.fit)?;
-    let settings = args.options()?.check(fit_atmosphere_pa(&fit))?;
+    let settings = args
+        .options()
+        .and_then(|o| o.check(fit_atmosphere_pa(&fit)))
+        .map_err(Failure::option)?;
     let bar = Progress::default();
     let prediction = predict_observed(&fit, &settings, &|what, done, total| {
         bar.tell(what, done, total)
-    })?;
+    })
+    .map_err(Failure::predict)?;
     let source = source_name(&args.fit, &fit);
-    let written = write_prediction(&prediction, &settings, &source, &args.out)?;
+    let written =
+        write_prediction(&prediction, &settings, &source, &args.out).map_err(Failure::predict)?;
     let display = settings.display();
     say!("prediction from {source}\n");
     say!("{}", tables_markdown(&prediction, display));

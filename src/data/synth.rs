@@ -151,10 +151,7 @@ pub fn free_speed(motor: &Motor, p_supply_pa: f64, p_atm_pa: f64) -> Result<f64,
     let bc = Boundary::supplied(p_supply_pa, p_atm_pa, Load::None);
     steady::free(motor, &bc, &steady::initial_guess(&bc))
         .map(|x| x[idx::OMEGA])
-        .map_err(|e| SimError {
-            experiment: "free speed".into(),
-            message: e.to_string(),
-        })
+        .map_err(SimError::FreeSpeed)
 }
 
 /// The three reference experiments with their inputs and no measured channels yet.

@@ -207,9 +207,10 @@ pub enum RegressError {
     /// The estimated names do not make a parameter space.
     #[error("{0}")]
     Space(#[from] SpaceError),
-    /// The least-squares problem of the selected terms has no solution.
+    /// The least-squares problem of the selected terms has no solution (nalgebra's
+    /// reason).
     #[error("{0}")]
-    Solve(String),
+    Solve(&'static str),
 }
 
 /// One library term's linearised score.
@@ -521,7 +522,7 @@ fn joint_coefficients(
     let a = DMatrix::from_fn(n, all.len(), |i, j| all[j][i]);
     a.svd(true, true)
         .solve(r0, 1e-10)
-        .map_err(|e| RegressError::Solve(e.to_string()))
+        .map_err(RegressError::Solve)
 }
 
 #[cfg(test)]

@@ -60,16 +60,67 @@ pub enum EstimateError {
         source: std::io::Error,
     },
     /// A line of the results file is unreadable or belongs elsewhere.
-    #[error("{}:{line}: {message}", path.display())]
+    #[error("{}:{line}: {why}", path.display())]
     ResultsLine {
         /// The results file.
         path: PathBuf,
         /// 1-based line number.
         line: usize,
         /// What is wrong with it.
-        message: String,
+        why: ResultsLineError,
     },
     /// The best point breaks a model constraint (it cannot: penalised points never win).
     #[error("best parameters: {0}")]
     BestParameters(#[from] ParamError),
+}
+
+/// What is wrong with a line of a results file (`EstimateError::ResultsLine`).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ResultsLineError {
+    /// The line cannot be read.
+    #[error(transparent)]
+    Read(#[from] std::io::Error),
+    /// The header is not JSON of a header.
+    #[error(transparent)]
+    Header(#[from] serde_json::Error),
+    /// The header is another run's.
+    #[error(
+        "belongs to a different run (seed, starts, parameters or effects differ); remove it or \
+         drop --resume"
+    )]
+    OtherRun,
+    /// A start that this run cannot have made.
+    #[error("{0}: not a start of this run; remove the file or drop --resume")]
+    NotOfThisRun(ForeignStart),
+}
+
+/// Why a recorded start cannot be one of this run's.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ForeignStart {
+    /// A point with another number of coordinates than the run has parameters.
+    #[error("start {index}: {key} has {len} coordinates where the run has {n} parameters")]
+    Coordinates {
+        /// The start's index.
+        index: usize,
+        /// Which point: `theta0` or `theta`.
+        key: &'static str,
+        /// Its coordinates.
+        len: usize,
+        /// The run's parameters.
+        n: usize,
+    },
+    /// A coordinate that is not a finite number.
+    #[error("start {index} has a coordinate that is not a finite number")]
+    NotFiniteCoordinate {
+        /// The start's index.
+        index: usize,
+    },
+    /// A cost that is not a finite number.
+    #[error("start {index} has a cost that is not a finite number")]
+    NotFiniteCost {
+        /// The start's index.
+        index: usize,
+    },
 }

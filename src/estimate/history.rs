@@ -1,7 +1,7 @@
 //! The history of a run (pyPESTO's `history`): an append-only results file of finished
 //! starts (JSON lines after a header naming the run), read back to resume.
 
-use super::error::EstimateError;
+use super::error::{EstimateError, ForeignStart, ResultsLineError};
 use super::settings::MultiStartSettings;
 use super::space::ParamSpace;
 use super::StartResult;
@@ -24,25 +24,23 @@ const RESULTS_FORMAT: &str = "vanefit.starts/1";
 /// Why a whole, readable record cannot be a finished start of a run with `n` parameters
 /// (an edited or foreign file): the optimizer would be handed points of the wrong dimension
 /// (a panic) and the best start chosen by a cost no run can give. `None` when it can be.
-fn not_of_this_run(r: &StartResult, n: usize) -> Option<String> {
+fn not_of_this_run(r: &StartResult, n: usize) -> Option<ForeignStart> {
     let index = r.index;
     for (key, point) in [("theta0", &r.theta0), ("theta", &r.theta)] {
         if point.len() != n {
-            return Some(format!(
-                "start {index}: {key} has {} coordinates where the run has {n} parameters",
-                point.len()
-            ));
+            return Some(ForeignStart::Coordinates {
+                index,
+                key,
+                len: point.len(),
+                n,
+            });
         }
     }
     if !r.theta0.iter().chain(&r.theta).all(|v| v.is_finite()) {
-        return Some(format!(
-            "start {index} has a coordinate that is not a finite number"
-        ));
+        return Some(ForeignStart::NotFiniteCoordinate { index });
     }
     if !r.cost.is_finite() || !r.history.iter().all(|c| c.is_finite()) {
-        return Some(format!(
-            "start {index} has a cost that is not a finite number"
-        ));
+        return Some(ForeignStart::NotFiniteCost { index });
     }
     None
 }
@@ -80,11 +78,11 @@ impl ResultsFile {
         }
     }
 
-    fn bad_line(&self, line: usize, message: String) -> EstimateError {
+    fn bad_line(&self, line: usize, why: impl Into<ResultsLineError>) -> EstimateError {
         EstimateError::ResultsLine {
             path: self.path.clone(),
             line,
-            message,
+            why: why.into(),
         }
     }
 
@@ -103,23 +101,19 @@ impl ResultsFile {
         let Some(first) = lines.next() else {
             return Ok(Vec::new());
         };
-        let first = first.map_err(|e| self.bad_line(1, e.to_string()))?;
-        let header: Header =
-            serde_json::from_str(&first).map_err(|e| self.bad_line(1, e.to_string()))?;
+        let first = first.map_err(|e| self.bad_line(1, e))?;
+        let header: Header = serde_json::from_str(&first).map_err(|e| self.bad_line(1, e))?;
         if header != Self::header(space, cfg) {
-            return Err(self.bad_line(1, "belongs to a different run (seed, starts, parameters or effects differ); remove it or drop --resume".into()));
+            return Err(self.bad_line(1, ResultsLineError::OtherRun));
         }
         let mut out = Vec::new();
         self.cut_torn_line()?;
         for (i, line) in lines.enumerate() {
-            let line = line.map_err(|e| self.bad_line(i + 2, e.to_string()))?;
+            let line = line.map_err(|e| self.bad_line(i + 2, e))?;
             // A line cut short by an interruption is simply not finished.
             if let Ok(r) = serde_json::from_str::<StartResult>(&line) {
                 if let Some(why) = not_of_this_run(&r, space.len()) {
-                    return Err(self.bad_line(
-                        i + 2,
-                        format!("{why}: not a start of this run; remove the file or drop --resume"),
-                    ));
+                    return Err(self.bad_line(i + 2, ResultsLineError::NotOfThisRun(why)));
                 }
                 if r.index < cfg.starts() && !out.iter().any(|o: &StartResult| o.index == r.index) {
                     out.push(r);

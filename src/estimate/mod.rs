@@ -51,7 +51,7 @@ pub use uncertainty::{
 
 pub use displacement::DisplacementEstimate;
 pub use engine::Engine;
-pub use error::EstimateError;
+pub use error::{EstimateError, ForeignStart, ResultsLineError};
 pub use history::ResultsFile;
 pub use objective::{Coordinates, Evaluation, Objective, Problem};
 pub use settings::{MultiStartConfig, MultiStartSettings};

@@ -8,7 +8,7 @@ pub(crate) mod rodas;
 pub(crate) mod scalar;
 
 #[cfg(feature = "bdf")]
-pub use ode::DiffsolBdf;
+pub use ode::{BdfError, DiffsolBdf};
 pub use ode::{Jacobian, Kinks, Rhs, Slopes, SolveError, State, StiffSolver, Tolerances};
 pub use rodas::Rodas4;
 

@@ -75,10 +75,51 @@ impl Tolerances {
     }
 }
 
-/// Why an integration failed (the integrator's own message).
+/// Why an integration failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("integration failed: {0}")]
-pub struct SolveError(pub String);
+#[non_exhaustive]
+pub enum SolveError {
+    /// The output times decrease somewhere, or the first lies before the start time.
+    #[error("integration failed: output times must increase from t0")]
+    OutputTimesNotIncreasing,
+    /// The step size fell below rounding at a time.
+    #[error("integration failed: step size underflow at t = {t} s")]
+    StepSizeUnderflow {
+        /// Where the integration stopped, s.
+        t: f64,
+    },
+    /// The step limit was reached before the last output time.
+    #[error(
+        "integration failed: more than {max_steps} steps before t = {t_end} s (stopped at t = \
+         {t} s)"
+    )]
+    TooManySteps {
+        /// The step limit.
+        max_steps: usize,
+        /// The last output time, s.
+        t_end: f64,
+        /// Where the integration stopped, s.
+        t: f64,
+    },
+    /// diffsol's BDF failed (its own message).
+    #[cfg(feature = "bdf")]
+    #[error("integration failed: {0}")]
+    Bdf(#[source] BdfError),
+}
+
+/// An error of diffsol's BDF ([`DiffsolBdf`]). Equal when the messages are (diffsol's
+/// error does not compare).
+#[cfg(feature = "bdf")]
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(transparent)]
+pub struct BdfError(#[from] pub diffsol::DiffsolError);
+
+#[cfg(feature = "bdf")]
+impl PartialEq for BdfError {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.to_string() == other.0.to_string()
+    }
+}
 
 /// A stiff initial-value solver.
 pub trait StiffSolver: Send + Sync {
@@ -210,10 +251,10 @@ impl StiffSolver for DiffsolBdf {
     }
 }
 
-/// diffsol's error as the integrator's message.
+/// diffsol's error as the integrator's.
 #[cfg(feature = "bdf")]
 fn diffsol_error(e: diffsol::DiffsolError) -> SolveError {
-    SolveError(e.to_string())
+    SolveError::Bdf(BdfError(e))
 }
 
 /// The states at the times `t_out` (increasing, all ≥ `t0`, the solver's start): steps
@@ -236,7 +277,7 @@ where
         return Ok(out);
     };
     if t_out.windows(2).any(|w| w[1] < w[0]) || t_out[0] < t0 {
-        return Err(SolveError("output times must increase from t0".into()));
+        return Err(SolveError::OutputTimesNotIncreasing);
     }
     if t_end > t0 {
         solver.set_stop_time(t_end).map_err(diffsol_error)?;

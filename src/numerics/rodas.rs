@@ -434,7 +434,7 @@ impl StiffSolver for Rodas4 {
             return Ok(out);
         };
         if t_out.windows(2).any(|w| w[1] < w[0]) || t_out[0] < t0 {
-            return Err(SolveError("output times must increase from t0".into()));
+            return Err(SolveError::OutputTimesNotIncreasing);
         }
         let (mut t, mut y) = (t0, x0);
         let mut k = 0;
@@ -482,7 +482,7 @@ impl StiffSolver for Rodas4 {
                     _ => control.rejected(h_try, err),
                 };
                 if h < 1e-14 * t.abs().max(1.0) {
-                    return Err(SolveError(format!("step size underflow at t = {t} s")));
+                    return Err(SolveError::StepSizeUnderflow { t });
                 }
                 continue;
             };
@@ -512,9 +512,11 @@ impl StiffSolver for Rodas4 {
                 h = h.max(h_before.min(StepControl::MAX_GROWTH * h_try));
             }
         }
-        Err(SolveError(format!(
-            "more than {MAX_STEPS} steps before t = {t_end} s (stopped at t = {t} s)"
-        )))
+        Err(SolveError::TooManySteps {
+            max_steps: MAX_STEPS,
+            t_end,
+            t,
+        })
     }
 }
 

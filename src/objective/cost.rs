@@ -326,10 +326,12 @@ impl CostModel {
         for ex in &self.experiments {
             let sim = ex.experiment.simulate(motor, solver)?;
             for ch in &ex.channels {
-                let values = sim.channel(ch.reference.quantity).ok_or_else(|| SimError {
-                    experiment: ch.reference.file.clone(),
-                    message: format!("the simulation gives no {}", ch.reference.column),
-                })?;
+                let values =
+                    sim.channel(ch.reference.quantity)
+                        .ok_or_else(|| SimError::NoChannel {
+                            experiment: ch.reference.file.clone(),
+                            column: ch.reference.column.clone(),
+                        })?;
                 let simulated: Vec<f64> = ch.rows.iter().map(|&i| values[i]).collect();
                 let normalized = simulated
                     .iter()
@@ -397,10 +399,12 @@ impl CostModel {
         {
             let sim = sim?;
             for ch in &ex.channels {
-                let values = sim.channel(ch.reference.quantity).ok_or_else(|| SimError {
-                    experiment: ch.reference.file.clone(),
-                    message: format!("the simulation gives no {}", ch.reference.column),
-                })?;
+                let values =
+                    sim.channel(ch.reference.quantity)
+                        .ok_or_else(|| SimError::NoChannel {
+                            experiment: ch.reference.file.clone(),
+                            column: ch.reference.column.clone(),
+                        })?;
                 let rows = rows_of(out.len(), ch);
                 out.push(
                     rows.iter()
@@ -625,9 +629,7 @@ mod tests {
                 Ok(vec![[f64::NAN; crate::model::motor::N_STATES]; t_out.len()])
             } else {
                 let _ = x0;
-                Err(crate::numerics::ode::SolveError(
-                    "step size too small".into(),
-                ))
+                Err(crate::numerics::ode::SolveError::StepSizeUnderflow { t: 0.0 })
             }
         }
     }

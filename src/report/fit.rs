@@ -330,7 +330,7 @@ pub(crate) fn plots(
     let fit = outcome
         .channels
         .as_deref()
-        .map_err(|e| PlotError(e.to_string()))?;
+        .map_err(|e| PlotError::Sim(e.clone()))?;
     written.extend(overlays(
         dataset,
         cost,
@@ -476,10 +476,8 @@ pub(crate) fn overlays(
         let (mut panels, mut residuals) = (Vec::new(), Vec::new());
         for reference in cost.references().filter(|r| r.file == ex.file) {
             let ax = &reference.abscissa;
-            let x_meas = ax.measured(rec).map_err(|e| PlotError(e.to_string()))?;
-            let y_meas = rec
-                .values(reference.quantity)
-                .map_err(|e| PlotError(e.to_string()))?;
+            let x_meas = ax.measured(rec)?;
+            let y_meas = rec.values(reference.quantity)?;
             let p_atm = ds.p_atm_pa;
             let data = x_meas
                 .iter()

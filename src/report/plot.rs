@@ -23,7 +23,6 @@ use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use std::fmt;
 use std::path::Path;
 
 /// How a series is drawn.
@@ -135,16 +134,30 @@ pub struct Chart {
 }
 
 /// Why a chart could not be drawn.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlotError(pub String);
-
-impl fmt::Display for PlotError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "plot: {}", self.0)
-    }
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlotError {
+    /// The drawing backend failed (plotters' message: its errors borrow the backend).
+    #[error("plot: {0}")]
+    Draw(String),
+    /// The SVG file could not be written.
+    #[error("plot: {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A model to draw does not simulate.
+    #[error("plot: {0}")]
+    Sim(#[from] crate::sim::experiment::SimError),
+    /// A channel to draw is not in its recording.
+    #[error("plot: {0}")]
+    Data(#[from] crate::data::DataError),
+    /// A channel to draw is not in its recording.
+    #[error("plot: {0}")]
+    MissingColumn(#[from] crate::sim::recording::MissingColumn),
 }
-
-impl std::error::Error for PlotError {}
 
 /// Size of one panel's chart (title, axes and plotting area), pixels; a legend adds to it.
 const PANEL_W: u32 = 640;
@@ -422,12 +435,14 @@ impl Figure {
 }
 
 fn write(path: &Path, svg: &str) -> Result<(), PlotError> {
-    crate::io::write_atomic(path, svg.as_bytes())
-        .map_err(|e| PlotError(format!("{}: {e}", path.display())))
+    crate::io::write_atomic(path, svg.as_bytes()).map_err(|source| PlotError::Write {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 fn err<E: std::error::Error>(e: E) -> PlotError {
-    PlotError(e.to_string())
+    PlotError::Draw(e.to_string())
 }
 
 /// Draws a chart and its legend in one cell of a figure: the chart in the cell's top-left

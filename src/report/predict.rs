@@ -845,7 +845,7 @@ fn band_chart(
     y_label: &str,
     series: &[BandSeries],
 ) -> Result<String, PlotError> {
-    let err = |e: &dyn std::fmt::Display| PlotError(e.to_string());
+    let err = |e: &dyn std::fmt::Display| PlotError::Draw(e.to_string());
     let all = series.iter().flat_map(|s| s.points.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,

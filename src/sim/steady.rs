@@ -8,8 +8,26 @@ use crate::numerics::lu::Lu;
 
 /// What the steady solver could not do.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("no steady state: {0}")]
-pub struct SteadyError(pub String);
+#[non_exhaustive]
+pub enum SteadyError {
+    /// Every damped Newton step, down to a millionth of the full one, left a pressure ≤ 0
+    /// or a residual that is not finite.
+    #[error("no steady state: pressures would turn negative")]
+    NegativePressures,
+    /// The iteration did not converge within its limit.
+    #[error(
+        "no steady state: not converged after {iterations} iterations (residual {residual:.3e})"
+    )]
+    NotConverged {
+        /// The iteration limit.
+        iterations: usize,
+        /// The scaled residual norm at the last iterate.
+        residual: f64,
+    },
+}
+
+/// The iteration limit of [`solve`].
+const MAX_ITERATIONS: usize = 200;
 
 /// Typical magnitude of each state (for steps and convergence).
 const SCALE: State = [1e5, 1e5, 1e5, 100.0];
@@ -75,7 +93,7 @@ fn solve(
     let (mut fx, mut jx) = linearise(&x);
     let mut res = residual_norm(&fx, n_free);
     let mut dt = dt0;
-    for _ in 0..200 {
+    for _ in 0..MAX_ITERATIONS {
         if res == 0.0 {
             return Ok(x);
         }
@@ -97,7 +115,7 @@ fn solve(
             }
             step *= 0.5;
             if step < 1e-6 {
-                return Err(SteadyError("pressures would turn negative".into()));
+                return Err(SteadyError::NegativePressures);
             }
         };
         let small_step =
@@ -119,9 +137,10 @@ fn solve(
             return Ok(x);
         }
     }
-    Err(SteadyError(format!(
-        "not converged after 200 iterations (residual {res:.3e})"
-    )))
+    Err(SteadyError::NotConverged {
+        iterations: MAX_ITERATIONS,
+        residual: res,
+    })
 }
 
 /// The step Δx of (I/Δt − J)·Δx = f(x); with the speed fixed, the speed's row and column are

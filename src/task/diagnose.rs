@@ -3,7 +3,7 @@
 //! and write `diagnosis.json`, `extended.json`, `report.md` and the plots
 //! ([`write_diagnosis`]), for the command line and `batch` alike.
 
-use super::OptionError;
+use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset};
 use crate::diagnose::Diagnosis;
 use crate::diagnose::{diagnose_observed, DiagnoseError, DiagnoseObserver};
@@ -55,16 +55,10 @@ impl DiagnoseOptions {
     /// Checks `starts` and `threads` (≥ 1).
     pub fn check(&self) -> Result<DiagnoseSettings, OptionError> {
         if self.starts == 0 {
-            return Err(OptionError::new(
-                "DiagnoseOptions.starts",
-                " must be at least 1",
-            ));
+            return Err(OptionError::of(Opt::DiagnoseStarts, " must be at least 1"));
         }
         if self.threads == Some(0) {
-            return Err(OptionError::new(
-                "DiagnoseOptions.threads",
-                " must be at least 1",
-            ));
+            return Err(OptionError::of(Opt::DiagnoseThreads, " must be at least 1"));
         }
         let mut engine = match self.effort {
             Effort::Full => crate::diagnose::DiagnoseOptions::full(self.starts, self.seed),

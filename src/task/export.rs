@@ -5,6 +5,7 @@
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
 use crate::export::petab::{self, PetabError, PetabSummary, PetabTables};
+use crate::task::Opt;
 use std::path::{Path, PathBuf};
 
 /// Why the export failed.
@@ -12,7 +13,7 @@ use std::path::{Path, PathBuf};
 #[non_exhaustive]
 pub enum ExportError {
     /// No dataset given and none found where fits usually sit.
-    #[error("{fit}: dataset '{name}' not found at {tried}; name it with {field}")]
+    #[error("{}", no_dataset(.fit, .name, .tried, *.option, &Opt::field))]
     NoDataset {
         /// The fit file.
         fit: String,
@@ -21,7 +22,7 @@ pub enum ExportError {
         /// The folders looked in.
         tried: String,
         /// The option that names the dataset.
-        field: &'static str,
+        option: Opt,
     },
     /// The fit file cannot be read.
     #[error(transparent)]
@@ -32,6 +33,36 @@ pub enum ExportError {
     /// The tables cannot be made or written.
     #[error(transparent)]
     Petab(#[from] PetabError),
+}
+
+/// The message of [`ExportError::NoDataset`], its option called `name(option)`.
+fn no_dataset(
+    fit: &str,
+    dataset: &str,
+    tried: &str,
+    option: Opt,
+    name: &dyn Fn(Opt) -> &'static str,
+) -> String {
+    format!(
+        "{fit}: dataset '{dataset}' not found at {tried}; name it with {}",
+        name(option)
+    )
+}
+
+impl ExportError {
+    /// The message with the option it names called `name(option)` (e.g. the command line's
+    /// flag); [`std::fmt::Display`] names it by the task's argument.
+    pub fn message_with(&self, name: &dyn Fn(Opt) -> &'static str) -> String {
+        match self {
+            Self::NoDataset {
+                fit,
+                name: dataset,
+                tried,
+                option,
+            } => no_dataset(fit, dataset, tried, *option, name),
+            other => other.to_string(),
+        }
+    }
 }
 
 /// `measurements/<name>` beside the fit file's folder (fits/x.json → measurements/name),
@@ -55,7 +86,7 @@ fn find_dataset(fit: &Path, name: &str) -> Result<PathBuf, ExportError> {
                 .map(|p| p.display().to_string())
                 .collect::<Vec<_>>()
                 .join(", "),
-            field: "`dataset`",
+            option: Opt::ExportDataset,
         })
 }
 

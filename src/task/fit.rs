@@ -3,7 +3,7 @@
 //! fit file, plots, report), called by the command line for one dataset and by `batch` for
 //! a fleet, so both give the same fit for a seed.
 
-use super::OptionError;
+use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::data::fitfile::FitFile;
 use crate::estimate::displacement::{
@@ -131,17 +131,14 @@ impl FitOptions {
     /// > 1. Parameter names and ranges are checked against the dataset by the fit.
     pub fn check(&self) -> Result<FitSettings, OptionError> {
         if self.starts == 0 {
-            return Err(OptionError::new("FitOptions.starts", " must be at least 1"));
+            return Err(OptionError::of(Opt::FitStarts, " must be at least 1"));
         }
         if self.threads == Some(0) {
-            return Err(OptionError::new(
-                "FitOptions.threads",
-                " must be at least 1",
-            ));
+            return Err(OptionError::of(Opt::FitThreads, " must be at least 1"));
         }
         if !(self.start_spread.is_finite() && self.start_spread > 1.0) {
-            return Err(OptionError::new(
-                "FitOptions.start_spread",
+            return Err(OptionError::of(
+                Opt::FitStartSpread,
                 format!(" {}: must be a number > 1", self.start_spread),
             ));
         }
@@ -233,7 +230,7 @@ fn search_space(
     }
     if let Some(b) = o.bounds.iter().find(|b| !names.contains(&b.name)) {
         let after = format!(": '{}' is not estimated", b.name);
-        return Err(OptionError::new("FitOptions.bounds", after).into());
+        return Err(OptionError::of(Opt::FitBounds, after).into());
     }
     let find = |list: &[ParamRange], n: &str| list.iter().find(|r| r.name == n).cloned();
     let dims = names
@@ -269,9 +266,7 @@ fn search_space(
             }
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| {
-            OptionError::new("FitOptions.estimate/bounds/start_ranges", format!(": {e}"))
-        })?;
+        .map_err(|e| OptionError::of(Opt::FitRanges, format!(": {e}")))?;
     let prior = if o.priors {
         Prior::for_motor(&fixed)
     } else {
@@ -409,7 +404,7 @@ fn catalogue_estimates(
             "the catalogue pins none of {} to within {limit:.0} % (1σ): add curves, key figures or a rig experiment, or name parameters with ",
             names.join(", ")
         );
-        FitError::Option(OptionError::within("FitOptions.estimate", before, ""))
+        FitError::Option(OptionError::of_within(Opt::FitEstimate, before, ""))
     };
     let Some(pinning) = crate::estimate::subset::pinned_subset(data, &motor, &names) else {
         return Err(nothing());

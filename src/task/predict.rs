@@ -6,7 +6,7 @@
 //! Every bad input (fit file, pressure list, unit, nozzle) is refused with a message that
 //! names the file or field, before anything is written.
 
-use super::OptionError;
+use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
 use crate::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
@@ -17,6 +17,7 @@ use crate::predict::{
     BandChoice, BandRequest, Nozzle, NozzlePort, PosteriorSource, PredictError, SamplingOptions,
 };
 use crate::report::predict::{write, PredictReportError, PressureDisplay};
+use crate::sim::operating_point::OperatingPointError;
 use crate::units::constants::P_ATM_PA;
 use crate::units::{Quantity, Unit};
 use std::path::{Path, PathBuf};
@@ -79,8 +80,8 @@ pub fn pressure_units() -> &'static [Unit] {
 }
 
 /// The pressure unit with column suffix `suffix` (`bar_g`, `mpa`, ...); a bad one is an
-/// error naming `field` and the known suffixes.
-pub fn pressure_unit(field: &'static str, suffix: &str) -> Result<Unit, OptionError> {
+/// error naming the option `opt` and the known suffixes.
+pub fn pressure_unit(opt: Opt, suffix: &str) -> Result<Unit, OptionError> {
     let units = pressure_units();
     units
         .iter()
@@ -88,8 +89,8 @@ pub fn pressure_unit(field: &'static str, suffix: &str) -> Result<Unit, OptionEr
         .copied()
         .ok_or_else(|| {
             let known: Vec<&str> = units.iter().map(|u| u.suffix()).collect();
-            OptionError::new(
-                field,
+            OptionError::of(
+                opt,
                 format!(
                     " '{suffix}': not a pressure unit; use one of {}",
                     known.join(", ")
@@ -99,19 +100,13 @@ pub fn pressure_unit(field: &'static str, suffix: &str) -> Result<Unit, OptionEr
 }
 
 /// A pressure in `unit` as an absolute pressure, Pa, that must be positive.
-fn absolute(
-    field: &'static str,
-    given: &str,
-    v: f64,
-    unit: Unit,
-    p_atm_pa: f64,
-) -> Result<f64, OptionError> {
+fn absolute(opt: Opt, given: &str, v: f64, unit: Unit, p_atm_pa: f64) -> Result<f64, OptionError> {
     let p = unit.to_si(v, p_atm_pa);
     if p.is_finite() && p > 0.0 {
         return Ok(p);
     }
-    Err(OptionError::new(
-        field,
+    Err(OptionError::of(
+        opt,
         format!(
             " '{given}': {} {} is not a positive absolute pressure ({p} Pa)",
             v,
@@ -134,50 +129,44 @@ impl PredictOptions {
     /// unit, every pressure a positive absolute pressure, at most one nozzle with a
     /// positive conductance, a positive grid, at least 2 curve points, a spread > 1.
     pub fn check(&self, p_atm_pa: f64) -> Result<PredictSettings, OptionError> {
-        let unit = pressure_unit("PredictOptions.unit", self.unit.suffix())?;
+        let unit = pressure_unit(Opt::PredictUnit, self.unit.suffix())?;
         let mut o = crate::predict::PredictOptions::new(p_atm_pa);
         if let Some(list) = &self.pressures {
             let given = list_text(list);
             if list.is_empty() {
-                return Err(OptionError::new(
-                    "PredictOptions.pressures",
+                return Err(OptionError::of(
+                    Opt::PredictPressures,
                     " '': give at least one pressure, e.g. 3,4,5",
                 ));
             }
             o.pressures_pa = list
                 .iter()
-                .map(|v| absolute("PredictOptions.pressures", &given, *v, unit, p_atm_pa))
+                .map(|v| absolute(Opt::PredictPressures, &given, *v, unit, p_atm_pa))
                 .collect::<Result<_, _>>()?;
         }
         if let Some(r) = self.reference {
-            o.reference_pa = absolute(
-                "PredictOptions.reference",
-                &r.to_string(),
-                r,
-                unit,
-                p_atm_pa,
-            )?;
+            o.reference_pa = absolute(Opt::PredictReference, &r.to_string(), r, unit, p_atm_pa)?;
         }
         o.nozzle = self.nozzle()?;
         let grid = self.speed_grid_rpm;
         if !(grid.is_finite() && grid > 0.0) {
-            return Err(OptionError::new(
-                "PredictOptions.speed_grid_rpm",
+            return Err(OptionError::of(
+                Opt::PredictSpeedGrid,
                 format!(" {grid}: must be a positive number of rpm"),
             ));
         }
         o.speed_grid_rad_s = Unit::Rpm.to_si(grid, p_atm_pa);
         if self.curve_points < 2 {
-            return Err(OptionError::new(
-                "PredictOptions.curve_points",
+            return Err(OptionError::of(
+                Opt::PredictCurvePoints,
                 format!(" {}: a curve needs at least 2 points", self.curve_points),
             ));
         }
         o.curve_points = self.curve_points;
         if let Some(f) = self.fixed_spread {
             if !(f.is_finite() && f > 1.0) {
-                return Err(OptionError::new(
-                    "PredictOptions.fixed_spread",
+                return Err(OptionError::of(
+                    Opt::PredictFixedSpread,
                     format!(" {f}: must be a factor > 1"),
                 ));
             }
@@ -196,27 +185,27 @@ impl PredictOptions {
     /// Samples asked need the dataset; the sampler's counts must be usable.
     fn check_sampling(&self) -> Result<(), OptionError> {
         if self.bands == BandChoice::Samples && self.data.is_none() {
-            return Err(OptionError::new(
-                "PredictOptions.data",
+            return Err(OptionError::of(
+                Opt::PredictData,
                 ": bands from posterior samples need the dataset the fit was made from",
             ));
         }
         let s = &self.sampling;
         if let Some(w) = s.walkers.filter(|w| *w < 4 || w % 2 == 1) {
-            return Err(OptionError::new(
-                "PredictOptions.sampling.walkers",
+            return Err(OptionError::of(
+                Opt::PredictWalkers,
                 format!(" {w}: give an even number ≥ 2·(estimated parameters + 1)"),
             ));
         }
         if s.steps < 20 {
-            return Err(OptionError::new(
-                "PredictOptions.sampling.steps",
+            return Err(OptionError::of(
+                Opt::PredictSteps,
                 format!(" {}: give at least 20 kept steps", s.steps),
             ));
         }
         if s.draws < 40 {
-            return Err(OptionError::new(
-                "PredictOptions.sampling.draws",
+            return Err(OptionError::of(
+                Opt::PredictDraws,
                 format!(
                     " {}: give at least 40 draws for a 95 % band's percentiles",
                     s.draws
@@ -228,28 +217,29 @@ impl PredictOptions {
 
     /// The extra nozzle: at most one, with a positive conductance.
     fn nozzle(&self) -> Result<Option<Nozzle>, OptionError> {
-        let nozzle = |field: &'static str, port: NozzlePort, c: Option<f64>| match c {
-            Some(v) if !(v.is_finite() && v > 0.0) => Err(OptionError::new(
-                field,
+        let nozzle = |opt: Opt, port: NozzlePort, c: Option<f64>| match c {
+            Some(v) if !(v.is_finite() && v > 0.0) => Err(OptionError::of(
+                opt,
                 format!(" {v}: the conductance must be a positive number of m3/(s*Pa)"),
             )),
             Some(v) => Ok(Some(Nozzle { port, c_m3_s_pa: v })),
             None => Ok(None),
         };
         let inlet = nozzle(
-            "PredictOptions.inlet_nozzle_m3_s_pa",
+            Opt::PredictInletNozzle,
             NozzlePort::Inlet,
             self.inlet_nozzle_m3_s_pa,
         )?;
         let outlet = nozzle(
-            "PredictOptions.outlet_nozzle_m3_s_pa",
+            Opt::PredictOutletNozzle,
             NozzlePort::Outlet,
             self.outlet_nozzle_m3_s_pa,
         )?;
         if inlet.is_some() && outlet.is_some() {
-            return Err(OptionError::new(
-                "PredictOptions.inlet_nozzle_m3_s_pa",
-                " and PredictOptions.outlet_nozzle_m3_s_pa: give one extra nozzle, not both",
+            return Err(OptionError::pair(
+                Opt::PredictInletNozzle,
+                Opt::PredictOutletNozzle,
+                ": give one extra nozzle, not both",
             ));
         }
         Ok(inlet.or(outlet))
@@ -288,14 +278,26 @@ pub enum PredictTaskError {
     /// The fit file cannot be read.
     #[error(transparent)]
     FitFile(#[from] FitFileError),
+    /// The motor's figures at one supply pressure could not be found.
+    #[error("{}", at_pressure(.pressure, *.p_supply_pa, *.reference, .source, &Opt::field))]
+    AtPressure {
+        /// The supply pressure in the tables' unit, with the unit's label.
+        pressure: String,
+        /// Supply pressure, Pa absolute.
+        p_supply_pa: f64,
+        /// Whether it is the reference pressure of the factors (`PredictOptions.reference`).
+        reference: bool,
+        /// Why.
+        source: OperatingPointError,
+    },
     /// The prediction failed.
-    #[error("{0}")]
-    Predict(String),
+    #[error(transparent)]
+    Predict(PredictError),
     /// The fit's dataset cannot be read.
-    #[error("PredictOptions.data: {0}")]
+    #[error("{opt}: {0}", opt = Opt::PredictData)]
     Data(#[from] DataError),
     /// The fit's likelihood cannot be rebuilt on the dataset.
-    #[error("PredictOptions.data: {0}")]
+    #[error("{opt}: {0}", opt = Opt::PredictData)]
     Likelihood(#[from] FitLikelihoodError),
     /// The output folder cannot be made.
     #[error("{}: cannot create: {source}", path.display())]
@@ -308,6 +310,45 @@ pub enum PredictTaskError {
     /// The results cannot be written.
     #[error(transparent)]
     Report(#[from] PredictReportError),
+}
+
+/// The message of [`PredictTaskError::AtPressure`], the option `PredictOptions.reference`
+/// called `name(option)` when the pressure is the reference.
+fn at_pressure(
+    pressure: &str,
+    p_supply_pa: f64,
+    reference: bool,
+    source: &OperatingPointError,
+    name: &dyn Fn(Opt) -> &'static str,
+) -> String {
+    let note = if reference {
+        format!(
+            ", the {} pressure of the factors",
+            name(Opt::PredictReference)
+        )
+    } else {
+        String::new()
+    };
+    format!("at {pressure} ({p_supply_pa:.0} Pa abs.{note}): {source}")
+}
+
+impl PredictTaskError {
+    /// The message with every option it names called `name(option)` (e.g. the command
+    /// line's flag); [`std::fmt::Display`] names them by their fields.
+    pub fn message_with(&self, name: &dyn Fn(Opt) -> &'static str) -> String {
+        match self {
+            Self::Option(e) => e.message_with(name),
+            Self::Data(e) => format!("{}: {e}", name(Opt::PredictData)),
+            Self::Likelihood(e) => format!("{}: {e}", name(Opt::PredictData)),
+            Self::AtPressure {
+                pressure,
+                p_supply_pa,
+                reference,
+                source,
+            } => at_pressure(pressure, *p_supply_pa, *reference, source, name),
+            other => other.to_string(),
+        }
+    }
 }
 
 /// The atmosphere of a fit (its recordings'), Pa; the standard one when it has none.
@@ -397,25 +438,21 @@ fn motor_log_prior(fit: &FitFile, names: &[String]) -> Option<impl Fn(&[f64]) ->
     })
 }
 
-/// A prediction's failure in the asked unit (naming the reference when the reference
+/// A prediction's failure in the asked unit (marking the reference when the reference
 /// pressure is the one that failed, since every factor needs it).
 fn failed(e: PredictError, display: &PressureDisplay, reference_pa: f64) -> PredictTaskError {
-    PredictTaskError::Predict(match e {
+    match e {
         PredictError::AtPressure {
             p_supply_pa,
             source,
-        } => format!(
-            "at {} {} ({p_supply_pa:.0} Pa abs.{}): {source}",
-            display.text(p_supply_pa),
-            display.label(),
-            if p_supply_pa == reference_pa {
-                ", the PredictOptions.reference pressure of the factors"
-            } else {
-                ""
-            }
-        ),
-        other => other.to_string(),
-    })
+        } => PredictTaskError::AtPressure {
+            pressure: format!("{} {}", display.text(p_supply_pa), display.label()),
+            p_supply_pa,
+            reference: p_supply_pa == reference_pa,
+            source,
+        },
+        other => PredictTaskError::Predict(other),
+    }
 }
 
 /// Writes a prediction into the folder `out` (created): tables, report and figures, titled

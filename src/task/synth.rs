@@ -2,7 +2,7 @@
 //! pages printed to 3 digits) written from a known motor, with its truth file.
 
 use super::simulate::SimulateError;
-use super::OptionError;
+use super::{Opt, OptionError};
 use crate::data::fitfile::FitFile;
 use crate::data::synth::{synthesize, write_dataset, SensorNoise, SynthPlan};
 use crate::data::synth_catalogue::{write_catalogue, CataloguePlan};
@@ -77,14 +77,14 @@ impl SynthOptions {
                 .iter()
                 .find(|p| !(p.is_finite() && **p > 0.0 && **p < 40.0))
             {
-                return Err(OptionError::new(
-                    "SynthOptions.pressures_bar_g",
+                return Err(OptionError::of(
+                    Opt::SynthPressures,
                     format!(": {p} is not a supply pressure in bar(g) (0 to 40)"),
                 ));
             }
         } else if !(self.noise.is_finite() && self.noise >= 0.0) {
-            return Err(OptionError::new(
-                "SynthOptions.noise",
+            return Err(OptionError::of(
+                Opt::SynthNoise,
                 format!(" {}: must be a number >= 0", self.noise),
             ));
         }

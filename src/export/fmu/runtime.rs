@@ -8,9 +8,9 @@ use crate::data::fitfile::FitFile;
 use crate::model::jacobian::BoundaryRate;
 use crate::model::motor::{idx, Boundary, Load, Motor, State};
 use crate::model::params::ParamSet;
-use crate::numerics::ode::{Slopes, StiffSolver};
+use crate::numerics::ode::{Slopes, SolveError, StiffSolver};
 use crate::numerics::rodas::Rodas4;
-use crate::sim::steady;
+use crate::sim::steady::{self, SteadyError};
 
 /// Why a call into the FMU's model failed (the C interface logs it and returns an error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -31,14 +31,14 @@ pub enum RuntimeError {
     },
     /// No steady state at the initial inputs.
     #[error("steady start: {0}")]
-    Steady(String),
+    Steady(#[source] SteadyError),
     /// The stiff integrator failed in a co-simulation step.
-    #[error("step from t = {t} s: {message}")]
+    #[error("step from t = {t} s: {source}")]
     Step {
         /// Start of the step, s.
         t: f64,
-        /// The integrator's message.
-        message: String,
+        /// The integrator's error.
+        source: SolveError,
     },
 }
 
@@ -322,7 +322,7 @@ impl MotorFmu {
         if self.start_steady {
             let bc = self.boundary();
             self.x = steady::free(&self.motor, &bc, &steady::initial_guess(&bc))
-                .map_err(|e| RuntimeError::Steady(e.to_string()))?;
+                .map_err(RuntimeError::Steady)?;
         }
         Ok(())
     }
@@ -357,10 +357,7 @@ impl MotorFmu {
             let kinks = |t: f64, x: &State| motor.laminar_margins(x, &bc_at(t));
             let out = Rodas4::default()
                 .solve_with_kinks(&rhs, &jacobian, &kinks, t0, self.x, &[t0 + h_s])
-                .map_err(|e| RuntimeError::Step {
-                    t: t0,
-                    message: e.to_string(),
-                })?;
+                .map_err(|source| RuntimeError::Step { t: t0, source })?;
             self.x = out[0];
             self.inputs = self.inputs_at(h_s);
         }

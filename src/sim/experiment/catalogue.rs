@@ -39,10 +39,11 @@ impl ExperimentKind for Catalogue {
     fn build(&self, data: &ExperimentData) -> Result<Arc<dyn Drive>, SimError> {
         let rec = &data.recording;
         let speeds = rec.values(Quantity::Speed).map_err(missing(data))?.to_vec();
-        let p_supply_pa = data.p_supply_pa.ok_or_else(|| SimError {
-            experiment: data.file.clone(),
-            message: "a catalogue needs its supply pressure".into(),
-        })?;
+        let p_supply_pa = data
+            .p_supply_pa
+            .ok_or_else(|| SimError::CatalogueWithoutSupply {
+                experiment: data.file.clone(),
+            })?;
         Ok(Arc::new(CatalogueSweep {
             p_supply_pa,
             speeds,
@@ -71,7 +72,7 @@ impl Drive for CatalogueSweep {
         // The operating points `predict` uses: one stall convention, one sweep.
         let conditions = Conditions::supplied(self.p_supply_pa, setting.p_atm_pa);
         let points = at_speeds(motor, &conditions, &self.speeds)
-            .map_err(|e| setting.fail(e.to_string()))?;
+            .map_err(|e| setting.steady_failed(e))?;
         Ok(Simulated {
             outputs: vec![
                 (Quantity::Torque, points.iter().map(|p| p.torque_nm).collect()),

@@ -105,7 +105,11 @@ fn steady_sweep(
         let x = near
             .filter(Result::is_ok)
             .unwrap_or_else(|| steady::at_speed(motor, &bc, speeds[i], &steady::initial_guess(&bc)))
-            .map_err(|e| setting.fail(format!("row {}: {e}", i + 1)))?;
+            .map_err(|source| SimError::SteadyRow {
+                experiment: setting.file.to_string(),
+                row: i + 1,
+                source,
+            })?;
         let b = motor.balance(&x, &bc);
         // At standstill the brake holds the rotor against the full dry friction.
         let torque = shaft_torque(motor, &x, &b);

@@ -9,8 +9,9 @@
 //! `registry!` below (which also adds the [`Kind`] variant that rig.toml names).
 
 use crate::model::motor::{Load, Motor};
-use crate::numerics::ode::StiffSolver;
+use crate::numerics::ode::{SolveError, StiffSolver};
 use crate::sim::recording::{ExperimentData, MissingColumn};
+use crate::sim::steady::SteadyError;
 use crate::units::Quantity;
 use serde::Deserialize;
 use std::fmt;
@@ -18,14 +19,94 @@ use std::sync::Arc;
 
 mod transient;
 
-/// Why a simulation failed.
+/// Why a simulation failed. Every variant but [`SimError::FreeSpeed`] names its
+/// experiment by its recording's file name as given in rig.toml.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("simulating {experiment}: {message}")]
-pub struct SimError {
-    /// Recording file name as given in rig.toml.
-    pub experiment: String,
-    /// What failed (the lower layer's message, with its context).
-    pub message: String,
+#[non_exhaustive]
+pub enum SimError {
+    /// A channel the experiment needs is not in its recording.
+    #[error("simulating {experiment}: {source}")]
+    MissingColumn {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+        /// The missing column.
+        source: MissingColumn,
+    },
+    /// A catalogue without its supply pressure.
+    #[error("simulating {experiment}: a catalogue needs its supply pressure")]
+    CatalogueWithoutSupply {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+    },
+    /// A transient without a supply pressure (neither in rig.toml nor recorded).
+    #[error("simulating {experiment}: no supply pressure")]
+    NoSupply {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+    },
+    /// No steady state at a point of a steady sweep.
+    #[error("simulating {experiment}: {source}")]
+    Steady {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+        /// The steady solver's error.
+        source: SteadyError,
+    },
+    /// No steady state at a row of a recording (1-based).
+    #[error("simulating {experiment}: row {row}: {source}")]
+    SteadyRow {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+        /// The row, counted from 1.
+        row: usize,
+        /// The steady solver's error.
+        source: SteadyError,
+    },
+    /// No steady state to start a transient from.
+    #[error("simulating {experiment}: initial state: {source}")]
+    InitialState {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+        /// The steady solver's error.
+        source: SteadyError,
+    },
+    /// The integration of a transient failed.
+    #[error("simulating {experiment}: {source}")]
+    Solve {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+        /// The integrator's error.
+        source: SolveError,
+    },
+    /// The simulation gives no values for a channel of the recording.
+    #[error("simulating {experiment}: the simulation gives no {column}")]
+    NoChannel {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+        /// The recorded column's name.
+        column: String,
+    },
+    /// No free-running speed (of a synthetic dataset's motor).
+    #[error("simulating free speed: {0}")]
+    FreeSpeed(#[source] SteadyError),
+}
+
+impl SimError {
+    /// The recording file name of the experiment (as given in rig.toml); `free speed` for
+    /// [`SimError::FreeSpeed`].
+    pub fn experiment(&self) -> &str {
+        match self {
+            Self::MissingColumn { experiment, .. }
+            | Self::CatalogueWithoutSupply { experiment }
+            | Self::NoSupply { experiment }
+            | Self::Steady { experiment, .. }
+            | Self::SteadyRow { experiment, .. }
+            | Self::InitialState { experiment, .. }
+            | Self::Solve { experiment, .. }
+            | Self::NoChannel { experiment, .. } => experiment,
+            Self::FreeSpeed(_) => "free speed",
+        }
+    }
 }
 
 /// Simulated channels of one experiment, SI, one value per recorded row.
@@ -81,11 +162,11 @@ pub struct Setting<'a> {
 }
 
 impl Setting<'_> {
-    /// An error of this experiment's simulation.
-    pub fn fail(&self, message: String) -> SimError {
-        SimError {
+    /// This experiment's failure to find a steady state (of a sweep).
+    pub fn steady_failed(&self, source: SteadyError) -> SimError {
+        SimError::Steady {
             experiment: self.file.to_string(),
-            message,
+            source,
         }
     }
 }
@@ -224,9 +305,9 @@ impl Experiment {
 
 /// The error of a missing column while building an experiment from `data`.
 fn missing(data: &ExperimentData) -> impl Fn(MissingColumn) -> SimError + '_ {
-    |e: MissingColumn| SimError {
+    |source: MissingColumn| SimError::MissingColumn {
         experiment: data.file.clone(),
-        message: e.to_string(),
+        source,
     }
 }
 

@@ -99,8 +99,12 @@ impl Drive for Transient {
         let times = &self.times;
         let t0 = times[0];
         let bc0 = self.boundary_at(setting, t0);
-        let x0 = steady::free(motor, &bc0, &steady::initial_guess(&bc0))
-            .map_err(|e| setting.fail(format!("initial state: {e}")))?;
+        let x0 = steady::free(motor, &bc0, &steady::initial_guess(&bc0)).map_err(|source| {
+            SimError::InitialState {
+                experiment: setting.file.to_string(),
+                source,
+            }
+        })?;
         // The inputs at the last time asked for: a Rosenbrock step evaluates its last two
         // stages at the same time, and the next step's linearisation there again (the
         // schedules and the conductance's `exp` were ~6 % of an evaluation's instructions).
@@ -129,7 +133,10 @@ impl Drive for Transient {
         let kinks = |t: f64, x: &State| motor.laminar_margins(x, &boundary(setting, inputs(t)));
         let states = solver
             .solve_with_kinks(&rhs, &jacobian, &kinks, t0, x0, times)
-            .map_err(|e| setting.fail(e.to_string()))?;
+            .map_err(|source| SimError::Solve {
+                experiment: setting.file.to_string(),
+                source,
+            })?;
         let n = times.len();
         let mut out: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(n));
         for (inputs, x) in self.row_inputs.iter().zip(&states) {
@@ -180,9 +187,8 @@ pub(super) fn supply_schedule(
             Ok(Schedule::constant(p))
         }
         (_, Some(col), _) => Ok(smoothed(col)),
-        (None, None, _) => Err(SimError {
+        (None, None, _) => Err(SimError::NoSupply {
             experiment: data.file.clone(),
-            message: "no supply pressure".into(),
         }),
     }
 }
