@@ -3,7 +3,7 @@
 //! running fit's starts every few seconds.
 
 use crate::diagnose::{DiagnoseObserver, Progress as DiagnoseProgress};
-use crate::estimate::multistart::{RunObserver, StartResult};
+use crate::estimate::optimize::multistart::{RunObserver, StartResult};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -74,7 +74,7 @@ impl crate::task::fit::FitObserver for UnitProgress<'_> {
             crate::io::say_line(format_args!("{line}"));
         }
     }
-    fn displacement(&self, estimate: &crate::estimate::displacement::DisplacementEstimate) {
+    fn displacement(&self, estimate: &crate::estimate::fit::displacement::DisplacementEstimate) {
         let line = crate::task::fit::displacement_first_line(estimate);
         crate::io::say_line(format_args!("{line}"));
     }

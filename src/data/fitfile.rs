@@ -60,7 +60,7 @@ pub struct ParamVerdict {
 }
 
 /// How the fit's estimate and intervals were obtained and how well it reproduces the data
-/// (`statistics` in the file; see `estimate::goodness`).
+/// (`statistics` in the file; see `estimate::fit::goodness`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FitStatistics {
     /// What the exported values are: "maximum_likelihood" (of the recorded rows).
@@ -106,7 +106,7 @@ pub struct FitStatistics {
     pub profile_threshold: Option<f64>,
     /// The estimated parameters' values (SI) at which the supply-pressure sensor offset's
     /// effect on the rows was linearised; with `widened_noise` it rebuilds the likelihood
-    /// exactly (`estimate::fit_likelihood`). Empty in files written before it existed.
+    /// exactly (`estimate::fit::fit_likelihood`). Empty in files written before it existed.
     #[serde(default)]
     pub linearised_at: serde_json::Map<String, Value>,
     /// The motor prior of the estimated parameters (docs/estimation.md, "Priors"): the
@@ -160,7 +160,7 @@ pub struct RunInfo {
 /// The joint uncertainty of the estimated parameters (`covariance` in the file): the
 /// covariance of ln θ from the curvature of the likelihood's χ² at the estimate,
 /// Σ_log = D·Σ_θ·D with Σ_θ = 2·s²·H⁻¹ in the optimizer's coordinates
-/// (`estimate::uncertainty::curvature_covariance`, s² the intervals' scale) and
+/// (`estimate::profile::uncertainty::curvature_covariance`, s² the intervals' scale) and
 /// D = diag(d ln v/dθ). Written as
 /// `{"space": "log", "parameters": [names], "matrix": [[...]]}`; `null` when a fit computed
 /// no intervals or the curvature was not positive definite. The profile intervals (`ci95`)

@@ -46,9 +46,9 @@
 
 use super::fitting::Fitted;
 pub use crate::data::fitfile::{term_from_json, term_to_json};
-use crate::estimate::derivatives::central_column;
 use crate::estimate::engine::Engine;
-use crate::estimate::space::{ParamSpace, SpaceError};
+use crate::estimate::problem::derivatives::central_column;
+use crate::estimate::problem::space::{ParamSpace, SpaceError};
 pub use crate::model::extra::{
     balance_name, balance_symbol, category, coefficient_unit, describe, feature_name, formula,
     pressure_id, speed_id,

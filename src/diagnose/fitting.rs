@@ -2,7 +2,7 @@
 //! from a previous optimum, several at once.
 //!
 //! Every fit minimises the likelihood of the recorded data ([`crate::objective::likelihood`]). Catalog
-//! models go through the project's multi-start estimator ([`crate::estimate::multistart`])
+//! models go through the project's multi-start estimator ([`crate::estimate::optimize::multistart`])
 //! with the warm points as `given_starts`. Models with discovered terms ([`ExtraTerm`]) are
 //! not expressible as a [`ParamSpace`] (their coefficients are not named parameters), so
 //! they are fitted here by restarted Nelder–Mead over the space's θ plus one coordinate per
@@ -10,14 +10,14 @@
 
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::least_squares::polish_residuals;
-use crate::estimate::likelihood::Likelihood;
-use crate::estimate::multistart::{self, Silent};
-use crate::estimate::objective::Evaluation;
-use crate::estimate::objective::{Coordinates, Objective, Problem};
-use crate::estimate::optimize::{self, Layout, NelderMeadSettings, Restart};
-use crate::estimate::settings::MultiStartConfig;
-use crate::estimate::space::{ParamSpace, SpaceError};
+use crate::estimate::optimize::least_squares::polish_residuals;
+use crate::estimate::optimize::multistart::{self, Silent};
+use crate::estimate::optimize::nelder_mead::{self, Layout, NelderMeadSettings, Restart};
+use crate::estimate::optimize::settings::MultiStartConfig;
+use crate::estimate::problem::likelihood::Likelihood;
+use crate::estimate::problem::objective::Evaluation;
+use crate::estimate::problem::objective::{Coordinates, Objective, Problem};
+use crate::estimate::problem::space::{ParamSpace, SpaceError};
 use crate::model::effects::EffectSet;
 use crate::model::motor::{ExtraTerm, Motor};
 use crate::model::params::MotorParams;
@@ -286,7 +286,7 @@ fn term_fit(objective: &HandOver<'_>, space: &ParamSpace, job: &FitJob) -> Resul
         let mut x0 = space.theta(p);
         x0.extend(std::iter::repeat_n(1.0, job.extra.len()));
         let f0 = problem.evaluate(&x0).cost;
-        let search = optimize::minimize(&problem, x0, f0, REFIT, job.max_iters, stage);
+        let search = nelder_mead::minimize(&problem, x0, f0, REFIT, job.max_iters, stage);
         if best.as_ref().is_none_or(|(_, b)| search.cost() < *b) {
             best = Some((search.x().to_vec(), search.cost()));
         }

@@ -28,7 +28,7 @@ pub struct Silent;
 impl DiagnoseObserver for Silent {}
 
 /// The multi-start's silent observer is silent here too, so one `Silent` serves every task.
-impl DiagnoseObserver for crate::estimate::multistart::Silent {}
+impl DiagnoseObserver for crate::estimate::optimize::multistart::Silent {}
 
 /// One step of a diagnosis. `Display` gives the command line's progress line.
 #[derive(Debug, Clone, Copy)]

@@ -5,7 +5,7 @@
 //! same threads by work stealing: there are no pools inside pools. Every parallel map keeps
 //! the order of its input, so results never depend on the number of threads.
 
-use super::error::EstimateError;
+use crate::estimate::error::EstimateError;
 use rayon::prelude::*;
 
 /// A thread pool to run estimation work on.

@@ -1,5 +1,5 @@
 //! Errors of the estimate layer: bad run settings (one variant per bad value, checked once
-//! by [`super::settings::MultiStartConfig::check`]), the thread pool, the results file.
+//! by [`crate::estimate::optimize::settings::MultiStartConfig::check`]), the thread pool, the results file.
 
 use crate::model::params::ParamError;
 use std::path::PathBuf;
@@ -8,7 +8,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum EstimateError {
-    /// The observer asked the run to stop ([`super::multistart::RunObserver::keep_going`]).
+    /// The observer asked the run to stop ([`crate::estimate::optimize::multistart::RunObserver::keep_going`]).
     #[error("interrupted: the starts finished so far are in the results file; resume to continue")]
     Interrupted,
     /// No start point asked for.

@@ -1,10 +1,10 @@
 //! The history of a run (pyPESTO's `history`): an append-only results file of finished
 //! starts (JSON lines after a header naming the run), read back to resume.
 
-use super::error::{EstimateError, ForeignStart, ResultsLineError};
-use super::settings::MultiStartSettings;
-use super::space::ParamSpace;
 use super::StartResult;
+use crate::estimate::error::{EstimateError, ForeignStart, ResultsLineError};
+use crate::estimate::optimize::settings::MultiStartSettings;
+use crate::estimate::problem::space::ParamSpace;
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};

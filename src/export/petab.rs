@@ -4,7 +4,7 @@
 //!
 //! # What the tables say
 //!
-//! The problem is the likelihood the fit maximised (`estimate::fit_likelihood`): the
+//! The problem is the likelihood the fit maximised (`estimate::fit::fit_likelihood`): the
 //! compared rows of every recording, each channel with its σ (the data's noise, widened where
 //! the fit widened it), and the rig's systematic errors as parameters with Gaussian priors.
 //! Observable `<recording>_<quantity>` of channel c at row i is
@@ -55,7 +55,7 @@
 
 use crate::data::dataset::{Dataset, Kind};
 use crate::data::fitfile::FitFile;
-use crate::estimate::fit_likelihood::{
+use crate::estimate::fit::fit_likelihood::{
     Breakdown, ChannelRows, FitLikelihood, FitLikelihoodError, MotorPriorTerm,
 };
 use crate::model::params::{ParamId, PARAMS};

@@ -264,7 +264,7 @@ pub fn displacement_from_page(fit: &FitFile) -> Option<String> {
     let v = fit.params.v_disp();
     let ci = fit.ci95.iter().find(|(n, _)| n == v_disp).map(|(_, c)| *c);
     let text = match ci {
-        Some(c) => crate::estimate::displacement::describe_cm3(v, c),
+        Some(c) => crate::estimate::fit::displacement::describe_cm3(v, c),
         None => format!(
             "displacement estimated from the page: {:.3} cm³ (no interval: not identifiable)",
             v * 1e6

@@ -26,7 +26,7 @@
 use super::uncertainty::ParamUncertainty;
 use super::PredictError;
 use crate::data::fitfile::FitFile;
-use crate::estimate::fit_likelihood::FitLikelihood;
+use crate::estimate::fit::fit_likelihood::FitLikelihood;
 use crate::estimate::sample::{
     run_ensemble_with, summarise, EnsembleSettings, FitPosterior, LogDensity, LogPrior, Moves,
     ParamDiagnostics,

@@ -31,7 +31,7 @@
 
 use super::PredictError;
 use crate::data::fitfile::FitFile;
-use crate::estimate::space::DEFAULT_ESTIMATED;
+use crate::estimate::problem::space::DEFAULT_ESTIMATED;
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamId, ParamSet};
 use nalgebra::{DMatrix, DVector};

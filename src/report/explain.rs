@@ -5,7 +5,7 @@
 //! The definitions are the code's: J is `objective::cost` eq. \[1\], χ² is
 //! `objective::likelihood` eq. \[1\] (with the sensor offsets of
 //! `objective::nuisance` profiled out in a fit), the noise ratio and its limit are
-//! `estimate::goodness` eqs. \[1\]–\[2\].
+//! `estimate::fit::goodness` eqs. \[1\]–\[2\].
 
 use crate::model::params::{
     conductance_dm3_s_bar, spec, CATALOGUE_CONDUCTANCE_UNIT, CONDUCTANCE_UNIT,

@@ -5,8 +5,8 @@
 
 use crate::data::dataset::Dataset;
 use crate::estimate::fit::{FitOutcome, FitSetup};
-use crate::estimate::space::ParamSpace;
-use crate::estimate::uncertainty::Interval;
+use crate::estimate::problem::space::ParamSpace;
+use crate::estimate::profile::uncertainty::Interval;
 use crate::io::side_path;
 use crate::model::params::{conductance_dm3_s_bar, spec, MotorParams, ParamSpec, PARAMS};
 use crate::objective::cost::{ChannelResiduals, CostModel};
@@ -16,7 +16,7 @@ use crate::report::plot::{Chart, Figure, Legend, PlotError, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::estimate::multistart::StartResult;
+use crate::estimate::optimize::multistart::StartResult;
 
 /// One estimated parameter of a fit, as the summary and the report print it.
 #[derive(Debug, Clone, PartialEq)]
@@ -199,7 +199,7 @@ pub fn markdown(
 
 /// χ² of a fit as the terminal and the report name it: `chi2 X over N rows, chi2/dof Y
 /// (dof D)`, the rows against the data's own noise (docs/model.md, "χ² and χ²/dof").
-pub fn chi2_summary(g: &crate::estimate::goodness::GoodnessOfFit) -> String {
+pub fn chi2_summary(g: &crate::estimate::fit::goodness::GoodnessOfFit) -> String {
     format!(
         "chi2 {:.1} over {} rows, chi2/dof {:.3} (dof {})",
         g.chi2, g.n_points, g.chi2_per_dof, g.dof

@@ -6,19 +6,19 @@
 use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::data::fitfile::FitFile;
-use crate::estimate::displacement::{
-    describe_cm3, displacement_missing, from_page as displacement_from_page, DisplacementEstimate,
-};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
+use crate::estimate::fit::displacement::{
+    describe_cm3, displacement_missing, from_page as displacement_from_page, DisplacementEstimate,
+};
 use crate::estimate::fit::{
     fit as estimate_fit, fit_file, most_sensitive_experiment, FitData, FitOutcome, FitSetup,
     UncertaintyMethod,
 };
-use crate::estimate::multistart::RunObserver;
-use crate::estimate::prior::Prior;
-use crate::estimate::settings::MultiStartConfig;
-use crate::estimate::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
+use crate::estimate::optimize::multistart::RunObserver;
+use crate::estimate::optimize::settings::MultiStartConfig;
+use crate::estimate::problem::prior::Prior;
+use crate::estimate::problem::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
 use crate::io::side_path;
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
@@ -299,7 +299,7 @@ fn displacement_dimension(e: &DisplacementEstimate) -> Result<Dimension, SpaceEr
 }
 
 /// For a dataset of catalogue pages only whose `[motor]` gives neither a displacement nor
-/// a geometry: the displacement estimated from the pages (`estimate::displacement`).
+/// a geometry: the displacement estimated from the pages (`estimate::fit::displacement`).
 fn page_displacement(ds: &Dataset, data: &FitData) -> Option<DisplacementEstimate> {
     let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
     (catalogue_only && displacement_missing(&ds.motor))
@@ -362,7 +362,7 @@ pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
 }
 
 /// For a dataset of catalogue pages only and no `estimate`: the parameters the catalogue
-/// pins down (`estimate::subset`), reported to `report` with what would pin the rest;
+/// pins down (`estimate::profile::subset`), reported to `report` with what would pin the rest;
 /// otherwise `o` as it is.
 fn catalogue_estimates(
     ds: &Dataset,
@@ -398,7 +398,7 @@ fn catalogue_estimates(
                 .map(|id| id.name().to_string()),
         );
     }
-    let limit = 100.0 * crate::estimate::subset::PINNED_RELATIVE_SD;
+    let limit = 100.0 * crate::estimate::profile::subset::PINNED_RELATIVE_SD;
     let nothing = || {
         let before = format!(
             "the catalogue pins none of {} to within {limit:.0} % (1σ): add curves, key figures or a rig experiment, or name parameters with ",
@@ -406,7 +406,8 @@ fn catalogue_estimates(
         );
         FitError::Option(OptionError::of_within(Opt::FitEstimate, before, ""))
     };
-    let Some(pinning) = crate::estimate::subset::pinned_subset(data, &motor, &names) else {
+    let Some(pinning) = crate::estimate::profile::subset::pinned_subset(data, &motor, &names)
+    else {
         return Err(nothing());
     };
     let rows: Vec<Pinning> = pinning
@@ -485,7 +486,7 @@ pub trait FitObserver: RunObserver {
     }
 }
 
-impl FitObserver for crate::estimate::multistart::Silent {}
+impl FitObserver for crate::estimate::optimize::multistart::Silent {}
 
 /// The caller's observer, with the pinning kept for the [`Fit`].
 struct Noted<'a> {

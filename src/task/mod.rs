@@ -1,6 +1,6 @@
 //! The work of each command as a library function: typed options in, typed results out.
 //!
-//! Every task follows one pattern (linfa's `ParamGuard`, as `estimate::settings` does it):
+//! Every task follows one pattern (linfa's `ParamGuard`, as `estimate::optimize::settings` does it):
 //! an options struct with public fields and defaults (`FitOptions`, `DiagnoseOptions`,
 //! `PredictOptions`, `SynthOptions`, `BatchOptions`, a `ControlStudy`), turned by `check()`
 //! into settings with private fields (`FitSettings`, ...), so that a task never sees a bad

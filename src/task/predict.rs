@@ -9,7 +9,7 @@
 use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
-use crate::estimate::fit_likelihood::{FitLikelihood, FitLikelihoodError};
+use crate::estimate::fit::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use crate::estimate::sample::posterior::LogPrior;
 use crate::model::params::ParamId;
 use crate::predict::Prediction;

@@ -1,4 +1,4 @@
-//! The likelihood rebuilt from a fit file (`estimate::fit_likelihood`) is the fit's own: at
+//! The likelihood rebuilt from a fit file (`estimate::fit::fit_likelihood`) is the fit's own: at
 //! the exported parameters it gives the file's χ² to rounding, its parts add up, it rises
 //! away from the estimate, and bad use gets a named error.
 

@@ -15,8 +15,8 @@
 //! zero density.
 
 use super::LogDensity;
-use crate::estimate::fit_likelihood::FitLikelihood;
-use crate::estimate::uncertainty::CHI2_95;
+use crate::estimate::fit::fit_likelihood::FitLikelihood;
+use crate::estimate::profile::uncertainty::CHI2_95;
 
 /// A log-prior density of the estimated parameters' values (SI, the fit file's order), up
 /// to a constant; −∞ where the prior is zero.

@@ -10,7 +10,7 @@
 //! out, 1/norm = its conditional σ), while that σ stays below the limit; then it drops the
 //! worst-determined one while any joint σ exceeds the limit.
 
-use super::fit_data::FitData;
+use crate::estimate::problem::fit_data::FitData;
 use crate::model::motor::Motor;
 use crate::numerics::DefaultSolver;
 use nalgebra::{DMatrix, DVector};

@@ -1,9 +1,9 @@
 //! The search space: which parameters are estimated (each a [`Dimension`] with its bounds
 //! and coordinate map), what is held fixed, the effects switched on and the motor prior.
 
-use super::dimension::{logistic, logit};
-pub use super::dimension::{Dimension, SpaceError};
-use super::prior::Prior;
+use crate::estimate::problem::dimension::{logistic, logit};
+pub use crate::estimate::problem::dimension::{Dimension, SpaceError};
+use crate::estimate::problem::prior::Prior;
 use crate::model::effects::EffectSet;
 pub use crate::model::params::DEFAULT_ESTIMATED;
 use crate::model::params::{MotorParams, ParamId, ParamSet};
@@ -18,7 +18,7 @@ pub struct ParamSpace {
     /// Effects switched on.
     pub effects: EffectSet,
     /// The prior of the estimated parameters (empty: none), added to every cost the space
-    /// is searched on (`estimate::prior`).
+    /// is searched on (`estimate::problem::prior`).
     pub prior: Prior,
     /// The displacement, m³, that `fixed` was scaled to, when the fixed size-dependent
     /// parameters follow an estimated displacement (a page that does not print it): with

@@ -12,7 +12,7 @@
 //! interval), or after `max_iters` iterations. A residual vector that cannot be computed
 //! (a failed simulation) counts as an infinite χ²: the step is refused.
 
-use super::objective::{Coordinates, Problem};
+use crate::estimate::problem::objective::{Coordinates, Problem};
 use nalgebra::{DMatrix, DVector};
 
 /// Finite-difference step in θ: a relative change of 1e-3, a secant rather than a tangent

@@ -17,10 +17,10 @@
 //! prior's pull moves it by a fraction (σ_data/σ)² of its distance from v₀: nothing; where
 //! they do not (a catalogue page), the posterior is the prior and the bands carry it.
 //!
-//! A sampler of the estimator's coordinates θ (`estimate::dimension`) adds [`Prior::ln_prior`]
+//! A sampler of the estimator's coordinates θ (`estimate::problem::dimension`) adds [`Prior::ln_prior`]
 //! to the log-likelihood −χ²/2: the log-density of θ, the Jacobian of θ → ln v included.
 
-use super::dimension::Dimension;
+use crate::estimate::problem::dimension::Dimension;
 use crate::model::params::{MotorParams, ParamId};
 
 /// The normal quantile of a two-sided 95 % range.
@@ -226,7 +226,7 @@ impl Prior {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimate::space::ParamSpace;
+    use crate::estimate::problem::space::ParamSpace;
     use crate::model::effects::EffectSet;
 
     fn space() -> ParamSpace {

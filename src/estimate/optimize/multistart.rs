@@ -15,14 +15,14 @@
 //! where the objective has them): Nelder–Mead finds the basin, least squares its floor.
 //! The rule looks at the start alone, so it keeps the run independent of the thread count.
 
-use super::engine::Engine;
-use super::error::EstimateError;
-use super::history::ResultsFile;
-use super::least_squares::levenberg_marquardt_run;
-use super::objective::{Objective, Problem};
-use super::optimize::{RestartedNelderMead, Status};
-use super::settings::MultiStartSettings;
-use super::space::ParamSpace;
+use crate::estimate::engine::Engine;
+use crate::estimate::error::EstimateError;
+use crate::estimate::history::ResultsFile;
+use crate::estimate::optimize::least_squares::levenberg_marquardt_run;
+use crate::estimate::optimize::nelder_mead::{RestartedNelderMead, Status};
+use crate::estimate::optimize::settings::MultiStartSettings;
+use crate::estimate::problem::objective::{Objective, Problem};
+use crate::estimate::problem::space::ParamSpace;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -490,9 +490,9 @@ pub fn cluster(results: &[StartResult], space: &ParamSpace, radius: f64) -> Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimate::objective::Evaluation;
-    use crate::estimate::settings::MultiStartConfig;
-    use crate::estimate::space::DEFAULT_ESTIMATED;
+    use crate::estimate::optimize::settings::MultiStartConfig;
+    use crate::estimate::problem::objective::Evaluation;
+    use crate::estimate::problem::space::DEFAULT_ESTIMATED;
     use crate::model::effects::EffectSet;
     use crate::model::motor::Motor;
     use crate::model::params::MotorParams;

@@ -8,7 +8,7 @@
 //! the multi-start restarts with curvature-shaped simplices, a diagnosis refit with axis
 //! simplices of halving edge, a profile point runs one simplex.
 
-use super::derivatives::hessian;
+use crate::estimate::problem::derivatives::hessian;
 use argmin::core::{CostFunction, Error, Executor, State, TerminationReason};
 use argmin::solver::neldermead::NelderMead;
 

@@ -13,27 +13,34 @@
 //! interval belong to one likelihood, and the exported parameters do not depend on whether
 //! intervals were computed. J at that point is a little above the best start's J (the two
 //! scores weigh the channels differently); both are reported. The goodness of fit
-//! ([`super::goodness`]) is measured against the data's noise, and intervals are widened
+//! ([`crate::estimate::fit::goodness`]) is measured against the data's noise, and intervals are widened
 //! where the model misses it.
 
-use super::engine::Engine;
-use super::error::EstimateError;
-pub use super::fit_data::FitData;
-use super::goodness::{competitors, mark_competitors, GoodnessOfFit};
-use super::history::ResultsFile;
-use super::likelihood::Likelihood;
-use super::max_likelihood::{lowest, maximum_likelihood, MlFit, Polished};
-use super::multistart::{self, cluster, Cluster, MultiStartOutcome, RunObserver};
-use super::objective::{Evaluation, Objective, Problem};
-use super::optimize::{minimize, Restart};
-use super::settings::{MultiStartConfig, MultiStartSettings};
-use super::space::ParamSpace;
-use super::uncertainty::{self, Interval};
+pub(crate) mod displacement;
+pub(crate) mod fit_likelihood;
+pub(crate) mod goodness;
+pub(crate) mod max_likelihood;
+
 use crate::data::dataset::Kind;
 use crate::data::fitfile::{
     FitConditions, FitFile, FitStatistics, LogCovariance, ParamVerdict, PriorEntry, ProfilePath,
     RunInfo, Starts,
 };
+use crate::estimate::engine::Engine;
+use crate::estimate::error::EstimateError;
+use crate::estimate::fit::goodness::{competitors, mark_competitors, GoodnessOfFit};
+use crate::estimate::fit::max_likelihood::{lowest, maximum_likelihood, MlFit, Polished};
+use crate::estimate::history::ResultsFile;
+use crate::estimate::optimize::multistart::{
+    self, cluster, Cluster, MultiStartOutcome, RunObserver,
+};
+use crate::estimate::optimize::nelder_mead::{minimize, Restart};
+use crate::estimate::optimize::settings::{MultiStartConfig, MultiStartSettings};
+pub use crate::estimate::problem::fit_data::FitData;
+use crate::estimate::problem::likelihood::Likelihood;
+use crate::estimate::problem::objective::{Evaluation, Objective, Problem};
+use crate::estimate::problem::space::ParamSpace;
+use crate::estimate::profile::uncertainty::{self, Interval};
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamId};
 use crate::numerics::DefaultSolver;
@@ -143,7 +150,7 @@ pub struct FitOutcome {
     /// nuisances' prior terms included); the estimate minimises, and the intervals are
     /// profiled on, this plus [`FitOutcome::prior_chi2`].
     pub chi2: f64,
-    /// The motor prior's χ²_prior at the estimate (`estimate::prior`; 0 without a prior).
+    /// The motor prior's χ²_prior at the estimate (`estimate::problem::prior`; 0 without a prior).
     pub prior_chi2: f64,
     /// Rise of that χ² that bounds a 95 % profile interval (`None` without a simulation).
     pub threshold: Option<f64>,
@@ -197,7 +204,7 @@ impl FitOutcome {
 /// The covariance of the estimated parameters' logarithms from that of the optimizer's
 /// coordinates θ: Σ_log = D·Σ_θ·D with D = diag(d ln v_j/dθ_j) at θ. With u = 1/(1 + e^(−θ))
 /// the position in the bounds, d ln v/dθ = (ln hi − ln lo)·u·(1 − u) on a log scale and
-/// (hi − lo)·u·(1 − u)/v on a linear one (`estimate::space`). Symmetrised against rounding.
+/// (hi − lo)·u·(1 − u)/v on a linear one (`estimate::problem::space`). Symmetrised against rounding.
 /// `None` when the sizes disagree or a linearly placed parameter is not positive (it has no
 /// logarithm).
 fn log_covariance(space: &ParamSpace, theta: &[f64], cov: &DMatrix<f64>) -> Option<LogCovariance> {

@@ -1,7 +1,7 @@
 //! The likelihood a fit's estimate and intervals were measured on, rebuilt from its fit file,
 //! for tools outside vanefit (the Python package, pyPESTO, the PEtab export).
 //!
-//! A fit ([`super::fit`]) maximises the likelihood of the recorded rows
+//! A fit ([`crate::estimate::fit`]) maximises the likelihood of the recorded rows
 //! ([`crate::objective::likelihood`]): the experiments driven by the smooth of each recorded
 //! input, σ per channel from the data, the sensors' offsets and the supply-pressure sensor's
 //! offset profiled out as Gaussian nuisances ([`crate::objective::nuisance`]),
@@ -35,12 +35,12 @@
 //! alone, so that a sampler adding its own prior does not count it twice. At the fit's
 //! estimate, `likelihood_chi2` + `prior_chi2` of the fit file is the fit's objective.
 
-use super::fit_data::FitData;
-use super::prior::{PriorTerm, NO_LOG_RESIDUAL};
-use super::space::{Dimension, SpaceError};
-use super::uncertainty::CHI2_95;
 use crate::data::dataset::Dataset;
 use crate::data::fitfile::FitFile;
+use crate::estimate::problem::fit_data::FitData;
+use crate::estimate::problem::prior::{PriorTerm, NO_LOG_RESIDUAL};
+use crate::estimate::problem::space::{Dimension, SpaceError};
+use crate::estimate::profile::uncertainty::CHI2_95;
 use crate::model::effects::EffectSet;
 use crate::model::extra::ExtraTerm;
 use crate::model::motor::Motor;

@@ -1,11 +1,11 @@
 //! What a fit is scored on: the cost J (docs/model.md, "Cost J"; on the dataset as
 //! recorded) and the likelihood of the recorded rows (inputs smoothed, sensor offsets and
-//! the supply-pressure sensor's offset as nuisances); see [`super::fit`] for how the two
+//! the supply-pressure sensor's offset as nuisances); see [`crate::estimate::fit`] for how the two
 //! are used.
 
-use super::goodness::ChannelChi2;
 use crate::data::dataset::Dataset;
 use crate::data::fitfile::FitConditions;
+use crate::estimate::fit::goodness::ChannelChi2;
 use crate::model::motor::Motor;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{CostError, CostModel, CostOptions};

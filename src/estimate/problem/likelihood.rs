@@ -1,7 +1,7 @@
 //! The likelihood of the recorded rows ([`crate::objective::likelihood`]) as an estimation
 //! objective: what the diagnosis fits, and what a fit's intervals are measured on.
 
-use super::objective::{Evaluation, Objective};
+use crate::estimate::problem::objective::{Evaluation, Objective};
 use crate::model::motor::Motor;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::{CostModel, FAILURE_PENALTY};

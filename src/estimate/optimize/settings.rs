@@ -2,9 +2,9 @@
 //! public fields and defaults, turned by [`MultiStartConfig::check`] into a
 //! [`MultiStartSettings`] whose fields are private, so a run never sees a bad value.
 
-use super::error::EstimateError;
-use super::least_squares::LmSettings;
-use super::optimize::{Layout, NelderMeadSettings, Restart};
+use crate::estimate::error::EstimateError;
+use crate::estimate::optimize::least_squares::LmSettings;
+use crate::estimate::optimize::nelder_mead::{Layout, NelderMeadSettings, Restart};
 
 /// Settings of a multi-start run as given (unchecked).
 #[derive(Debug, Clone, PartialEq)]
@@ -56,7 +56,7 @@ pub struct MultiStartConfig {
     pub restart_gain: f64,
     /// Hand-over to least squares: after this many rounds of Nelder–Mead, a start still
     /// running takes Levenberg–Marquardt on the cost's residuals for its next stage
-    /// ([`super::multistart`]); 0: never (objectives without cost residuals never do).
+    /// ([`crate::estimate::optimize::multistart`]); 0: never (objectives without cost residuals never do).
     /// The rule looks at the start alone, so it does not depend on the thread count.
     /// Nelder–Mead's later iterations crawl along the cost's narrow valleys at about 1.6
     /// evaluations an iteration; Levenberg–Marquardt crosses them from the linearised

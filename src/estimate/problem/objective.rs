@@ -7,7 +7,7 @@
 //! the fit of a dataset), or a space extended by coefficients of discovered terms (the
 //! refits of a diagnosis). Both give the same [`Problem`], so both use the same optimizer.
 
-use super::space::ParamSpace;
+use crate::estimate::problem::space::ParamSpace;
 use crate::model::motor::Motor;
 use argmin::core::{CostFunction, Error};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -47,7 +47,7 @@ pub trait Objective: Sync {
     /// Residuals whose squares sum to the fitting cost (not χ²: each channel's rows scaled
     /// by √(w/N) of its weight and row count, docs/model.md, "Cost J"), where the objective
     /// can give them (`None`: it cannot, or the simulation failed); lets a multi-start hand
-    /// a start over to Levenberg–Marquardt ([`super::multistart`]). One residual per
+    /// a start over to Levenberg–Marquardt ([`crate::estimate::optimize::multistart`]). One residual per
     /// compared row, so the prior's share of the cost (χ²_prior/n) is its residuals
     /// scaled by 1/√n with n their count.
     fn cost_residuals(&self, motor: &Motor) -> Option<Vec<f64>> {
@@ -67,7 +67,7 @@ pub trait Coordinates: Sync {
     /// The motor at `x`.
     fn motor(&self, x: &[f64]) -> Option<Motor>;
 
-    /// The prior's residuals of the motor at `x` (`estimate::prior`): their squares are
+    /// The prior's residuals of the motor at `x` (`estimate::problem::prior`): their squares are
     /// added to χ² (and divided by the number of points, to the cost). None by default.
     fn prior_residuals(&self, motor: &Motor) -> Vec<f64> {
         let _ = motor;

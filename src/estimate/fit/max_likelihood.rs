@@ -1,13 +1,13 @@
 //! The maximum-likelihood point of a fit: the multi-start's optima polished on the
 //! likelihood of the recorded rows (`maximum_likelihood`).
 
-use super::engine::Engine;
-use super::error::EstimateError;
-use super::fit_data::FitData;
-use super::likelihood::Likelihood;
-use super::objective::Problem;
-use super::space::ParamSpace;
-use super::uncertainty;
+use crate::estimate::engine::Engine;
+use crate::estimate::error::EstimateError;
+use crate::estimate::problem::fit_data::FitData;
+use crate::estimate::problem::likelihood::Likelihood;
+use crate::estimate::problem::objective::Problem;
+use crate::estimate::problem::space::ParamSpace;
+use crate::estimate::profile::uncertainty;
 use crate::model::motor::Motor;
 use crate::numerics::DefaultSolver;
 use crate::objective::likelihood::Target;

@@ -14,11 +14,13 @@
 //! other local optimum the multi-start found fits as well (within the threshold) with the
 //! parameter outside the interval: a profile explores one valley only.
 
-use super::derivatives::{central_column, hessian};
-use super::engine::Engine;
-use super::least_squares::{levenberg_marquardt, polish_residuals, LmSettings};
-use super::objective::{Problem, Profiled};
-use super::optimize::{Layout, NelderMeadSettings, Restart, RestartedNelderMead};
+use crate::estimate::engine::Engine;
+use crate::estimate::optimize::least_squares::{levenberg_marquardt, polish_residuals, LmSettings};
+use crate::estimate::optimize::nelder_mead::{
+    Layout, NelderMeadSettings, Restart, RestartedNelderMead,
+};
+use crate::estimate::problem::derivatives::{central_column, hessian};
+use crate::estimate::problem::objective::{Problem, Profiled};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 

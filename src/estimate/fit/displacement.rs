@@ -19,12 +19,12 @@
 //!    the ports, leaks and friction of real motors may differ from the scaled defaults.
 //!
 //! The fit then estimates `v_disp` with every other parameter, the priors' medians and the
-//! fixed size-dependent parameters following it (`estimate::prior`, `estimate::space`), and
+//! fixed size-dependent parameters following it (`estimate::problem::prior`, `estimate::problem::space`), and
 //! its profile interval is the one reported with the fit.
 
-use super::fit_data::FitData;
-use super::prior::Prior;
 use crate::data::motor::MotorSection;
+use crate::estimate::problem::fit_data::FitData;
+use crate::estimate::problem::prior::Prior;
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
 use crate::model::params::MotorParams;

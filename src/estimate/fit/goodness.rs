@@ -31,8 +31,8 @@
 //! fit within the threshold with a parameter outside its interval make that parameter not
 //! identifiable ([`mark_competitors`]).
 
-use super::uncertainty::Interval;
-use crate::estimate::space::ParamSpace;
+use crate::estimate::problem::space::ParamSpace;
+use crate::estimate::profile::uncertainty::Interval;
 use serde::Serialize;
 
 /// How well the estimate reproduces the data, against the data's own noise.
@@ -99,7 +99,7 @@ impl GoodnessOfFit {
 
     /// The rise of χ² that ends a 95% profile interval: 3.841·s².
     pub fn threshold(&self) -> f64 {
-        super::uncertainty::CHI2_95 * self.interval_scale.powi(2)
+        crate::estimate::profile::uncertainty::CHI2_95 * self.interval_scale.powi(2)
     }
 }
 
