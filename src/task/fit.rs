@@ -4,66 +4,31 @@
 //! a fleet, so both give the same fit for a seed.
 
 use super::{Opt, OptionError};
-use crate::data::dataset::{DataError, Dataset, Kind};
+use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::fit::displacement::{
-    describe_cm3, displacement_missing, from_page as displacement_from_page, DisplacementEstimate,
+    describe_cm3, displacement_missing, DisplacementEstimate,
 };
+use crate::estimate::fit::setup::{
+    catalogue_only, page_displacement, page_estimates, search_space, PageChoice, SetupError,
+    SpaceRequest,
+};
+pub use crate::estimate::fit::setup::{ParamRange, Pinning, RangeSyntax};
 use crate::estimate::fit::{
-    fit as estimate_fit, fit_file, most_sensitive_experiment, FitData, FitOutcome, FitSetup,
-    UncertaintyMethod,
+    fit as estimate_fit, fit_file, FitData, FitOutcome, FitSetup, UncertaintyMethod,
 };
 use crate::estimate::optimize::multistart::RunObserver;
 use crate::estimate::optimize::settings::MultiStartConfig;
-use crate::estimate::problem::prior::Prior;
-use crate::estimate::problem::space::{Dimension, ParamSpace, SpaceError, DEFAULT_ESTIMATED};
+use crate::estimate::problem::space::SpaceError;
 use crate::io::side_path;
 use crate::model::effects::EffectSet;
-use crate::model::motor::Motor;
-use crate::model::params::{estimated_names, page_prior_extra, ParamId};
+use crate::model::params::ParamId;
 use crate::objective::cost::{CostError, CostOptions};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
 use std::path::{Path, PathBuf};
-
-/// A search or start range of one parameter, SI.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParamRange {
-    /// The parameter.
-    pub name: String,
-    /// Lower end, SI.
-    pub lo: f64,
-    /// Upper end, SI.
-    pub hi: f64,
-}
-
-/// An item of a range list that is not `name=lo:hi`.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("'{0}' is not name=lo:hi")]
-pub struct RangeSyntax(pub String);
-
-impl ParamRange {
-    /// Parses `name=lo:hi,...` (empty items skipped), e.g. `c_in1=1e-9:2e-8,visc=1e-6:1e-3`.
-    pub fn parse_list(text: &str) -> Result<Vec<ParamRange>, RangeSyntax> {
-        text.split(',')
-            .filter(|s| !s.trim().is_empty())
-            .map(|item| {
-                let bad = || RangeSyntax(item.to_string());
-                let (name, range) = item.split_once('=').ok_or_else(bad)?;
-                let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
-                let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
-                let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
-                Ok(ParamRange {
-                    name: name.trim().to_string(),
-                    lo,
-                    hi,
-                })
-            })
-            .collect()
-    }
-}
 
 /// Options of a fit as given (unchecked); [`FitOptions::check`] makes them [`FitSettings`].
 #[derive(Debug, Clone, PartialEq)]
@@ -205,125 +170,49 @@ pub enum FitError {
     Plot(#[from] PlotError),
 }
 
-/// The search space of a fit: estimated names (default set plus every parameter of the
-/// effects switched on), bounds and start ranges, around the dataset's nominal motor.
-fn search_space(
-    ds: &Dataset,
-    o: &FitOptions,
-    displacement: Option<&DisplacementEstimate>,
-) -> Result<ParamSpace, FitError> {
-    let fixed = ds.nominal_params()?;
-    let mut names: Vec<String> = match &o.estimate {
-        Some(list) => list
-            .iter()
-            .map(|s| s.trim().to_string())
-            .filter(|s| !s.is_empty())
-            .collect(),
-        None => estimated_names(&EffectSet::empty()),
-    };
-    for e in o.effects.iter() {
-        for p in e.parameters() {
-            if !names.iter().any(|n| n == p) {
-                names.push(p.to_string());
-            }
+/// A failed set-up of the search, with the option it concerns named.
+fn setup_error(e: SetupError) -> FitError {
+    let option = match e {
+        SetupError::NotEstimated { name } => {
+            OptionError::of(Opt::FitBounds, format!(": '{name}' is not estimated"))
         }
-    }
-    if let Some(b) = o.bounds.iter().find(|b| !names.contains(&b.name)) {
-        let after = format!(": '{}' is not estimated", b.name);
-        return Err(OptionError::of(Opt::FitBounds, after).into());
-    }
-    let find = |list: &[ParamRange], n: &str| list.iter().find(|r| r.name == n).cloned();
-    let dims = names
-        .iter()
-        .map(|n| {
-            let id = ParamId::from_name(n);
-            let d = match (find(&o.bounds, n), displacement) {
-                (Some(r), _) => Dimension::with_bounds(n, r.lo, r.hi)?,
-                (None, Some(e)) if id == Some(ParamId::V_DISP) => displacement_dimension(e)?,
-                (None, _) if id == Some(ParamId::V_DEAD) && fixed.v_dead() > 0.0 => {
-                    dead_volume_dimension(fixed.v_dead(), fixed.v_disp() / fixed.z())?
-                }
-                (None, _) => Dimension::for_param(n)?,
-            };
-            if id == Some(ParamId::V_DISP) && find(&o.start_ranges, n).is_none() {
-                if let Some(e) = displacement {
-                    return d.with_start_range(e.ci95_m3[0], e.ci95_m3[1]);
-                }
-            }
-            match find(&o.start_ranges, n) {
-                Some(r) => d.with_start_range(r.lo, r.hi),
-                None => {
-                    // The rig's nominal value: defaults scaled with the displacement.
-                    let centre = fixed.get(n).unwrap_or(0.0);
-                    if d.log_scale && centre > 0.0 {
-                        d.clone()
-                            .with_start_range(centre / o.start_spread, centre * o.start_spread)
-                            .or(Ok(d))
-                    } else {
-                        Ok(d)
-                    }
-                }
-            }
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| OptionError::of(Opt::FitRanges, format!(": {e}")))?;
-    let prior = if o.priors {
-        Prior::for_motor(&fixed)
-    } else {
-        Prior::none()
+        SetupError::Dimension(e) => OptionError::of(Opt::FitRanges, format!(": {e}")),
+        SetupError::NothingPinned { names, limit_pct } => {
+            let before = format!(
+                "the catalogue pins none of {} to within {limit_pct:.0} % (1σ): add curves, key figures or a rig experiment, or name parameters with ",
+                names.join(", ")
+            );
+            OptionError::of_within(Opt::FitEstimate, before, "")
+        }
+        SetupError::Space(e) => return FitError::Space(e),
     };
-    let v_ref = fixed.v_disp();
-    let space = ParamSpace::from_dims(dims, fixed, o.effects.clone())?.with_prior(prior);
-    // A page without a displacement: what is fixed follows the estimated one (similarity).
-    Ok(match displacement {
-        Some(_) => space.with_size_following(v_ref),
-        None => space,
-    })
+    FitError::Option(option)
 }
 
-/// The search dimension of the dead volume (whose default search range starts at 0, no
-/// logarithm): 1/10 to 10 times its nominal value `v0`, and below 0.9 of the filling volume
-/// `v_fill` (it must stay below it).
-fn dead_volume_dimension(v0: f64, v_fill: f64) -> Result<Dimension, SpaceError> {
-    let hi = (10.0 * v0).min(0.9 * v_fill);
-    Dimension::with_id_bounds(ParamId::V_DEAD, (v0 / 10.0).min(0.5 * hi), hi)
-}
-
-/// The search dimension of a displacement estimated from a page: bounds ×/÷ 5 around the
-/// page's estimate (wider where its interval is), within the parameter's own domain.
-fn displacement_dimension(e: &DisplacementEstimate) -> Result<Dimension, SpaceError> {
-    let (domain_lo, domain_hi) = ParamId::V_DISP.spec().search;
-    let lo = (e.v_disp_m3 / 5.0).min(e.ci95_m3[0] / 2.0).max(domain_lo);
-    let hi = (e.v_disp_m3 * 5.0).max(e.ci95_m3[1] * 2.0).min(domain_hi);
-    Dimension::with_id_bounds(ParamId::V_DISP, lo, hi)
-}
-
-/// For a dataset of catalogue pages only whose `[motor]` gives neither a displacement nor
-/// a geometry: the displacement estimated from the pages (`estimate::fit::displacement`).
-fn page_displacement(ds: &Dataset, data: &FitData) -> Option<DisplacementEstimate> {
-    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
-    (catalogue_only && displacement_missing(&ds.motor))
-        .then(|| displacement_from_page(data, &ds.motor))
-        .flatten()
-}
-
-/// One parameter of a catalogue's pinning: how well the catalogue pins it, and whether it
-/// is estimated.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Pinning {
-    /// The parameter.
-    pub name: String,
-    /// Relative 1σ at the nominal motor (infinite: unseen).
-    pub(crate) relative_sd: f64,
-    /// Estimated (pinned to within the limit).
-    pub(crate) pinned: bool,
-    /// The value it stays fixed at when not pinned, SI.
-    pub value: f64,
-    /// The kind of experiment that would pin it (when not pinned).
-    pub pinned_by: Option<Kind>,
-    /// When not pinned and the fit has a prior: the prior's 95 % factor F, on which the
-    /// parameter then rests (it is estimated, and its interval is the prior's ×/÷ F).
-    pub prior_factor: Option<f64>,
+/// For a dataset of catalogue pages only and no `estimate`: what the pages let the fit
+/// estimate (`estimate::fit::setup::page_estimates`), its pinning reported to `observer`
+/// with what would pin the rest; `None` otherwise (the options say what is estimated).
+fn page_choice(
+    ds: &Dataset,
+    data: &FitData,
+    o: &FitOptions,
+    observer: &dyn FitObserver,
+    displacement: Option<&DisplacementEstimate>,
+) -> Result<Option<PageChoice>, FitError> {
+    if let Some(e) = displacement {
+        observer.displacement(e);
+    }
+    if o.estimate.is_some() || !catalogue_only(ds) {
+        return Ok(None);
+    }
+    let nominal = ds.nominal_params()?;
+    let choice =
+        page_estimates(data, nominal, o.priors, displacement.is_some()).map_err(setup_error)?;
+    observer.pinning(choice.limit_pct, &choice.pinning);
+    match choice.nothing_pinned() {
+        Some(e) => Err(setup_error(e)),
+        None => Ok(Some(choice)),
+    }
 }
 
 /// The pinning as the command line prints it: a heading, then one line per parameter
@@ -361,94 +250,6 @@ pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
     lines
 }
 
-/// For a dataset of catalogue pages only and no `estimate`: the parameters the catalogue
-/// pins down (`estimate::profile::subset`), reported to `report` with what would pin the rest;
-/// otherwise `o` as it is.
-fn catalogue_estimates(
-    ds: &Dataset,
-    data: &FitData,
-    o: &FitOptions,
-    observer: &dyn FitObserver,
-    displacement: Option<&DisplacementEstimate>,
-) -> Result<FitOptions, FitError> {
-    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
-    if let Some(e) = displacement {
-        observer.displacement(e);
-    }
-    if o.estimate.is_some() || !catalogue_only {
-        return Ok(o.clone());
-    }
-    let motor = Motor::new(ds.nominal_params()?, EffectSet::empty());
-    let prior = if o.priors {
-        Prior::for_motor(motor.params())
-    } else {
-        Prior::none()
-    };
-    let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
-    if !prior.is_empty() {
-        // With the motor prior, the two parameters that shape how torque and flow change with
-        // the supply pressure are estimated too, resting on their priors where the page is
-        // silent: held at their defaults, a page's torque deficit went into the Coulomb
-        // friction, a constant that eats a growing share of the torque at lower pressures
-        // (docs/estimation.md, "What a page cannot pin").
-        names.extend(
-            page_prior_extra()
-                .into_iter()
-                .filter(|id| prior.term(*id).is_some())
-                .map(|id| id.name().to_string()),
-        );
-    }
-    let limit = 100.0 * crate::estimate::profile::subset::PINNED_RELATIVE_SD;
-    let nothing = || {
-        let before = format!(
-            "the catalogue pins none of {} to within {limit:.0} % (1σ): add curves, key figures or a rig experiment, or name parameters with ",
-            names.join(", ")
-        );
-        FitError::Option(OptionError::of_within(Opt::FitEstimate, before, ""))
-    };
-    let Some(pinning) = crate::estimate::profile::subset::pinned_subset(data, &motor, &names)
-    else {
-        return Err(nothing());
-    };
-    let rows: Vec<Pinning> = pinning
-        .iter()
-        .map(|p| Pinning {
-            name: p.name.clone(),
-            relative_sd: p.relative_sd,
-            pinned: p.pinned,
-            value: motor.params().get(&p.name).unwrap_or(f64::NAN),
-            pinned_by: most_sensitive_experiment(&motor, &p.name),
-            prior_factor: (!p.pinned)
-                .then(|| {
-                    ParamId::from_name(&p.name)
-                        .and_then(|id| prior.term(id))
-                        .map(|t| t.factor95())
-                })
-                .flatten(),
-        })
-        .collect();
-    observer.pinning(limit, &rows);
-    // With a prior every parameter is estimated: what the pages leave open rests on its
-    // prior, and the covariance (and so predict's bands) carries it.
-    let chosen: Vec<String> = rows
-        .iter()
-        .filter(|p| p.pinned || p.prior_factor.is_some())
-        .map(|p| p.name.clone())
-        .collect();
-    if chosen.is_empty() {
-        return Err(nothing());
-    }
-    let mut chosen = chosen;
-    if displacement.is_some() {
-        // Not printed: the displacement is estimated with the rest, from the page.
-        chosen.push(ParamId::V_DISP.name().to_string());
-    }
-    Ok(FitOptions {
-        estimate: Some(chosen),
-        ..o.clone()
-    })
-}
-
 /// The first estimate of a page's displacement as `fit` and `check` print it.
 pub fn displacement_first_line(estimate: &DisplacementEstimate) -> String {
     format!(
@@ -461,8 +262,7 @@ pub fn displacement_first_line(estimate: &DisplacementEstimate) -> String {
 /// `[motor]` gives neither a displacement nor a geometry, estimated from the pages
 /// (`None` otherwise, or where no displacement gives a motor the pages can be simulated at).
 pub fn page_displacement_of(ds: &Dataset) -> Result<Option<DisplacementEstimate>, FitError> {
-    let catalogue_only = ds.experiments.iter().all(|e| e.kind == Kind::Catalogue);
-    if !(catalogue_only && displacement_missing(&ds.motor)) {
+    if !(catalogue_only(ds) && displacement_missing(&ds.motor)) {
         return Ok(None);
     }
     let data = FitData::new(ds, CostOptions::default())?;
@@ -487,24 +287,6 @@ pub trait FitObserver: RunObserver {
 }
 
 impl FitObserver for crate::estimate::optimize::multistart::Silent {}
-
-/// The caller's observer, with the pinning kept for the [`Fit`].
-struct Noted<'a> {
-    inner: &'a dyn FitObserver,
-    pinning: &'a std::sync::Mutex<Vec<Pinning>>,
-}
-
-impl FitObserver for Noted<'_> {
-    fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
-        *self.pinning.lock().unwrap_or_else(|p| p.into_inner()) = rows.to_vec();
-        self.inner.pinning(limit_pct, rows);
-    }
-    fn displacement(&self, estimate: &DisplacementEstimate) {
-        self.inner.displacement(estimate);
-    }
-}
-
-impl RunObserver for Noted<'_> {}
 
 /// A finished fit: the dataset, its fit data, what was estimated, the outcome and the fit
 /// file (not yet written).
@@ -581,19 +363,21 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         // Every default and prior is scaled to the page's size, as if it had printed it.
         ds.motor.displacement_m3 = Some(e.v_disp_m3);
     }
-    let pinning = std::sync::Mutex::new(Vec::new());
-    let noted = Noted {
-        inner: observer,
-        pinning: &pinning,
+    let o = settings.options();
+    let choice = page_choice(&ds, &data, o, observer, displacement.as_ref())?;
+    let request = SpaceRequest {
+        estimate: match &choice {
+            Some(c) => Some(c.names.as_slice()),
+            None => o.estimate.as_deref(),
+        },
+        effects: &o.effects,
+        bounds: &o.bounds,
+        start_ranges: &o.start_ranges,
+        start_spread: o.start_spread,
+        priors: o.priors,
     };
-    let o = &catalogue_estimates(
-        &ds,
-        &data,
-        settings.options(),
-        &noted,
-        displacement.as_ref(),
-    )?;
-    let space = search_space(&ds, o, displacement.as_ref())?;
+    let space =
+        search_space(ds.nominal_params()?, &request, displacement.as_ref()).map_err(setup_error)?;
     let setup = FitSetup {
         space,
         multistart: MultiStartConfig {
@@ -621,7 +405,7 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         outcome,
         file,
         seed: o.seed,
-        pinning: pinning.into_inner().unwrap_or_else(|p| p.into_inner()),
+        pinning: choice.map(|c| c.pinning).unwrap_or_default(),
         displacement,
     })
 }

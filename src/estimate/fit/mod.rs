@@ -20,6 +20,7 @@ pub(crate) mod displacement;
 pub(crate) mod fit_likelihood;
 pub(crate) mod goodness;
 pub(crate) mod max_likelihood;
+pub(crate) mod setup;
 
 use crate::data::dataset::Kind;
 use crate::data::fitfile::{

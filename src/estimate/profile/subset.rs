@@ -24,7 +24,7 @@ const LOG_STEP: f64 = 1e-3;
 
 /// A parameter's verdict.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Pinning {
+pub struct Verdict {
     /// The parameter.
     pub name: String,
     /// Relative 1σ: jointly with the other chosen ones for a chosen parameter; for one left
@@ -95,7 +95,7 @@ pub(crate) fn pinned_subset(
     data: &FitData,
     motor: &Motor,
     names: &[String],
-) -> Option<Vec<Pinning>> {
+) -> Option<Vec<Verdict>> {
     let jac = sensitivities(data, motor, names)?;
     let mut chosen: Vec<usize> = Vec::new();
     loop {
@@ -129,12 +129,12 @@ pub(crate) fn pinned_subset(
             .iter()
             .enumerate()
             .map(|(j, name)| match chosen.iter().position(|c| *c == j) {
-                Some(k) => Pinning {
+                Some(k) => Verdict {
                     name: name.clone(),
                     relative_sd: sd[k],
                     pinned: true,
                 },
-                None => Pinning {
+                None => Verdict {
                     name: name.clone(),
                     relative_sd: conditional_sd(&jac, &chosen, j),
                     pinned: false,
