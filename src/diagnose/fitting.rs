@@ -10,9 +10,10 @@
 
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::optimize::least_squares::polish_residuals;
+use crate::estimate::optimize::local::polish_residuals;
+use crate::estimate::optimize::local::{LocalOptimizer, NelderMead};
 use crate::estimate::optimize::multistart::{self, Silent};
-use crate::estimate::optimize::nelder_mead::{self, Layout, NelderMeadSettings, Restart};
+use crate::estimate::optimize::nelder_mead::{Layout, NelderMeadSettings, Restart};
 use crate::estimate::optimize::settings::MultiStartConfig;
 use crate::estimate::problem::likelihood::Likelihood;
 use crate::estimate::problem::objective::Evaluation;
@@ -280,15 +281,19 @@ fn term_fit(objective: &HandOver<'_>, space: &ParamSpace, job: &FitJob) -> Resul
         terms: &job.extra,
     };
     let problem = Problem::new(objective, &coordinates, false);
-    let stage = job.max_iters.max(400) / 2;
+    let refit = NelderMead {
+        settings: REFIT,
+        max_iters: job.max_iters,
+        stage_iters: job.max_iters.max(400) / 2,
+    };
     let mut best: Option<(Vec<f64>, f64)> = None;
     for p in &job.starts {
         let mut x0 = space.theta(p);
         x0.extend(std::iter::repeat_n(1.0, job.extra.len()));
         let f0 = problem.evaluate(&x0).cost;
-        let search = nelder_mead::minimize(&problem, x0, f0, REFIT, job.max_iters, stage);
-        if best.as_ref().is_none_or(|(_, b)| search.cost() < *b) {
-            best = Some((search.x().to_vec(), search.cost()));
+        let search = refit.minimize(&problem, &x0, f0);
+        if best.as_ref().is_none_or(|(_, b)| search.value < *b) {
+            best = Some((search.x, search.value));
         }
     }
     let (x, _) = best.ok_or_else(|| FitError::NoStart(job.label.clone()))?;

@@ -32,10 +32,11 @@ use crate::estimate::error::EstimateError;
 use crate::estimate::fit::goodness::{competitors, mark_competitors, GoodnessOfFit};
 use crate::estimate::fit::max_likelihood::{lowest, maximum_likelihood, MlFit, Polished};
 use crate::estimate::history::ResultsFile;
+use crate::estimate::optimize::local::{LocalOptimizer, NelderMead};
 use crate::estimate::optimize::multistart::{
     self, cluster, Cluster, MultiStartOutcome, RunObserver,
 };
-use crate::estimate::optimize::nelder_mead::{minimize, Restart};
+use crate::estimate::optimize::nelder_mead::Restart;
 use crate::estimate::optimize::settings::{MultiStartConfig, MultiStartSettings};
 pub use crate::estimate::problem::fit_data::FitData;
 use crate::estimate::problem::likelihood::Likelihood;
@@ -461,16 +462,14 @@ fn finish(
     if let Restart::Curvature { min_gain, .. } = &mut nm.restart {
         *min_gain = min_gain.min(1e-6);
     }
-    let search = minimize(
-        problem,
-        theta.to_vec(),
-        f0,
-        nm,
-        settings.max_iters(),
-        settings.stage_iters(),
-    );
-    if search.cost() <= f0 {
-        search.x().to_vec()
+    let tight = NelderMead {
+        settings: nm,
+        max_iters: settings.max_iters(),
+        stage_iters: settings.stage_iters(),
+    };
+    let search = tight.minimize(problem, theta, f0);
+    if search.value <= f0 {
+        search.x
     } else {
         theta.to_vec()
     }

@@ -12,7 +12,6 @@
 //! interval), or after `max_iters` iterations. A residual vector that cannot be computed
 //! (a failed simulation) counts as an infinite χ²: the step is refused.
 
-use crate::estimate::problem::objective::{Coordinates, Problem};
 use nalgebra::{DMatrix, DVector};
 
 /// Finite-difference step in θ: a relative change of 1e-3, a secant rather than a tangent
@@ -48,7 +47,7 @@ impl Default for LmSettings {
     }
 }
 
-fn chi2(r: &[f64]) -> f64 {
+pub(crate) fn chi2(r: &[f64]) -> f64 {
     r.iter().map(|v| v * v).sum()
 }
 
@@ -110,7 +109,7 @@ pub(crate) fn levenberg_marquardt_run(
 }
 
 /// [`levenberg_marquardt_run`] from `x0` whose residuals `r0 = f(x0)` the caller has.
-fn levenberg_marquardt_from(
+pub(crate) fn levenberg_marquardt_from(
     f: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
     x0: &[f64],
     mut r: Vec<f64>,
@@ -185,24 +184,6 @@ fn levenberg_marquardt_from(
         chi2: c,
         converged,
     }
-}
-
-/// Levenberg–Marquardt on a problem's residuals from `x`, kept only where χ² falls: the
-/// better of the start and the polish, with its χ²; `None` when the problem has no residuals
-/// at `x` (not a least-squares objective, or a failed simulation).
-pub(crate) fn polish_residuals<C: Coordinates + ?Sized>(
-    problem: &Problem<'_, C>,
-    x: &[f64],
-) -> Option<(Vec<f64>, f64)> {
-    let r0 = problem.residuals(x)?;
-    let start = chi2(&r0);
-    let residuals = |t: &[f64]| problem.residuals(t);
-    let polished = levenberg_marquardt_from(&residuals, x, r0, LmSettings::default());
-    Some(if polished.chi2 < start {
-        (polished.x, polished.chi2)
-    } else {
-        (x.to_vec(), start)
-    })
 }
 
 #[cfg(test)]

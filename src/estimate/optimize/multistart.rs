@@ -18,7 +18,7 @@
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::history::ResultsFile;
-use crate::estimate::optimize::least_squares::levenberg_marquardt_run;
+use crate::estimate::optimize::local::{LevenbergMarquardt, LocalOptimizer, Residuals};
 use crate::estimate::optimize::nelder_mead::{RestartedNelderMead, Status};
 use crate::estimate::optimize::settings::MultiStartSettings;
 use crate::estimate::problem::objective::{Objective, Problem};
@@ -168,16 +168,19 @@ impl Runner {
     ) {
         self.handed = true;
         let problem = Problem::new(objective, space, false);
-        let residuals = |t: &[f64]| problem.cost_residuals(t);
-        let lm = cfg.handoff_lm();
-        let out = levenberg_marquardt_run(&residuals, self.search.x(), lm);
+        let lm = LevenbergMarquardt {
+            settings: cfg.handoff_lm(),
+            residuals: Residuals::Cost,
+        };
+        let out = lm.minimize(&problem, self.search.x(), self.search.cost());
         self.evaluations += problem.evaluations();
-        if out.converged && out.chi2.is_finite() && self.search.conclude(out.x.clone(), out.chi2) {
+        if out.converged && out.value.is_finite() && self.search.conclude(out.x.clone(), out.value)
+        {
             return;
         }
-        if out.chi2 < self.search.cost() {
+        if out.value < self.search.cost() {
             let step = cfg.nelder_mead().step * 0.1;
-            self.search.move_to(out.x, out.chi2, step);
+            self.search.move_to(out.x, out.value, step);
         }
     }
 

@@ -15,7 +15,8 @@
 //! parameter outside the interval: a profile explores one valley only.
 
 use crate::estimate::engine::Engine;
-use crate::estimate::optimize::least_squares::{levenberg_marquardt, polish_residuals, LmSettings};
+use crate::estimate::optimize::least_squares::{levenberg_marquardt, LmSettings};
+use crate::estimate::optimize::local::polish_residuals;
 use crate::estimate::optimize::nelder_mead::{
     Layout, NelderMeadSettings, Restart, RestartedNelderMead,
 };
