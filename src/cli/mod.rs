@@ -281,7 +281,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
         .map(|ex| {
             vanefit::objective::experiment_references(
                 ex,
-                &vanefit::objective::FitOptions::default(),
+                &vanefit::objective::ReferenceOptions::default(),
             )
         })
         .collect::<Result<Vec<_>, _>>()?;

@@ -1,7 +1,7 @@
 //! Why a diagnosis failed.
 
 use super::discover::RegressError;
-use super::fitting::FitError;
+use super::fitting::RefitError;
 use crate::data::dataset::DataError;
 use crate::estimate::EstimateError;
 use crate::objective::cost::CostError;
@@ -27,7 +27,7 @@ pub enum DiagnoseError {
     MissingColumn(#[from] MissingColumn),
     /// A fit failed.
     #[error(transparent)]
-    Fit(#[from] FitError),
+    Fit(#[from] RefitError),
     /// The regression of the misfit on the term library failed.
     #[error(transparent)]
     Regression(#[from] RegressError),

@@ -30,7 +30,7 @@ use std::time::Instant;
 /// Why a fit could not run (every message starts with the fit's label).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum FitError {
+pub enum RefitError {
     /// The job has no start point.
     #[error("{0}: no start point")]
     NoStart(String),
@@ -192,7 +192,7 @@ pub fn run_job(
     target: &Target,
     job: &FitJob,
     engine: &Engine,
-) -> Result<Fitted, FitError> {
+) -> Result<Fitted, RefitError> {
     let t0 = Instant::now();
     let solver = DefaultSolver::default();
     let objective = HandOver(Likelihood {
@@ -204,7 +204,7 @@ pub fn run_job(
     let first = job
         .starts
         .first()
-        .ok_or_else(|| FitError::NoStart(job.label.clone()))?;
+        .ok_or_else(|| RefitError::NoStart(job.label.clone()))?;
     let space = ParamSpace::new(&names, first.clone(), job.effects.clone())?;
     let found = if job.extra.is_empty() {
         catalog_fit(engine, &objective, &space, job)?
@@ -231,8 +231,8 @@ fn catalog_fit(
     objective: &HandOver<'_>,
     space: &ParamSpace,
     job: &FitJob,
-) -> Result<Found, FitError> {
-    let run_error = |source| FitError::Run {
+) -> Result<Found, RefitError> {
+    let run_error = |source| RefitError::Run {
         label: job.label.clone(),
         source,
     };
@@ -268,13 +268,17 @@ fn catalog_fit(
 
 /// A model with discovered terms ([`TermSpace`]): [`REFIT`] from every start point in turn,
 /// keeping the best. No hand-over to Levenberg–Marquardt here (see [`HandOver`]).
-fn term_fit(objective: &HandOver<'_>, space: &ParamSpace, job: &FitJob) -> Result<Found, FitError> {
+fn term_fit(
+    objective: &HandOver<'_>,
+    space: &ParamSpace,
+    job: &FitJob,
+) -> Result<Found, RefitError> {
     if job
         .extra
         .iter()
         .any(|t| t.coefficient == 0.0 || !t.coefficient.is_finite())
     {
-        return Err(FitError::ZeroTerm(job.label.clone()));
+        return Err(RefitError::ZeroTerm(job.label.clone()));
     }
     let coordinates = TermSpace {
         space,
@@ -296,11 +300,11 @@ fn term_fit(objective: &HandOver<'_>, space: &ParamSpace, job: &FitJob) -> Resul
             best = Some((search.x, search.value));
         }
     }
-    let (x, _) = best.ok_or_else(|| FitError::NoStart(job.label.clone()))?;
+    let (x, _) = best.ok_or_else(|| RefitError::NoStart(job.label.clone()))?;
     let x = lm_polish(&problem, x);
     let motor = coordinates
         .motor(&x)
-        .ok_or_else(|| FitError::InvalidBest(job.label.clone()))?;
+        .ok_or_else(|| RefitError::InvalidBest(job.label.clone()))?;
     Ok(Found {
         k: x.len(),
         motor,
@@ -324,6 +328,6 @@ pub(crate) fn run_jobs(
     target: &Target,
     jobs: &[FitJob],
     engine: &Engine,
-) -> Vec<Result<Fitted, FitError>> {
+) -> Vec<Result<Fitted, RefitError>> {
     engine.map(jobs, |j| run_job(cost, target, j, engine))
 }

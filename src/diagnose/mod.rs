@@ -79,7 +79,11 @@ mod concealment;
 mod context;
 mod error;
 pub use analysis::{ChannelData, Location};
-pub use fitting::{run_job, FitError, FitJob, Fitted};
+pub use fitting::{run_job, FitJob, Fitted, RefitError};
+
+/// The former name of [`RefitError`] (one `FitError` is the fit task's).
+#[deprecated(note = "renamed `RefitError`")]
+pub type FitError = RefitError;
 mod json;
 mod locate;
 mod models;

@@ -21,14 +21,11 @@ pub trait DiagnoseObserver {
     }
 }
 
-/// An observer that ignores everything.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Silent;
+/// The observer that ignores everything: the multi-start's, silent here too, so one `Silent`
+/// serves every task.
+pub use crate::estimate::optimize::multistart::Silent;
 
 impl DiagnoseObserver for Silent {}
-
-/// The multi-start's silent observer is silent here too, so one `Silent` serves every task.
-impl DiagnoseObserver for crate::estimate::optimize::multistart::Silent {}
 
 /// One step of a diagnosis. `Display` gives the command line's progress line.
 #[derive(Debug, Clone, Copy)]

@@ -28,7 +28,9 @@
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
-use crate::objective::reference::{experiment_references, ChannelReference, FitOptions, Reference};
+use crate::objective::reference::{
+    experiment_references, ChannelReference, Reference, ReferenceOptions,
+};
 use crate::sim::experiment::{Experiment, SimError, Simulated};
 use crate::units::Quantity;
 use rayon::prelude::*;
@@ -41,7 +43,7 @@ pub const FAILURE_PENALTY: f64 = 1e10;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CostOptions {
     /// How the reference polynomials are fitted.
-    pub reference: FitOptions,
+    pub reference: ReferenceOptions,
     /// Most rows compared per channel (evenly spaced over those in range).
     pub max_points_per_channel: usize,
 }
@@ -51,7 +53,7 @@ impl Default for CostOptions {
     /// the simulation, which produces every row anyway).
     fn default() -> Self {
         Self {
-            reference: FitOptions::default(),
+            reference: ReferenceOptions::default(),
             max_points_per_channel: usize::MAX,
         }
     }

@@ -41,7 +41,7 @@
 
 use super::cost::{compared_rows, CostError, CostModel};
 use super::nuisance::{Nuisance, Nuisances};
-use super::reference::{FitOptions, Reference};
+use super::reference::{Reference, ReferenceOptions};
 use crate::data::dataset::{Dataset, Kind};
 use crate::model::motor::Motor;
 use crate::numerics::DefaultSolver;
@@ -172,7 +172,7 @@ pub(crate) fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
                 col.si.clone()
             };
             let noise = noise_sigma(&v);
-            let smooth = Reference::fit(&times, &v, &FitOptions::default()).ok();
+            let smooth = Reference::fit(&times, &v, &ReferenceOptions::default()).ok();
             let accepted = smooth
                 .as_ref()
                 .filter(|r| r.sigma_residual() <= 1.2 * noise);

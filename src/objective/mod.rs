@@ -10,5 +10,14 @@ pub use cost::{ChannelCost, ChannelResiduals, CostError, CostModel, CostOptions,
 pub use likelihood::{ChannelTarget, InputSmoothing, Target};
 pub use nuisance::{Nuisance, Nuisances};
 pub use reference::{
-    experiment_references, Abscissa, ChannelReference, FitError, FitOptions, Piece, Reference,
+    experiment_references, Abscissa, ChannelReference, Piece, Reference, ReferenceError,
+    ReferenceOptions,
 };
+
+/// The former name of [`ReferenceOptions`] (one `FitOptions` is the fit task's).
+#[deprecated(note = "renamed `ReferenceOptions`")]
+pub type FitOptions = ReferenceOptions;
+
+/// The former name of [`ReferenceError`] (one `FitError` is the fit task's).
+#[deprecated(note = "renamed `ReferenceError`")]
+pub type FitError = ReferenceError;

@@ -33,7 +33,7 @@
 //!   split found is judged on all of them. A split is accepted only when it is clearly better than one piece:
 //!   PRESS must fall by at least the factor `SPLIT_GAIN` *and* by more than a BIC-like
 //!   penalty, n·ln(PRESS₁/PRESS₂) > (p₂ − p₁ + 1)·ln n. Splitting is repeated on the pieces
-//!   (binary segmentation) up to [`FitOptions::max_pieces`]. Points in the middle of the
+//!   (binary segmentation) up to [`ReferenceOptions::max_pieces`]. Points in the middle of the
 //!   jump (the rotor accelerating while the pressure barely moves) belong to neither curve:
 //!   of the points next to a split, those more than 4 prediction standard deviations from
 //!   a fit of the rest of their piece are dropped (repeatedly, refitting in between). A
@@ -62,14 +62,14 @@ const TRIM_ROUNDS: usize = 3;
 
 /// How references are fitted.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FitOptions {
+pub struct ReferenceOptions {
     /// Highest degree tried (further limited to ⌊(n − 1)/3⌋ for n points).
     pub max_degree: usize,
     /// Most pieces a reference may be split into (1: never split).
     pub max_pieces: usize,
 }
 
-impl Default for FitOptions {
+impl Default for ReferenceOptions {
     /// Degree up to 8, at most 3 pieces.
     fn default() -> Self {
         Self {
@@ -82,7 +82,7 @@ impl Default for FitOptions {
 /// Why a reference could not be fitted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
-pub enum FitError {
+pub enum ReferenceError {
     /// The polynomial of this degree is not determined by the points.
     #[error("degree {0} is not determined by the data")]
     Undetermined(usize),
@@ -166,10 +166,10 @@ impl Piece {
     }
 
     /// Least-squares fit of exactly this degree to (x, y) (no degree selection).
-    pub fn fit(x: &[f64], y: &[f64], degree: usize) -> Result<Piece, FitError> {
+    pub fn fit(x: &[f64], y: &[f64], degree: usize) -> Result<Piece, ReferenceError> {
         check_points(x, y, degree + 2)?;
         let qr = QrFit::new(x, y, degree + 1)?;
-        qr.piece(degree).ok_or(FitError::Undetermined(degree))
+        qr.piece(degree).ok_or(ReferenceError::Undetermined(degree))
     }
 }
 
@@ -181,15 +181,15 @@ fn scale(x: f64, lo: f64, hi: f64) -> f64 {
     }
 }
 
-fn check_points(x: &[f64], y: &[f64], min: usize) -> Result<(), FitError> {
+fn check_points(x: &[f64], y: &[f64], min: usize) -> Result<(), ReferenceError> {
     if x.len() != y.len() {
-        return Err(FitError::LengthMismatch(x.len(), y.len()));
+        return Err(ReferenceError::LengthMismatch(x.len(), y.len()));
     }
     if x.len() < min {
-        return Err(FitError::TooFew { got: x.len(), min });
+        return Err(ReferenceError::TooFew { got: x.len(), min });
     }
     if let Some(i) = (0..x.len()).find(|&i| !(x[i].is_finite() && y[i].is_finite())) {
-        return Err(FitError::NotFinite(i + 1));
+        return Err(ReferenceError::NotFinite(i + 1));
     }
     Ok(())
 }
@@ -210,12 +210,12 @@ struct QrFit<'a> {
 }
 
 impl<'a> QrFit<'a> {
-    fn new(x: &'a [f64], y: &'a [f64], m: usize) -> Result<Self, FitError> {
+    fn new(x: &'a [f64], y: &'a [f64], m: usize) -> Result<Self, ReferenceError> {
         let n = x.len();
         let m = m.min(n).max(1);
         let (lo, hi) = min_max(x);
         if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
-            return Err(FitError::NoRange);
+            return Err(ReferenceError::NoRange);
         }
         let mut a = DMatrix::<f64>::zeros(n, m);
         let mut row = vec![0.0; m];
@@ -323,13 +323,13 @@ struct Selected {
 
 /// Fits degrees 1 … cap and picks one by LOO cross-validation with the one-standard-error
 /// rule (see the module documentation). `x` sorted or not.
-fn select(x: &[f64], y: &[f64], max_degree: usize) -> Result<Selected, FitError> {
+fn select(x: &[f64], y: &[f64], max_degree: usize) -> Result<Selected, ReferenceError> {
     check_points(x, y, MIN_POINTS)?;
     let n = x.len();
     let cap = degree_cap(n, max_degree).max(1);
     let qr = QrFit::new(x, y, cap + 1)?;
     if qr.rank < 2 {
-        return Err(FitError::NoRange);
+        return Err(ReferenceError::NoRange);
     }
     let scale2 = y.iter().map(|v| v * v).sum::<f64>() / n as f64;
     // (degree, mean squared LOO residual)
@@ -340,7 +340,7 @@ fn select(x: &[f64], y: &[f64], max_degree: usize) -> Result<Selected, FitError>
         }
     }
     let Some(&(_, best)) = scores.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-        return Err(FitError::NoDegree);
+        return Err(ReferenceError::NoDegree);
     };
     // One standard error of a mean of n squared Gaussian residuals is √(2/n) of that mean.
     // (The Gaussian value, not the sample one: where the residuals are lack of fit rather
@@ -353,7 +353,7 @@ fn select(x: &[f64], y: &[f64], max_degree: usize) -> Result<Selected, FitError>
         .find(|s| s.1 <= threshold)
         .map(|s| s.0)
         .unwrap_or(1);
-    let piece = qr.piece(degree).ok_or(FitError::SelectionFailed)?;
+    let piece = qr.piece(degree).ok_or(ReferenceError::SelectionFailed)?;
     Ok(Selected {
         piece,
         best_press: best * n as f64,
@@ -376,7 +376,11 @@ pub struct Reference {
 
 impl Reference {
     /// Fits a reference to measured points (any order; see the module documentation).
-    pub fn fit(x: &[f64], y: &[f64], options: &FitOptions) -> Result<Reference, FitError> {
+    pub fn fit(
+        x: &[f64],
+        y: &[f64],
+        options: &ReferenceOptions,
+    ) -> Result<Reference, ReferenceError> {
         check_points(x, y, MIN_POINTS)?;
         let n = x.len();
         let mut order: Vec<usize> = (0..n).collect();
@@ -437,9 +441,9 @@ impl Reference {
     pub fn stated(
         x: &[f64],
         y: &[f64],
-        options: &FitOptions,
+        options: &ReferenceOptions,
         tolerance: f64,
-    ) -> Result<Reference, FitError> {
+    ) -> Result<Reference, ReferenceError> {
         let ymax = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let mut distinct: Vec<f64> = x.to_vec();
         distinct.sort_by(f64::total_cmp);
@@ -462,7 +466,8 @@ impl Reference {
                 }
             } else {
                 let qr = QrFit::new(x, y, degree + 1)?;
-                qr.piece(degree).ok_or(FitError::Undetermined(degree))?
+                qr.piece(degree)
+                    .ok_or(ReferenceError::Undetermined(degree))?
             };
             Reference {
                 pieces: vec![piece],
@@ -669,7 +674,7 @@ fn trim_split(
     left: IndexRange,
     right: IndexRange,
     max_degree: usize,
-) -> Result<(), FitError> {
+) -> Result<(), ReferenceError> {
     for _round in 0..TRIM_ROUNDS {
         let mut changed = false;
         for (seg, near_end) in [(left, true), (right, false)] {
@@ -708,7 +713,7 @@ struct InteriorFit {
 }
 
 impl InteriorFit {
-    fn new(x: &[f64], y: &[f64], max_degree: usize) -> Result<Self, FitError> {
+    fn new(x: &[f64], y: &[f64], max_degree: usize) -> Result<Self, ReferenceError> {
         let piece = select(x, y, max_degree)?.piece;
         let p = piece.degree + 1;
         let qr = QrFit::new(x, y, p)?;
@@ -824,7 +829,7 @@ impl ChannelReference {
 /// and the channel's column.
 pub fn experiment_references(
     data: &ExperimentData,
-    options: &FitOptions,
+    options: &ReferenceOptions,
 ) -> Result<Vec<ChannelReference>, DataError> {
     let rec = &data.recording;
     let abscissa = Abscissa::of(data.kind, rec)?;
@@ -907,7 +912,7 @@ mod tests {
             assert!((piece.value(xi) - f(xi)).abs() < 1e-9, "at {xi}");
         }
         assert!(piece.rss < 1e-20);
-        let r = Reference::fit(&x, &y, &FitOptions::default()).unwrap();
+        let r = Reference::fit(&x, &y, &ReferenceOptions::default()).unwrap();
         assert_eq!(r.degree(), 3);
         assert_eq!(r.pieces().len(), 1);
         assert!((r.eval(4e5).unwrap() - f(4e5)).abs() < 1e-9);
@@ -925,7 +930,7 @@ mod tests {
         for seed in 1..=5 {
             let e = noise(x.len(), 2e-3, seed);
             let y: Vec<f64> = x.iter().zip(&e).map(|(w, e)| f(*w) + e).collect();
-            let r = Reference::fit(&x, &y, &FitOptions::default()).unwrap();
+            let r = Reference::fit(&x, &y, &ReferenceOptions::default()).unwrap();
             assert_eq!(r.degree(), 2, "seed {seed}");
             assert_eq!(r.pieces().len(), 1, "seed {seed}");
             let s = r.sigma();
@@ -936,7 +941,7 @@ mod tests {
         let g = |u: f64| 1.9 + 0.8 * (u + 8.0) - 0.5 * (u + 8.0).powi(2) + 0.9 * (u + 8.0).powi(3);
         let e = noise(x.len(), 0.01, 42);
         let y: Vec<f64> = x.iter().zip(&e).map(|(u, e)| g(*u) + e).collect();
-        let r = Reference::fit(&x, &y, &FitOptions::default()).unwrap();
+        let r = Reference::fit(&x, &y, &ReferenceOptions::default()).unwrap();
         assert_eq!(r.degree(), 3);
         assert!((r.sigma() / 0.01 - 1.0).abs() < 0.15, "σ = {}", r.sigma());
     }
@@ -945,13 +950,13 @@ mod tests {
     fn degree_is_capped_below_a_third_of_the_points() {
         let x = linspace(0.0, 1.0, 10);
         let y: Vec<f64> = x.iter().map(|v| (6.0 * v).sin()).collect();
-        let r = Reference::fit(&x, &y, &FitOptions::default()).unwrap();
+        let r = Reference::fit(&x, &y, &ReferenceOptions::default()).unwrap();
         assert!(r.degree() <= 3);
-        assert!(Reference::fit(&x[..3], &y[..3], &FitOptions::default()).is_err());
+        assert!(Reference::fit(&x[..3], &y[..3], &ReferenceOptions::default()).is_err());
         assert!(Reference::fit(
             &[1.0; 5],
             &[1.0, 2.0, 3.0, 4.0, 5.0],
-            &FitOptions::default()
+            &ReferenceOptions::default()
         )
         .is_err());
     }
@@ -990,7 +995,7 @@ mod tests {
     #[test]
     fn jump_is_split_not_smeared() {
         let (x, y) = step_ramp(3);
-        let r = Reference::fit(&x, &y, &FitOptions::default()).unwrap();
+        let r = Reference::fit(&x, &y, &ReferenceOptions::default()).unwrap();
         assert!(r.pieces().len() >= 2, "{:?}", r.pieces().len());
         let first = &r.pieces()[0];
         // The standstill piece ends at the breakaway.
@@ -1027,7 +1032,7 @@ mod tests {
                 .zip(&e)
                 .map(|(p, e)| 7e-9 * p - 1e-15 * p * p + e)
                 .collect();
-            let r = Reference::fit(&x, &y, &FitOptions::default()).unwrap();
+            let r = Reference::fit(&x, &y, &ReferenceOptions::default()).unwrap();
             assert_eq!(r.pieces().len(), 1, "seed {seed}");
         }
     }
@@ -1036,7 +1041,7 @@ mod tests {
     fn sigma_never_falls_below_the_resolution_floor() {
         let x = linspace(0.0, 10.0, 20);
         let y: Vec<f64> = x.iter().map(|v| 3.0 + 0.5 * v).collect();
-        let r = Reference::fit(&x, &y, &FitOptions::default()).unwrap();
+        let r = Reference::fit(&x, &y, &ReferenceOptions::default()).unwrap();
         assert!(r.sigma_residual() < 1e-12);
         assert!((r.sigma() - 8.0 / 4096.0).abs() < 1e-15);
     }

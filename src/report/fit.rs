@@ -719,7 +719,7 @@ mod tests {
     fn torque_reference(x: &[f64], y: &[f64]) -> ChannelReference {
         let (quantity, unit) = crate::units::parse_column("torque_nm").unwrap();
         let (ax_q, ax_unit) = crate::units::parse_column("speed_rpm").unwrap();
-        let options = crate::objective::reference::FitOptions::default();
+        let options = crate::objective::reference::ReferenceOptions::default();
         ChannelReference {
             kind: crate::data::dataset::Kind::Catalogue,
             file: "page.csv".into(),
