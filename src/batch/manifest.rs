@@ -437,14 +437,14 @@ fn predict_args(
 /// keys are the command's options).
 fn predict_key(e: &OptionError) -> String {
     e.message_with(&|o| match o {
-        Opt::PredictUnit => "--unit",
-        Opt::PredictPressures => "--pressures",
-        Opt::PredictReference => "--reference",
-        Opt::PredictInletNozzle => "--inlet-nozzle",
-        Opt::PredictOutletNozzle => "--outlet-nozzle",
-        Opt::PredictSpeedGrid => "--speed-grid-rpm",
-        Opt::PredictCurvePoints => "--curve-points",
-        Opt::PredictFixedSpread => "--fixed-spread",
+        Opt::PredictUnit
+        | Opt::PredictPressures
+        | Opt::PredictReference
+        | Opt::PredictInletNozzle
+        | Opt::PredictOutletNozzle
+        | Opt::PredictSpeedGrid
+        | Opt::PredictCurvePoints
+        | Opt::PredictFixedSpread => o.flag(),
         other => other.field(),
     })
 }

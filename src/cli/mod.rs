@@ -165,32 +165,9 @@ impl Failure {
     }
 }
 
-/// The flag that sets a task's option.
+/// The flag that sets a task's option ([`Opt::flag`]).
 pub(crate) fn flag(o: Opt) -> &'static str {
-    match o {
-        Opt::FitStarts | Opt::DiagnoseStarts => "--starts",
-        Opt::FitThreads | Opt::DiagnoseThreads | Opt::BatchThreads => "--threads",
-        Opt::FitStartSpread => "--start-spread",
-        Opt::FitBounds => "--bounds",
-        Opt::FitEstimate => "--estimate",
-        Opt::FitRanges => "--estimate/--bounds/--start-range",
-        Opt::PredictUnit => "--unit",
-        Opt::PredictPressures | Opt::SynthPressures => "--pressures",
-        Opt::PredictReference => "--reference",
-        Opt::PredictInletNozzle => "--inlet-nozzle",
-        Opt::PredictOutletNozzle => "--outlet-nozzle",
-        Opt::PredictSpeedGrid => "--speed-grid-rpm",
-        Opt::PredictCurvePoints => "--curve-points",
-        Opt::PredictFixedSpread => "--fixed-spread",
-        Opt::PredictData => "--data",
-        Opt::PredictWalkers => "--walkers",
-        Opt::PredictSteps => "--steps",
-        Opt::PredictDraws => "--draws",
-        Opt::SynthNoise => "--noise",
-        Opt::ExportDataset => "--dataset",
-        // An option added to the library without a flag here keeps its field's name.
-        other => other.field(),
-    }
+    o.flag()
 }
 
 /// Clap value parser of `--effects`: the list as given once every id in it is known, so an

@@ -103,19 +103,23 @@ fn unit_term(balance: BalanceId, pressure: P, speed: W) -> ExtraTerm {
     }
 }
 
+/// The chambers' absolute pressures and their differences, the factors that multiply the
+/// speed in the library's speed-driven terms.
+const ABSOLUTE_AND_DIFFERENCES: [P; 6] = [
+    P::P1,
+    P::P2,
+    P::Pe,
+    P::P1MinusPe,
+    P::P2MinusPe,
+    P::P1MinusP2,
+];
+
 /// The library's loss torques: pressures times speed, pressure- and load-dependent
 /// Coulomb-like terms, and friction laws beyond Coulomb and viscous.
 fn torque_terms() -> Vec<ExtraTerm> {
     let mut out = Vec::new();
     // Speed only: ω is `visc`, ω·|ω| is `vane_friction_speed_squared`; pressure times speed:
-    for p in [
-        P::P1,
-        P::P2,
-        P::Pe,
-        P::P1MinusPe,
-        P::P2MinusPe,
-        P::P1MinusP2,
-    ] {
+    for p in ABSOLUTE_AND_DIFFERENCES {
         out.push(unit_term(BalanceId::Torque, p, W::Omega));
     }
     // Coulomb-like, pressure-dependent ((p_1 − p_e)·tanh is `pressure_dependent_friction`;
@@ -167,14 +171,7 @@ fn mass_terms(b: BalanceId) -> Vec<ExtraTerm> {
     }
     // Speed-driven flows (pumping, carry-over: density times swept volume):
     out.push(unit_term(b, P::One, W::Omega));
-    for p in [
-        P::P1,
-        P::P2,
-        P::Pe,
-        P::P1MinusPe,
-        P::P2MinusPe,
-        P::P1MinusP2,
-    ] {
+    for p in ABSOLUTE_AND_DIFFERENCES {
         out.push(unit_term(b, p, W::Omega));
     }
     out

@@ -147,6 +147,15 @@ struct Channel {
     sigma: f64,
 }
 
+/// The simulation's values of a compared channel, or the error that it gives none.
+fn channel_values<'a>(sim: &'a Simulated, ch: &Channel) -> Result<&'a [f64], SimError> {
+    sim.channel(ch.reference.quantity)
+        .ok_or_else(|| SimError::NoChannel {
+            experiment: ch.reference.file.clone(),
+            column: ch.reference.column.clone(),
+        })
+}
+
 #[derive(Debug, Clone)]
 struct ExperimentCost {
     experiment: Experiment,
@@ -328,12 +337,7 @@ impl CostModel {
         for ex in &self.experiments {
             let sim = ex.experiment.simulate(motor, solver)?;
             for ch in &ex.channels {
-                let values =
-                    sim.channel(ch.reference.quantity)
-                        .ok_or_else(|| SimError::NoChannel {
-                            experiment: ch.reference.file.clone(),
-                            column: ch.reference.column.clone(),
-                        })?;
+                let values = channel_values(&sim, ch)?;
                 let simulated: Vec<f64> = ch.rows.iter().map(|&i| values[i]).collect();
                 let normalized = simulated
                     .iter()
@@ -401,12 +405,7 @@ impl CostModel {
         {
             let sim = sim?;
             for ch in &ex.channels {
-                let values =
-                    sim.channel(ch.reference.quantity)
-                        .ok_or_else(|| SimError::NoChannel {
-                            experiment: ch.reference.file.clone(),
-                            column: ch.reference.column.clone(),
-                        })?;
+                let values = channel_values(&sim, ch)?;
                 let rows = rows_of(out.len(), ch);
                 out.push(
                     rows.iter()

@@ -64,6 +64,33 @@ pub enum Opt {
 }
 
 impl Opt {
+    /// The command line's flag that sets the option (`vanefit fit --starts`); a batch
+    /// manifest's keys are the same options. Every option has one: a new option is a new arm.
+    pub fn flag(self) -> &'static str {
+        match self {
+            Opt::FitStarts | Opt::DiagnoseStarts => "--starts",
+            Opt::FitThreads | Opt::DiagnoseThreads | Opt::BatchThreads => "--threads",
+            Opt::FitStartSpread => "--start-spread",
+            Opt::FitBounds => "--bounds",
+            Opt::FitEstimate => "--estimate",
+            Opt::FitRanges => "--estimate/--bounds/--start-range",
+            Opt::PredictUnit => "--unit",
+            Opt::PredictPressures | Opt::SynthPressures => "--pressures",
+            Opt::PredictReference => "--reference",
+            Opt::PredictInletNozzle => "--inlet-nozzle",
+            Opt::PredictOutletNozzle => "--outlet-nozzle",
+            Opt::PredictSpeedGrid => "--speed-grid-rpm",
+            Opt::PredictCurvePoints => "--curve-points",
+            Opt::PredictFixedSpread => "--fixed-spread",
+            Opt::PredictData => "--data",
+            Opt::PredictWalkers => "--walkers",
+            Opt::PredictSteps => "--steps",
+            Opt::PredictDraws => "--draws",
+            Opt::SynthNoise => "--noise",
+            Opt::ExportDataset => "--dataset",
+        }
+    }
+
     /// Every option.
     pub const ALL: &'static [Opt] = &[
         Opt::FitStarts,
