@@ -234,6 +234,7 @@ mod tests {
     use super::select::choose;
     use super::*;
     use crate::model::effects::EffectSet;
+    use crate::model::params::ParamId;
     use std::path::Path;
 
     fn candidate(label: &str, kind: ModelKind, delta_bic: f64) -> Candidate {
@@ -333,9 +334,9 @@ mod tests {
         let base = MotorParams::default();
         let s = effect_starts(&[Effect::IncompleteFilling], &base, 3);
         assert_eq!(s.len(), 3);
-        assert_eq!(s[0].w_fill(), 1e5);
-        assert!(s[1].w_fill() < 1e5);
+        assert_eq!(s[0].effect_values(Effect::IncompleteFilling), &[1e5]);
+        assert!(s[1].effect_values(Effect::IncompleteFilling)[0] < 1e5);
         let s = effect_starts(&[Effect::BreakawayFriction], &base, 1);
-        assert_eq!(s[0].t_static(), base.t_coulomb());
+        assert_eq!(s[0].value(ParamId::T_STATIC), base.t_coulomb());
     }
 }

@@ -423,7 +423,7 @@ impl Motor {
         let mut extra = [0.0; 4];
         if !self.effects.is_empty() {
             for (m, own) in self.active() {
-                m.add_to_balances(own, p, x, bc.p_atm_pa, &mut extra);
+                m.add_to_balances(own, p.values(), x, bc.p_atm_pa, &mut extra);
             }
         }
         // Computed once: the torque equation's T and the load of load-dependent friction.

@@ -1,73 +1,25 @@
-//! Motor parameters: names, units, defaults and bounds (docs/model.md, "Parameters"), and
-//! the one place where unchecked values become checked parameters (as linfa's
-//! `ParamGuard`).
+//! Motor parameters: the registry of every parameter ([`PARAMS`], docs/model.md,
+//! "Parameters"), a motor's values ([`MotorParams`]), and the one place where unchecked
+//! values become checked parameters (as linfa's `ParamGuard`).
+//!
+//! What a parameter is ([`ParamSpec`], [`ParamId`], …) and the base model's table of them
+//! are in `spec`; each effect's parameters are in its file under `model/effects/`. This file
+//! assembles them, base model first and then each effect in registry order, and re-exports
+//! `spec`'s parameter types, so that `params::ParamSpec` and the like still name them.
 //!
 //! Every parameter is SI. The names are the contract used in fit files and on the command
 //! line; they must not change.
 
-use crate::model::effects::{Effect, EffectSet, N_EFFECTS, PARAM_LISTS};
+use crate::model::effects::{breakaway_friction, Effect, EffectSet, N_EFFECTS, PARAM_LISTS};
+use crate::model::spec::base_table;
+pub(crate) use crate::model::spec::{Domain, CATALOGUE_CONDUCTANCE_UNIT, CONDUCTANCE_UNIT};
+pub use crate::model::spec::{Estimated, OffValue, ParamId, ParamSpec, ParamValues, BASE_PARAMS};
 use std::fmt;
-
-/// What values a parameter may take.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Domain {
-    /// Strictly positive (searched in log space).
-    Positive,
-    /// Zero or positive (searched in log space between its bounds).
-    NonNegative,
-    /// Closed interval [lo, hi] (searched through a logistic map).
-    Interval(f64, f64),
-    /// Whole number in [lo, hi] (never estimated).
-    Integer(u32, u32),
-}
-
-/// Which value switches an effect's parameter off: the nested base model, or as near as
-/// the search range allows (the diagnosis starts each candidate there).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum OffValue {
-    /// A base-model parameter: never switched off (its default stands in).
-    NotAnEffect,
-    /// The lower end of the search range.
-    SearchLower,
-    /// The upper end of the search range.
-    SearchUpper,
-    /// The default (the parameter does not matter once the others are off).
-    Default,
-    /// The base model's value of the parameter, clamped into the search range.
-    BaseClamped(ParamId),
-}
-
-/// When a fit estimates a parameter without being told which to estimate
-/// (docs/model.md, "What is estimated").
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Estimated {
-    /// Always (the six conductances and the two friction terms).
-    ByDefault,
-    /// Also in a fit of catalogue pages alone with the motor prior: the parameters that
-    /// shape how torque and flow change with the supply pressure, resting on their priors
-    /// where the page is silent. `rank` orders them after the default ones (θ order).
-    OnPagesWithPrior {
-        /// Position among these parameters in θ.
-        rank: u8,
-    },
-    /// Only when named (`--estimate`), or with its effect switched on.
-    OnRequest,
-}
-
-/// A parameter's identity: its position in [`PARAMS`]. Strings appear only at the file
-/// edges ([`ParamId::from_name`], [`ParamId::name`]); inside, a parameter travels as this.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct ParamId(u8);
 
 impl ParamId {
     /// The parameter `j` of effect `e` (its `j`-th spec).
     pub const fn of_effect(e: Effect, j: usize) -> Self {
         Self((EFFECT_OFFSETS[e.index()] + j) as u8)
-    }
-
-    /// Position in [`PARAMS`] (and in a [`MotorParams`]'s values).
-    pub const fn index(self) -> usize {
-        self.0 as usize
     }
 
     /// Everything the registry knows of the parameter.
@@ -91,6 +43,17 @@ impl ParamId {
     }
 }
 
+/// The effects' parameters that code names (the base model's constants come with its table
+/// in `spec`), each from its position in its effect's file.
+impl ParamId {
+    /// `t_static`: static (breakaway) friction torque T_s, N·m (`breakaway_friction`).
+    pub const T_STATIC: ParamId =
+        ParamId::of_effect(Effect::BreakawayFriction, breakaway_friction::T_STATIC);
+    /// `w_stribeck`: Stribeck speed ω_s, rad/s (`breakaway_friction`).
+    pub const W_STRIBECK: ParamId =
+        ParamId::of_effect(Effect::BreakawayFriction, breakaway_friction::W_STRIBECK);
+}
+
 impl fmt::Debug for ParamId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
@@ -103,100 +66,10 @@ impl fmt::Display for ParamId {
     }
 }
 
-/// Everything known of one parameter, in one place: its name, unit, default, domain and
-/// search range, the effect that adds it, how it follows the motor's size, its prior, when
-/// it is estimated, and what would pin it.
-#[derive(Debug, Clone, Copy)]
-pub struct ParamSpec {
-    /// The name in fit files and on the command line.
-    pub name: &'static str,
-    /// The SI unit, as fit files write it.
-    pub unit: &'static str,
-    /// Default value (motor AR034-11), SI.
-    pub default: f64,
-    /// Values the parameter may take.
-    pub(crate) domain: Domain,
-    /// Search range for estimation (lo, hi) in SI; log-spaced for positive parameters.
-    pub search: (f64, f64),
-    /// The effect that adds this parameter, or `None` for the base model.
-    pub effect: Option<Effect>,
-    /// The value that switches the effect off.
-    pub off: OffValue,
-    /// What the parameter is, in a few words for people (see [`ParamSpec::description`]).
-    pub(crate) meaning: &'static str,
-    /// k of its size law: the default of a motor of displacement V is the AR034-11 default
-    /// × (V/V_AR034)^k, by geometric similarity (docs/model.md, "Defaults that follow the
-    /// motor's size"). `None`: it does not follow the size.
-    pub size_exponent: Option<f64>,
-    /// F, the factor (95 %, either way) within which real vane motors of the same
-    /// displacement lie around the size-scaled default: the log-normal motor prior
-    /// σ = ln F/1.96 (docs/estimation.md, "Priors"). `None`: no prior.
-    pub prior_factor95: Option<f64>,
-    /// When a fit estimates it unasked.
-    pub estimated: Estimated,
-    /// The one extra measurement a catalogue's reader can most easily get that pins it, in
-    /// words (docs/estimation.md, "What a page cannot pin").
-    pub pinned_by: &'static str,
-    /// The `[motor]` key of rig.toml that gives it, where that is not its name.
-    pub rig_key: Option<&'static str>,
-}
-
-/// The measurement that pins a parameter for which no easier one is known.
-const PINNED_BY_RIG: &str = "a rig experiment (docs/estimation.md, \"Catalogue pages\")";
-
-/// The friction and the pressure-shaping parameters separate from the air's torque only
-/// across supply pressures: the Coulomb friction is a constant, the air torque ∝ the
-/// pressure.
-const PINNED_BY_SECOND_PRESSURE: &str =
-    "the torque curve (or stall torque) at a second supply pressure";
-
-/// The leaks carry all the air at stall, where no air passes through the displacement.
-const PINNED_BY_STALL_AIR: &str = "the air flow at stall (the internal leakage)";
-
-/// The outlet and exhaust ports set the air at free speed, where the flow through them
-/// peaks.
-const PINNED_BY_FREE_AIR: &str = "the air consumption at free speed";
-
 impl ParamSpec {
-    /// The registry's facts that an effect's parameter does not set: no size law, no prior,
-    /// estimated only with its effect, pinned by a rig experiment. An effect's spec is its
-    /// own fields followed by `..ParamSpec::EFFECT`.
-    pub const EFFECT: ParamSpec = ParamSpec {
-        name: "",
-        unit: "1",
-        default: 0.0,
-        domain: Domain::NonNegative,
-        search: (0.0, 1.0),
-        effect: None,
-        off: OffValue::Default,
-        meaning: "",
-        size_exponent: None,
-        prior_factor95: None,
-        estimated: Estimated::OnRequest,
-        pinned_by: PINNED_BY_RIG,
-        rig_key: None,
-    };
-
-    /// What the parameter is, in words, for every table and report that prints its id:
-    /// `c_1e` is "leak, inlet side → exhaust", `t_coulomb` "Coulomb friction torque". The
-    /// base model's descriptions are the table in this file; each effect's are in its file
-    /// under `model/effects/`.
-    pub fn description(&self) -> &'static str {
-        self.meaning
-    }
-
-    /// The id followed by its description, e.g. `c_in1 (inlet port, supply → chamber 1)`.
-    pub fn label(&self) -> String {
-        format!("{} ({})", self.name, self.meaning)
-    }
-
-    /// Whether the parameter is a sonic conductance (unit [`CONDUCTANCE_UNIT`]), which
-    /// reports give in [`CATALOGUE_CONDUCTANCE_UNIT`] too.
-    pub(crate) fn is_conductance(&self) -> bool {
-        self.unit == CONDUCTANCE_UNIT
-    }
-
     /// The value that switches this parameter's effect off, given the base parameters.
+    /// (Here rather than with the rest of `ParamSpec` in `spec`, because it reads a
+    /// [`MotorParams`].)
     pub(crate) fn off_value(&self, base: &MotorParams) -> f64 {
         let (lo, hi) = self.search;
         match self.off {
@@ -206,105 +79,22 @@ impl ParamSpec {
             OffValue::BaseClamped(id) => base.value(id).clamp(lo, hi),
         }
     }
-
-    /// Its default scaled to a motor `size` times AR034-11's displacement by its size law
-    /// (the default itself for a parameter that does not follow the size).
-    pub fn scaled_default(&self, size: f64) -> f64 {
-        match self.size_exponent {
-            Some(k) => self.default * size.powf(k),
-            None => self.default,
-        }
-    }
 }
 
-/// The SI unit of a sonic conductance, as fit files write it.
-pub(crate) const CONDUCTANCE_UNIT: &str = "m3/(s*Pa)";
-
-/// The unit in which catalogues and ISO 6358 give sonic conductances.
-pub(crate) const CATALOGUE_CONDUCTANCE_UNIT: &str = "dm3/(s*bar)";
-
-macro_rules! base_params {
-    ($( $id:ident $field:ident : $unit:literal = $default:expr, $domain:expr, ($lo:expr, $hi:expr),
+/// The base model's accessors on [`MotorParams`], one per row of `spec`'s `base_table!`.
+macro_rules! base_accessors {
+    ($( $id:ident $field:ident : $unit:literal = $default:expr, $domain:expr, $search:expr,
         $meaning:literal, size $k:expr, prior $f:expr, $est:expr, $pins:expr, key $key:expr; )*) => {
-        #[allow(non_camel_case_types)]
-        enum Base { $( $field, )* }
-
-        /// The base model's parameters (docs/model.md, "Parameters"), first in [`PARAMS`].
-        pub const BASE_PARAMS: &[ParamSpec] = &[
-            $( ParamSpec { name: stringify!($field), unit: $unit, default: $default, domain: $domain,
-                           search: ($lo, $hi), effect: None, off: OffValue::NotAnEffect,
-                           meaning: $meaning, size_exponent: $k, prior_factor95: $f,
-                           estimated: $est, pinned_by: $pins, rig_key: $key }, )*
-        ];
-
-        impl ParamId {
-            $(
-                #[doc = concat!("`", stringify!($field), "`: ", $meaning, " (", $unit, ").")]
-                pub const $id: ParamId = ParamId(Base::$field as u8);
-            )*
-        }
-
         impl MotorParams {
             $(
                 #[doc = concat!("`", stringify!($field), "`: ", $meaning, " (", $unit, ").")]
-                pub fn $field(&self) -> f64 { self.values[Base::$field as usize] }
+                pub fn $field(&self) -> f64 { self.values[ParamId::$id.index()] }
             )*
         }
     };
 }
 
-use Domain::{Integer, Interval, NonNegative, Positive};
-use Estimated::{ByDefault, OnPagesWithPrior, OnRequest};
-// Size laws (geometric similarity, lengths ∝ s^⅓ with s = V_disp/V_disp,AR034): sonic
-// conductances are areas (∝ s^⅔); lumped volumes and the dead volume per compartment ∝ s;
-// Coulomb friction is a force from the pressure on vane and seal areas times a radius (∝ s);
-// viscous friction is a sheared area times a radius squared over an unchanged clearance
-// (∝ s^{4/3}); inertia is a mass times a radius squared (∝ s^{5/3}). Dimensionless
-// parameters (z, ε, b_crit, n_poly) do not change with size; `w_reg` is a numerical
-// regularisation speed and is kept. Where the priors' factors come from: docs/estimation.md,
-// "Priors".
-base_params! {
-    C_IN1 c_in1: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "inlet port, supply → chamber 1",
-        size Some(2.0 / 3.0), prior Some(2.0), ByDefault, "the air consumption at max power", key None;
-    C_OUT2 c_out2: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "outlet port, chamber 2 → port 2",
-        size Some(2.0 / 3.0), prior Some(2.0), ByDefault, PINNED_BY_FREE_AIR, key None;
-    C_EXT c_ext: "m3/(s*Pa)" = 1.170707e-8, Positive, (1e-9, 1e-7), "exhaust port, exhaust chamber → atmosphere",
-        size Some(2.0 / 3.0), prior Some(2.0), ByDefault, PINNED_BY_FREE_AIR, key None;
-    C_1E c_1e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leak, inlet side → exhaust",
-        size Some(2.0 / 3.0), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
-    C_2E c_2e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leak, outlet side → exhaust",
-        size Some(2.0 / 3.0), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
-    C_12 c_12: "m3/(s*Pa)" = 7.616275e-10, NonNegative, (1e-12, 1e-8), "leak, inlet side → outlet side",
-        size Some(2.0 / 3.0), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
-    B_CRIT b_crit: "1" = 0.5, Interval(0.05, 0.95), (0.2, 0.6), "critical pressure ratio of every nozzle",
-        size None, prior Some(1.6), OnPagesWithPrior { rank: 1 }, PINNED_BY_SECOND_PRESSURE, key None;
-    Z z: "1" = 5.0, Integer(2, 16), (5.0, 5.0), "number of vanes",
-        size None, prior None, OnRequest, PINNED_BY_RIG, key Some("vanes");
-    // 0.01–10 000 cm³ per revolution: beyond either end no vane motor exists, and the
-    // steady-state search fails (1 m³ has no steady state), so the gate refuses it first.
-    V_DISP v_disp: "m3" = 3.8e-6, Interval(1e-8, 1e-2), (1e-7, 1e-3), "nominal displacement z·V_fill",
-        size None, prior None, OnRequest, "the displacement (a datasheet row)", key Some("displacement_m3");
-    EPS eps: "1" = 1.071, Interval(1.0, 2.0), (1.0, 1.5), "expansion ratio V_exp/V_fill",
-        size None, prior None, OnRequest, PINNED_BY_RIG, key Some("expansion_ratio");
-    V_DEAD v_dead: "m3" = 0.10e-6, NonNegative, (0.0, 1e-6), "dead volume per compartment",
-        size Some(1.0), prior Some(2.0), OnPagesWithPrior { rank: 0 }, PINNED_BY_SECOND_PRESSURE, key Some("dead_volume_m3");
-    N_POLY n_poly: "1" = 1.3, Interval(1.0, 1.4), (1.0, 1.4), "polytropic index of expansion and compression",
-        size None, prior None, OnRequest, PINNED_BY_RIG, key None;
-    VOL1 vol1: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of chamber 1 (inlet side)",
-        size Some(1.0), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
-    VOL2 vol2: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of chamber 2 (outlet side)",
-        size Some(1.0), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
-    VOLE vole: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of the exhaust chamber",
-        size Some(1.0), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
-    INERTIA inertia: "kg*m2" = 2e-4, Positive, (1e-6, 1e-2), "inertia of rotor, coupling and brake",
-        size Some(5.0 / 3.0), prior Some(2.0), OnRequest, PINNED_BY_RIG, key None;
-    T_COULOMB t_coulomb: "N*m" = 0.02, NonNegative, (1e-3, 0.2), "Coulomb friction torque",
-        size Some(1.0), prior Some(3.0), ByDefault, PINNED_BY_SECOND_PRESSURE, key None;
-    VISC visc: "N*m*s/rad" = 6e-5, NonNegative, (1e-6, 1e-3), "viscous friction",
-        size Some(4.0 / 3.0), prior Some(3.0), ByDefault, PINNED_BY_SECOND_PRESSURE, key None;
-    W_REG w_reg: "rad/s" = 0.2, Positive, (0.01, 5.0), "speed that regularises the Coulomb friction",
-        size None, prior None, OnRequest, PINNED_BY_RIG, key None;
-}
+base_table!(base_accessors);
 
 /// Number of parameters: the base model's and every catalog effect's.
 const N_PARAMS: usize = count_params();
@@ -438,8 +228,10 @@ const fn default_values() -> [f64; N_PARAMS] {
 }
 
 /// Checked motor parameters, SI units. The only way to build them is `ParamSet::check`
-/// (or a default), so every value has passed its check; read them through the accessor of
-/// the same name (base parameters here, each effect's in its file) or [`MotorParams::get`].
+/// (or a default), so every value has passed its check; read a base parameter through the
+/// accessor of the same name (made from `spec`'s table), any through [`MotorParams::value`]
+/// with its [`ParamId`] or [`MotorParams::get`] with its name, and an effect's own through
+/// [`MotorParams::effect_values`].
 #[derive(Clone, PartialEq)]
 pub struct MotorParams {
     /// One value per entry of [`PARAMS`], in its order.
@@ -471,6 +263,11 @@ impl MotorParams {
     pub fn effect_values(&self, e: Effect) -> &[f64] {
         let start = EFFECT_OFFSETS[e.index()];
         &self.values[start..start + e.specs().len()]
+    }
+
+    /// Every value, as the catalog's hooks read them ([`ParamValues`]).
+    pub fn values(&self) -> ParamValues<'_> {
+        ParamValues::new(&self.values)
     }
 
     fn set_unchecked(&mut self, name: &str, value: f64) -> bool {
@@ -606,6 +403,7 @@ impl ParamSet {
 }
 
 use crate::units::format::short;
+use Domain::{Integer, Interval, NonNegative, Positive};
 
 fn check_domain(spec: &ParamSpec, v: f64) -> Result<(), ParamError> {
     let fail = |message: String| {
@@ -671,7 +469,6 @@ mod tests {
                         g_seal w_seal v_carry w_fill k_fric_p tau_sensor valve_tau valve_zeta";
         assert_eq!(names.join(" "), expected);
         let p = MotorParams::default().with("g_seal", 2.5).unwrap();
-        assert_eq!(p.g_seal(), 2.5);
         assert_eq!(
             p.effect_values(Effect::SpeedDependentLeakage),
             &[2.5, 300.0]

@@ -5,13 +5,15 @@
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::friction;
-use crate::model::params::{Domain, MotorParams, OffValue, ParamId, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamId, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct BreakawayFriction;
 
-const T_STATIC: usize = 0;
-const W_STRIBECK: usize = 1;
+/// Position of T_s among its parameters (`ParamId::T_STATIC` in `params` names it).
+pub(crate) const T_STATIC: usize = 0;
+/// Position of ω_s among its parameters (`ParamId::W_STRIBECK` in `params` names it).
+pub(crate) const W_STRIBECK: usize = 1;
 
 /// Its parameters: T_s and ω_s. Off: T_s = T_c (clamped into its search range) leaves the
 /// base model's friction; ω_s then does not matter and stays at its default.
@@ -63,31 +65,13 @@ impl CatalogEffect for BreakawayFriction {
     }
 }
 
-impl ParamId {
-    /// `t_static`: static (breakaway) friction torque T_s, N·m.
-    pub const T_STATIC: ParamId = ParamId::of_effect(Effect::BreakawayFriction, T_STATIC);
-    /// `w_stribeck`: Stribeck speed ω_s, rad/s.
-    pub const W_STRIBECK: ParamId = ParamId::of_effect(Effect::BreakawayFriction, W_STRIBECK);
-}
-
-impl MotorParams {
-    /// Static (breakaway) friction torque T_s, N·m (`breakaway_friction`).
-    pub fn t_static(&self) -> f64 {
-        self.effect_values(Effect::BreakawayFriction)[T_STATIC]
-    }
-    /// Stribeck speed ω_s, rad/s (`breakaway_friction`).
-    pub fn w_stribeck(&self) -> f64 {
-        self.effect_values(Effect::BreakawayFriction)[W_STRIBECK]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn off_is_the_base_model() {
-        super::super::testing::reproduces_base(Effect::BreakawayFriction, &[], 0.0);
+        crate::model::testing::reproduces_base(Effect::BreakawayFriction, &[], 0.0);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! p_discharge·V_carry·z·|ω|/(2π·R·T0), kg/s.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec};
 use crate::units::constants::RT0;
 use std::f64::consts::PI;
 
@@ -47,21 +47,13 @@ impl CatalogEffect for DeadVolumeCarryover {
     }
 }
 
-impl MotorParams {
-    /// Volume carried back at discharge pressure per compartment, m³
-    /// (`dead_volume_carryover`).
-    pub fn v_carry(&self) -> f64 {
-        self.effect_values(Effect::DeadVolumeCarryover)[V_CARRY]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn zero_is_the_base_model_and_hook_is_the_formula() {
-        super::super::testing::reproduces_base(Effect::DeadVolumeCarryover, &[("v_carry", 0.0)], 0.0);
+        crate::model::testing::reproduces_base(Effect::DeadVolumeCarryover, &[("v_carry", 0.0)], 0.0);
         let m = DeadVolumeCarryover.carryover_kg_s(&[1e-7], 2e5, -100.0, 5.0);
         assert_eq!(m, Some(2e5 * 1e-7 * 5.0 * 100.0 / (2.0 * PI * RT0)));
     }

@@ -3,7 +3,7 @@
 //! (p_inlet − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct IncompleteFilling;
@@ -47,21 +47,13 @@ impl CatalogEffect for IncompleteFilling {
     }
 }
 
-impl MotorParams {
-    /// Speed ω_f at which filling reaches half the pressure difference, rad/s
-    /// (`incomplete_filling`).
-    pub fn w_fill(&self) -> f64 {
-        self.effect_values(Effect::IncompleteFilling)[W_FILL]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn far_off_is_the_base_model_and_hook_is_half_at_w_fill() {
-        super::super::testing::reproduces_base(Effect::IncompleteFilling, &[("w_fill", 1e150)], 1e-12);
+        crate::model::testing::reproduces_base(Effect::IncompleteFilling, &[("w_fill", 1e150)], 1e-12);
         let p = IncompleteFilling.filling_pressure(&[1000.0], 6e5, 1e5, 1000.0);
         assert_eq!(p, 1e5 + 5e5 * 0.5);
     }

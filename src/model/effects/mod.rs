@@ -5,13 +5,19 @@
 //! category and one line of physics, its parameters ([`ParamSpec`], with the value that
 //! switches each off), the experiments it can show in ([`ShowsIn`]), and where it acts in
 //! the motor (the hooks of [`Term`]). Adding an effect is its file plus one line in the
-//! `registry!` below; its parameters join [`crate::model::params::PARAMS`] after those
-//! of the effects before it (the order of fit files).
+//! `registry!` below; `params` assembles its parameters into
+//! [`PARAMS`](crate::model::PARAMS) after those of the effects before it (the order of fit
+//! files).
+//!
+//! The catalog stands on `spec` (the [`Effect`] handle and what a parameter is) and never
+//! on `params`, which stands on the catalog: a hook reads its own parameter values (`own`),
+//! and [`Term::add_to_balances`] every parameter of the motor as [`ParamValues`].
 //!
 //! Discovered terms ([`crate::model::extra::ExtraTerm`]) act through the same [`Term`]
 //! hooks.
 
-use crate::model::params::{MotorParams, ParamSpec};
+pub use crate::model::spec::Effect;
+use crate::model::spec::{ParamSpec, ParamValues};
 use crate::numerics::ode::State;
 use std::fmt;
 use std::str::FromStr;
@@ -128,11 +134,11 @@ pub trait Term: Sync {
 
     /// Adds this term's contributions to the balances, indexed by
     /// [`crate::model::extra::BalanceId`]: a loss torque (N·m) and mass flows into V_1,
-    /// V_2, V_e (kg/s), at state `x`.
+    /// V_2, V_e (kg/s), at state `x`; `params` holds every parameter of the motor.
     fn add_to_balances(
         &self,
         own: &[f64],
-        params: &MotorParams,
+        params: ParamValues<'_>,
         x: &State,
         p_atm_pa: f64,
         acc: &mut [f64; 4],
@@ -232,11 +238,8 @@ const fn names<const N: usize>(specs: &[ParamSpec]) -> [&'static str; N] {
     out
 }
 
-/// A catalogued effect: a handle to its entry in the registry. The ids are fixed once used
-/// (docs/model.md, "Missing-physics catalog"); the order is the registry's.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct Effect(u8);
-
+/// The handle [`Effect`] (defined in `spec`, below the parameters that name it): its
+/// constants come from the `registry!` above, the rest from its entry.
 impl Effect {
     /// Position in the registry.
     pub const fn index(self) -> usize {
@@ -364,61 +367,9 @@ impl FromIterator<Effect> for EffectSet {
     }
 }
 
-/// Test helpers shared by the effect files.
-#[cfg(test)]
-pub(crate) mod testing {
-    use crate::model::motor::{Boundary, Load, Motor};
-    use crate::model::params::MotorParams;
-    use crate::numerics::ode::State;
-
-    /// States forward, reverse and at standstill.
-    pub(crate) const STATES: [State; 4] = [
-        [6e5, 1.5e5, 1.3e5, 800.0],
-        [3e5, 4e5, 2e5, -300.0],
-        [2e5, 1e5, 1e5, 0.0],
-        [5e5, 2e5, 1.2e5, 3.0],
-    ];
-
-    /// The boundary of the checks.
-    pub(crate) fn boundary() -> Boundary {
-        Boundary::supplied(7.3e5, 1.01325e5, Load::ViscousBrake { c_nm_s_rad: 2e-4 })
-    }
-
-    /// `effect` switched on with its parameters at their off values, then at `values`,
-    /// gives the base model's derivatives to within `tol` relative (0: bit for bit).
-    pub(crate) fn reproduces_base(effect: super::Effect, values: &[(&str, f64)], tol: f64) {
-        let base = MotorParams::default();
-        let mut p = base.clone();
-        for s in effect.specs() {
-            p = p.with(s.name, s.off_value(&base)).unwrap();
-        }
-        for (name, v) in values {
-            p = p.with(name, *v).unwrap();
-        }
-        let on = Motor::new(p, super::EffectSet::empty().with(effect));
-        let off = Motor::new(base, super::EffectSet::empty());
-        for x in STATES {
-            let (a, b) = (
-                on.derivatives(&x, &boundary()),
-                off.derivatives(&x, &boundary()),
-            );
-            for i in 0..4 {
-                let d = (a[i] - b[i]).abs();
-                assert!(
-                    d <= tol * b[i].abs(),
-                    "{effect} {x:?} [{i}]: {} vs {}",
-                    a[i],
-                    b[i]
-                );
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::params::spec;
 
     #[test]
     fn ids_round_trip_and_unknown_is_refused() {
@@ -440,7 +391,7 @@ mod tests {
             assert_eq!(e.parameters().len(), e.specs().len());
             for (name, s) in e.parameters().iter().zip(e.specs()) {
                 assert_eq!(*name, s.name);
-                assert_eq!(spec(name).unwrap().effect, Some(e), "{name}");
+                assert_eq!(s.effect, Some(e), "{name}");
             }
         }
         assert_eq!(format!("{:?}", Effect::SensorLag), "SensorLag");

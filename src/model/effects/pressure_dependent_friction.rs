@@ -3,7 +3,7 @@
 //! k·max(p_inlet − p_e, 0), N·m.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct PressureDependentFriction;
@@ -45,20 +45,13 @@ impl CatalogEffect for PressureDependentFriction {
     }
 }
 
-impl MotorParams {
-    /// Coulomb friction per Pa of p_1 − p_e, N·m/Pa (`pressure_dependent_friction`).
-    pub fn k_fric_p(&self) -> f64 {
-        self.effect_values(Effect::PressureDependentFriction)[K_FRIC_P]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn zero_is_the_base_model_and_hook_is_the_formula() {
-        super::super::testing::reproduces_base(Effect::PressureDependentFriction, &[("k_fric_p", 0.0)], 0.0);
+        crate::model::testing::reproduces_base(Effect::PressureDependentFriction, &[("k_fric_p", 0.0)], 0.0);
         let h = PressureDependentFriction;
         assert_eq!(h.coulomb_nm(&[1e-8], 0.02, 6e5, 1e5), 0.02 + 1e-8 * 5e5);
         assert_eq!(h.coulomb_nm(&[1e-8], 0.02, 1e5, 2e5), 0.02);

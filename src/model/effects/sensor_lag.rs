@@ -3,7 +3,7 @@
 //! transient recordings.
 
 use super::{Category, CatalogEffect, Effect, ShowsIn, Term};
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct SensorLag;
@@ -51,13 +51,6 @@ impl CatalogEffect for SensorLag {
     }
 }
 
-impl MotorParams {
-    /// First-order lag τ of the flow and speed sensors, s (`sensor_lag`).
-    pub fn tau_sensor(&self) -> f64 {
-        self.effect_values(Effect::SensorLag)[TAU_SENSOR]
-    }
-}
-
 /// A sensor's first-order lag y_m' = (y − y_m)/τ applied to samples of y, exact when y is
 /// linear between samples (first-order hold); the sensor starts settled at y(t_0).
 fn first_order_lag(times: &[f64], y: &[f64], tau: f64) -> Vec<f64> {
@@ -81,7 +74,7 @@ mod tests {
 
     #[test]
     fn off_is_the_base_model() {
-        super::super::testing::reproduces_base(Effect::SensorLag, &[], 0.0);
+        crate::model::testing::reproduces_base(Effect::SensorLag, &[], 0.0);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! multiplied by 1 + g/(1 + (ω/ω_seal)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct SpeedDependentLeakage;
@@ -60,24 +60,13 @@ impl CatalogEffect for SpeedDependentLeakage {
     }
 }
 
-impl MotorParams {
-    /// Extra leakage at standstill g, relative (`speed_dependent_leakage`).
-    pub fn g_seal(&self) -> f64 {
-        self.effect_values(Effect::SpeedDependentLeakage)[G_SEAL]
-    }
-    /// Speed ω_seal at which sealing halves the extra leakage, rad/s.
-    pub fn w_seal(&self) -> f64 {
-        self.effect_values(Effect::SpeedDependentLeakage)[W_SEAL]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn zero_is_the_base_model_and_hook_halves_at_w_seal() {
-        super::super::testing::reproduces_base(Effect::SpeedDependentLeakage, &[("g_seal", 0.0)], 0.0);
+        crate::model::testing::reproduces_base(Effect::SpeedDependentLeakage, &[("g_seal", 0.0)], 0.0);
         let own = [1.0, 300.0];
         assert_eq!(SpeedDependentLeakage.leak_factor(&own, 0.0), Some(2.0));
         assert_eq!(SpeedDependentLeakage.leak_factor(&own, 300.0), Some(1.5));

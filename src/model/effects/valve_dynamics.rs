@@ -5,7 +5,7 @@
 //! output, so it never shows in them.
 
 use super::{Category, CatalogEffect, Effect, ShowsIn, SupplyValve, Term};
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub(crate) struct ValveDynamics;
@@ -73,30 +73,18 @@ impl CatalogEffect for ValveDynamics {
     }
 }
 
-impl MotorParams {
-    /// Time constant τ of the pressure control valve, s (`valve_dynamics`).
-    pub fn valve_tau(&self) -> f64 {
-        self.effect_values(Effect::ValveDynamics)[VALVE_TAU]
-    }
-    /// Damping ratio ζ of the second-order valve, 1 (`valve_dynamics`).
-    pub fn valve_zeta(&self) -> f64 {
-        self.effect_values(Effect::ValveDynamics)[VALVE_ZETA]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::effects::EffectSet;
-    use crate::model::motor::Motor;
+    use crate::model::testing::{reproduces_base, supply_valve};
 
     #[test]
     fn off_is_the_base_model_and_the_valve_follows_the_switch() {
-        super::super::testing::reproduces_base(Effect::ValveDynamics, &[], 0.0);
-        let p = MotorParams::default();
-        let off = Motor::new(p.clone(), EffectSet::empty()).supply_valve();
+        reproduces_base(Effect::ValveDynamics, &[], 0.0);
+        let off = supply_valve(EffectSet::empty());
         assert_eq!(off, SupplyValve { tau_s: 0.05, zeta: None });
-        let on = Motor::new(p, EffectSet::empty().with(Effect::ValveDynamics)).supply_valve();
+        let on = supply_valve(EffectSet::empty().with(Effect::ValveDynamics));
         assert_eq!(on.zeta, Some(0.7));
     }
 }

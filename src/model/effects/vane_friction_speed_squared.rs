@@ -3,7 +3,7 @@
 //! smooth part of the friction.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::params::{Domain, MotorParams, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct VaneFrictionSpeedSquared;
@@ -46,20 +46,13 @@ impl CatalogEffect for VaneFrictionSpeedSquared {
     }
 }
 
-impl MotorParams {
-    /// Speed-squared friction coefficient c₂, N·m·s²/rad² (`vane_friction_speed_squared`).
-    pub fn c_w2(&self) -> f64 {
-        self.effect_values(Effect::VaneFrictionSpeedSquared)[C_W2]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn zero_is_the_base_model_and_hook_is_odd() {
-        super::super::testing::reproduces_base(Effect::VaneFrictionSpeedSquared, &[("c_w2", 0.0)], 0.0);
+        crate::model::testing::reproduces_base(Effect::VaneFrictionSpeedSquared, &[("c_w2", 0.0)], 0.0);
         let t = VaneFrictionSpeedSquared.wet_nm(&[2e-8], 0.0, 100.0);
         assert_eq!(t, 2e-8 * 100.0 * 100.0);
         assert_eq!(VaneFrictionSpeedSquared.wet_nm(&[2e-8], 0.0, -100.0), -t);
