@@ -42,14 +42,11 @@ fn fit_err(e: FitError) -> PyErr {
 }
 
 fn uncertainty_of(name: &str) -> PyResult<UncertaintyMethod> {
-    match name {
-        "profile" => Ok(UncertaintyMethod::Profile),
-        "curvature" => Ok(UncertaintyMethod::Curvature),
-        "none" => Ok(UncertaintyMethod::None),
-        other => Err(ParameterError::new_err(format!(
-            "uncertainty '{other}': must be 'profile', 'curvature' or 'none'"
-        ))),
-    }
+    UncertaintyMethod::from_id(name).ok_or_else(|| {
+        ParameterError::new_err(format!(
+            "uncertainty '{name}': must be 'profile', 'curvature' or 'none'"
+        ))
+    })
 }
 
 /// Fits a dataset exactly as `vanefit fit` does. Returns the fit file's text and every

@@ -350,17 +350,12 @@ fn fit_args(src: &Source<'_>, raw: &RawFit) -> Result<(FitOptions, bool), Manife
     a.seed = raw.seed.unwrap_or(a.seed);
     a.max_iters = raw.max_iters.unwrap_or(a.max_iters);
     if let Some(u) = &raw.uncertainty {
-        a.uncertainty = match u.get_ref().as_str() {
-            "profile" => UncertaintyMethod::Profile,
-            "curvature" => UncertaintyMethod::Curvature,
-            "none" => UncertaintyMethod::None,
-            _ => {
-                return Err(src.at(
-                    u.span(),
-                    "uncertainty must be \"profile\", \"curvature\" or \"none\"",
-                ))
-            }
-        };
+        a.uncertainty = UncertaintyMethod::from_id(u.get_ref()).ok_or_else(|| {
+            src.at(
+                u.span(),
+                "uncertainty must be \"profile\", \"curvature\" or \"none\"",
+            )
+        })?;
     }
     if let Some(e) = &raw.effects {
         a.effects = EffectSet::parse_list(&e.get_ref().join(","))

@@ -407,7 +407,7 @@ fn print_goodness(out: &FitOutcome) {
         let verdict = if g.noise_reached {
             "the model reaches the noise".to_string()
         } else {
-            let worst = g
+            let worst = out
                 .worst_channel
                 .as_ref()
                 .map(|(c, r)| format!("; worst {c} at {r:.2}x its noise"))

@@ -3,6 +3,7 @@
 //! defaults for the rest; unknown names, wrong units and non-physical values are refused
 //! with the file and line.
 
+use super::statistics::{EstimateMethod, FitStatistics, UncertaintyMethod};
 use crate::model::effects::{Effect, EffectSet};
 use crate::model::extra::{
     balance_name, coefficient_unit, describe, formula, pressure_id, speed_id, BalanceId, Chamber,
@@ -57,84 +58,6 @@ pub struct ParamVerdict {
     pub identifiable: bool,
     /// Why not, in words.
     pub why: Option<String>,
-}
-
-/// How the fit's estimate and intervals were obtained and how well it reproduces the data
-/// (`statistics` in the file; see `estimate::fit::goodness`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FitStatistics {
-    /// What the exported values are: "maximum_likelihood" (of the recorded rows).
-    pub estimate: String,
-    /// How intervals were computed: "profile", "curvature" or "none".
-    pub uncertainty: String,
-    /// χ² of the likelihood at the estimate.
-    pub chi2: f64,
-    /// Compared points.
-    pub n_points: usize,
-    /// n − k.
-    pub dof: usize,
-    /// χ²/dof.
-    pub(crate) chi2_per_dof: f64,
-    /// RMS residual over noise, channels averaged alike.
-    pub noise_ratio: f64,
-    /// The largest noise ratio of a model that reaches the noise.
-    pub noise_ratio_limit: f64,
-    /// Whether the model reaches the noise.
-    pub noise_reached: bool,
-    /// Factor by which the intervals were widened (1 when the noise is reached).
-    pub interval_scale: f64,
-    /// Cost J of the multi-start's best start (`cost` is J at the estimate).
-    pub best_start_cost: f64,
-    /// The systematic errors profiled out at the estimate, SI (sensor offsets in the
-    /// sensor's unit, the supply-pressure sensor's offset in Pa), by label.
-    #[serde(default)]
-    pub nuisances: serde_json::Map<String, Value>,
-    /// Channels whose noise estimate was widened to their residual scatter for the
-    /// intervals, by "file column": the factor (> 1).
-    #[serde(default)]
-    pub widened_noise: serde_json::Map<String, Value>,
-    /// χ² of the likelihood that the estimate minimises and the intervals are profiled on:
-    /// each channel's σ widened per `widened_noise`, the nuisances' prior terms
-    /// (β̂/τ)² included. (`chi2` above is the goodness of fit: the rows against the data's
-    /// own σ, without the priors.) `None` in files written before it existed.
-    #[serde(default)]
-    pub likelihood_chi2: Option<f64>,
-    /// Rise of `likelihood_chi2` that bounds a 95 % profile interval, χ²₁(0.95)·s² with s
-    /// the widened likelihood's own interval scale. `None` in files written before it
-    /// existed or when no interval could be computed.
-    #[serde(default)]
-    pub profile_threshold: Option<f64>,
-    /// The estimated parameters' values (SI) at which the supply-pressure sensor offset's
-    /// effect on the rows was linearised; with `widened_noise` it rebuilds the likelihood
-    /// exactly (`estimate::fit::fit_likelihood`). Empty in files written before it existed.
-    #[serde(default)]
-    pub linearised_at: serde_json::Map<String, Value>,
-    /// The motor prior of the estimated parameters (docs/estimation.md, "Priors"): the
-    /// estimate minimises `likelihood_chi2` + `prior_chi2`, and the covariance and the
-    /// profiles hold the prior's precision. Empty without a prior (`--priors none`, and
-    /// files written before priors existed).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub prior: Vec<PriorEntry>,
-    /// χ²_prior = Σ ((ln v − ln median)/sd_ln)² at the estimate (`None` without a prior).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub prior_chi2: Option<f64>,
-}
-
-/// One estimated parameter's log-normal prior as the fit file states it:
-/// ln v ~ N(ln median, sd_ln²).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PriorEntry {
-    /// The parameter.
-    pub parameter: String,
-    /// The median, SI (its default scaled to the motor's displacement).
-    pub median: f64,
-    /// Standard deviation of ln v.
-    pub sd_ln: f64,
-    /// Where the displacement was estimated with the other parameters (a page that does not
-    /// print it): k of the size law the median follows, median·(v_disp/v̂_disp)^k with
-    /// v̂_disp the fit's displacement (`ParamSpec::size_exponent`). Absent otherwise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub size_exponent: Option<f64>,
 }
 
 /// Number of starts and how many converged.
@@ -559,9 +482,7 @@ impl FitFile {
                 .and_then(|v| serde_json::from_value(v.clone()).ok()),
             extra,
             verdicts: verdicts(obj),
-            statistics: obj
-                .get("statistics")
-                .and_then(|v| serde_json::from_value(v.clone()).ok()),
+            statistics: r.statistics(obj)?,
             covariance,
             conditions: r.conditions(obj)?,
             profiles: r.profiles(obj)?,
@@ -683,6 +604,33 @@ impl Reader<'_> {
             )),
             None => Ok(Some(c)),
         }
+    }
+
+    /// `statistics` (absent or null: none). Its methods are refused at their line when
+    /// unknown (a file that names another estimate or interval must not pass for one of
+    /// ours); an object that does not read otherwise is left out, as it always was.
+    fn statistics(&self, obj: &Map<String, Value>) -> Result<Option<FitStatistics>, FitFileError> {
+        let v = match obj.get("statistics") {
+            None | Some(Value::Null) => return Ok(None),
+            Some(v) => v,
+        };
+        let here = self.line_of("\"statistics\"");
+        let method = |key: &str, read: fn(Value) -> Result<(), serde_json::Error>| {
+            let Some(id) = v.get(key) else {
+                return Ok(());
+            };
+            read(id.clone()).map_err(|e| {
+                let at = self.line_after(here, &format!("\"{key}\"")).or(here);
+                self.fail(at, format!("statistics.{key} {e}"))
+            })
+        };
+        method("estimate", |id| {
+            serde_json::from_value::<EstimateMethod>(id).map(drop)
+        })?;
+        method("uncertainty", |id| {
+            serde_json::from_value::<UncertaintyMethod>(id).map(drop)
+        })?;
+        Ok(serde_json::from_value(v.clone()).ok())
     }
 
     /// `conditions` (absent or null: unknown).
@@ -924,6 +872,84 @@ mod tests {
         assert_eq!(back.estimated, f.estimated);
         assert_eq!(back.ci95, f.ci95);
         assert_eq!(back.cost, Some(3.5));
+    }
+
+    /// The statistics' keys as the file has always had them, the goodness of fit inline.
+    #[test]
+    fn statistics_round_trip_in_their_order_and_unknown_methods_are_refused_at_their_line() {
+        use crate::data::statistics::GoodnessOfFit;
+        let mut f = FitFile::from_params("demo", MotorParams::default(), EffectSet::empty());
+        f.statistics = Some(FitStatistics {
+            estimate: EstimateMethod::MaximumLikelihood,
+            uncertainty: UncertaintyMethod::Curvature,
+            goodness: GoodnessOfFit {
+                chi2: 12.5,
+                n_points: 10,
+                dof: 8,
+                chi2_per_dof: 12.5 / 8.0,
+                noise_ratio: 1.1,
+                noise_ratio_limit: 1.3,
+                noise_reached: true,
+                interval_scale: 1.1,
+            },
+            best_start_cost: 0.25,
+            nuisances: Map::new(),
+            widened_noise: Map::new(),
+            likelihood_chi2: Some(12.0),
+            profile_threshold: None,
+            linearised_at: Map::new(),
+            prior: Vec::new(),
+            prior_chi2: None,
+        });
+        let text = serde_json::to_string_pretty(&f.to_json()).unwrap();
+        let doc: Value = serde_json::from_str(&text).unwrap();
+        let keys: Vec<&str> = doc["statistics"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        assert_eq!(
+            keys,
+            [
+                "estimate",
+                "uncertainty",
+                "chi2",
+                "n_points",
+                "dof",
+                "chi2_per_dof",
+                "noise_ratio",
+                "noise_ratio_limit",
+                "noise_reached",
+                "interval_scale",
+                "best_start_cost",
+                "nuisances",
+                "widened_noise",
+                "likelihood_chi2",
+                "profile_threshold",
+                "linearised_at",
+            ]
+        );
+        assert_eq!(doc["statistics"]["estimate"], "maximum_likelihood");
+        assert_eq!(doc["statistics"]["uncertainty"], "curvature");
+        let back = FitFile::parse(Path::new("f.json"), &text).unwrap();
+        assert_eq!(back.statistics, f.statistics);
+        for (from, to, says) in [
+            (
+                "\"uncertainty\": \"curvature\"",
+                "\"uncertainty\": \"bogus\"",
+                r#"statistics.uncertainty must be "profile", "curvature" or "none", not "bogus""#,
+            ),
+            (
+                "\"estimate\": \"maximum_likelihood\"",
+                "\"estimate\": 3",
+                r#"statistics.estimate must be "maximum_likelihood", not 3"#,
+            ),
+        ] {
+            let line = text.lines().position(|l| l.contains(from)).unwrap() + 1;
+            let e = FitFile::parse(Path::new("f.json"), &text.replace(from, to)).unwrap_err();
+            assert_eq!((e.line, e.message.as_str()), (Some(line), says), "{e}");
+        }
     }
 
     #[test]

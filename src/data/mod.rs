@@ -1,8 +1,10 @@
-//! Data at the file edge: datasets (rig.toml + CSV), fit files, synthetic datasets.
+//! Data at the file edge: datasets (rig.toml + CSV), fit files and their statistics,
+//! synthetic datasets.
 
 pub(crate) mod dataset;
 pub(crate) mod fitfile;
 pub(crate) mod motor;
+pub(crate) mod statistics;
 pub(crate) mod synth;
 pub(crate) mod synth_catalogue;
 
@@ -13,8 +15,9 @@ pub use dataset::{
     Recording, FIGURES,
 };
 pub use fitfile::{
-    FitConditions, FitFile, FitFileError, FitStatistics, LogCovariance, ParamVerdict, PriorEntry,
-    ProfilePath, RunInfo, Starts, TermError,
+    FitConditions, FitFile, FitFileError, LogCovariance, ParamVerdict, ProfilePath, RunInfo,
+    Starts, TermError,
 };
 pub use motor::MotorSpecError;
+pub use statistics::{EstimateMethod, FitStatistics, GoodnessOfFit, PriorEntry, UncertaintyMethod};
 pub use synth::{free_speed, plan_experiments, synthesize, write_dataset, SensorNoise, SynthPlan};

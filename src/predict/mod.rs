@@ -217,11 +217,11 @@ pub fn fit_warnings(fit: &FitFile) -> Vec<String> {
     if let Some(line) = displacement_from_page(fit) {
         out.push(line);
     }
-    if let Some(st) = &fit.statistics {
-        if !st.noise_reached {
+    if let Some(g) = fit.statistics.as_ref().map(|st| &st.goodness) {
+        if !g.noise_reached {
             out.push(format!(
                 "WARNING: the fit does NOT reach the noise (noise ratio {:.2} > limit {:.2}): its model misses the data, the bands are widened by {:.2} but may still not hold where the model misses.",
-                st.noise_ratio, st.noise_ratio_limit, st.interval_scale
+                g.noise_ratio, g.noise_ratio_limit, g.interval_scale
             ));
         }
     }

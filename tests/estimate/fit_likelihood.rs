@@ -41,9 +41,9 @@ fn the_rebuilt_likelihood_gives_the_fits_own_chi2() {
     assert_eq!(lik.chi2_min(), stated);
     // Widening only lowers χ²; the threshold is χ²₁(0.95) times a scale ≥ 1.
     assert!(
-        stated <= stats.chi2 + 1e-9 * stats.chi2,
+        stated <= stats.goodness.chi2 + 1e-9 * stats.goodness.chi2,
         "{stated} vs {}",
-        stats.chi2
+        stats.goodness.chi2
     );
     let threshold = stats.profile_threshold.unwrap();
     assert_eq!(lik.threshold(), threshold);
@@ -60,7 +60,7 @@ fn the_rebuilt_likelihood_gives_the_fits_own_chi2() {
     );
     assert!(b.chi2_prior > 0.0 && b.chi2_prior < b.chi2_data);
     let n: usize = b.channels.iter().map(|c| c.rows.len()).sum();
-    assert_eq!(n, stats.n_points);
+    assert_eq!(n, stats.goodness.n_points);
     for c in &b.channels {
         assert_eq!(c.rows.len(), c.data.len());
         assert_eq!(c.rows.len(), c.simulated.len());

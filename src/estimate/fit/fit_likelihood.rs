@@ -256,7 +256,7 @@ impl FitLikelihood {
             chi2_min: stats.likelihood_chi2.unwrap_or(f64::NAN),
             threshold: stats
                 .profile_threshold
-                .unwrap_or(CHI2_95 * stats.interval_scale.powi(2)),
+                .unwrap_or(CHI2_95 * stats.goodness.interval_scale.powi(2)),
             solver: DefaultSolver::default(),
             prior,
             size_index,

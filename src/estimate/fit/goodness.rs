@@ -31,32 +31,9 @@
 //! fit within the threshold with a parameter outside its interval make that parameter not
 //! identifiable ([`mark_competitors`]).
 
+pub use crate::data::statistics::GoodnessOfFit;
 use crate::estimate::problem::space::ParamSpace;
 use crate::estimate::profile::uncertainty::Interval;
-use serde::Serialize;
-
-/// How well the estimate reproduces the data, against the data's own noise.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct GoodnessOfFit {
-    /// χ² of the likelihood at the estimate (offsets profiled out).
-    pub chi2: f64,
-    /// Compared points.
-    pub n_points: usize,
-    /// Degrees of freedom, n − k.
-    pub dof: usize,
-    /// χ²/dof.
-    pub(crate) chi2_per_dof: f64,
-    /// r of eq. \[1\].
-    pub noise_ratio: f64,
-    /// The largest r of a model that reaches the noise (eq. \[2\]).
-    pub noise_ratio_limit: f64,
-    /// r ≤ the limit.
-    pub noise_reached: bool,
-    /// s = max(1, r): the factor by which intervals are widened.
-    pub interval_scale: f64,
-    /// The channel with the largest χ²_c/n_c: "file column", and its √(χ²_c/n_c).
-    pub worst_channel: Option<(String, f64)>,
-}
 
 /// One channel's share of χ².
 #[derive(Debug, Clone, PartialEq)]
@@ -69,6 +46,8 @@ pub struct ChannelChi2 {
     pub n: usize,
 }
 
+/// The record ([`GoodnessOfFit`], in `data` with the fit file that states it) as this layer
+/// computes and uses it.
 impl GoodnessOfFit {
     /// The goodness of fit of channels' χ² with `k` estimated parameters.
     pub fn new(channels: &[ChannelChi2], k: usize) -> Self {
@@ -80,10 +59,6 @@ impl GoodnessOfFit {
         let r2 = used.iter().map(|ch| ch.chi2 / ch.n as f64).sum::<f64>() / c;
         let spread: f64 = used.iter().map(|ch| 5.89 / ch.n as f64).sum();
         let limit2 = 1.0 + 3.09 * spread.sqrt() / c;
-        let worst = used
-            .iter()
-            .map(|ch| (ch.label.clone(), (ch.chi2 / ch.n as f64).sqrt()))
-            .max_by(|a, b| a.1.total_cmp(&b.1));
         Self {
             chi2,
             n_points,
@@ -93,7 +68,6 @@ impl GoodnessOfFit {
             noise_ratio_limit: limit2.sqrt(),
             noise_reached: r2 <= limit2,
             interval_scale: r2.sqrt().max(1.0),
-            worst_channel: worst,
         }
     }
 
@@ -101,6 +75,17 @@ impl GoodnessOfFit {
     pub fn threshold(&self) -> f64 {
         crate::estimate::profile::uncertainty::CHI2_95 * self.interval_scale.powi(2)
     }
+}
+
+/// The channel with the largest χ²_c/n_c: its "file column" and √(χ²_c/n_c) (`None`
+/// without a compared row). Said beside the goodness of fit where the model misses the
+/// noise; not part of the record, which a fit file states without it.
+pub fn worst_channel(channels: &[ChannelChi2]) -> Option<(String, f64)> {
+    channels
+        .iter()
+        .filter(|c| c.n > 0)
+        .map(|ch| (ch.label.clone(), (ch.chi2 / ch.n as f64).sqrt()))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 /// A local optimum of the multi-start other than the estimate, re-polished on χ².
@@ -172,6 +157,8 @@ mod tests {
         assert!(!bad.noise_reached);
         assert!((bad.interval_scale - 2.0f64.sqrt()).abs() < 1e-12);
         assert!((bad.threshold() - 2.0 * super::super::uncertainty::CHI2_95).abs() < 1e-9);
-        assert_eq!(bad.worst_channel.unwrap().0, "c25");
+        let channels = [ch(100.0, 25), ch(600.0, 600), ch(650.0, 650)];
+        assert_eq!(worst_channel(&channels).unwrap().0, "c25");
+        assert_eq!(worst_channel(&[ch(0.0, 0)]), None);
     }
 }

@@ -24,12 +24,13 @@ pub(crate) mod setup;
 
 use crate::data::dataset::Kind;
 use crate::data::fitfile::{
-    FitConditions, FitFile, FitStatistics, LogCovariance, ParamVerdict, PriorEntry, ProfilePath,
-    RunInfo, Starts,
+    FitConditions, FitFile, LogCovariance, ParamVerdict, ProfilePath, RunInfo, Starts,
 };
+pub use crate::data::statistics::UncertaintyMethod;
+use crate::data::statistics::{EstimateMethod, FitStatistics, PriorEntry};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::fit::goodness::{competitors, mark_competitors, GoodnessOfFit};
+use crate::estimate::fit::goodness::{competitors, mark_competitors, worst_channel, GoodnessOfFit};
 use crate::estimate::fit::max_likelihood::{lowest, maximum_likelihood, MlFit, Polished};
 use crate::estimate::history::ResultsFile;
 use crate::estimate::optimize::local::{LocalOptimizer, NelderMead};
@@ -100,29 +101,6 @@ impl Objective for DataObjective<'_> {
 /// for the estimate and, when they fit as well, evidence that a parameter is not identifiable.
 const RIVALS: usize = 8;
 
-/// How intervals are computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum UncertaintyMethod {
-    /// Profile likelihood (curvature sizes the steps and fills in if it fails).
-    Profile,
-    /// Curvature of χ² only (fast).
-    Curvature,
-    /// No intervals.
-    None,
-}
-
-impl UncertaintyMethod {
-    /// The method's name in files and on the command line.
-    pub fn id(self) -> &'static str {
-        match self {
-            UncertaintyMethod::Profile => "profile",
-            UncertaintyMethod::Curvature => "curvature",
-            UncertaintyMethod::None => "none",
-        }
-    }
-}
-
 /// Everything a fit needs besides the data.
 pub struct FitSetup {
     /// What is estimated.
@@ -158,8 +136,12 @@ pub struct FitOutcome {
     pub threshold: Option<f64>,
     /// Data points behind χ².
     pub n_points: usize,
-    /// Goodness of fit against the data's noise (`None` if the estimate cannot be simulated).
+    /// Goodness of fit against the data's noise (`None` if the estimate cannot be simulated):
+    /// the record the fit file's statistics state.
     pub goodness: Option<GoodnessOfFit>,
+    /// The channel farthest from its noise, "file column" and √(χ²_c/n_c)
+    /// (`goodness::worst_channel`; `None` where `goodness` is).
+    pub worst_channel: Option<(String, f64)>,
     /// How the intervals were computed.
     pub method: UncertaintyMethod,
     /// The systematic errors profiled out at the estimate (label, value SI: sensor offsets
@@ -281,6 +263,7 @@ pub fn fit(
         threshold: a.threshold,
         n_points: data.target.n_points(),
         goodness: a.goodness,
+        worst_channel: a.worst_channel,
         method: setup.uncertainty,
         nuisances: a.nuisances,
         widening,
@@ -355,6 +338,7 @@ struct Assessed {
     prior_chi2: f64,
     threshold: Option<f64>,
     goodness: Option<GoodnessOfFit>,
+    worst_channel: Option<(String, f64)>,
     nuisances: Vec<(String, f64)>,
     intervals: Vec<Interval>,
     covariance: Option<DMatrix<f64>>,
@@ -388,9 +372,11 @@ fn assess(
     let motor = Motor::new(params.clone(), setup.space.effects.clone());
     let k = theta.len();
     let simulated = data.simulate(&motor);
-    let goodness = simulated
+    let chi2s = simulated
         .as_ref()
-        .map(|sim| GoodnessOfFit::new(&data.channel_chi2(&target, sim), k));
+        .map(|sim| data.channel_chi2(&target, sim));
+    let goodness = chi2s.as_deref().map(|c| GoodnessOfFit::new(c, k));
+    let worst_channel = chi2s.as_deref().and_then(worst_channel);
     let scored = simulated
         .as_ref()
         .map(|sim| GoodnessOfFit::new(&data.channel_chi2(&widened, sim), k));
@@ -421,6 +407,7 @@ fn assess(
         prior_chi2,
         threshold: scored.as_ref().map(GoodnessOfFit::threshold),
         goodness,
+        worst_channel,
         nuisances,
         theta,
         intervals,
@@ -618,16 +605,9 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             })
             .collect(),
         statistics: out.goodness.as_ref().map(|g| FitStatistics {
-            estimate: "maximum_likelihood".into(),
-            uncertainty: out.method.id().into(),
-            chi2: g.chi2,
-            n_points: g.n_points,
-            dof: g.dof,
-            chi2_per_dof: g.chi2_per_dof,
-            noise_ratio: g.noise_ratio,
-            noise_ratio_limit: g.noise_ratio_limit,
-            noise_reached: g.noise_reached,
-            interval_scale: g.interval_scale,
+            estimate: EstimateMethod::MaximumLikelihood,
+            uncertainty: out.method,
+            goodness: g.clone(),
             best_start_cost: out.best_start_cost,
             nuisances: out
                 .nuisances
