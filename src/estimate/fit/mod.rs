@@ -167,7 +167,7 @@ pub struct FitOutcome {
     /// (what the fit's overlay plots draw), or why it could not be simulated.
     pub channels: Result<Vec<ChannelResiduals>, SimError>,
     /// For each estimated parameter that the data leave open (its interval says why), the
-    /// reference experiment that would pin it ([`most_sensitive_experiment`]), where one is
+    /// reference experiment that would pin it (`most_sensitive_experiment`), where one is
     /// found.
     pub would_pin: Vec<(ParamId, Kind)>,
     /// Every start.
@@ -225,8 +225,8 @@ fn log_covariance(space: &ParamSpace, theta: &[f64], cov: &DMatrix<f64>) -> Opti
 }
 
 /// Fits the space's parameters to the data on the engine's threads (see the module docs):
-/// the multi-start on the cost J ([`search`]), the maximum-likelihood polish of its best
-/// minima, and the estimate's assessment ([`assess`]).
+/// the multi-start on the cost J (`search`), the maximum-likelihood polish of its best
+/// minima, and the estimate's assessment (`assess`).
 pub fn fit(
     engine: &Engine,
     data: &FitData,
