@@ -8,13 +8,13 @@ use pyo3::prelude::*;
 use serde_json::{Map, Value};
 use std::path::PathBuf;
 use vanefit::control::BodeOptions;
-use vanefit::control::ControlError;
 use vanefit::control::DesignOptions;
 use vanefit::control::DisturbanceOptions;
 use vanefit::control::MinSpeedOptions;
 use vanefit::control::Port;
 use vanefit::control::StepOptions;
 use vanefit::control::ThrottleOptions;
+use vanefit::control::{ControlError, ControlOpt};
 use vanefit::control::{GainOptions, LoopOptions, MotorOptions, PiOptions, ValveOptions};
 use vanefit::report::control as rc;
 use vanefit::report::control::ControlReportError;
@@ -244,9 +244,9 @@ pub fn control(
 
 /// A study's error as the exception Python users catch: a fit file that cannot be read is
 /// a DataError, a bad option a ParameterError, a study that fails a VanefitError. Options
-/// are named as the Python keywords ([`keywords`]).
+/// are named as the Python keywords ([`keyword`]).
 fn control_err(e: ControlError) -> PyErr {
-    let message = keywords(&e.to_string());
+    let message = e.message_with(&keyword);
     match e {
         ControlError::FitFile(_) => DataError::new_err(message),
         ControlError::Settings(_) | ControlError::SetPoint { .. } => {
@@ -256,26 +256,15 @@ fn control_err(e: ControlError) -> PyErr {
     }
 }
 
-/// A message of the control layer with its option fields (`StepOptions.from_rpm`) named as
-/// the keywords of `control()` (`from_rpm`): the field's name, `valve_` before the valve's,
-/// and `fit` for the fit file.
-fn keywords(message: &str) -> String {
-    const TYPES: [(&str, &str); 11] = [
-        ("MotorOptions.params", "fit"),
-        ("ValveOptions.", "valve_"),
-        ("MotorOptions.", ""),
-        ("PiOptions.", ""),
-        ("GainOptions.", ""),
-        ("ThrottleOptions.", ""),
-        ("BodeOptions.", ""),
-        ("StepOptions.", ""),
-        ("DisturbanceOptions.", ""),
-        ("MinSpeedOptions.", ""),
-        ("DesignOptions.", ""),
-    ];
-    let mut m = message.to_string();
-    for (field, keyword) in TYPES {
-        m = m.replace(field, keyword);
+/// The keyword of `control()` that sets a control study's option: the field's name
+/// (`from_rpm` for `StepOptions.from_rpm`), `valve_` before the valve's, and `fit` for the
+/// fit file.
+fn keyword(o: ControlOpt) -> &'static str {
+    match o {
+        ControlOpt::MotorParams => "fit",
+        ControlOpt::ValveTau => "valve_tau_s",
+        ControlOpt::ValveUMax => "valve_u_max_v",
+        ControlOpt::ValvePMax => "valve_p_max_bar_g",
+        other => other.name(),
     }
-    m
 }

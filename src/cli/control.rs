@@ -8,12 +8,14 @@
 //! This module holds only the command line: the clap arguments, their conversion to the
 //! library's `ControlStudy` and the printed summaries. The study runs as
 //! `vanefit::task::control`: the motor checked, the output folder created, the rest
-//! checked, the study run and written, then the summary printed.
+//! checked, the study run and written, then the summary printed. Its errors name the
+//! options by their flags ([`flag`], by the [`ControlOpt`] they carry).
 
 use crate::cli::Failure;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use vanefit::control::rpm;
+use vanefit::control::ControlOpt;
 use vanefit::control::Loop;
 use vanefit::control::Port;
 use vanefit::control::{BodeOptions, BodeStudy};
@@ -287,59 +289,48 @@ pub(crate) struct DesignArgs {
     duration_s: f64,
 }
 
-/// The control studies' option fields (`vanefit::control::study`, as their errors name
-/// them) and the flags that set them. No field here starts with another, so the order does
-/// not matter.
-pub(crate) const FLAGS: &[(&str, &str)] = &[
-    ("BodeOptions.p_mean_mpa", "--p-mean-mpa"),
-    ("BodeOptions.f_min_hz", "--f-min-hz"),
-    ("BodeOptions.f_max_hz", "--f-max-hz"),
-    ("BodeOptions.points", "--points"),
-    ("ThrottleOptions.p_supply_mpa", "--p-supply-mpa"),
-    ("ThrottleOptions.c_min_m3_s_pa", "--c-min-m3-s-pa"),
-    ("ThrottleOptions.c_max_m3_s_pa", "--c-max-m3-s-pa"),
-    ("ThrottleOptions.curves_m3_s_pa", "--curves-m3-s-pa"),
-    ("ThrottleOptions.points", "--points"),
-    ("StepOptions.from_rpm", "--from-rpm"),
-    ("StepOptions.to_rpm", "--to-rpm"),
-    ("StepOptions.t_step_s", "--t-step-s"),
-    ("StepOptions.duration_s", "--duration-s"),
-    ("DisturbanceOptions.rpm", "--rpm"),
-    ("DisturbanceOptions.load_step_nm", "--load-step-nm"),
-    ("DisturbanceOptions.t_step_s", "--t-step-s"),
-    ("DisturbanceOptions.duration_s", "--duration-s"),
-    ("MinSpeedOptions.p_max_mpa", "--p-max-mpa"),
-    ("MinSpeedOptions.ramp_s", "--ramp-s"),
-    ("MinSpeedOptions.factor", "--factor"),
-    ("MinSpeedOptions.floor_rpm", "--floor-rpm"),
-    ("MinSpeedOptions.stage_s", "--stage-s"),
-    ("DesignOptions.pm_deg", "--pm-deg"),
-    ("DesignOptions.crossover_hz", "--crossover-hz"),
-    ("DesignOptions.p_mean_mpa", "--p-mean-mpa"),
-    ("DesignOptions.step_rpm", "--step-rpm"),
-    ("DesignOptions.duration_s", "--duration-s"),
-    ("MotorOptions.params", "--params"),
-    ("MotorOptions.effects", "--effects"),
-    ("MotorOptions.brake_nm_s_rad", "--brake-nm-s-rad"),
-    ("ValveOptions.tau_s", "--valve-tau-s"),
-    ("ValveOptions.u_max_v", "--valve-u-max-v"),
-    ("ValveOptions.p_max_bar_g", "--valve-p-max-bar-g"),
-    ("PiOptions.ts_ms", "--ts-ms"),
-    ("PiOptions.speed_unit_rpm", "--speed-unit-rpm"),
-    ("PiOptions.anti_windup", "--anti-windup"),
-    ("GainOptions.kp", "--kp"),
-    ("GainOptions.ki", "--ki"),
-];
-
-/// A message with every control study's option field replaced by its flag.
-pub(crate) fn flags(message: &str) -> String {
-    let mut m = message.to_string();
-    for (field, flag) in FLAGS {
-        if m.contains(field) {
-            m = m.replace(field, flag);
+/// The flag that sets a control study's option (`vanefit::control::study`, whose errors
+/// name it by its field).
+pub(crate) fn flag(o: ControlOpt) -> &'static str {
+    match o {
+        ControlOpt::BodePMean | ControlOpt::DesignPMean => "--p-mean-mpa",
+        ControlOpt::BodeFMin => "--f-min-hz",
+        ControlOpt::BodeFMax => "--f-max-hz",
+        ControlOpt::BodePoints | ControlOpt::ThrottlePoints => "--points",
+        ControlOpt::ThrottlePSupply => "--p-supply-mpa",
+        ControlOpt::ThrottleCMin => "--c-min-m3-s-pa",
+        ControlOpt::ThrottleCMax => "--c-max-m3-s-pa",
+        ControlOpt::ThrottleCurves => "--curves-m3-s-pa",
+        ControlOpt::StepFrom => "--from-rpm",
+        ControlOpt::StepTo => "--to-rpm",
+        ControlOpt::StepTStep | ControlOpt::DisturbanceTStep => "--t-step-s",
+        ControlOpt::StepDuration | ControlOpt::DisturbanceDuration | ControlOpt::DesignDuration => {
+            "--duration-s"
         }
+        ControlOpt::DisturbanceRpm => "--rpm",
+        ControlOpt::DisturbanceLoadStep => "--load-step-nm",
+        ControlOpt::MinSpeedPMax => "--p-max-mpa",
+        ControlOpt::MinSpeedRamp => "--ramp-s",
+        ControlOpt::MinSpeedFactor => "--factor",
+        ControlOpt::MinSpeedFloor => "--floor-rpm",
+        ControlOpt::MinSpeedStage => "--stage-s",
+        ControlOpt::DesignPhaseMargin => "--pm-deg",
+        ControlOpt::DesignCrossover => "--crossover-hz",
+        ControlOpt::DesignStep => "--step-rpm",
+        ControlOpt::MotorParams => "--params",
+        ControlOpt::MotorEffects => "--effects",
+        ControlOpt::MotorBrake => "--brake-nm-s-rad",
+        ControlOpt::ValveTau => "--valve-tau-s",
+        ControlOpt::ValveUMax => "--valve-u-max-v",
+        ControlOpt::ValvePMax => "--valve-p-max-bar-g",
+        ControlOpt::PiSampleTime => "--ts-ms",
+        ControlOpt::PiSpeedUnit => "--speed-unit-rpm",
+        ControlOpt::PiAntiWindup => "--anti-windup",
+        ControlOpt::GainKp => "--kp",
+        ControlOpt::GainKi => "--ki",
+        // An option added to the library without a flag here keeps its field's name.
+        other => other.field(),
     }
-    m
 }
 
 /// Runs `vanefit control <study>`.
@@ -347,13 +338,16 @@ pub(crate) fn run(args: ControlArgs) -> Result<(), Failure> {
     let (common, study) = study(&args.study);
     // The motor is checked first, then the output folder is created (default
     // `./control-<study>`) and locked for this run, then the loop and the study's options.
-    let plant = study.check_plant()?;
+    let plant = study.check_plant().map_err(Failure::control)?;
     let out = common
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("control-{}", study.name())));
     let _lock = prepare_dir(&out).map_err(|e| Failure(format!("--out {e}")))?;
-    let result = study.check_on(plant)?.run()?;
+    let result = study
+        .check_on(plant)
+        .and_then(|checked| checked.run())
+        .map_err(Failure::control)?;
     let mut print = |p: &Path| say!("wrote {}", p.display());
     write_study(&result, &out, &mut print)?;
     match &result {
@@ -369,7 +363,7 @@ pub(crate) fn run(args: ControlArgs) -> Result<(), Failure> {
         StudyResult::Design(r) => {
             print_design(r);
             // The files and the summary are there to look at even when the check fails.
-            r.check_settled()?;
+            r.check_settled().map_err(Failure::control)?;
         }
         _ => {}
     }
@@ -777,12 +771,16 @@ mod tests {
     fn bad_options_are_refused_naming_the_option() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().to_str().unwrap();
-        let cases: [(&[&str], &str); 4] = [
+        let cases: [(&[&str], &str); 5] = [
             (&["bode", "--p-mean-mpa", "-0.2"], "--p-mean-mpa"),
             (&["bode", "--p-mean-mpa", "0.105"], "stalled"),
             (
                 &["step", "--from-rpm", "50000"],
-                "above the speed at full command",
+                "--from-rpm 50000: set-point 50000 rpm is above the speed at full command",
+            ),
+            (
+                &["step", "--t-step-s", "9", "--duration-s", "8"],
+                "--t-step-s 9: must be before --duration-s",
             ),
             (
                 &["throttle-inlet", "--curves-m3-s-pa", "none,big"],

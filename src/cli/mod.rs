@@ -24,6 +24,7 @@ pub(crate) mod predict;
 
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
+use vanefit::control::ControlError;
 use vanefit::data::FitFile;
 use vanefit::data::{Dataset, Kind};
 use vanefit::model::EffectSet;
@@ -131,12 +132,11 @@ pub(crate) struct RunArgs {
 pub(crate) struct Failure(pub String);
 
 impl<E: std::error::Error> From<E> for Failure {
-    /// The error's message, with the control studies' option fields
-    /// (`StepOptions.t_step_s`) shown as the flags that set them (`cli::control::FLAGS`).
-    /// The tasks' options are named by their flags where their errors are converted
-    /// ([`Failure::option`] and the like).
+    /// The error's message as it is. Errors that name options are converted where they
+    /// arise, naming them by their flags ([`Failure::option`], [`Failure::control`] and
+    /// the like).
     fn from(e: E) -> Self {
-        Failure(crate::cli::control::flags(&e.to_string()))
+        Failure(e.to_string())
     }
 }
 
@@ -162,6 +162,12 @@ impl Failure {
     /// A failed export, the option it names named by its flag.
     pub(crate) fn export(e: ExportError) -> Self {
         Failure(e.message_with(&flag))
+    }
+
+    /// A failed control study, the options it names named by their flags
+    /// (`cli::control::flag`).
+    pub(crate) fn control(e: ControlError) -> Self {
+        Failure(e.message_with(&crate::cli::control::flag))
     }
 }
 
@@ -428,23 +434,34 @@ mod tests {
     use super::Cli;
     use clap::{CommandFactory, Parser};
 
-    /// No library field of the control studies' flag table starts with another field (it
-    /// would be replaced by the other's flag), and a control study's field becomes its flag.
+    /// Every option of the control studies has a flag of a control study (none is shown as
+    /// its field), and a bad option's message names its options by their flags.
     #[test]
-    fn control_flag_fields_do_not_clash() {
-        let control: Vec<&str> = crate::cli::control::FLAGS.iter().map(|(f, _)| *f).collect();
-        for a in &control {
-            for b in &control {
-                assert!(
-                    a == b || !(a.starts_with(b) || b.starts_with(a)),
-                    "{a} / {b}"
-                );
-            }
+    fn every_control_option_has_a_flag() {
+        use vanefit::control::{ControlError, ControlOpt, SettingsError};
+        let mut cmd = Cli::command();
+        let control = cmd.find_subcommand_mut("control").unwrap();
+        let longs: Vec<String> = control
+            .get_subcommands()
+            .flat_map(|s| s.get_arguments())
+            .filter_map(|a| a.get_long())
+            .map(|l| format!("--{l}"))
+            .collect();
+        for o in ControlOpt::ALL {
+            let f = crate::cli::control::flag(*o);
+            assert!(longs.iter().any(|l| l == f), "{o}: {f}");
         }
+        let e = ControlError::Settings(SettingsError::StepAfterEnd {
+            option: ControlOpt::StepTStep,
+            value: 9.0,
+            end: ControlOpt::StepDuration,
+        });
         assert_eq!(
-            crate::cli::control::flags(
-                "StepOptions.t_step_s 9: must be before StepOptions.duration_s"
-            ),
+            e.to_string(),
+            "StepOptions.t_step_s 9: must be before StepOptions.duration_s"
+        );
+        assert_eq!(
+            super::Failure::control(e).0,
             "--t-step-s 9: must be before --duration-s"
         );
     }

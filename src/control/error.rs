@@ -1,108 +1,193 @@
 //! Why a control study could not be done: [`SettingsError`] for a bad option value, found
-//! before any work, and [`ControlError`] for everything else. Options are named by their
-//! field, `Type.field` (e.g. `ThrottleOptions.points`), as `task::OptionError` names them;
-//! the command line shows its flags instead, Python its keywords.
+//! before any work, and [`ControlError`] for everything else. They carry the options they
+//! name as [`ControlOpt`] values; their messages name them by their fields, `Type.field`
+//! (e.g. `ThrottleOptions.points`), as `task::OptionError` names the tasks' options, and
+//! `message_with` by any other names: the command line shows its flags, Python its
+//! keywords.
 
+use crate::control::option::ControlOpt;
 use crate::data::fitfile::FitFileError;
 use crate::numerics::ode::SolveError;
 use crate::sim::steady::SteadyError;
+use std::fmt;
 
-/// A bad option value of a control study (a field of its `…Options`).
+/// A bad option value of a control study (a field of its `…Options`). Its message names
+/// the options by their fields ([`ControlOpt::field`], e.g. `ThrottleOptions.points 1: must
+/// be at least 2`); [`SettingsError::message_with`] by any other names (the command line's
+/// flags, Python's keywords).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SettingsError {
     /// A quantity that must be a finite number > 0.
-    #[error("{option} {value}: must be a number > 0")]
     NotPositive {
-        /// The option's field, e.g. `PiOptions.ts_ms`.
-        option: &'static str,
+        /// The option, e.g. [`ControlOpt::PiSampleTime`].
+        option: ControlOpt,
         /// The value given.
         value: f64,
     },
     /// A quantity that must be a finite number ≥ 0.
-    #[error("{option} {value}: must be a number >= 0")]
     Negative {
-        /// The option's field, e.g. `GainOptions.kp`.
-        option: &'static str,
+        /// The option, e.g. [`ControlOpt::GainKp`].
+        option: ControlOpt,
         /// The value given.
         value: f64,
     },
     /// A quantity that must be finite (of either sign).
-    #[error("{option} {value}: must be a number")]
     NotFinite {
-        /// The option's field, e.g. `DisturbanceOptions.load_step_nm`.
-        option: &'static str,
+        /// The option, e.g. [`ControlOpt::DisturbanceLoadStep`].
+        option: ControlOpt,
         /// The value given.
         value: f64,
     },
     /// An absolute pressure at or below atmosphere (101 325 Pa).
-    #[error("{option} {value}: must be above atmospheric (0.101325)")]
     NotAboveAtmosphere {
-        /// The option's field, e.g. `ThrottleOptions.p_supply_mpa`.
-        option: &'static str,
+        /// The option, e.g. [`ControlOpt::ThrottlePSupply`].
+        option: ControlOpt,
         /// The value given, MPa absolute.
         value: f64,
     },
     /// The upper end of a range at or below its lower end.
-    #[error("{option} {value}: must be larger than {lower}")]
     EmptyRange {
-        /// The field of the upper end, e.g. `BodeOptions.f_max_hz`.
-        option: &'static str,
+        /// The upper end, e.g. [`ControlOpt::BodeFMax`].
+        option: ControlOpt,
         /// The value given.
         value: f64,
-        /// The field of the lower end.
-        lower: &'static str,
+        /// The lower end.
+        lower: ControlOpt,
     },
     /// Too few grid points for the study.
-    #[error("{option} {value}: must be at least {min}")]
     TooFewPoints {
-        /// The option's field, e.g. `ThrottleOptions.points`.
-        option: &'static str,
+        /// The option, e.g. [`ControlOpt::ThrottlePoints`].
+        option: ControlOpt,
         /// The value given.
         value: usize,
         /// The least the study needs.
         min: usize,
     },
-    /// An item of `ThrottleOptions.curves_m3_s_pa` that is neither `none` nor a number.
-    #[error("ThrottleOptions.curves_m3_s_pa {0}: must be \"none\" or a conductance > 0")]
+    /// An item of `ThrottleOptions.curves_m3_s_pa` ([`ControlOpt::ThrottleCurves`]) that is
+    /// neither `none` nor a number.
     NotAConductance(String),
-    /// `ThrottleOptions.curves_m3_s_pa` without any item.
-    #[error("ThrottleOptions.curves_m3_s_pa {0}: must be a non-empty list")]
+    /// `ThrottleOptions.curves_m3_s_pa` ([`ControlOpt::ThrottleCurves`]) without any item.
     NoCurves(String),
-    /// A controller sample time above 100 ms, ms.
-    #[error("PiOptions.ts_ms {0}: must be at most 100 ms")]
+    /// A controller sample time above 100 ms, ms ([`ControlOpt::PiSampleTime`]).
     SampleTimeTooLong(f64),
-    /// An unknown `PiOptions.anti_windup` scheme.
-    #[error("PiOptions.anti_windup: {0}")]
+    /// An unknown `PiOptions.anti_windup` scheme ([`ControlOpt::PiAntiWindup`]).
     AntiWindup(#[from] UnknownAntiWindup),
-    /// Back-calculation needs both gains for its tracking time K_p/K_i.
-    #[error(
-        "PiOptions.anti_windup back-calculation needs GainOptions.kp > 0 and GainOptions.ki > 0 \
-         (tracking time kp/ki)"
-    )]
+    /// Back-calculation ([`ControlOpt::PiAntiWindup`]) needs both gains
+    /// ([`ControlOpt::GainKp`], [`ControlOpt::GainKi`]) for its tracking time K_p/K_i.
     BackCalculationWithoutGains,
-    /// An unknown effect in `MotorOptions.effects` (the model's message).
-    #[error("MotorOptions.effects: {0}")]
+    /// An unknown effect in `MotorOptions.effects` ([`ControlOpt::MotorEffects`]; the
+    /// model's message).
     Effects(#[from] crate::model::effects::UnknownEffect),
     /// A step time at or after the end of the scenario.
-    #[error("{option} {value}: must be before {end}")]
     StepAfterEnd {
-        /// The field of the step time, e.g. `StepOptions.t_step_s`.
-        option: &'static str,
+        /// The step time, e.g. [`ControlOpt::StepTStep`].
+        option: ControlOpt,
         /// The value given, s.
         value: f64,
-        /// The field of the scenario's length, e.g. `StepOptions.duration_s`.
-        end: &'static str,
+        /// The scenario's length, e.g. [`ControlOpt::StepDuration`].
+        end: ControlOpt,
     },
-    /// `MinSpeedOptions.factor` outside (0, 1).
-    #[error("MinSpeedOptions.factor {0}: must be between 0 and 1")]
+    /// `MinSpeedOptions.factor` ([`ControlOpt::MinSpeedFactor`]) outside (0, 1).
     Factor(f64),
-    /// `MinSpeedOptions.stage_s` not longer than the hold window plus 1 s, s.
-    #[error("MinSpeedOptions.stage_s {0}: must be longer than 3 s")]
+    /// `MinSpeedOptions.stage_s` ([`ControlOpt::MinSpeedStage`]) not longer than the hold
+    /// window plus 1 s, s.
     StageTooShort(f64),
-    /// `DesignOptions.pm_deg` outside (0, 90).
-    #[error("DesignOptions.pm_deg {0}: must be between 0 and 90")]
+    /// `DesignOptions.pm_deg` ([`ControlOpt::DesignPhaseMargin`]) outside (0, 90).
     PhaseMargin(f64),
+}
+
+impl SettingsError {
+    /// The option at fault (the first of those the message names).
+    pub fn option(&self) -> ControlOpt {
+        use SettingsError as E;
+        match self {
+            E::NotPositive { option, .. }
+            | E::Negative { option, .. }
+            | E::NotFinite { option, .. }
+            | E::NotAboveAtmosphere { option, .. }
+            | E::EmptyRange { option, .. }
+            | E::TooFewPoints { option, .. }
+            | E::StepAfterEnd { option, .. } => *option,
+            E::NotAConductance(_) | E::NoCurves(_) => ControlOpt::ThrottleCurves,
+            E::SampleTimeTooLong(_) => ControlOpt::PiSampleTime,
+            E::AntiWindup(_) | E::BackCalculationWithoutGains => ControlOpt::PiAntiWindup,
+            E::Effects(_) => ControlOpt::MotorEffects,
+            E::Factor(_) => ControlOpt::MinSpeedFactor,
+            E::StageTooShort(_) => ControlOpt::MinSpeedStage,
+            E::PhaseMargin(_) => ControlOpt::DesignPhaseMargin,
+        }
+    }
+
+    /// The message with every option it names called `name(option)` (e.g. the command
+    /// line's flag); [`fmt::Display`] is `message_with(&ControlOpt::field)`.
+    pub fn message_with(&self, name: &dyn Fn(ControlOpt) -> &'static str) -> String {
+        use ControlOpt as O;
+        use SettingsError as E;
+        match self {
+            E::NotPositive { option, value } => {
+                format!("{} {value}: must be a number > 0", name(*option))
+            }
+            E::Negative { option, value } => {
+                format!("{} {value}: must be a number >= 0", name(*option))
+            }
+            E::NotFinite { option, value } => {
+                format!("{} {value}: must be a number", name(*option))
+            }
+            E::NotAboveAtmosphere { option, value } => format!(
+                "{} {value}: must be above atmospheric (0.101325)",
+                name(*option)
+            ),
+            E::EmptyRange {
+                option,
+                value,
+                lower,
+            } => format!(
+                "{} {value}: must be larger than {}",
+                name(*option),
+                name(*lower)
+            ),
+            E::TooFewPoints { option, value, min } => {
+                format!("{} {value}: must be at least {min}", name(*option))
+            }
+            E::NotAConductance(item) => format!(
+                "{} {item}: must be \"none\" or a conductance > 0",
+                name(O::ThrottleCurves)
+            ),
+            E::NoCurves(list) => format!(
+                "{} {list}: must be a non-empty list",
+                name(O::ThrottleCurves)
+            ),
+            E::SampleTimeTooLong(ts_ms) => {
+                format!("{} {ts_ms}: must be at most 100 ms", name(O::PiSampleTime))
+            }
+            E::AntiWindup(e) => format!("{}: {e}", name(O::PiAntiWindup)),
+            E::BackCalculationWithoutGains => format!(
+                "{} back-calculation needs {} > 0 and {} > 0 (tracking time kp/ki)",
+                name(O::PiAntiWindup),
+                name(O::GainKp),
+                name(O::GainKi)
+            ),
+            E::Effects(e) => format!("{}: {e}", name(O::MotorEffects)),
+            E::StepAfterEnd { option, value, end } => {
+                format!("{} {value}: must be before {}", name(*option), name(*end))
+            }
+            E::Factor(v) => format!("{} {v}: must be between 0 and 1", name(O::MinSpeedFactor)),
+            E::StageTooShort(v) => {
+                format!("{} {v}: must be longer than 3 s", name(O::MinSpeedStage))
+            }
+            E::PhaseMargin(v) => format!(
+                "{} {v}: must be between 0 and 90",
+                name(O::DesignPhaseMargin)
+            ),
+        }
+    }
+}
+
+impl fmt::Display for SettingsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message_with(&ControlOpt::field))
+    }
 }
 
 /// An anti-windup scheme that is not one of `conditional`, `back-calculation`, `none`.
@@ -110,7 +195,9 @@ pub enum SettingsError {
 #[error("unknown anti-windup '{0}' (known: conditional, back-calculation, none)")]
 pub struct UnknownAntiWindup(pub String);
 
-/// Why a control study failed.
+/// Why a control study failed. Where its message names options (a bad value, a set-point,
+/// the advice after a failed design check) it names them by their fields, as
+/// [`SettingsError`]; [`ControlError::message_with`] by any other names.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ControlError {
@@ -269,32 +356,26 @@ pub enum ControlError {
         source: SteadyError,
     },
     /// The loop cannot be settled at the set-point an option asks for.
-    #[error("{option} {value}: {source}")]
+    #[error("{}", self.message_with(&ControlOpt::field))]
     SetPoint {
-        /// The option's field, e.g. `StepOptions.from_rpm`.
-        option: &'static str,
+        /// The option, e.g. [`ControlOpt::StepFrom`].
+        option: ControlOpt,
         /// The value given, rpm.
         value: f64,
         /// Why.
         source: Box<ControlError>,
     },
     /// The minimum-speed staircase could not be run from its start speed.
-    #[error(
-        "closed loop started at {start_rpm:.0} rpm (1.25 x the open-loop minimum, at least 1000 \
-         rpm): {source}"
-    )]
+    #[error("{}", self.message_with(&ControlOpt::field))]
     StaircaseStart {
         /// Start speed, rpm.
         start_rpm: f64,
         /// Why.
         source: Box<ControlError>,
     },
-    /// The designed PI does not settle in the check simulation.
-    #[error(
-        "the designed loop does not settle in the {duration_s} s check simulation (final error \
-         {final_error_rpm:.1} rpm); try a larger DesignOptions.pm_deg or a lower \
-         DesignOptions.crossover_hz"
-    )]
+    /// The designed PI does not settle in the check simulation (the message advises a larger
+    /// [`ControlOpt::DesignPhaseMargin`] or a lower [`ControlOpt::DesignCrossover`]).
+    #[error("{}", self.message_with(&ControlOpt::field))]
     NotSettled {
         /// Length of the check simulation, s.
         duration_s: f64,
@@ -303,7 +384,86 @@ pub enum ControlError {
     },
 }
 
+impl ControlError {
+    /// The option at fault: that of a bad value ([`ControlError::Settings`]) or of a
+    /// set-point that cannot be settled ([`ControlError::SetPoint`]); `None` for the rest.
+    pub fn option(&self) -> Option<ControlOpt> {
+        match self {
+            ControlError::Settings(e) => Some(e.option()),
+            ControlError::SetPoint { option, .. } => Some(*option),
+            _ => None,
+        }
+    }
+
+    /// The message with every option it names called `name(option)` (e.g. the command
+    /// line's flag); [`fmt::Display`] is `message_with(&ControlOpt::field)`.
+    pub fn message_with(&self, name: &dyn Fn(ControlOpt) -> &'static str) -> String {
+        match self {
+            ControlError::Settings(e) => e.message_with(name),
+            ControlError::SetPoint {
+                option,
+                value,
+                source,
+            } => format!("{} {value}: {}", name(*option), source.message_with(name)),
+            ControlError::StaircaseStart { start_rpm, source } => format!(
+                "closed loop started at {start_rpm:.0} rpm (1.25 x the open-loop minimum, at \
+                 least 1000 rpm): {}",
+                source.message_with(name)
+            ),
+            ControlError::NotSettled {
+                duration_s,
+                final_error_rpm,
+            } => format!(
+                "the designed loop does not settle in the {duration_s} s check simulation (final \
+                 error {final_error_rpm:.1} rpm); try a larger {} or a lower {}",
+                name(ControlOpt::DesignPhaseMargin),
+                name(ControlOpt::DesignCrossover)
+            ),
+            // The other messages name no option (their `#[error]` text is their own, not
+            // this function's: it may not be, or this would call itself).
+            other => other.to_string(),
+        }
+    }
+}
+
 /// A throttle for messages: its conductance, or `none`.
 fn throttle_name(c_m3_s_pa: &Option<f64>) -> String {
     c_m3_s_pa.map_or("none".to_string(), |c| format!("{c:.3e} m3/(s*Pa)"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The messages name their options by field, or by any name `message_with` is given,
+    /// nested errors too.
+    #[test]
+    fn messages_name_options_by_field_or_otherwise() {
+        let e = ControlError::SetPoint {
+            option: ControlOpt::StepFrom,
+            value: 3.0,
+            source: Box::new(ControlError::NotSettled {
+                duration_s: 5.0,
+                final_error_rpm: 12.0,
+            }),
+        };
+        assert_eq!(e.option(), Some(ControlOpt::StepFrom));
+        assert_eq!(
+            e.to_string(),
+            "StepOptions.from_rpm 3: the designed loop does not settle in the 5 s check \
+             simulation (final error 12.0 rpm); try a larger DesignOptions.pm_deg or a lower \
+             DesignOptions.crossover_hz"
+        );
+        assert_eq!(
+            e.message_with(&ControlOpt::name),
+            "from_rpm 3: the designed loop does not settle in the 5 s check simulation (final \
+             error 12.0 rpm); try a larger pm_deg or a lower crossover_hz"
+        );
+        let e = SettingsError::BackCalculationWithoutGains;
+        assert_eq!(e.option(), ControlOpt::PiAntiWindup);
+        assert_eq!(
+            e.message_with(&ControlOpt::name),
+            "anti_windup back-calculation needs kp > 0 and ki > 0 (tracking time kp/ki)"
+        );
+    }
 }

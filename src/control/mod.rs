@@ -13,6 +13,7 @@
 //! * `study`: the studies of `vanefit control <study>`: their checked settings and a
 //!   `study` function each that returns the results (no printing, no files; the CSV tables
 //!   and SVG figures are `report::control`'s).
+//! * `option`: the studies' options as values ([`ControlOpt`]), as the errors name them.
 //! * `error`: why a study could not be done.
 //!
 //! The motor is integrated with `numerics::DefaultSolver`, which steps and interpolates
@@ -28,6 +29,7 @@ pub(crate) mod design;
 pub(crate) mod error;
 pub(crate) mod linear;
 pub(crate) mod min_speed;
+pub(crate) mod option;
 pub(crate) mod study;
 pub(crate) mod throttle;
 
@@ -39,6 +41,7 @@ pub use design::{design_pi, margins, Margins, Target};
 pub use error::{ControlError, SettingsError, UnknownAntiWindup};
 pub use linear::{LagFit, LinearModel, OperatingPoint, TwoLags};
 pub use min_speed::{open_loop_start, ControlledMin, HoldAttempt, Jump, StartUp};
+pub use option::ControlOpt;
 pub use study::bode::BodeSettings;
 pub use study::design::DesignSettings;
 pub use study::disturbance::DisturbanceSettings;

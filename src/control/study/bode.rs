@@ -10,6 +10,7 @@ use crate::control::linear::{
     fit_two_lags, log_grid, operating_point, rad_s, two_lag_guess, unwrapped_phase_deg, LagFit,
     LinearModel,
 };
+use crate::control::option::ControlOpt;
 use crate::model::motor::{Boundary, Load, Motor};
 use crate::units::constants::P_ATM_PA;
 use nalgebra::Complex;
@@ -32,19 +33,19 @@ pub struct BodeOptions {
 impl BodeOptions {
     /// Checks every option; the valve is the motor's unless the options say otherwise.
     pub fn check(&self, motor: &Motor) -> Result<BodeSettings, SettingsError> {
-        let p_mean_mpa = positive("BodeOptions.p_mean_mpa", self.p_mean_mpa)?;
-        let f_min_hz = positive("BodeOptions.f_min_hz", self.f_min_hz)?;
-        let f_max_hz = positive("BodeOptions.f_max_hz", self.f_max_hz)?;
+        let p_mean_mpa = positive(ControlOpt::BodePMean, self.p_mean_mpa)?;
+        let f_min_hz = positive(ControlOpt::BodeFMin, self.f_min_hz)?;
+        let f_max_hz = positive(ControlOpt::BodeFMax, self.f_max_hz)?;
         if f_max_hz <= f_min_hz {
             return Err(SettingsError::EmptyRange {
-                option: "BodeOptions.f_max_hz",
+                option: ControlOpt::BodeFMax,
                 value: f_max_hz,
-                lower: "BodeOptions.f_min_hz",
+                lower: ControlOpt::BodeFMin,
             });
         }
         if self.points < 5 {
             return Err(SettingsError::TooFewPoints {
-                option: "BodeOptions.points",
+                option: ControlOpt::BodePoints,
                 value: self.points,
                 min: 5,
             });

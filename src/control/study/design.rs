@@ -10,6 +10,7 @@ use crate::control::closed_loop::{
 use crate::control::design::{design_pi, margins, open_loop, Margins, Target};
 use crate::control::error::{ControlError, SettingsError};
 use crate::control::linear::{log_grid, rad_s, unwrapped_phase_deg};
+use crate::control::option::ControlOpt;
 use crate::control::{rpm, RAD_S_PER_RPM};
 use crate::numerics::DefaultSolver;
 use nalgebra::Complex;
@@ -42,16 +43,16 @@ impl DesignOptions {
         }
         let target = match self.crossover_hz {
             Some(f) => Target::Bandwidth {
-                crossover_rad_s: rad_s(positive("DesignOptions.crossover_hz", f)?),
+                crossover_rad_s: rad_s(positive(ControlOpt::DesignCrossover, f)?),
                 pm_deg: pm,
             },
             None => Target::PhaseMargin { pm_deg: pm },
         };
         Ok(DesignSettings {
             target,
-            p_mean_mpa: positive("DesignOptions.p_mean_mpa", self.p_mean_mpa)?,
-            step_rpm: positive("DesignOptions.step_rpm", self.step_rpm)?,
-            duration_s: positive("DesignOptions.duration_s", self.duration_s)?,
+            p_mean_mpa: positive(ControlOpt::DesignPMean, self.p_mean_mpa)?,
+            step_rpm: positive(ControlOpt::DesignStep, self.step_rpm)?,
+            duration_s: positive(ControlOpt::DesignDuration, self.duration_s)?,
         })
     }
 }

@@ -6,6 +6,7 @@ use crate::control::closed_loop::{
     disturbance_metrics, tail_mean_error, DisturbanceMetrics, Loop, Scenario, Steps, Trace,
 };
 use crate::control::error::{ControlError, SettingsError};
+use crate::control::option::ControlOpt;
 use crate::control::RAD_S_PER_RPM;
 use crate::numerics::DefaultSolver;
 
@@ -25,17 +26,17 @@ pub struct DisturbanceOptions {
 impl DisturbanceOptions {
     /// Checks every option.
     pub fn check(&self) -> Result<DisturbanceSettings, SettingsError> {
-        let rpm = positive("DisturbanceOptions.rpm", self.rpm)?;
+        let rpm = positive(ControlOpt::DisturbanceRpm, self.rpm)?;
         let load_step_nm = self.load_step_nm;
         if !load_step_nm.is_finite() {
             return Err(SettingsError::NotFinite {
-                option: "DisturbanceOptions.load_step_nm",
+                option: ControlOpt::DisturbanceLoadStep,
                 value: load_step_nm,
             });
         }
         let (duration_s, t_step_s) = step_window(
-            ("DisturbanceOptions.duration_s", self.duration_s),
-            ("DisturbanceOptions.t_step_s", self.t_step_s),
+            (ControlOpt::DisturbanceDuration, self.duration_s),
+            (ControlOpt::DisturbanceTStep, self.t_step_s),
         )?;
         Ok(DisturbanceSettings {
             rpm,
@@ -109,7 +110,7 @@ pub fn study(
     let m = plant.motor();
     let w = s.setpoint_rad_s();
     let start = lp.settled_at(m, w).map_err(|e| ControlError::SetPoint {
-        option: "DisturbanceOptions.rpm",
+        option: ControlOpt::DisturbanceRpm,
         value: s.rpm,
         source: Box::new(e),
     })?;

@@ -8,6 +8,7 @@ use crate::control::min_speed::{
     closed_loop_min_speed, lowest_running_speed_rad_s, open_loop_start, ramp_simulation,
     ControlledMin, StartUp, HOLD_WINDOW_S,
 };
+use crate::control::option::ControlOpt;
 use crate::control::{rpm, RAD_S_PER_RPM};
 use crate::model::motor::Motor;
 use crate::units::constants::P_ATM_PA;
@@ -36,16 +37,16 @@ pub struct MinSpeedOptions {
 impl MinSpeedOptions {
     /// Checks every option; the default floor is the motor's.
     pub fn check(&self, motor: &Motor) -> Result<MinSpeedSettings, SettingsError> {
-        let p_max_mpa = absolute_pressure_mpa("MinSpeedOptions.p_max_mpa", self.p_max_mpa)?;
-        let ramp_s = positive("MinSpeedOptions.ramp_s", self.ramp_s)?;
+        let p_max_mpa = absolute_pressure_mpa(ControlOpt::MinSpeedPMax, self.p_max_mpa)?;
+        let ramp_s = positive(ControlOpt::MinSpeedRamp, self.ramp_s)?;
         if !(self.factor > 0.0 && self.factor < 1.0) {
             return Err(SettingsError::Factor(self.factor));
         }
         let floor_rad_s = match self.floor_rpm {
-            Some(f) => positive("MinSpeedOptions.floor_rpm", f)? * RAD_S_PER_RPM,
+            Some(f) => positive(ControlOpt::MinSpeedFloor, f)? * RAD_S_PER_RPM,
             None => lowest_running_speed_rad_s(motor),
         };
-        let stage_s = positive("MinSpeedOptions.stage_s", self.stage_s)?;
+        let stage_s = positive(ControlOpt::MinSpeedStage, self.stage_s)?;
         if stage_s <= HOLD_WINDOW_S + 1.0 {
             return Err(SettingsError::StageTooShort(stage_s));
         }

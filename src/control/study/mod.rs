@@ -23,6 +23,7 @@ pub use throttle::{ThrottleOptions, ThrottleStudy};
 
 use super::closed_loop::{AntiWindup, Loop, PiController, Valve, ValveDynamics};
 use super::error::{ControlError, SettingsError};
+use super::option::ControlOpt;
 use crate::data::fitfile::FitFile;
 use crate::model::effects::EffectSet;
 use crate::model::motor::{Load, Motor};
@@ -31,7 +32,7 @@ use crate::units::constants::P_ATM_PA;
 use std::path::PathBuf;
 
 /// `v` if it is a finite number > 0.
-pub(crate) fn positive(option: &'static str, v: f64) -> Result<f64, SettingsError> {
+pub(crate) fn positive(option: ControlOpt, v: f64) -> Result<f64, SettingsError> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
@@ -40,7 +41,7 @@ pub(crate) fn positive(option: &'static str, v: f64) -> Result<f64, SettingsErro
 }
 
 /// `v` if it is a finite number ≥ 0.
-pub(crate) fn non_negative(option: &'static str, v: f64) -> Result<f64, SettingsError> {
+pub(crate) fn non_negative(option: ControlOpt, v: f64) -> Result<f64, SettingsError> {
     if v.is_finite() && v >= 0.0 {
         Ok(v)
     } else {
@@ -49,7 +50,7 @@ pub(crate) fn non_negative(option: &'static str, v: f64) -> Result<f64, Settings
 }
 
 /// An absolute pressure option in MPa, checked to lie above atmosphere.
-pub(crate) fn absolute_pressure_mpa(option: &'static str, mpa: f64) -> Result<f64, SettingsError> {
+pub(crate) fn absolute_pressure_mpa(option: ControlOpt, mpa: f64) -> Result<f64, SettingsError> {
     let p = positive(option, mpa)? * 1e6;
     if p <= P_ATM_PA {
         return Err(SettingsError::NotAboveAtmosphere { option, value: mpa });
@@ -57,19 +58,19 @@ pub(crate) fn absolute_pressure_mpa(option: &'static str, mpa: f64) -> Result<f6
     Ok(mpa)
 }
 
-/// A scenario's length and the time of its step, s, each with its option's field: the step
-/// must fall inside the length.
+/// A scenario's length and the time of its step, s, each with its option: the step must
+/// fall inside the length.
 pub(crate) fn step_window(
-    (duration_field, duration_s): (&'static str, f64),
-    (t_step_field, t_step_s): (&'static str, f64),
+    (duration_opt, duration_s): (ControlOpt, f64),
+    (t_step_opt, t_step_s): (ControlOpt, f64),
 ) -> Result<(f64, f64), SettingsError> {
-    let dur = positive(duration_field, duration_s)?;
-    let t_step = non_negative(t_step_field, t_step_s)?;
+    let dur = positive(duration_opt, duration_s)?;
+    let t_step = non_negative(t_step_opt, t_step_s)?;
     if t_step >= dur {
         return Err(SettingsError::StepAfterEnd {
-            option: t_step_field,
+            option: t_step_opt,
             value: t_step,
-            end: duration_field,
+            end: duration_opt,
         });
     }
     Ok((dur, t_step))
@@ -103,7 +104,7 @@ impl MotorOptions {
             effects = EffectSet::parse_list(list).map_err(SettingsError::Effects)?;
         }
         let brake = non_negative(
-            "MotorOptions.brake_nm_s_rad",
+            ControlOpt::MotorBrake,
             self.brake_nm_s_rad.unwrap_or(default_brake_nm_s_rad),
         )?;
         let load = if brake > 0.0 {
@@ -154,7 +155,7 @@ impl ValveOptions {
     pub fn check(&self, motor: &Motor) -> Result<Valve, SettingsError> {
         let mut v = Valve::for_motor(motor, P_ATM_PA);
         if let Some(tau) = self.tau_s {
-            let tau = positive("ValveOptions.tau_s", tau)?;
+            let tau = positive(ControlOpt::ValveTau, tau)?;
             v.dynamics = match v.dynamics {
                 ValveDynamics::FirstOrder { .. } => ValveDynamics::FirstOrder { tau_s: tau },
                 ValveDynamics::SecondOrder { zeta, .. } => {
@@ -162,8 +163,8 @@ impl ValveOptions {
                 }
             };
         }
-        v.u_max_v = positive("ValveOptions.u_max_v", self.u_max_v)?;
-        v.p_max_gauge_pa = positive("ValveOptions.p_max_bar_g", self.p_max_bar_g)? * 1e5;
+        v.u_max_v = positive(ControlOpt::ValveUMax, self.u_max_v)?;
+        v.p_max_gauge_pa = positive(ControlOpt::ValvePMax, self.p_max_bar_g)? * 1e5;
         Ok(v)
     }
 }
@@ -199,12 +200,12 @@ impl PiOptions {
         let base = PiController::default();
         let (kp, ki) = match gains {
             Some(g) => (
-                non_negative("GainOptions.kp", g.kp)?,
-                non_negative("GainOptions.ki", g.ki)?,
+                non_negative(ControlOpt::GainKp, g.kp)?,
+                non_negative(ControlOpt::GainKi, g.ki)?,
             ),
             None => (base.kp, base.ki),
         };
-        let ts = positive("PiOptions.ts_ms", self.ts_ms)? * 1e-3;
+        let ts = positive(ControlOpt::PiSampleTime, self.ts_ms)? * 1e-3;
         if ts > 0.1 {
             return Err(SettingsError::SampleTimeTooLong(self.ts_ms));
         }
@@ -216,7 +217,7 @@ impl PiOptions {
             kp,
             ki,
             ts_s: ts,
-            speed_unit_rpm: positive("PiOptions.speed_unit_rpm", self.speed_unit_rpm)?,
+            speed_unit_rpm: positive(ControlOpt::PiSpeedUnit, self.speed_unit_rpm)?,
             u_min_v: 0.0,
             u_max_v: valve.u_max_v,
             anti_windup,

@@ -4,6 +4,7 @@
 use super::{positive, step_window, Plant};
 use crate::control::closed_loop::{step_metrics, Loop, Scenario, StepMetrics, Steps, Trace};
 use crate::control::error::{ControlError, SettingsError};
+use crate::control::option::ControlOpt;
 use crate::control::RAD_S_PER_RPM;
 use crate::model::motor::{idx, Boundary};
 use crate::numerics::DefaultSolver;
@@ -26,11 +27,11 @@ pub struct StepOptions {
 impl StepOptions {
     /// Checks every option.
     pub fn check(&self) -> Result<StepSettings, SettingsError> {
-        let from_rpm = positive("StepOptions.from_rpm", self.from_rpm)?;
-        let to_rpm = positive("StepOptions.to_rpm", self.to_rpm)?;
+        let from_rpm = positive(ControlOpt::StepFrom, self.from_rpm)?;
+        let to_rpm = positive(ControlOpt::StepTo, self.to_rpm)?;
         let (duration_s, t_step_s) = step_window(
-            ("StepOptions.duration_s", self.duration_s),
-            ("StepOptions.t_step_s", self.t_step_s),
+            (ControlOpt::StepDuration, self.duration_s),
+            (ControlOpt::StepTStep, self.t_step_s),
         )?;
         Ok(StepSettings {
             from_rpm,
@@ -102,7 +103,7 @@ pub fn study(plant: &Plant, lp: &Loop, s: &StepSettings) -> Result<StepStudy, Co
     let m = plant.motor();
     let (from, to) = (s.from_rad_s(), s.to_rad_s());
     let start = lp.settled_at(m, from).map_err(|e| ControlError::SetPoint {
-        option: "StepOptions.from_rpm",
+        option: ControlOpt::StepFrom,
         value: s.from_rpm,
         source: Box::new(e),
     })?;

@@ -4,6 +4,7 @@
 
 use super::{absolute_pressure_mpa, positive, Plant};
 use crate::control::error::{ControlError, SettingsError};
+use crate::control::option::ControlOpt;
 use crate::control::throttle::{
     conductance_grid, speed_vs_conductance, torque_speed, Port, ThrottlePoint, TorquePoint,
 };
@@ -35,20 +36,19 @@ pub struct ThrottleOptions {
 impl ThrottleOptions {
     /// Checks every option.
     pub fn check(&self) -> Result<ThrottleSettings, SettingsError> {
-        let p_supply_mpa =
-            absolute_pressure_mpa("ThrottleOptions.p_supply_mpa", self.p_supply_mpa)?;
-        let c_min = positive("ThrottleOptions.c_min_m3_s_pa", self.c_min_m3_s_pa)?;
-        let c_max = positive("ThrottleOptions.c_max_m3_s_pa", self.c_max_m3_s_pa)?;
+        let p_supply_mpa = absolute_pressure_mpa(ControlOpt::ThrottlePSupply, self.p_supply_mpa)?;
+        let c_min = positive(ControlOpt::ThrottleCMin, self.c_min_m3_s_pa)?;
+        let c_max = positive(ControlOpt::ThrottleCMax, self.c_max_m3_s_pa)?;
         if c_max <= c_min {
             return Err(SettingsError::EmptyRange {
-                option: "ThrottleOptions.c_max_m3_s_pa",
+                option: ControlOpt::ThrottleCMax,
                 value: c_max,
-                lower: "ThrottleOptions.c_min_m3_s_pa",
+                lower: ControlOpt::ThrottleCMin,
             });
         }
         if self.points < 2 {
             return Err(SettingsError::TooFewPoints {
-                option: "ThrottleOptions.points",
+                option: ControlOpt::ThrottlePoints,
                 value: self.points,
                 min: 2,
             });
@@ -74,7 +74,7 @@ fn parse_curves(list: &str) -> Result<Vec<Option<f64>>, SettingsError> {
             let v: f64 = item
                 .parse()
                 .map_err(|_| SettingsError::NotAConductance(item.to_string()))?;
-            out.push(Some(positive("ThrottleOptions.curves_m3_s_pa", v)?));
+            out.push(Some(positive(ControlOpt::ThrottleCurves, v)?));
         }
     }
     if out.is_empty() {
