@@ -7,9 +7,7 @@
 //! advance a number of iterations at a time between the run's barriers, which a call that
 //! runs to the end cannot do.
 
-use crate::estimate::optimize::least_squares::{
-    chi2, levenberg_marquardt_from, levenberg_marquardt_run, LmSettings,
-};
+use crate::estimate::optimize::least_squares::{chi2, levenberg_marquardt_from, LmSettings};
 #[cfg(doc)]
 use crate::estimate::optimize::nelder_mead::RestartedNelderMead;
 use crate::estimate::optimize::nelder_mead::{self, NelderMeadSettings, Status};
@@ -100,20 +98,30 @@ impl LocalOptimizer for LevenbergMarquardt {
         x0: &[f64],
         _f0: f64,
     ) -> LocalMinimum {
-        let f = |t: &[f64]| match self.residuals {
-            Residuals::Cost => problem.cost_residuals(t),
-            Residuals::Chi2 => problem.residuals(t),
-        };
-        let out = levenberg_marquardt_run(&f, x0, self.settings);
-        LocalMinimum {
-            x: out.x,
-            value: out.chi2,
-            converged: out.converged,
+        match self.residuals_at(problem, x0) {
+            Some(r0) => self.minimize_from(problem, x0, r0),
+            None => LocalMinimum {
+                x: x0.to_vec(),
+                value: f64::INFINITY,
+                converged: false,
+            },
         }
     }
 }
 
 impl LevenbergMarquardt {
+    /// The residuals it works on, at `x` (`None` where they cannot be computed).
+    fn residuals_at<C: Coordinates + ?Sized>(
+        &self,
+        problem: &Problem<'_, C>,
+        x: &[f64],
+    ) -> Option<Vec<f64>> {
+        match self.residuals {
+            Residuals::Cost => problem.cost_residuals(x),
+            Residuals::Chi2 => problem.residuals(x),
+        }
+    }
+
     /// [`LocalOptimizer::minimize`] from `x0` whose residuals `r0` the caller has.
     pub(crate) fn minimize_from<C: Coordinates + ?Sized>(
         &self,
@@ -121,10 +129,7 @@ impl LevenbergMarquardt {
         x0: &[f64],
         r0: Vec<f64>,
     ) -> LocalMinimum {
-        let f = |t: &[f64]| match self.residuals {
-            Residuals::Cost => problem.cost_residuals(t),
-            Residuals::Chi2 => problem.residuals(t),
-        };
+        let f = |t: &[f64]| self.residuals_at(problem, t);
         let out = levenberg_marquardt_from(&f, x0, r0, self.settings);
         LocalMinimum {
             x: out.x,
