@@ -1,7 +1,8 @@
 //! The displacement of a motor whose catalogue page does not print it, estimated from the
 //! page itself (docs/estimation.md, "A page without a displacement").
 //!
-//! The steady model is exactly similar under the size laws of `data::motor::SIZE_EXPONENTS`:
+//! The steady model is exactly similar under the registry's size laws
+//! (`ParamSpec::size_exponent`):
 //! a motor s = V_disp/3.8 cm³ times AR034-11 with every default scaled has s × its torques,
 //! s^⅔ × its flows and powers and s^−⅓ × its speeds at every supply pressure. So the
 //! torque per supply pressure (∝ V_disp) and the air per revolution at free speed
