@@ -156,6 +156,9 @@ const PINNED_BY_STALL_AIR: &str = "the air flow at stall (the internal leakage)"
 /// peaks.
 const PINNED_BY_FREE_AIR: &str = "the air consumption at free speed";
 
+/// The inlet port sets the air at max power, where the supply fills the compartments.
+const PINNED_BY_MAX_POWER_AIR: &str = "the air consumption at max power";
+
 impl ParamSpec {
     /// The registry's facts that an effect's parameter does not set: no size law, no prior,
     /// estimated only with its effect, pinned by a rig experiment. An effect's spec is its
@@ -229,7 +232,7 @@ macro_rules! base_table {
     ($then:ident) => {
         $then! {
             C_IN1 c_in1: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "inlet port, supply → chamber 1",
-                size Some(2.0 / 3.0), prior Some(2.0), ByDefault, "the air consumption at max power", key None;
+                size Some(2.0 / 3.0), prior Some(2.0), ByDefault, PINNED_BY_MAX_POWER_AIR, key None;
             C_OUT2 c_out2: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "outlet port, chamber 2 → port 2",
                 size Some(2.0 / 3.0), prior Some(2.0), ByDefault, PINNED_BY_FREE_AIR, key None;
             C_EXT c_ext: "m3/(s*Pa)" = 1.170707e-8, Positive, (1e-9, 1e-7), "exhaust port, exhaust chamber → atmosphere",

@@ -8,12 +8,10 @@ use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::fit::displacement::{
-    describe_cm3, displacement_missing, DisplacementEstimate,
-};
+use crate::estimate::fit::displacement::{describe_cm3, DisplacementEstimate};
 use crate::estimate::fit::setup::{
-    catalogue_only, page_displacement, page_estimates, search_space, PageChoice, SetupError,
-    SpaceRequest,
+    catalogue_only, displacement_unprinted, page_displacement, page_estimates, search_space,
+    PageChoice, SetupError, SpaceRequest,
 };
 pub use crate::estimate::fit::setup::{ParamRange, Pinning, RangeSyntax};
 use crate::estimate::fit::{
@@ -262,7 +260,7 @@ pub fn displacement_first_line(estimate: &DisplacementEstimate) -> String {
 /// `[motor]` gives neither a displacement nor a geometry, estimated from the pages
 /// (`None` otherwise, or where no displacement gives a motor the pages can be simulated at).
 pub fn page_displacement_of(ds: &Dataset) -> Result<Option<DisplacementEstimate>, FitError> {
-    if !(catalogue_only(ds) && displacement_missing(&ds.motor)) {
+    if !displacement_unprinted(ds) {
         return Ok(None);
     }
     let data = FitData::new(ds, CostOptions::default())?;

@@ -15,9 +15,7 @@ use crate::estimate::problem::space::{Dimension, ParamSpace, SpaceError};
 use crate::estimate::profile::subset::{pinned_subset, PINNED_RELATIVE_SD};
 use crate::model::effects::EffectSet;
 use crate::model::motor::Motor;
-use crate::model::params::{
-    estimated_names, page_prior_extra, MotorParams, ParamId, DEFAULT_ESTIMATED,
-};
+use crate::model::params::{estimated_names, page_prior_extra, MotorParams, ParamId};
 
 /// A search or start range of one parameter, SI.
 #[derive(Debug, Clone, PartialEq)]
@@ -219,10 +217,16 @@ pub fn catalogue_only(ds: &Dataset) -> bool {
     ds.experiments.iter().all(|e| e.kind == Kind::Catalogue)
 }
 
-/// For a dataset of catalogue pages only whose `[motor]` gives neither a displacement nor
-/// a geometry: the displacement estimated from the pages (`estimate::fit::displacement`).
+/// Whether a dataset is catalogue pages only whose `[motor]` gives neither a displacement
+/// nor a geometry (so the fit estimates the displacement from the pages).
+pub fn displacement_unprinted(ds: &Dataset) -> bool {
+    catalogue_only(ds) && displacement_missing(&ds.motor)
+}
+
+/// For a dataset whose displacement is not printed ([`displacement_unprinted`]): the
+/// displacement estimated from the pages (`estimate::fit::displacement`).
 pub fn page_displacement(ds: &Dataset, data: &FitData) -> Option<DisplacementEstimate> {
-    (catalogue_only(ds) && displacement_missing(&ds.motor))
+    displacement_unprinted(ds)
         .then(|| displacement_from_page(data, &ds.motor))
         .flatten()
 }
@@ -287,7 +291,7 @@ pub fn page_estimates(
     } else {
         Prior::none()
     };
-    let mut names: Vec<String> = DEFAULT_ESTIMATED.iter().map(|s| s.to_string()).collect();
+    let mut names = estimated_names(&EffectSet::empty());
     if !prior.is_empty() {
         // With the motor prior, the two parameters that shape how torque and flow change with
         // the supply pressure are estimated too, resting on their priors where the page is
