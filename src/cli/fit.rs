@@ -368,6 +368,9 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
     for line in report::terminal_table(&report::parameter_rows(ds, setup, out)) {
         say!("{line}");
     }
+    for w in report::bound_warnings(out) {
+        say!("warning: {w}");
+    }
     say!("fixed (not estimated):");
     for (s, v) in report::fixed_parameters(setup, out) {
         say!(

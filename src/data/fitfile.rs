@@ -900,6 +900,7 @@ mod tests {
             linearised_at: Map::new(),
             prior: Vec::new(),
             prior_chi2: None,
+            on_bound: Vec::new(),
         });
         let text = serde_json::to_string_pretty(&f.to_json()).unwrap();
         let doc: Value = serde_json::from_str(&text).unwrap();

@@ -175,6 +175,21 @@ pub struct FitStatistics {
     /// χ²_prior = Σ ((ln v − ln median)/sd_ln)² at the estimate (`None` without a prior).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prior_chi2: Option<f64>,
+    /// The estimated parameters that ended on a bound of their search range: what depends
+    /// on them is unreliable (docs/estimation.md, "Bounds"). Absent when none did.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub on_bound: Vec<BoundEntry>,
+}
+
+/// An estimate that ended on a bound of its search range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoundEntry {
+    /// The parameter.
+    pub parameter: String,
+    /// `lower` or `upper`.
+    pub side: String,
+    /// The bound, SI.
+    pub bound: f64,
 }
 
 /// One estimated parameter's log-normal prior as the fit file states it:

@@ -5,6 +5,7 @@
 use crate::data::dataset::{Column, DataError, ExperimentData, Kind, Recording};
 use crate::model::effects::EffectSet;
 use crate::model::motor::{idx, Boundary, Load, Motor};
+use crate::model::spec::SizeLaw;
 use crate::numerics::ode::StiffSolver;
 use crate::sim::experiment::{Experiment, SimError};
 use crate::sim::steady;
@@ -42,6 +43,21 @@ impl SensorNoise {
             conductance_rel: 5e-3,
         }
     }
+    /// [`SensorNoise::typical`] for a motor of displacement `v_disp_m3`: a rig sized to its
+    /// motor has sensors whose ranges, and so whose noise, follow the motor's flows
+    /// (∝ s^⅔), speeds (∝ s^{-⅓}) and torques (∝ s) (`SizeLaw`); the pressure sensors and the
+    /// throttle's relative setting do not change. The reference motor's rig is `typical()`.
+    pub fn typical_for(v_disp_m3: f64) -> Self {
+        let f = |k| SizeLaw::factor(v_disp_m3, k);
+        let t = Self::typical();
+        Self {
+            flow_kg_s: t.flow_kg_s * f(SizeLaw::MASS_FLOW),
+            speed_rad_s: t.speed_rad_s * f(SizeLaw::SPEED),
+            torque_nm: t.torque_nm * f(SizeLaw::TORQUE),
+            ..t
+        }
+    }
+
     /// No noise at all.
     pub fn none() -> Self {
         Self {
@@ -97,6 +113,30 @@ impl Default for SynthPlan {
             sample_rate_hz: 10.0,
             brake: Load::ViscousBrake { c_nm_s_rad: 1.0e-4 },
             c_port2_range: (3e-8, 1.5e-9),
+        }
+    }
+}
+
+impl SynthPlan {
+    /// The paper's rig ([`SynthPlan::default`]) scaled to a motor of displacement
+    /// `v_disp_m3`: the brake loads it at the same share of its torque at the same share of
+    /// its speed (c ∝ torque/speed ∝ s^{4/3}), and the outlet throttle spans the same range
+    /// relative to its ports (conductances ∝ s^⅔). Pressures, ramp lengths and the sampling
+    /// rate stay: the ramps are slow against every motor's time constants.
+    pub fn for_motor(v_disp_m3: f64) -> Self {
+        let d = Self::default();
+        let f = |k| SizeLaw::factor(v_disp_m3, k);
+        let brake = match d.brake {
+            Load::ViscousBrake { c_nm_s_rad } => Load::ViscousBrake {
+                c_nm_s_rad: c_nm_s_rad * f(SizeLaw::TORQUE - SizeLaw::SPEED),
+            },
+            other => other,
+        };
+        let area = f(SizeLaw::AREA);
+        Self {
+            brake,
+            c_port2_range: (d.c_port2_range.0 * area, d.c_port2_range.1 * area),
+            ..d
         }
     }
 }
@@ -349,4 +389,34 @@ pub fn write_dataset(
             .map_err(io)?;
     }
     crate::io::write_atomic(&dir.join("rig.toml"), rig.as_bytes()).map_err(io)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reference motor's rig is the paper's; a motor s times its size gets a brake
+    /// c × s^{4/3}, throttle conductances × s^⅔ and sensor noise following its flows
+    /// (s^⅔), speeds (s^{-⅓}) and torques (s).
+    #[test]
+    fn the_rig_follows_the_motor_size() {
+        assert_eq!(SynthPlan::for_motor(3.8e-6), SynthPlan::default());
+        assert_eq!(SensorNoise::typical_for(3.8e-6), SensorNoise::typical());
+        let s: f64 = 8.0;
+        let plan = SynthPlan::for_motor(8.0 * 3.8e-6);
+        let Load::ViscousBrake { c_nm_s_rad } = plan.brake else {
+            panic!("{:?}", plan.brake)
+        };
+        assert!(
+            (c_nm_s_rad / (1e-4 * 16.0) - 1.0).abs() < 1e-12,
+            "{c_nm_s_rad}"
+        );
+        assert!((plan.c_port2_range.0 / (3e-8 * 4.0) - 1.0).abs() < 1e-12);
+        let n = SensorNoise::typical_for(s * 3.8e-6);
+        let t = SensorNoise::typical();
+        assert!((n.flow_kg_s / (t.flow_kg_s * 4.0) - 1.0).abs() < 1e-12);
+        assert!((n.speed_rad_s / (t.speed_rad_s / 2.0) - 1.0).abs() < 1e-12);
+        assert!((n.torque_nm / (t.torque_nm * 8.0) - 1.0).abs() < 1e-12);
+        assert_eq!(n.pressure_pa, t.pressure_pa);
+    }
 }

@@ -12,6 +12,7 @@ use super::{analysis, applicable_effects, off_value, Candidate, ModelKind, Skipp
 use super::{Effect, SELECT_DELTA_BIC};
 use crate::model::effects::EffectSet;
 use crate::model::params::{spec, MotorParams, ParamId, DEFAULT_ESTIMATED_IDS};
+use crate::model::spec::SizeLaw;
 
 /// The refits of phase 2.
 pub(crate) struct Refits {
@@ -205,7 +206,7 @@ pub(crate) fn effect_starts(effects: &[Effect], base: &MotorParams, n: usize) ->
                 let v = match u {
                     None => off_value(name, base),
                     Some(u) => {
-                        let (lo, hi) = s.search;
+                        let (lo, hi) = s.search_at(base.size());
                         if lo > 0.0 {
                             (lo.ln() + u * (hi.ln() - lo.ln())).exp()
                         } else {
@@ -253,17 +254,20 @@ const STRIBECK_GRID: [f64; 7] = [1.0, 2.4, 5.8, 14.0, 34.0, 83.0, 200.0];
 /// T_s that decays fast or a lower one that decays slowly.
 fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
     let base = &unpinned(base);
+    // The grids' speeds are the reference motor's; a motor of another size runs at speeds
+    // ∝ s^{-⅓} (`SizeLaw::SPEED`), and so do its Stribeck and hand-over speeds.
+    let speed_scale = base.size().powf(SizeLaw::SPEED);
     let grid: Vec<(usize, MotorParams)> = (0..COULOMB_SCALE.len())
         .flat_map(|s| HANDOVER_SPEEDS.iter().map(move |h| (s, h)))
         .flat_map(|(s, h)| STATIC_OVER_COULOMB.iter().map(move |k| (s, h, k)))
         .flat_map(|(s, h, k)| STRIBECK_GRID.iter().map(move |w| (s, h, k, w)))
         .filter_map(|(s, h, k, w)| {
             let t_c = COULOMB_SCALE[s] * base.t_coulomb();
-            let visc = base.visc() + (base.t_coulomb() - t_c) / h;
+            let visc = base.visc() + (base.t_coulomb() - t_c) / (h * speed_scale);
             base.with_value(ParamId::T_COULOMB, t_c)
                 .and_then(|p| p.with_value(ParamId::VISC, visc))
                 .and_then(|p| p.with_value(ParamId::T_STATIC, k * t_c))
-                .and_then(|p| p.with_value(ParamId::W_STRIBECK, *w))
+                .and_then(|p| p.with_value(ParamId::W_STRIBECK, w * speed_scale))
                 .ok()
                 .map(|p| (s, p))
         })
@@ -295,7 +299,7 @@ fn unpinned(base: &MotorParams) -> MotorParams {
     let mut p = base.clone();
     for id in DEFAULT_ESTIMATED_IDS {
         let s = id.spec();
-        if base.value(id) <= s.search.0 * 1.01 {
+        if base.value(id) <= s.search_at(base.size()).0 * 1.01 {
             p = p.with_value(id, s.default).unwrap_or(p);
         }
     }

@@ -56,6 +56,7 @@ pub use crate::model::extra::{
 use crate::model::motor::{
     BalanceId, ExtraTerm, LeakPath, Motor, PressureFactor as P, SpeedFactor as W,
 };
+use crate::model::spec::SizeLaw;
 use crate::numerics::DefaultSolver;
 use crate::objective::cost::CostModel;
 use crate::objective::likelihood::Target;
@@ -69,11 +70,20 @@ const PATH_PREFERENCE: f64 = 10.0;
 /// Most terms selected in one regression.
 const MAX_TERMS: usize = 2;
 
-/// Typical state used to size the perturbation δ of each feature.
+/// Typical state of the reference motor (AR034-11) used to size the perturbation δ of each
+/// feature: p1, p2, pe in Pa and ω in rad/s ([`typical_state`] scales ω to a motor's size).
 const TYPICAL: [f64; 4] = [5e5, 2e5, 1.5e5, 800.0];
-/// Size of a perturbation in each balance: torque N·m, mass kg/s.
+/// Size of a perturbation in each balance of the reference motor (one noise level of its
+/// rig): torque N·m, mass kg/s. [`step`] scales them to a motor's size.
 const TORQUE_STEP: f64 = 2e-3;
 const MASS_STEP: f64 = 1e-5;
+
+/// [`TYPICAL`] for a motor `size` times AR034-11's displacement: the pressures are the
+/// same, the speed follows the vane-tip speed (ω ∝ s^{-⅓}, `SizeLaw::SPEED`).
+fn typical_state(size: f64) -> [f64; 4] {
+    let [p1, p2, pe, w] = TYPICAL;
+    [p1, p2, pe, w * size.powf(SizeLaw::SPEED)]
+}
 
 /// The library of candidate terms (coefficient 1).
 pub fn library() -> Vec<ExtraTerm> {
@@ -178,19 +188,27 @@ fn mass_terms(b: BalanceId) -> Vec<ExtraTerm> {
 }
 
 /// Perturbation δ of a library term's coefficient: the size of one noise level of its
-/// balance at [`TYPICAL`], where the motor's air torque is `t_air_nm`.
-fn step(t: &ExtraTerm, t_air_nm: f64) -> f64 {
+/// balance at the typical state of a motor `size` times AR034-11's displacement
+/// ([`typical_state`]), where the motor's air torque is `t_air_nm`. The noise levels
+/// follow the size as the rig's sensors do (torque ∝ s, mass flow ∝ s^⅔), so that a term's
+/// step is the same share of the motor's own balance at every size.
+fn step(t: &ExtraTerm, t_air_nm: f64, size: f64) -> f64 {
     let unit = ExtraTerm {
         coefficient: 1.0,
         ..*t
     };
     let f = unit
-        .feature(&TYPICAL, crate::units::constants::P_ATM_PA, 0.2, t_air_nm)
+        .feature(
+            &typical_state(size),
+            crate::units::constants::P_ATM_PA,
+            0.2,
+            t_air_nm,
+        )
         .abs()
         .max(1e-30);
     match t.balance {
-        BalanceId::Torque => TORQUE_STEP / f,
-        _ => MASS_STEP / f,
+        BalanceId::Torque => TORQUE_STEP * size.powf(SizeLaw::TORQUE) / f,
+        _ => MASS_STEP * size.powf(SizeLaw::MASS_FLOW) / f,
     }
 }
 
@@ -356,8 +374,12 @@ fn sensitivities(
     let mut cols: Vec<Col> = (0..theta.len()).map(Col::Theta).collect();
     cols.extend((0..model.extra.len()).map(Col::Extra));
     let n_nuisance = cols.len();
-    let t_air_nm = motor.air_torque_nm(&TYPICAL);
-    cols.extend(lib.iter().map(|t| Col::Library(*t, step(t, t_air_nm))));
+    let size = model.params.size();
+    let t_air_nm = motor.air_torque_nm(&typical_state(size));
+    cols.extend(
+        lib.iter()
+            .map(|t| Col::Library(*t, step(t, t_air_nm, size))),
+    );
     let column = |c: &Col| -> Option<Vec<f64>> {
         let at = |sign: f64| -> Option<Vec<f64>> {
             let m = match c {
@@ -525,6 +547,40 @@ fn joint_coefficients(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The typical state and perturbations of the reference motor are the constants; a
+    /// motor 8 times its size turns at half the speed, and a term's step is the same share
+    /// of its own (scaled) balance.
+    #[test]
+    fn the_typical_state_and_steps_follow_the_size() {
+        assert_eq!(typical_state(1.0), TYPICAL);
+        let s8 = typical_state(8.0);
+        assert_eq!(s8[..3], TYPICAL[..3]);
+        assert!((s8[3] - TYPICAL[3] / 2.0).abs() < 1e-9);
+        let t_air_nm = Motor::default_motor().air_torque_nm(&TYPICAL);
+        let lib = library();
+        let torque = lib.iter().find(|t| t.balance == BalanceId::Torque).unwrap();
+        let unit = ExtraTerm {
+            coefficient: 1.0,
+            ..*torque
+        };
+        let f = |size: f64, t_air: f64| {
+            unit.feature(
+                &typical_state(size),
+                crate::units::constants::P_ATM_PA,
+                0.2,
+                t_air,
+            )
+            .abs()
+        };
+        let (s1, s8) = (
+            step(torque, t_air_nm, 1.0),
+            step(torque, 8.0 * t_air_nm, 8.0),
+        );
+        // δ·f is the balance's noise level: 2 mN·m at size 1, 8 × that at size 8.
+        assert!((s1 * f(1.0, t_air_nm) - TORQUE_STEP).abs() < 1e-12);
+        assert!((s8 * f(8.0, 8.0 * t_air_nm) - 8.0 * TORQUE_STEP).abs() < 1e-9);
+    }
     use crate::model::effects::Category;
 
     #[test]
@@ -538,7 +594,7 @@ mod tests {
                     "{a:?}"
                 );
             }
-            assert!(step(a, t_air_nm).is_finite() && step(a, t_air_nm) > 0.0);
+            assert!(step(a, t_air_nm, 1.0).is_finite() && step(a, t_air_nm, 1.0) > 0.0);
         }
         let t = ExtraTerm {
             balance: BalanceId::Torque,

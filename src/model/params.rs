@@ -71,7 +71,7 @@ impl ParamSpec {
     /// (Here rather than with the rest of `ParamSpec` in `spec`, because it reads a
     /// [`MotorParams`].)
     pub(crate) fn off_value(&self, base: &MotorParams) -> f64 {
-        let (lo, hi) = self.search;
+        let (lo, hi) = self.search_at(base.size());
         match self.off {
             OffValue::NotAnEffect | OffValue::Default => self.default,
             OffValue::SearchLower => lo,
@@ -252,6 +252,12 @@ impl MotorParams {
     /// Value of a parameter.
     pub fn value(&self, id: ParamId) -> f64 {
         self.values[id.index()]
+    }
+
+    /// The motor's size s = V_disp/V_disp,AR034 that its size laws scale with
+    /// ([`ParamSpec::size_exponent`]; exactly 1 for the reference motor).
+    pub fn size(&self) -> f64 {
+        self.v_disp() / crate::model::spec::REFERENCE_DISPLACEMENT_M3
     }
 
     /// Value of a named parameter (`None` for an unknown name).
@@ -435,6 +441,59 @@ fn check_domain(spec: &ParamSpec, v: f64) -> Result<(), ParamError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::spec::SizeLaw;
+
+    /// The reference motor keeps its exact search ranges (so its fits do not change), and a
+    /// motor of any size from 0.3 to 500 cm³ gets the same factors around its size-scaled
+    /// default: the range × s^k, k the parameter's size law.
+    #[test]
+    fn search_ranges_follow_the_size_law_and_keep_the_reference_motors() {
+        for s in PARAMS {
+            assert_eq!(s.search_at(1.0), s.search, "{}", s.name);
+        }
+        for cm3 in [0.3, 1.0, 3.8, 25.0, 150.0, 500.0] {
+            let size = cm3 / 3.8;
+            for s in PARAMS.iter().filter(|s| s.size_exponent.is_some()) {
+                let k = s.size_exponent.unwrap();
+                let (lo, hi) = s.search_at(size);
+                let d = s.scaled_default(size);
+                // Independent: the default's position between the bounds in log space is
+                // the reference motor's at every size.
+                let f = size.powf(k);
+                assert!(
+                    (lo - s.search.0 * f).abs() <= 1e-12 * lo,
+                    "{} {cm3}",
+                    s.name
+                );
+                assert!(
+                    (hi / (s.search.1 * f) - 1.0).abs() < 1e-12,
+                    "{} {cm3}",
+                    s.name
+                );
+                assert!(
+                    (d / (s.default * f) - 1.0).abs() < 1e-12,
+                    "{} {cm3}",
+                    s.name
+                );
+                if lo > 0.0 {
+                    assert!(
+                        d / lo >= 5.0 && hi / d >= 5.0,
+                        "{} at {cm3} cm³: [{lo:e}, {hi:e}] around {d:e}",
+                        s.name
+                    );
+                }
+            }
+        }
+        // A Coulomb friction torque scales as a torque (∝ s), a conductance as an area.
+        assert_eq!(
+            ParamId::T_COULOMB.spec().size_exponent,
+            Some(SizeLaw::TORQUE)
+        );
+        assert_eq!(ParamId::C_IN1.spec().size_exponent, Some(SizeLaw::AREA));
+        let big = MotorParams::default().with("v_disp", 100e-6).unwrap();
+        assert!((big.size() - 100.0 / 3.8).abs() < 1e-12);
+        assert_eq!(MotorParams::default().size(), 1.0);
+    }
 
     #[test]
     fn defaults_pass_their_own_check_and_names_are_unique() {

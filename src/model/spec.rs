@@ -198,15 +198,66 @@ impl ParamSpec {
         self.unit == CONDUCTANCE_UNIT
     }
 
+    /// The factor s^k by which its size law scales it for a motor `size` = s times
+    /// AR034-11's displacement (1 for a parameter that does not follow the size, and exactly
+    /// 1 at s = 1, so the reference motor keeps its exact values).
+    pub fn size_factor(&self, size: f64) -> f64 {
+        match self.size_exponent {
+            Some(k) => size.powf(k),
+            None => 1.0,
+        }
+    }
+
     /// Its default scaled to a motor `size` times AR034-11's displacement by its size law
     /// (the default itself for a parameter that does not follow the size).
     pub fn scaled_default(&self, size: f64) -> f64 {
-        match self.size_exponent {
-            Some(k) => self.default * size.powf(k),
-            None => self.default,
-        }
+        self.default * self.size_factor(size)
+    }
+
+    /// Its search range for a motor `size` times AR034-11's displacement: the reference
+    /// motor's range [`ParamSpec::search`] × s^k, so that the bounds are the same wide
+    /// factors around the size-scaled default at every size (a 100 cm³ motor's Coulomb
+    /// friction is 26 × the 3.8 cm³ motor's, and so are its bounds).
+    pub fn search_at(&self, size: f64) -> (f64, f64) {
+        let f = self.size_factor(size);
+        (self.search.0 * f, self.search.1 * f)
     }
 }
+
+/// Size laws of geometric similarity: the exponent k with which a quantity follows a motor's
+/// size s = V_disp/V_disp,AR034 (lengths ∝ s^⅓; docs/model.md, "Defaults that follow the
+/// motor's size"). The registry's rows, the diagnosis's scales and `synth`'s rig name them.
+pub struct SizeLaw;
+
+impl SizeLaw {
+    /// Areas: sonic conductances, port and leak gaps (∝ s^⅔).
+    pub const AREA: f64 = 2.0 / 3.0;
+    /// Volumes: lumped, dead and carried-over volumes (∝ s).
+    pub const VOLUME: f64 = 1.0;
+    /// Torques: a pressure on an area times a radius (s^⅔·s^⅓ = s).
+    pub const TORQUE: f64 = 1.0;
+    /// Viscous friction: a sheared area times a radius squared over an unchanged clearance
+    /// (s^⅔·s^⅔ = s^{4/3}).
+    pub const VISCOUS: f64 = 4.0 / 3.0;
+    /// Inertia: a mass times a radius squared (s·s^⅔ = s^{5/3}).
+    pub const INERTIA: f64 = 5.0 / 3.0;
+    /// Speeds at equal vane-tip (sliding) speed: ω = v/r ∝ s^{-⅓}. The free speed of vane
+    /// motors falls so with size (makers' ranges: ≈ 20 000 rpm at 1 cm³, 3 000 rpm at 500 cm³).
+    pub const SPEED: f64 = -1.0 / 3.0;
+    /// Mass flows: a displacement times a speed (s·s^{-⅓} = s^⅔), as the port areas pass them.
+    pub const MASS_FLOW: f64 = 2.0 / 3.0;
+    /// Torque per speed squared (vane friction ∝ ω²: centrifugal force m·ω²·r times a
+    /// radius; s·s^⅔ = s^{5/3}).
+    pub const TORQUE_PER_SPEED2: f64 = 5.0 / 3.0;
+
+    /// s^k for a motor of displacement `v_disp_m3`, with s relative to AR034-11's.
+    pub fn factor(v_disp_m3: f64, k: f64) -> f64 {
+        (v_disp_m3 / REFERENCE_DISPLACEMENT_M3).powf(k)
+    }
+}
+
+/// AR034-11's displacement, m³: the motor of size 1 whose values are the registry's defaults.
+pub const REFERENCE_DISPLACEMENT_M3: f64 = 3.8e-6;
 
 /// The SI unit of a sonic conductance, as fit files write it.
 pub(crate) const CONDUCTANCE_UNIT: &str = "m3/(s*Pa)";
@@ -232,43 +283,43 @@ macro_rules! base_table {
     ($then:ident) => {
         $then! {
             C_IN1 c_in1: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "inlet port, supply → chamber 1",
-                size Some(2.0 / 3.0), prior Some(2.0), ByDefault, PINNED_BY_MAX_POWER_AIR, key None;
+                size Some(SizeLaw::AREA), prior Some(2.0), ByDefault, PINNED_BY_MAX_POWER_AIR, key None;
             C_OUT2 c_out2: "m3/(s*Pa)" = 6.758282e-9, Positive, (5e-10, 5e-8), "outlet port, chamber 2 → port 2",
-                size Some(2.0 / 3.0), prior Some(2.0), ByDefault, PINNED_BY_FREE_AIR, key None;
+                size Some(SizeLaw::AREA), prior Some(2.0), ByDefault, PINNED_BY_FREE_AIR, key None;
             C_EXT c_ext: "m3/(s*Pa)" = 1.170707e-8, Positive, (1e-9, 1e-7), "exhaust port, exhaust chamber → atmosphere",
-                size Some(2.0 / 3.0), prior Some(2.0), ByDefault, PINNED_BY_FREE_AIR, key None;
+                size Some(SizeLaw::AREA), prior Some(2.0), ByDefault, PINNED_BY_FREE_AIR, key None;
             C_1E c_1e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leak, inlet side → exhaust",
-                size Some(2.0 / 3.0), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
+                size Some(SizeLaw::AREA), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
             C_2E c_2e: "m3/(s*Pa)" = 2.077886e-9, NonNegative, (1e-11, 2e-8), "leak, outlet side → exhaust",
-                size Some(2.0 / 3.0), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
+                size Some(SizeLaw::AREA), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
             C_12 c_12: "m3/(s*Pa)" = 7.616275e-10, NonNegative, (1e-12, 1e-8), "leak, inlet side → outlet side",
-                size Some(2.0 / 3.0), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
+                size Some(SizeLaw::AREA), prior Some(4.0), ByDefault, PINNED_BY_STALL_AIR, key None;
             B_CRIT b_crit: "1" = 0.5, Interval(0.05, 0.95), (0.2, 0.6), "critical pressure ratio of every nozzle",
                 size None, prior Some(1.6), OnPagesWithPrior { rank: 1 }, PINNED_BY_SECOND_PRESSURE, key None;
             Z z: "1" = 5.0, Integer(2, 16), (5.0, 5.0), "number of vanes",
                 size None, prior None, OnRequest, PINNED_BY_RIG, key Some("vanes");
             // 0.01–10 000 cm³ per revolution: beyond either end no vane motor exists, and the
             // steady-state search fails (1 m³ has no steady state), so the gate refuses it first.
-            V_DISP v_disp: "m3" = 3.8e-6, Interval(1e-8, 1e-2), (1e-7, 1e-3), "nominal displacement z·V_fill",
+            V_DISP v_disp: "m3" = REFERENCE_DISPLACEMENT_M3, Interval(1e-8, 1e-2), (1e-7, 1e-3), "nominal displacement z·V_fill",
                 size None, prior None, OnRequest, "the displacement (a datasheet row)", key Some("displacement_m3");
             EPS eps: "1" = 1.071, Interval(1.0, 2.0), (1.0, 1.5), "expansion ratio V_exp/V_fill",
                 size None, prior None, OnRequest, PINNED_BY_RIG, key Some("expansion_ratio");
             V_DEAD v_dead: "m3" = 0.10e-6, NonNegative, (0.0, 1e-6), "dead volume per compartment",
-                size Some(1.0), prior Some(2.0), OnPagesWithPrior { rank: 0 }, PINNED_BY_SECOND_PRESSURE, key Some("dead_volume_m3");
+                size Some(SizeLaw::VOLUME), prior Some(2.0), OnPagesWithPrior { rank: 0 }, PINNED_BY_SECOND_PRESSURE, key Some("dead_volume_m3");
             N_POLY n_poly: "1" = 1.3, Interval(1.0, 1.4), (1.0, 1.4), "polytropic index of expansion and compression",
                 size None, prior None, OnRequest, PINNED_BY_RIG, key None;
             VOL1 vol1: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of chamber 1 (inlet side)",
-                size Some(1.0), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
+                size Some(SizeLaw::VOLUME), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
             VOL2 vol2: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of chamber 2 (outlet side)",
-                size Some(1.0), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
+                size Some(SizeLaw::VOLUME), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
             VOLE vole: "m3" = 2e-6, Positive, (1e-7, 1e-4), "lumped volume of the exhaust chamber",
-                size Some(1.0), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
+                size Some(SizeLaw::VOLUME), prior Some(3.0), OnRequest, PINNED_BY_RIG, key None;
             INERTIA inertia: "kg*m2" = 2e-4, Positive, (1e-6, 1e-2), "inertia of rotor, coupling and brake",
-                size Some(5.0 / 3.0), prior Some(2.0), OnRequest, PINNED_BY_RIG, key None;
+                size Some(SizeLaw::INERTIA), prior Some(2.0), OnRequest, PINNED_BY_RIG, key None;
             T_COULOMB t_coulomb: "N*m" = 0.02, NonNegative, (1e-3, 0.2), "Coulomb friction torque",
-                size Some(1.0), prior Some(3.0), ByDefault, PINNED_BY_SECOND_PRESSURE, key None;
+                size Some(SizeLaw::TORQUE), prior Some(3.0), ByDefault, PINNED_BY_SECOND_PRESSURE, key None;
             VISC visc: "N*m*s/rad" = 6e-5, NonNegative, (1e-6, 1e-3), "viscous friction",
-                size Some(4.0 / 3.0), prior Some(3.0), ByDefault, PINNED_BY_SECOND_PRESSURE, key None;
+                size Some(SizeLaw::VISCOUS), prior Some(3.0), ByDefault, PINNED_BY_SECOND_PRESSURE, key None;
             W_REG w_reg: "rad/s" = 0.2, Positive, (0.01, 5.0), "speed that regularises the Coulomb friction",
                 size None, prior None, OnRequest, PINNED_BY_RIG, key None;
         }

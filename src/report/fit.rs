@@ -5,10 +5,11 @@
 
 use crate::data::dataset::Dataset;
 use crate::estimate::fit::{FitOutcome, FitSetup};
+use crate::estimate::problem::dimension::BoundSide;
 use crate::estimate::problem::space::ParamSpace;
 use crate::estimate::profile::uncertainty::Interval;
 use crate::io::side_path;
-use crate::model::params::{conductance_dm3_s_bar, spec, MotorParams, ParamSpec, PARAMS};
+use crate::model::params::{conductance_dm3_s_bar, spec, Domain, MotorParams, ParamSpec, PARAMS};
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
 use crate::report::explain::{self, number};
@@ -159,6 +160,14 @@ pub fn markdown(
     );
     goodness_section(&mut md, out);
     parameter_section(&mut md, &parameter_rows(ds, setup, out));
+    let warnings = bound_warnings(out);
+    if !warnings.is_empty() {
+        let _ = writeln!(md, "## Estimates on a bound\n");
+        for w in warnings {
+            let _ = writeln!(md, "- {w}");
+        }
+        let _ = writeln!(md);
+    }
     let _ = writeln!(
         md,
         "## Fixed parameters\n\n| parameter | meaning | value |\n|---|---|---|"
@@ -195,6 +204,31 @@ pub fn markdown(
         }
     }
     md
+}
+
+/// One sentence per estimate that ended on a bound of its search range
+/// (`FitOutcome::on_bound`): which parameter, which bound, and why what depends on it is
+/// unreliable. A non-negative parameter on its lower bound is one the data see none of.
+pub fn bound_warnings(out: &FitOutcome) -> Vec<String> {
+    out.on_bound
+        .iter()
+        .map(|h| {
+            let s = h.id.spec();
+            let why = if h.side == BoundSide::Lower && s.domain == Domain::NonNegative {
+                "the data see none of it (that bound stands for zero)"
+            } else {
+                "the search range of a motor of this size stopped it, not the data"
+            };
+            format!(
+                "{} ({}) ended on its {} bound {}: {why}; it and every prediction that depends                  on it are unreliable. Widen its range with --bounds {}=LO:HI, or look for                  missing physics with `vanefit diagnose`.",
+                s.name,
+                s.description(),
+                h.side,
+                explain::value(s.name, h.bound, 3),
+                s.name
+            )
+        })
+        .collect()
 }
 
 /// χ² of a fit as the terminal and the report name it: `chi2 X over N rows, chi2/dof Y

@@ -138,13 +138,14 @@ pub fn write_synthetic(
         };
         write_catalogue(out, motor, &plan, "no noise")?.len()
     } else {
-        let plan = SynthPlan::default();
+        let v_disp_m3 = motor.params().v_disp();
+        let plan = SynthPlan::for_motor(v_disp_m3);
         let (noise, seed) = (settings.noise(), settings.seed());
         let experiments = synthesize(
             motor,
             &DefaultSolver::default(),
             &plan,
-            &SensorNoise::typical().scaled(noise),
+            &SensorNoise::typical_for(v_disp_m3).scaled(noise),
             seed,
         )?;
         let description = format!("seed {seed}, noise x{noise}.");

@@ -304,3 +304,46 @@ fn a_datasheet_only_fit_with_the_prior_is_never_less_certain_than_the_prior() {
         "only {bounded} parameters with intervals: {fit:#}"
     );
 }
+
+/// A fit whose estimate is held by a bound says so: the terminal and the report name the
+/// parameter and the bound, and the fit file lists it under `statistics.on_bound`. The
+/// shipped dataset's Coulomb friction is 0.02 N·m; bounds that end at 0.01 N·m hold it.
+#[test]
+fn a_fit_held_by_a_bound_names_the_parameter_and_warns() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = dir.path().join("held.json");
+    let o = vanefit(&[
+        "fit",
+        DATASET,
+        "--starts",
+        "3",
+        "--max-iters",
+        "200",
+        "--uncertainty",
+        "none",
+        "--no-plots",
+        "--bounds",
+        "t_coulomb=1e-3:0.01",
+        "--out",
+        fit.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+    let report = std::fs::read_to_string(dir.path().join("held.report.md")).unwrap();
+    for text in [&printed, &report] {
+        assert!(
+            text.contains("t_coulomb (Coulomb friction torque) ended on its upper bound"),
+            "no bound warning in:\n{text}"
+        );
+        assert!(text.contains("unreliable"), "{text}");
+    }
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    let hits = doc["statistics"]["on_bound"].as_array().expect("on_bound");
+    assert_eq!(hits.len(), 1, "{hits:?}");
+    assert_eq!(hits[0]["parameter"], "t_coulomb");
+    assert_eq!(hits[0]["side"], "upper");
+    assert!((hits[0]["bound"].as_f64().unwrap() - 0.01).abs() < 1e-12);
+    // Only the held parameter: the others sit inside their ranges.
+    assert!(!printed.contains("warning: c_"), "{printed}");
+}

@@ -208,7 +208,7 @@ impl FitLikelihood {
             .estimated
             .iter()
             .map(|n| {
-                Dimension::for_param(n).or_else(|e| {
+                Dimension::for_param(n, fit.params.size()).or_else(|e| {
                     // A parameter whose default search range starts at 0 (the dead volume, which
                     // page fits estimate): ×/÷ 10 about the fitted value.
                     match fit.params.get(n).filter(|v| *v > 0.0) {

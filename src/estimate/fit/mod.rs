@@ -27,7 +27,7 @@ use crate::data::fitfile::{
     FitConditions, FitFile, LogCovariance, ParamVerdict, ProfilePath, RunInfo, Starts,
 };
 pub use crate::data::statistics::UncertaintyMethod;
-use crate::data::statistics::{EstimateMethod, FitStatistics, PriorEntry};
+use crate::data::statistics::{BoundEntry, EstimateMethod, FitStatistics, PriorEntry};
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
 use crate::estimate::fit::goodness::{competitors, mark_competitors, worst_channel, GoodnessOfFit};
@@ -42,7 +42,7 @@ use crate::estimate::optimize::settings::{MultiStartConfig, MultiStartSettings};
 pub use crate::estimate::problem::fit_data::FitData;
 use crate::estimate::problem::likelihood::Likelihood;
 use crate::estimate::problem::objective::{Evaluation, Objective, Problem};
-use crate::estimate::problem::space::ParamSpace;
+use crate::estimate::problem::space::{BoundHit, ParamSpace};
 use crate::estimate::profile::uncertainty::{self, Interval};
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamId};
@@ -170,6 +170,10 @@ pub struct FitOutcome {
     /// reference experiment that would pin it (`most_sensitive_experiment`), where one is
     /// found.
     pub would_pin: Vec<(ParamId, Kind)>,
+    /// The estimated parameters that ended on a bound of their search range
+    /// (`ParamSpace::bounds_reached`): the data pushed them out of the range that real
+    /// motors of this size span, or the model lacks what the data show.
+    pub on_bound: Vec<BoundHit>,
     /// Every start.
     pub run: MultiStartOutcome,
     /// Cost evaluations in all.
@@ -254,6 +258,7 @@ pub fn fit(
     let widening = ml_fit.widening.clone();
     let a = assess(engine, data, setup, ml_fit, observer)?;
     let at = problem.evaluate(&a.theta);
+    let on_bound = setup.space.bounds_reached(&a.params);
     Ok(FitOutcome {
         params: a.params,
         cost: at.cost,
@@ -275,6 +280,7 @@ pub fn fit(
         clusters: searched.clusters,
         channels: a.channels,
         would_pin: a.would_pin,
+        on_bound,
         evaluations: searched.run.evaluations + problem.evaluations() + a.evaluations,
         run: searched.run,
         wall_s: t0.elapsed().as_secs_f64(),
@@ -515,8 +521,8 @@ pub(crate) fn most_sensitive_experiment(motor: &Motor, name: &str) -> Option<Kin
     use crate::data::synth::{free_speed, plan_experiments, SensorNoise, SynthPlan};
     use crate::sim::experiment::Experiment;
     use crate::units::Quantity;
-    let plan = SynthPlan::default();
-    let noise = SensorNoise::typical();
+    let plan = SynthPlan::for_motor(motor.params().v_disp());
+    let noise = SensorNoise::typical_for(motor.params().v_disp());
     let value = motor.params().get(name)?;
     let changed = Motor::new(
         motor.params().with(name, value * 1.2).ok()?,
@@ -638,6 +644,15 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
                 })
                 .collect(),
             prior_chi2: (!setup.space.prior.is_empty()).then_some(out.prior_chi2),
+            on_bound: out
+                .on_bound
+                .iter()
+                .map(|h| BoundEntry {
+                    parameter: h.id.name().to_string(),
+                    side: h.side.to_string(),
+                    bound: h.bound,
+                })
+                .collect(),
             profile_threshold: out.threshold,
             linearised_at: out
                 .linearised_at

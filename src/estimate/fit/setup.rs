@@ -171,7 +171,7 @@ fn dimension(
         (None, _) if id == Some(ParamId::V_DEAD) && fixed.v_dead() > 0.0 => {
             dead_volume_dimension(fixed.v_dead(), fixed.v_disp() / fixed.z())?
         }
-        (None, _) => Dimension::for_param(n)?,
+        (None, _) => Dimension::for_param(n, fixed.size())?,
     };
     if id == Some(ParamId::V_DISP) && find(request.start_ranges).is_none() {
         if let Some(e) = displacement {

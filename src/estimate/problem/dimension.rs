@@ -29,6 +29,30 @@ pub struct Dimension {
 #[error("{0}")]
 pub struct SpaceError(pub String);
 
+/// Share of a dimension's span (in its own scale: logarithmic or linear) within which an
+/// estimate counts as sitting on a bound. 1e-3 of a ×/÷ 10 span is 0.5 % of the value: an
+/// optimizer that stopped there was held by the bound, not by the data.
+pub const ON_BOUND_SHARE: f64 = 1e-3;
+
+/// Which end of its bounds an estimate reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoundSide {
+    /// The lower bound.
+    Lower,
+    /// The upper bound.
+    Upper,
+}
+
+impl std::fmt::Display for BoundSide {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Lower => "lower",
+            Self::Upper => "upper",
+        })
+    }
+}
+
 pub(crate) fn logit(u: f64) -> f64 {
     (u / (1.0 - u)).ln()
 }
@@ -43,20 +67,29 @@ impl Dimension {
         ParamId::from_name(name).ok_or_else(|| SpaceError(format!("unknown parameter '{name}'")))
     }
 
-    /// A dimension with the default bounds of its parameter (`ParamSpec::search`).
-    pub fn for_param(name: &str) -> Result<Self, SpaceError> {
-        Self::for_id(Self::id_of(name)?)
+    /// A dimension with the default bounds of its parameter for a motor `size` times
+    /// AR034-11's displacement (`ParamSpec::search_at`).
+    pub fn for_param(name: &str, size: f64) -> Result<Self, SpaceError> {
+        Self::for_id(Self::id_of(name)?, size)
     }
 
-    /// A dimension with the default bounds of its parameter (`ParamSpec::search`).
-    pub fn for_id(id: ParamId) -> Result<Self, SpaceError> {
+    /// A dimension with the default bounds of its parameter for a motor `size` times
+    /// AR034-11's displacement (`ParamSpec::search_at`: the reference motor's range scaled by
+    /// the parameter's size law, so that no motor of 0.3–500 cm³ starts against a bound).
+    pub fn for_id(id: ParamId, size: f64) -> Result<Self, SpaceError> {
         let s = id.spec();
         if matches!(s.domain, Domain::Integer(..)) {
             return Err(SpaceError(format!(
                 "parameter '{id}' is a whole number and cannot be estimated"
             )));
         }
-        Self::with_id_bounds(id, s.search.0, s.search.1)
+        if !(size.is_finite() && size > 0.0) {
+            return Err(SpaceError(format!(
+                "bounds of '{id}': the motor's size {size:e} is not a positive number"
+            )));
+        }
+        let (lo, hi) = s.search_at(size);
+        Self::with_id_bounds(id, lo, hi)
     }
 
     /// A dimension with explicit bounds (SI).
@@ -133,6 +166,19 @@ impl Dimension {
     /// Optimizer coordinate θ of a value (clamped a hair inside the bounds).
     pub fn theta(&self, v: f64) -> f64 {
         logit(self.unit(v).clamp(1e-9, 1.0 - 1e-9))
+    }
+
+    /// The bound that a value `v` sits on (within [`ON_BOUND_SHARE`] of the span), and the
+    /// bound's value, SI; `None` inside.
+    pub fn bound_reached(&self, v: f64) -> Option<(BoundSide, f64)> {
+        let u = self.unit(v);
+        if u <= ON_BOUND_SHARE {
+            Some((BoundSide::Lower, self.lo))
+        } else if u >= 1.0 - ON_BOUND_SHARE {
+            Some((BoundSide::Upper, self.hi))
+        } else {
+            None
+        }
     }
 
     /// Value at optimizer coordinate θ.

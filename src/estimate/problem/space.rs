@@ -1,7 +1,7 @@
 //! The search space: which parameters are estimated (each a [`Dimension`] with its bounds
 //! and coordinate map), what is held fixed, the effects switched on and the motor prior.
 
-use crate::estimate::problem::dimension::{logistic, logit};
+use crate::estimate::problem::dimension::{logistic, logit, BoundSide};
 pub use crate::estimate::problem::dimension::{Dimension, SpaceError};
 use crate::estimate::problem::prior::Prior;
 use crate::model::effects::EffectSet;
@@ -28,12 +28,25 @@ pub struct ParamSpace {
     pub size_reference_m3: Option<f64>,
 }
 
+/// An estimate that ended on a bound of its dimension ([`ParamSpace::bounds_reached`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoundHit {
+    /// The parameter.
+    pub id: ParamId,
+    /// Which bound.
+    pub side: BoundSide,
+    /// The bound, SI.
+    pub bound: f64,
+}
+
 impl ParamSpace {
-    /// Estimates `names` (default bounds) over `fixed`, with the effects switched on.
+    /// Estimates `names` (default bounds at `fixed`'s size) over `fixed`, with the effects
+    /// switched on.
     pub fn new(names: &[&str], fixed: MotorParams, effects: EffectSet) -> Result<Self, SpaceError> {
+        let size = fixed.size();
         let dims = names
             .iter()
-            .map(|n| Dimension::for_param(n))
+            .map(|n| Dimension::for_param(n, size))
             .collect::<Result<Vec<_>, _>>()?;
         Self::from_dims(dims, fixed, effects)
     }
@@ -135,6 +148,23 @@ impl ParamSpace {
         set.check()
     }
 
+    /// The estimated parameters of `p` that sit on one of their bounds: an optimizer that
+    /// stopped there was held by the bound, and what depends on that parameter is
+    /// unreliable (the fit says so).
+    pub fn bounds_reached(&self, p: &MotorParams) -> Vec<BoundHit> {
+        self.dims
+            .iter()
+            .filter_map(|d| {
+                d.bound_reached(p.value(d.id))
+                    .map(|(side, bound)| BoundHit {
+                        id: d.id,
+                        side,
+                        bound,
+                    })
+            })
+            .collect()
+    }
+
     /// Optimizer coordinates of a parameter set.
     pub fn theta(&self, p: &MotorParams) -> Vec<f64> {
         self.dims.iter().map(|d| d.theta(p.value(d.id))).collect()
@@ -161,6 +191,69 @@ impl ParamSpace {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An estimate at a bound (or within 1e-3 of the span of it, in the dimension's own
+    /// scale) is reported with its side and bound; one inside is not.
+    #[test]
+    fn estimates_on_a_bound_are_found_with_their_side() {
+        let s = ParamSpace::new(
+            &["c_in1", "b_crit", "t_coulomb"],
+            MotorParams::default(),
+            EffectSet::empty(),
+        )
+        .unwrap();
+        assert!(s.bounds_reached(&MotorParams::default()).is_empty());
+        let (lo, hi) = (s.dims[2].lo, s.dims[2].hi);
+        let p = MotorParams::default()
+            .with("t_coulomb", hi)
+            .unwrap()
+            .with(
+                "b_crit",
+                s.dims[1].lo + 1e-4 * (s.dims[1].hi - s.dims[1].lo),
+            )
+            .unwrap();
+        let hits = s.bounds_reached(&p);
+        assert_eq!(hits.len(), 2, "{hits:?}");
+        assert_eq!(
+            (hits[0].id, hits[0].side, hits[0].bound),
+            (ParamId::B_CRIT, BoundSide::Lower, s.dims[1].lo)
+        );
+        assert_eq!(
+            (hits[1].id, hits[1].side, hits[1].bound),
+            (ParamId::T_COULOMB, BoundSide::Upper, hi)
+        );
+        // 1 % above the lower bound of a ×/÷ 10 log span is 4e-3 of it: inside.
+        let p = MotorParams::default().with("t_coulomb", lo * 1.01).unwrap();
+        assert!(s.bounds_reached(&p).is_empty());
+    }
+
+    /// A space over a motor of another size is bounded around that motor's size-scaled
+    /// values: a 100 cm³ motor's Coulomb friction (26 × the reference's) is inside.
+    #[test]
+    fn a_large_motors_space_is_bounded_around_its_own_size() {
+        let size = 100.0 / 3.8;
+        let mut set = ParamSet::default();
+        set.set_value(ParamId::V_DISP, 100e-6);
+        for id in ParamId::all() {
+            if id.spec().size_exponent.is_some() {
+                set.set_value(id, id.spec().scaled_default(size));
+            }
+        }
+        let p = set.check().unwrap();
+        let s = ParamSpace::new(
+            &["t_coulomb", "visc", "c_in1"],
+            p.clone(),
+            EffectSet::empty(),
+        )
+        .unwrap();
+        assert!(s.bounds_reached(&p).is_empty());
+        let reference = ParamId::T_COULOMB.spec().search;
+        assert!(
+            p.t_coulomb() > reference.1,
+            "outside the reference motor's range"
+        );
+        assert!(s.dims[0].lo < p.t_coulomb() && p.t_coulomb() < s.dims[0].hi);
+    }
 
     #[test]
     fn theta_round_trips_inside_bounds() {

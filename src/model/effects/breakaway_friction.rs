@@ -5,7 +5,7 @@
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::friction;
-use crate::model::spec::{Domain, OffValue, ParamId, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamId, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct BreakawayFriction;
@@ -27,6 +27,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::BreakawayFriction),
         off: OffValue::BaseClamped(ParamId::T_COULOMB),
         meaning: "static (breakaway) friction torque",
+        size_exponent: Some(SizeLaw::TORQUE),
         ..ParamSpec::EFFECT
     },
     ParamSpec {
@@ -38,6 +39,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::BreakawayFriction),
         off: OffValue::Default,
         meaning: "Stribeck speed (the excess over Coulomb falls to 1/e)",
+        size_exponent: Some(SizeLaw::SPEED),
         ..ParamSpec::EFFECT
     },
 ];

@@ -3,7 +3,7 @@
 //! p_discharge·V_carry·z·|ω|/(2π·R·T0), kg/s.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
 use crate::units::constants::RT0;
 use std::f64::consts::PI;
 
@@ -22,6 +22,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::DeadVolumeCarryover),
     off: OffValue::SearchLower,
     meaning: "volume carried back at discharge pressure per compartment",
+    size_exponent: Some(SizeLaw::VOLUME),
     ..ParamSpec::EFFECT
 }];
 

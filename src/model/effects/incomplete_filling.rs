@@ -3,7 +3,7 @@
 //! (p_inlet − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct IncompleteFilling;
@@ -21,6 +21,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::IncompleteFilling),
     off: OffValue::SearchUpper,
     meaning: "speed at which filling reaches half the pressure difference",
+    size_exponent: Some(SizeLaw::SPEED),
     ..ParamSpec::EFFECT
 }];
 

@@ -3,7 +3,7 @@
 //! k·max(p_inlet − p_e, 0), N·m.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct PressureDependentFriction;
@@ -20,6 +20,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::PressureDependentFriction),
     off: OffValue::SearchLower,
     meaning: "Coulomb friction per Pa of p_1 - p_e",
+    size_exponent: Some(SizeLaw::TORQUE),
     ..ParamSpec::EFFECT
 }];
 

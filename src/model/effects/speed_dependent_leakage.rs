@@ -3,7 +3,7 @@
 //! multiplied by 1 + g/(1 + (ω/ω_seal)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct SpeedDependentLeakage;
@@ -34,6 +34,7 @@ pub const PARAMS: &[ParamSpec] = &[
         effect: Some(Effect::SpeedDependentLeakage),
         off: OffValue::Default,
         meaning: "speed at which vane sealing halves the extra leakage",
+        size_exponent: Some(SizeLaw::SPEED),
         ..ParamSpec::EFFECT
     },
 ];

@@ -3,7 +3,7 @@
 //! smooth part of the friction.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec};
+use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct VaneFrictionSpeedSquared;
@@ -21,6 +21,7 @@ pub const PARAMS: &[ParamSpec] = &[ParamSpec {
     effect: Some(Effect::VaneFrictionSpeedSquared),
     off: OffValue::SearchLower,
     meaning: "friction torque per (rad/s)² (vane tips, windage)",
+    size_exponent: Some(SizeLaw::TORQUE_PER_SPEED2),
     ..ParamSpec::EFFECT
 }];
 
