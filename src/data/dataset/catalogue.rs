@@ -776,6 +776,27 @@ mod tests {
             ("120 watts", Quantity::Power, Unit::W),
             ("7.4 ft³/min", Quantity::Flow1, Unit::Cfm),
             ("180 Nl/min ANR", Quantity::Flow1, Unit::LMinAnr),
+            // Issue 44's spellings.
+            ("12200 U/min", Quantity::Speed, Unit::Rpm),
+            ("12200 UpM", Quantity::Speed, Unit::Rpm),
+            ("3.9 Nl/s", Quantity::Flow1, Unit::NlS),
+            ("230 Nl/min", Quantity::Flow1, Unit::NlMin),
+            ("0.12 ft-lb", Quantity::Torque, Unit::LbfFt),
+            ("0.12 lb-ft", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft·lbf", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft.lbf", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft lbf", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft.lbs", Quantity::Torque, Unit::LbfFt),
+            ("6.3 barg", Quantity::PPort1, Unit::BarG),
+            ("6.3 bar(ü)", Quantity::PPort1, Unit::BarG),
+            ("6.3 bar ü", Quantity::PPort1, Unit::BarG),
+            ("6.3 BAR(Ü)", Quantity::PPort1, Unit::BarG),
+            ("90 psig", Quantity::PPort1, Unit::PsiG),
+            ("0.03 kgf·m", Quantity::Torque, Unit::KgfM),
+            ("0.03 kgf m", Quantity::Torque, Unit::KgfM),
+            ("0.03 kgfm", Quantity::Torque, Unit::KgfM),
+            ("3 kgf·cm", Quantity::Torque, Unit::KgfCm),
+            ("29 N·cm", Quantity::Torque, Unit::NCm),
         ] {
             assert_eq!(parse_value(text, q, p).map(|r| r.1), Ok(u), "{text}");
         }
@@ -787,6 +808,35 @@ mod tests {
             parse_value("0.12", Quantity::Power, p),
             Err(ValueError::NoUnit { .. })
         ));
+    }
+
+    /// Makers' spellings read as printed give the SI value of a closed form written out
+    /// here: 12200 U/min = 12200·2π/60 rad/s, 6.3 barg = 6.3e5 Pa + p_atm, 0.12 ft-lb =
+    /// 0.12·0.3048·0.45359237·9.80665 N·m, 3.9 Nl/s = 3.9e-3 m³/s · 101325/(287.05287·273.15)
+    /// kg/m³, 0.03 kgf·m = 0.03·9.80665 N·m.
+    #[test]
+    fn makers_spellings_give_closed_form_si_values() {
+        let p = 101_325.0;
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+        for (text, q, want) in [
+            ("12200 U/min", Quantity::Speed, 12_200.0 * std::f64::consts::PI / 30.0),
+            ("12200 min⁻¹", Quantity::Speed, 12_200.0 * std::f64::consts::PI / 30.0),
+            ("6.3 barg", Quantity::PPort1, 6.3e5 + p),
+            ("6.3 bar(ü)", Quantity::PPort1, 6.3e5 + p),
+            ("90 psig", Quantity::PPort1, 90.0 * 0.453_592_37 * 9.806_65 / 0.0254_f64.powi(2) + p),
+            ("0.12 ft-lb", Quantity::Torque, 0.12 * 0.3048 * 0.453_592_37 * 9.806_65),
+            ("0.12 lb-ft", Quantity::Torque, 0.12 * 0.3048 * 0.453_592_37 * 9.806_65),
+            ("0.03 kgf·m", Quantity::Torque, 0.03 * 9.806_65),
+            ("3.9 Nl/s", Quantity::Flow1, 3.9e-3 * 101_325.0 / (287.052_87 * 273.15)),
+            ("234 Nl/min", Quantity::Flow1, 234e-3 / 60.0 * 101_325.0 / (287.052_87 * 273.15)),
+        ] {
+            let (si, _, _) = parse_value(text, q, p).unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert!(close(si, want), "{text}: {si} vs {want}");
+        }
+        // Stated gauge: no warning about how it was read.
+        for stated in ["6.3 barg", "6.3 bar(ü)", "90 psig"] {
+            assert_eq!(supply_notation(stated, p), None, "{stated}");
+        }
     }
 
     /// "~9000 rpm", "approx. 0.3 N·m", "ca. 180 l/min": read as printed.
