@@ -451,6 +451,12 @@ pub(super) fn recording(
     curves: Option<Recording>,
     figures: &[Figure],
 ) -> Result<Recording, DataError> {
+    if curves.is_none() && figures.is_empty() {
+        return Err(src.at(
+            "kind",
+            "this catalogue experiment gives neither curves nor key figures: give a curve file (file = \"curves.csv\": speed_rpm and any of torque, power and air columns) or an [experiment.figures] table (free_speed = \"9000 rpm\", …), or both".into(),
+        ));
+    }
     let mut rec = curves.unwrap_or_else(|| Recording {
         file: src.rig.0.to_path_buf(),
         columns: Vec::new(),
@@ -462,10 +468,52 @@ pub(super) fn recording(
     let keys = FigureKeys::new(rec.rows(), &rows);
     add_figure_columns(&mut rec, &rows, figures);
     append_figure_rows(&mut rec, rows, src.p_atm_pa);
-    check_curves(&rec, src.tolerance, |q, row, message| {
-        keys.locate(src, &rec, q, row, message)
-    })?;
+    let locate = |q, row, message| keys.locate(src, &rec, q, row, message);
+    check_curves(&rec, src.tolerance, locate)?;
+    check_beyond_free_speed(&rec, keys.n_curve_rows, figures, src.tolerance, locate)?;
     Ok(rec)
+}
+
+/// Refuses a curve point beyond the printed free speed whose torque or power is above zero
+/// by more than three reading tolerances of its curve's full scale: the torque is 0 at the
+/// free speed and falls with speed, so no point beyond it has a torque (a misread speed, or
+/// a point of another pressure). Only the curve rows (the first `n_curve_rows`) are looked
+/// at; `locate` places the message at the cell.
+fn check_beyond_free_speed(
+    rec: &Recording,
+    n_curve_rows: usize,
+    figures: &[Figure],
+    tolerance: f64,
+    locate: impl Fn(Quantity, usize, String) -> DataError,
+) -> Result<(), DataError> {
+    let Some(free) = figures.iter().find(|f| f.key == "free_speed") else {
+        return Ok(());
+    };
+    let speed = rec.values(Quantity::Speed)?;
+    for q in [Quantity::Torque, Quantity::Power] {
+        let Some(col) = rec.column(q) else { continue };
+        let full_scale = col.si.iter().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+        for i in 0..n_curve_rows.min(speed.len()) {
+            let v = col.si[i];
+            if speed[i] > free.si && v.is_finite() && v > 3.0 * tolerance * full_scale {
+                let at = free.line.map_or(String::new(), |l| format!(" (rig.toml line {l})"));
+                return Err(locate(
+                    q,
+                    i,
+                    format!(
+                        "{} {} {} at {:.0} rpm, beyond the printed free speed {} {}{at}: the torque is 0 at free speed and falls with speed, so no point beyond it has a torque or power (a misread speed, or a point of another pressure?)",
+                        q.words(),
+                        &col.raw[i],
+                        col.unit.symbol(),
+                        Unit::Rpm.from_si(speed[i], 0.0),
+                        free.written,
+                        free.unit.symbol()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The quantities of a catalogue's curves, in the order of a figure row's cells.
