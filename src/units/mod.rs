@@ -579,6 +579,19 @@ mod tests {
         }
     }
 
+    /// docs/formats.md lists every unit of the table and every spelling of it.
+    #[test]
+    fn the_docs_list_every_unit_and_spelling() {
+        let docs = include_str!("../../docs/formats.md");
+        let at = docs.find("### Units and their spellings").unwrap();
+        let section = &docs[at..];
+        for f in &UNITS {
+            for name in std::iter::once(&f.suffix).chain(f.spellings) {
+                assert!(section.contains(&format!("`{name}`")), "{name}");
+            }
+        }
+    }
+
     /// The units that keep their former arithmetic agree with their factor in the table,
     /// and a decimal factor is its literal.
     #[test]
