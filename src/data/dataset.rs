@@ -784,7 +784,9 @@ pub(crate) fn locate_span(
         // points at its first letter) names the whole key.
         let bare = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
         if text[start..end].chars().all(bare) {
-            end += text[end..].find(|c: char| !bare(c)).unwrap_or(text.len() - end);
+            end += text[end..]
+                .find(|c: char| !bare(c))
+                .unwrap_or(text.len() - end);
         }
         let before = &text[..start];
         let line = before.matches('\n').count() as u64 + 1;

@@ -257,14 +257,21 @@ impl MotorSection {
             } else if given {
                 "given".to_string()
             } else {
-                format!("(assumed, not printed{note}; source: {})", assumed_source(key))
+                format!(
+                    "(assumed, not printed{note}; source: {})",
+                    assumed_source(key)
+                )
             }
         };
         let mut lines = vec![
             format!(
                 "displacement    {:.4} cm³  {}",
                 p.v_disp() * 1e6,
-                from(self.displacement_m3.is_some(), "displacement_m3", "; give displacement_m3 or displacement_cm3")
+                from(
+                    self.displacement_m3.is_some(),
+                    "displacement_m3",
+                    "; give displacement_m3 or displacement_cm3"
+                )
             ),
             format!(
                 "vanes           {}  {}",

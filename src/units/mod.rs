@@ -97,9 +97,9 @@ impl Quantity {
             Quantity::Time => &[S],
             Quantity::Speed => &[Rpm, RadS],
             Quantity::Torque => &[Nm, LbfFt, LbfIn, NCm, KgfM, KgfCm],
-            Quantity::Flow1 | Quantity::Flow2 => {
-                &[GS, KgS, LMinAnr, LSAnr, LS, LMin, M3Min, Cfm, Scfm, NlMin, NlS]
-            }
+            Quantity::Flow1 | Quantity::Flow2 => &[
+                GS, KgS, LMinAnr, LSAnr, LS, LMin, M3Min, Cfm, Scfm, NlMin, NlS,
+            ],
             Quantity::PPort1 | Quantity::PPort2 => &[Mpa, BarAbs, BarG, Pa, Kpa, PsiG, PsiA],
             Quantity::CPort2 => &[M3SPa, Dm3SBar],
             Quantity::Power => &[W, Kw, Hp],
@@ -229,8 +229,7 @@ const FREE_AIR: Option<&str> = Some("free air (ISO 1217): 100 kPa, 20 °C, dry, 
 /// ANR of ISO 8778, for the reference of its units.
 const ANR: Option<&str> = Some("ANR (ISO 8778/6358): ρ0 = 1.185 kg/m³");
 /// Normal conditions of DIN 1343, for the reference of its units.
-const NORMAL: Option<&str> =
-    Some("normal (DIN 1343): 101.325 kPa, 0 °C, dry, ρ = 1.2923 kg/m³");
+const NORMAL: Option<&str> = Some("normal (DIN 1343): 101.325 kPa, 0 °C, dry, ρ = 1.2923 kg/m³");
 /// The units' source: the SI Brochure.
 const SI: &str = "SI Brochure (BIPM, 9th ed. 2019)";
 /// The inch-pound units' source.
@@ -601,7 +600,10 @@ mod tests {
             for v in [1.0, 3.7, 12_200.0] {
                 let si = u.to_si(v, 0.0);
                 assert!((si - v * k).abs() <= 4.0 * f64::EPSILON * si, "{u:?}");
-                assert!((u.from_si(si, 0.0) - v).abs() <= 4.0 * f64::EPSILON * v, "{u:?}");
+                assert!(
+                    (u.from_si(si, 0.0) - v).abs() <= 4.0 * f64::EPSILON * v,
+                    "{u:?}"
+                );
             }
         }
         assert_eq!(pow10(-3), 1e-3);
@@ -619,7 +621,12 @@ mod tests {
         let lbf_ft = 0.453_592_37 * 9.806_65 * 0.3048;
         let rho_n = 101_325.0 / (287.052_87 * 273.15);
         for (q, text, v, want) in [
-            (Quantity::Speed, "u_min", 12_200.0, 12_200.0 * 2.0 * PI / 60.0),
+            (
+                Quantity::Speed,
+                "u_min",
+                12_200.0,
+                12_200.0 * 2.0 * PI / 60.0,
+            ),
             (Quantity::Speed, "upm", 60.0, 2.0 * PI),
             (Quantity::Speed, "min_1", 60.0, 2.0 * PI),
             (Quantity::Speed, "1_min", 60.0, 2.0 * PI),
@@ -634,7 +641,12 @@ mod tests {
             (Quantity::Torque, "n_cm", 29.4, 0.294),
             (Quantity::PPort1, "barg", 6.3, 731_325.0),
             (Quantity::PPort1, "bar_ü", 6.3, 731_325.0),
-            (Quantity::PPort1, "psig", 90.0, 90.0 * 6_894.757_293_168_361 + 101_325.0),
+            (
+                Quantity::PPort1,
+                "psig",
+                90.0,
+                90.0 * 6_894.757_293_168_361 + 101_325.0,
+            ),
         ] {
             let u = unit_of(q, text).unwrap_or_else(|e| panic!("{text}: {e}"));
             let si = u.to_si(v, 101_325.0);

@@ -170,7 +170,11 @@ fn bad_catalogue_input_is_located() {
     refused(
         rig7,
         &[],
-        &["rig.toml:8:1 (key 'kind')", "needs its supply pressure", "add p_supply"],
+        &[
+            "rig.toml:8:1 (key 'kind')",
+            "needs its supply pressure",
+            "add p_supply",
+        ],
     );
     // A figure that cannot be placed on a curve.
     let rig9 = "[[experiment]]\nkind = \"catalogue\"\np_supply = \"6.3 bar_g\"\n[experiment.figures]\nstall_torque = \"0.3 N·m\"\nair_at_free_speed = \"4 l/s\"\n";
@@ -263,7 +267,10 @@ fn a_page_with_neither_curves_nor_figures_says_so() {
     refused(
         rig,
         &[],
-        &["rig.toml:8:1 (key 'kind')", "neither curves nor key figures"],
+        &[
+            "rig.toml:8:1 (key 'kind')",
+            "neither curves nor key figures",
+        ],
     );
     let dir = dataset(rig, &[]);
     let (_, _, err) = check(dir.path());
@@ -297,10 +304,22 @@ fn check_names_the_folder_and_prints_units_as_people_write_them() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let name = dir.path().file_name().unwrap().to_string_lossy();
     assert!(text.starts_with(&format!("dataset {name} (")), "{text}");
-    for shown in ["[N·m]", "[l/s]", "[rpm]", " kW ", "= kg/s", "N·m, ", "in l/s counts air"] {
+    for shown in [
+        "[N·m]",
+        "[l/s]",
+        "[rpm]",
+        " kW ",
+        "= kg/s",
+        "N·m, ",
+        "in l/s counts air",
+    ] {
         assert!(text.contains(shown), "'{shown}' not in:\n{text}");
     }
     for suffix in ["[nm]", "[l_s]", " nm,", " kw ", " l_s ", "kg_s"] {
@@ -370,12 +389,21 @@ fn a_page_in_makers_spellings_fits_like_the_page_in_si() {
     assert!((ea.p_supply_pa.unwrap() / eb.p_supply_pa.unwrap() - 1.0).abs() < 1e-12);
     for (fa, fb) in ea.figures.iter().zip(&eb.figures) {
         assert_eq!(fa.key, fb.key);
-        assert!((fa.si / fb.si - 1.0).abs() < 1e-12, "{}: {} vs {}", fa.key, fa.si, fb.si);
+        assert!(
+            (fa.si / fb.si - 1.0).abs() < 1e-12,
+            "{}: {} vs {}",
+            fa.key,
+            fa.si,
+            fb.si
+        );
     }
     let (cost_si, est_si) = fitted(a.path());
     for d in [&b, &c] {
         let (cost, est) = fitted(d.path());
-        assert!((cost / cost_si - 1.0).abs() < 1e-6, "cost {cost} vs {cost_si}");
+        assert!(
+            (cost / cost_si - 1.0).abs() < 1e-6,
+            "cost {cost} vs {cost_si}"
+        );
         assert_eq!(est.len(), est_si.len());
         for ((name, v), (_, v_si)) in est.iter().zip(&est_si) {
             assert!((v / v_si - 1.0).abs() < 1e-4, "{name}: {v} vs {v_si}");

@@ -492,11 +492,18 @@ fn check_beyond_free_speed(
     let speed = rec.values(Quantity::Speed)?;
     for q in [Quantity::Torque, Quantity::Power] {
         let Some(col) = rec.column(q) else { continue };
-        let full_scale = col.si.iter().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+        let full_scale = col
+            .si
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max);
         for i in 0..n_curve_rows.min(speed.len()) {
             let v = col.si[i];
             if speed[i] > free.si && v.is_finite() && v > 3.0 * tolerance * full_scale {
-                let at = free.line.map_or(String::new(), |l| format!(" (rig.toml line {l})"));
+                let at = free
+                    .line
+                    .map_or(String::new(), |l| format!(" (rig.toml line {l})"));
                 return Err(locate(
                     q,
                     i,
@@ -867,16 +874,44 @@ mod tests {
         let p = 101_325.0;
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
         for (text, q, want) in [
-            ("12200 U/min", Quantity::Speed, 12_200.0 * std::f64::consts::PI / 30.0),
-            ("12200 min⁻¹", Quantity::Speed, 12_200.0 * std::f64::consts::PI / 30.0),
+            (
+                "12200 U/min",
+                Quantity::Speed,
+                12_200.0 * std::f64::consts::PI / 30.0,
+            ),
+            (
+                "12200 min⁻¹",
+                Quantity::Speed,
+                12_200.0 * std::f64::consts::PI / 30.0,
+            ),
             ("6.3 barg", Quantity::PPort1, 6.3e5 + p),
             ("6.3 bar(ü)", Quantity::PPort1, 6.3e5 + p),
-            ("90 psig", Quantity::PPort1, 90.0 * 0.453_592_37 * 9.806_65 / 0.0254_f64.powi(2) + p),
-            ("0.12 ft-lb", Quantity::Torque, 0.12 * 0.3048 * 0.453_592_37 * 9.806_65),
-            ("0.12 lb-ft", Quantity::Torque, 0.12 * 0.3048 * 0.453_592_37 * 9.806_65),
+            (
+                "90 psig",
+                Quantity::PPort1,
+                90.0 * 0.453_592_37 * 9.806_65 / 0.0254_f64.powi(2) + p,
+            ),
+            (
+                "0.12 ft-lb",
+                Quantity::Torque,
+                0.12 * 0.3048 * 0.453_592_37 * 9.806_65,
+            ),
+            (
+                "0.12 lb-ft",
+                Quantity::Torque,
+                0.12 * 0.3048 * 0.453_592_37 * 9.806_65,
+            ),
             ("0.03 kgf·m", Quantity::Torque, 0.03 * 9.806_65),
-            ("3.9 Nl/s", Quantity::Flow1, 3.9e-3 * 101_325.0 / (287.052_87 * 273.15)),
-            ("234 Nl/min", Quantity::Flow1, 234e-3 / 60.0 * 101_325.0 / (287.052_87 * 273.15)),
+            (
+                "3.9 Nl/s",
+                Quantity::Flow1,
+                3.9e-3 * 101_325.0 / (287.052_87 * 273.15),
+            ),
+            (
+                "234 Nl/min",
+                Quantity::Flow1,
+                234e-3 / 60.0 * 101_325.0 / (287.052_87 * 273.15),
+            ),
         ] {
             let (si, _, _) = parse_value(text, q, p).unwrap_or_else(|e| panic!("{text}: {e}"));
             assert!(close(si, want), "{text}: {si} vs {want}");

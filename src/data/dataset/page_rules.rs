@@ -85,8 +85,14 @@ fn rule_slip(ratio: f64, typical: f64, range: (f64, f64), q: Quantity) -> Option
             continue;
         }
         for (corrected, what) in [
-            (ratio / f, format!("{} printed as {}", small.symbol(), large.symbol())),
-            (ratio * f, format!("{} printed as {}", large.symbol(), small.symbol())),
+            (
+                ratio / f,
+                format!("{} printed as {}", small.symbol(), large.symbol()),
+            ),
+            (
+                ratio * f,
+                format!("{} printed as {}", large.symbol(), small.symbol()),
+            ),
         ] {
             let off = (corrected / typical).ln().abs();
             let inside = (range.0..=range.1).contains(&corrected);
