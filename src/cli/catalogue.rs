@@ -45,9 +45,9 @@ pub(crate) fn print(ex: &ExperimentData, p_atm_pa: f64) {
             "    {:<28} {:>10} {:<10} = {:>12} {}{note}",
             what,
             num(f.written),
-            f.unit.suffix(),
+            f.unit.symbol(),
             num(f.si),
-            si.suffix()
+            si.symbol()
         );
     }
     let rec = &ex.recording;
@@ -62,7 +62,7 @@ pub(crate) fn print(ex: &ExperimentData, p_atm_pa: f64) {
     .collect();
     let header: Vec<String> = cols
         .iter()
-        .map(|c| format!("{} = {}", c.name, c.quantity.si_unit().suffix()))
+        .map(|c| format!("{} = {}", c.name, c.quantity.si_unit().symbol()))
         .collect();
     say!("    points (as written → SI): {}", header.join(" | "));
     for r in 0..rec.rows() {
@@ -84,7 +84,7 @@ pub(crate) fn print(ex: &ExperimentData, p_atm_pa: f64) {
             if !shown.contains(&conditions) {
                 say!(
                     "    air consumption in {} counts air at {conditions}",
-                    u.suffix()
+                    u.symbol()
                 );
                 shown.push(conditions);
             }

@@ -309,7 +309,7 @@ fn check(dir: &Path) -> Result<(), Failure> {
                 c.name,
                 num(to(lo)),
                 num(to(hi)),
-                c.unit.suffix()
+                c.unit.symbol()
             );
         }
         catalogue::print(ex, ds.p_atm_pa);
@@ -339,7 +339,7 @@ fn print_reference(r: &vanefit::objective::ChannelReference, p_atm_pa: f64) {
     };
     let range = |lo: f64, hi: f64| {
         let (u, v) = (a.display(lo, p_atm_pa), a.display(hi, p_atm_pa));
-        format!("{} .. {} {}", num(u), num(v), a.unit.suffix())
+        format!("{} .. {} {}", num(u), num(v), a.unit.symbol())
     };
     let pieces = fit.pieces();
     let (lo, hi) = fit.range();
@@ -352,7 +352,7 @@ fn print_reference(r: &vanefit::objective::ChannelReference, p_atm_pa: f64) {
         "    reference {} vs {x_name}: {degree}, R² {:.5}, σ {sigma} {}{floor}, {} points, {}",
         r.column,
         fit.r_squared(),
-        r.unit.suffix(),
+        r.unit.symbol(),
         fit.n_fitted(),
         range(lo, hi)
     );

@@ -569,16 +569,15 @@ impl Dataset {
         let mut experiments = Vec::with_capacity(rig.experiment.len());
         for (k, ex) in rig.experiment.iter().enumerate() {
             let data = experiment_data(dir, (&rig_path, text), k, ex, p_atm_pa)?;
-            check_experiment(&data)?;
+            check_experiment(&data, &|key: &str, message: String| {
+                located(&rig_path, text, Table::Experiment(k), key, message)
+            })?;
             plausible::check_recording(&data.recording, p_atm_pa)?;
             experiments.push(data);
         }
         Ok(Dataset {
             dir: dir.to_path_buf(),
-            name: dir
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
+            name: dataset_name(dir),
             synthetic: rig.synthetic,
             description: rig.description,
             motor: rig.motor,
@@ -587,6 +586,15 @@ impl Dataset {
             experiments,
         })
     }
+}
+
+/// The dataset's name: its folder's name, also where the folder is given as `.` or `..`
+/// (the name of the folder it stands for).
+fn dataset_name(dir: &Path) -> String {
+    let named = |p: &Path| p.file_name().map(|n| n.to_string_lossy().into_owned());
+    named(dir)
+        .or_else(|| dir.canonicalize().ok().as_deref().and_then(named))
+        .unwrap_or_default()
 }
 
 impl ExperimentSection {
@@ -771,6 +779,14 @@ pub(crate) fn locate_span(
         let mut end = span.end.clamp(start, text.len());
         while !text.is_char_boundary(end) {
             end += 1;
+        }
+        // A span that covers only the start of a bare key (the parser's "duplicate key"
+        // points at its first letter) names the whole key.
+        let bare = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+        if text[start..end].chars().all(bare) {
+            end += text[end..]
+                .find(|c: char| !bare(c))
+                .unwrap_or(text.len() - end);
         }
         let before = &text[..start];
         let line = before.matches('\n').count() as u64 + 1;
@@ -1003,18 +1019,24 @@ fn check_load(
     }
 }
 
-/// Runs one of the input checks of an experiment's kind.
-fn check_input(ex: &ExperimentData, check: InputCheck) -> Result<(), DataError> {
+/// Runs one of the input checks of an experiment's kind; `at` locates an error at a key of
+/// the experiment's table in rig.toml.
+fn check_input(
+    ex: &ExperimentData,
+    check: InputCheck,
+    at: &impl Fn(&str, String) -> DataError,
+) -> Result<(), DataError> {
     let rec = &ex.recording;
     match check {
         InputCheck::Column(q) => rec.values(q).map(|_| ()).map_err(DataError::from),
         InputCheck::Spans(q, min_relative_span) => rec.check_spans(q, min_relative_span),
         InputCheck::Supply => {
             if ex.p_supply_pa.is_none() && rec.column(Quantity::PPort1).is_none() {
-                return Err(DataError::new(
-                    &rec.file,
+                // At the experiment's table, where the key belongs (no line of its own).
+                return Err(at(
+                    "kind",
                     format!(
-                        "{} needs its supply pressure: p_supply (e.g. \"6.3 bar_g\") or p_supply_mpa in rig.toml, or a p_port1 column",
+                        "this {} experiment needs its supply pressure: add p_supply = \"6.3 bar(g)\" (as printed) or p_supply_mpa to its [[experiment]] table, or a p_port1 column to its recording",
                         ex.kind.id()
                     ),
                 ));
@@ -1038,8 +1060,12 @@ fn check_input(ex: &ExperimentData, check: InputCheck) -> Result<(), DataError> 
     }
 }
 
-/// Checks that an experiment has the columns its kind needs.
-fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
+/// Checks that an experiment has the columns its kind needs; `at` locates an error at a
+/// key of its table in rig.toml.
+fn check_experiment(
+    ex: &ExperimentData,
+    at: &impl Fn(&str, String) -> DataError,
+) -> Result<(), DataError> {
     let rec = &ex.recording;
     // A catalogue's points are few by nature; its reader checks that it has some.
     if rec.rows() < MIN_ROWS && ex.kind != Kind::Catalogue {
@@ -1055,7 +1081,7 @@ fn check_experiment(ex: &ExperimentData) -> Result<(), DataError> {
     }
     let kind = ex.kind.model();
     for check in kind.inputs() {
-        check_input(ex, *check)?;
+        check_input(ex, *check, at)?;
     }
     let outputs = kind.channels();
     if !outputs.iter().any(|q| rec.column(*q).is_some()) {

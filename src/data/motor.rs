@@ -211,22 +211,56 @@ impl MotorSection {
     }
 }
 
+/// Where the value a fit assumes for a `[motor]` key that pages rarely print comes from:
+/// (rig.toml key, source). The values themselves are the registry's defaults
+/// (`model::spec`), the dead volume's scaled to the displacement.
+pub const ASSUMED_SOURCES: [(&str, &str); 4] = [
+    (
+        "displacement_m3",
+        "the paper's motor AR034-11 (W. Beater, appendix); a fit of catalogue pages alone estimates it from the pages (docs/estimation.md, \"A page without a displacement\")",
+    ),
+    (
+        "vanes",
+        "the paper's motor AR034-11 (W. Beater, appendix); vane air motors have 3 to 10 vanes, most 4 to 7 (Hydraulics & Pneumatics, Fluid Power Basics, \"Air motors\")",
+    ),
+    (
+        "expansion_ratio",
+        "the paper's motor AR034-11 (W. Beater, appendix: V_exp/V_fill from its port timing)",
+    ),
+    (
+        "dead_volume_m3",
+        "AR034-11's 0.1 cm³ scaled with the displacement (geometric similarity; docs/model.md, \"Defaults that follow the motor's size\")",
+    ),
+];
+
+/// The source of the value assumed for `key` (one of [`ASSUMED_SOURCES`]).
+fn assumed_source(key: &str) -> &'static str {
+    ASSUMED_SOURCES
+        .iter()
+        .find(|(k, _)| *k == key)
+        .map_or("", |(_, s)| s)
+}
+
 impl MotorSection {
     /// The motor a fit of this table will use, one line per key a page or rig file should
     /// give (displacement, vanes, expansion ratio, dead volume): its value and where it came
-    /// from (given, derived from the geometry, or a default and which), for `vanefit check`.
+    /// from (given, derived from the geometry, or assumed, not printed, with the source of
+    /// the assumed value), for `vanefit check`.
     pub fn assumed(&self) -> Result<Vec<String>, MotorSpecError> {
         let p = self.nominal_params()?;
         let geometry = self.geometry()?.is_some();
         let reference = MotorParams::default();
         let size = p.v_disp() / reference.v_disp();
-        let from = |given: bool, default: &str| -> String {
-            if geometry {
+        let from = |given: bool, key: &str, note: &str| -> String {
+            if geometry && key != "vanes" {
                 "derived from the geometry (paper eqs. 5–7)".to_string()
             } else if given {
                 "given".to_string()
             } else {
-                format!("DEFAULT: {default}")
+                format!(
+                    "(assumed, not printed{note}; source: {})",
+                    assumed_source(key)
+                )
             }
         };
         let mut lines = vec![
@@ -235,34 +269,27 @@ impl MotorSection {
                 p.v_disp() * 1e6,
                 from(
                     self.displacement_m3.is_some(),
-                    "the reference motor AR034-11's; give displacement_m3 (a fit of catalogue pages alone estimates it from the pages, see below)"
+                    "displacement_m3",
+                    "; give displacement_m3 or displacement_cm3"
                 )
             ),
             format!(
                 "vanes           {}  {}",
                 p.z(),
-                if self.vanes.is_some() {
-                    "given".to_string()
-                } else {
-                    "DEFAULT: AR034-11's (5); give vanes".to_string()
-                }
+                from(self.vanes.is_some(), "vanes", "")
             ),
             format!(
                 "expansion ratio {:.4}  {}",
                 p.eps(),
-                from(
-                    self.expansion_ratio.is_some(),
-                    "AR034-11's; give expansion_ratio"
-                )
+                from(self.expansion_ratio.is_some(), "expansion_ratio", "")
             ),
             format!(
                 "dead volume     {:.4} cm³  {}",
                 p.v_dead() * 1e6,
                 from(
                     self.dead_volume_m3.is_some(),
-                    &format!(
-                        "AR034-11's 0.1 cm³ × {size:.3} (the displacement's ratio; docs/model.md, \"Defaults that follow the motor's size\")"
-                    )
+                    "dead_volume_m3",
+                    &format!(": 0.1 cm³ × {size:.3}, the displacement's ratio to AR034-11's")
                 )
             ),
         ];
@@ -464,7 +491,19 @@ mod tests {
     fn the_assumed_motor_marks_every_default() {
         let lines = MotorSection::default().assumed().unwrap();
         assert_eq!(lines.len(), 4, "{lines:?}");
-        assert!(lines.iter().all(|l| l.contains("DEFAULT")), "{lines:?}");
+        assert!(
+            lines
+                .iter()
+                .all(|l| l.contains("(assumed, not printed") && l.contains("; source: ")),
+            "{lines:?}"
+        );
+        // The vane count: the registry's default, with where it comes from.
+        assert!(
+            lines[1].starts_with("vanes           5  (assumed, not printed; source: ")
+                && lines[1].contains("3 to 10 vanes"),
+            "{}",
+            lines[1]
+        );
         let m = MotorSection {
             displacement_m3: Some(7.6e-6),
             vanes: Some(4),
@@ -473,9 +512,9 @@ mod tests {
         let lines = m.assumed().unwrap();
         assert!(lines[0].contains("7.6000 cm³  given"), "{}", lines[0]);
         assert!(lines[1].contains("given"), "{}", lines[1]);
-        assert!(lines[2].contains("DEFAULT"), "{}", lines[2]);
+        assert!(lines[2].contains("(assumed, not printed"), "{}", lines[2]);
         assert!(
-            lines[3].contains("0.2000 cm³  DEFAULT") && lines[3].contains("2.000"),
+            lines[3].contains("0.2000 cm³  (assumed, not printed") && lines[3].contains("2.000"),
             "{}",
             lines[3]
         );

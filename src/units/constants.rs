@@ -36,7 +36,7 @@ pub(crate) const IN_M: f64 = 0.0254;
 /// One cubic foot, m³ (exact: 0.3048³).
 pub(crate) const FT3_M3: f64 = 0.028_316_846_592;
 /// Standard gravity, m/s² (exact by definition; defines the pound-force).
-const G_N: f64 = 9.806_65;
+pub(crate) const G_N: f64 = 9.806_65;
 /// One pound-force, N (exact: lb·g_n = 4.4482216152605 N).
 pub(crate) const LBF_N: f64 = LB_KG * G_N;
 /// One pound-force per square inch, Pa (≈ 6894.757 Pa).

@@ -96,10 +96,10 @@ impl Quantity {
         match self {
             Quantity::Time => &[S],
             Quantity::Speed => &[Rpm, RadS],
-            Quantity::Torque => &[Nm, LbfFt, LbfIn],
-            Quantity::Flow1 | Quantity::Flow2 => {
-                &[GS, KgS, LMinAnr, LSAnr, LS, LMin, M3Min, Cfm, Scfm, NlMin]
-            }
+            Quantity::Torque => &[Nm, LbfFt, LbfIn, NCm, KgfM, KgfCm],
+            Quantity::Flow1 | Quantity::Flow2 => &[
+                GS, KgS, LMinAnr, LSAnr, LS, LMin, M3Min, Cfm, Scfm, NlMin, NlS,
+            ],
             Quantity::PPort1 | Quantity::PPort2 => &[Mpa, BarAbs, BarG, Pa, Kpa, PsiG, PsiA],
             Quantity::CPort2 => &[M3SPa, Dm3SBar],
             Quantity::Power => &[W, Kw, Hp],
@@ -180,173 +180,224 @@ pub enum Unit {
     Kw,
     /// Mechanical horsepower (550 ft·lbf/s).
     Hp,
+    /// Normal litres per second (DIN 1343: 101.325 kPa, 0 °C, dry).
+    NlS,
+    /// Newton centimetre.
+    NCm,
+    /// Kilogram-force metre (kgf = 9.80665 N).
+    KgfM,
+    /// Kilogram-force centimetre.
+    KgfCm,
+}
+
+/// How a unit converts to SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scale {
+    /// SI = v·10^k exactly (g/s: −3, MPa: 6, SI units: 0): read with one rounding
+    /// ([`Unit::parse_si`]).
+    Decimal(i32),
+    /// SI = v·k.
+    Factor(f64),
+    /// A gauge pressure: SI = v·k + p_atm (the rig's atmosphere).
+    Gauge(f64),
+}
+
+/// Everything known of one unit, in one place: its column suffix, how people write it,
+/// the other spellings makers print (normalised as [`unit_of`] compares them: lower case,
+/// `_` for any run of other signs, `³` → `3`, `⁻¹` → `_1`), its factor to SI, where that
+/// factor comes from, and for a volume flow the reference conditions it counts air at.
+#[derive(Debug, Clone, Copy)]
+pub struct UnitFacts {
+    /// The unit.
+    pub unit: Unit,
+    /// The column-name suffix (`rpm`, `bar_g`).
+    pub suffix: &'static str,
+    /// The unit as people write it (`N·m`, `bar(g)`, `l/min ANR`).
+    pub symbol: &'static str,
+    /// Other spellings of the same unit (`u_min` for U/min, `barg`, `ft_lb`).
+    pub spellings: &'static [&'static str],
+    /// The conversion to SI.
+    pub scale: Scale,
+    /// Where the factor comes from.
+    pub source: &'static str,
+    /// For a volume flow: the reference conditions its volume is counted at.
+    pub reference: Option<&'static str>,
+}
+
+/// Free air of ISO 1217, for the reference of its units.
+const FREE_AIR: Option<&str> = Some("free air (ISO 1217): 100 kPa, 20 °C, dry, ρ = 1.1884 kg/m³");
+/// ANR of ISO 8778, for the reference of its units.
+const ANR: Option<&str> = Some("ANR (ISO 8778/6358): ρ0 = 1.185 kg/m³");
+/// Normal conditions of DIN 1343, for the reference of its units.
+const NORMAL: Option<&str> = Some("normal (DIN 1343): 101.325 kPa, 0 °C, dry, ρ = 1.2923 kg/m³");
+/// The units' source: the SI Brochure.
+const SI: &str = "SI Brochure (BIPM, 9th ed. 2019)";
+/// The inch-pound units' source.
+const NIST: &str = "NIST SP 811 (2008), appendix B: lb = 0.45359237 kg, ft = 0.3048 m, in = 0.0254 m, g_n = 9.80665 m/s² (exact)";
+
+/// Every unit, in the order of [`Unit`]'s variants (a test checks the order).
+pub const UNITS: [UnitFacts; 32] = {
+    use constants::*;
+    use Scale::*;
+    const fn u(
+        unit: Unit,
+        suffix: &'static str,
+        symbol: &'static str,
+        spellings: &'static [&'static str],
+        scale: Scale,
+        source: &'static str,
+    ) -> UnitFacts {
+        UnitFacts {
+            unit,
+            suffix,
+            symbol,
+            spellings,
+            scale,
+            source,
+            reference: None,
+        }
+    }
+    const fn flow(mut f: UnitFacts, reference: Option<&'static str>) -> UnitFacts {
+        f.reference = reference;
+        f
+    }
+    [
+        u(Unit::S, "s", "s", &[], Decimal(0), SI),
+        // Makers' spellings: "r/min", "min-1", "min⁻¹", "1/min", "r.p.m.", German "U/min"
+        // and "UpM" (Umdrehungen pro Minute).
+        u(Unit::Rpm, "rpm", "rpm",
+            &["r_min", "min_1", "min-1", "1_min", "r_p_m", "rev_min", "u_min", "upm"],
+            Factor(PI / 30.0), "one revolution is 2π rad (SI Brochure, 9th ed., table 4)"),
+        u(Unit::RadS, "rad_s", "rad/s", &[], Decimal(0), SI),
+        u(Unit::Nm, "nm", "N·m", &["n_m"], Decimal(0), SI),
+        u(Unit::GS, "g_s", "g/s", &[], Decimal(-3), SI),
+        u(Unit::KgS, "kg_s", "kg/s", &[], Decimal(0), SI),
+        // "Nl/min ANR": litres counted at ANR, whatever the N says.
+        flow(u(Unit::LMinAnr, "l_min_anr", "l/min ANR", &["anr_l_min", "nl_min_anr"],
+            Factor(1e-3 * RHO0_KG_M3 / 60.0), "ISO 8778 (ANR: 20 °C, 100 kPa, 65 % RH), ρ0 = 1.185 kg/m³ of ISO 6358"), ANR),
+        flow(u(Unit::LSAnr, "l_s_anr", "l/s ANR", &["anr_l_s", "nl_s_anr"],
+            Factor(1e-3 * RHO0_KG_M3), "ISO 8778 (ANR: 20 °C, 100 kPa, 65 % RH), ρ0 = 1.185 kg/m³ of ISO 6358"), ANR),
+        u(Unit::Mpa, "mpa", "MPa", &[], Decimal(6), SI),
+        u(Unit::BarAbs, "bar_abs", "bar(a)", &["bar_a", "bara"], Decimal(5),
+            "1 bar = 100 kPa (SI Brochure, 9th ed., table 8)"),
+        // "barg", and German "bar(ü)" (Überdruck, DIN 1314).
+        u(Unit::BarG, "bar_g", "bar(g)", &["barg", "bar_ü", "barü", "bar_ue"], Gauge(1e5),
+            "1 bar = 100 kPa (SI Brochure, table 8); gauge: above the rig's atmosphere (DIN 1314: Überdruck)"),
+        u(Unit::Pa, "pa", "Pa", &[], Decimal(0), SI),
+        u(Unit::Kpa, "kpa", "kPa", &[], Decimal(3), SI),
+        u(Unit::M3SPa, "m3_s_pa", "m³/(s·Pa)", &[], Decimal(0), SI),
+        // 1 dm³/(s·bar) = 1e-3 m³/s per 1e5 Pa.
+        u(Unit::Dm3SBar, "dm3_s_bar", "dm³/(s·bar)", &[], Decimal(-8),
+            "ISO 6358-1 (sonic conductance in dm³/(s·bar)); 1 bar = 100 kPa"),
+        // "ft·lbf", "ft.lbf", "ft lbf", "ft-lb", "lb-ft", "ft.lbs": a torque on a motor
+        // page (the same product is an energy elsewhere; a torque column reads it as one).
+        u(Unit::LbfFt, "lbf_ft", "lbf·ft",
+            &["ft_lbf", "ft_lb", "lb_ft", "ft_lbs", "lbs_ft"],
+            Factor(LBF_N * FT_M), NIST),
+        // "in·lbf", "in-lb", "lb-in", "in.lbs": all the inch-pound.
+        u(Unit::LbfIn, "lbf_in", "lbf·in", &["in_lbf", "in_lb", "lb_in", "in_lbs", "lbs_in"],
+            Factor(LBF_N * IN_M), NIST),
+        flow(u(Unit::LS, "l_s", "l/s", &[], Factor(1e-3 * RHO_FREE_AIR_KG_M3),
+            "ISO 1217 free air: ρ = 100 kPa / (287.05287 J/(kg·K) · 293.15 K)"), FREE_AIR),
+        flow(u(Unit::LMin, "l_min", "l/min", &[], Factor(1e-3 * RHO_FREE_AIR_KG_M3 / 60.0),
+            "ISO 1217 free air: ρ = 100 kPa / (287.05287 J/(kg·K) · 293.15 K)"), FREE_AIR),
+        flow(u(Unit::M3Min, "m3_min", "m³/min", &[], Factor(RHO_FREE_AIR_KG_M3 / 60.0),
+            "ISO 1217 free air: ρ = 100 kPa / (287.05287 J/(kg·K) · 293.15 K)"), FREE_AIR),
+        // "ft³/min" is cfm.
+        flow(u(Unit::Cfm, "cfm", "cfm", &["ft3_min"], Factor(FT3_M3 * RHO_FREE_AIR_KG_M3 / 60.0),
+            "ft³ = 0.3048³ m³ (NIST SP 811); ISO 1217 free air"), FREE_AIR),
+        flow(u(Unit::Scfm, "scfm", "scfm", &[], Factor(FT3_M3 * RHO_SCFM_KG_M3 / 60.0),
+            "US standard air, 0.075 lb/ft³ (ASME/ANSI; 14.7 psia, 68 °F, 36 % RH)"),
+            Some("US standard air: 0.075 lb/ft³ = 1.2014 kg/m³")),
+        flow(u(Unit::NlMin, "nl_min", "Nl/min", &[], Factor(1e-3 * RHO_NORMAL_KG_M3 / 60.0),
+            "DIN 1343 normal conditions: ρn = 101.325 kPa / (287.05287 J/(kg·K) · 273.15 K)"), NORMAL),
+        u(Unit::PsiG, "psi_g", "psi(g)", &["psig"], Gauge(PSI_PA),
+            "psi = lbf/in² (NIST SP 811); gauge: above the rig's atmosphere"),
+        u(Unit::PsiA, "psi_a", "psi(a)", &["psia", "psi_abs"], Factor(PSI_PA),
+            "psi = lbf/in² (NIST SP 811)"),
+        u(Unit::W, "w", "W", &["watt", "watts"], Decimal(0), SI),
+        u(Unit::Kw, "kw", "kW", &[], Decimal(3), SI),
+        u(Unit::Hp, "hp", "hp", &[], Factor(HP_W), "mechanical horsepower, 550 ft·lbf/s (NIST SP 811)"),
+        flow(u(Unit::NlS, "nl_s", "Nl/s", &[], Factor(1e-3 * RHO_NORMAL_KG_M3),
+            "DIN 1343 normal conditions: ρn = 101.325 kPa / (287.05287 J/(kg·K) · 273.15 K)"), NORMAL),
+        u(Unit::NCm, "n_cm", "N·cm", &["ncm"], Decimal(-2), SI),
+        // "kgf·m", "kgf m", "kgfm"; the kilopond-metre "kp·m" of older German pages.
+        u(Unit::KgfM, "kgf_m", "kgf·m", &["kgfm", "kp_m", "kpm"], Factor(G_N),
+            "kgf = 9.80665 N (3rd CGPM 1901; NIST SP 811)"),
+        u(Unit::KgfCm, "kgf_cm", "kgf·cm", &["kgfcm", "kp_cm", "kpcm"], Factor(G_N * 1e-2),
+            "kgf = 9.80665 N (3rd CGPM 1901; NIST SP 811)"),
+    ]
+};
+
+/// 10^k, exact where 10^|k| is (|k| ≤ 22) and correctly rounded otherwise: the factor of a
+/// [`Scale::Decimal`] unit, equal to the literal (`pow10(-3) == 1e-3`).
+fn pow10(k: i32) -> f64 {
+    if k >= 0 {
+        10f64.powi(k)
+    } else {
+        1.0 / 10f64.powi(-k)
+    }
 }
 
 impl Unit {
+    /// Everything known of the unit (its row of [`UNITS`]).
+    pub fn facts(self) -> &'static UnitFacts {
+        &UNITS[self as usize]
+    }
+
     /// The column-name suffix of the unit, e.g. `rpm`.
     pub fn suffix(self) -> &'static str {
-        match self {
-            Unit::S => "s",
-            Unit::Rpm => "rpm",
-            Unit::RadS => "rad_s",
-            Unit::Nm => "nm",
-            Unit::GS => "g_s",
-            Unit::KgS => "kg_s",
-            Unit::LMinAnr => "l_min_anr",
-            Unit::LSAnr => "l_s_anr",
-            Unit::Mpa => "mpa",
-            Unit::BarAbs => "bar_abs",
-            Unit::BarG => "bar_g",
-            Unit::Pa => "pa",
-            Unit::Kpa => "kpa",
-            Unit::M3SPa => "m3_s_pa",
-            Unit::Dm3SBar => "dm3_s_bar",
-            Unit::LbfFt => "lbf_ft",
-            Unit::LbfIn => "lbf_in",
-            Unit::LS => "l_s",
-            Unit::LMin => "l_min",
-            Unit::M3Min => "m3_min",
-            Unit::Cfm => "cfm",
-            Unit::Scfm => "scfm",
-            Unit::NlMin => "nl_min",
-            Unit::PsiG => "psi_g",
-            Unit::PsiA => "psi_a",
-            Unit::W => "w",
-            Unit::Kw => "kw",
-            Unit::Hp => "hp",
-        }
+        self.facts().suffix
     }
 
-    /// The unit as people write it, for axis titles (`N·m`, `bar(g)`, `l/min ANR`).
+    /// The unit as people write it, for axis titles and messages (`N·m`, `bar(g)`,
+    /// `l/min ANR`).
     pub fn symbol(self) -> &'static str {
-        match self {
-            Unit::S => "s",
-            Unit::Rpm => "rpm",
-            Unit::RadS => "rad/s",
-            Unit::Nm => "N·m",
-            Unit::GS => "g/s",
-            Unit::KgS => "kg/s",
-            Unit::LMinAnr => "l/min ANR",
-            Unit::LSAnr => "l/s ANR",
-            Unit::Mpa => "MPa",
-            Unit::BarAbs => "bar(a)",
-            Unit::BarG => "bar(g)",
-            Unit::Pa => "Pa",
-            Unit::Kpa => "kPa",
-            Unit::M3SPa => "m³/(s·Pa)",
-            Unit::Dm3SBar => "dm³/(s·bar)",
-            Unit::LbfFt => "lbf·ft",
-            Unit::LbfIn => "lbf·in",
-            Unit::LS => "l/s",
-            Unit::LMin => "l/min",
-            Unit::M3Min => "m³/min",
-            Unit::Cfm => "cfm",
-            Unit::Scfm => "scfm",
-            Unit::NlMin => "Nl/min",
-            Unit::PsiG => "psi(g)",
-            Unit::PsiA => "psi(a)",
-            Unit::W => "W",
-            Unit::Kw => "kW",
-            Unit::Hp => "hp",
-        }
+        self.facts().symbol
     }
 
-    /// Other suffixes that name the same unit (`bar_a` for `bar_abs`, `psig`, `nm3_min`…).
+    /// Other suffixes that name the same unit (`bar_a` for `bar_abs`, `psig`, `u_min`…).
     pub fn aliases(self) -> &'static [&'static str] {
-        match self {
-            Unit::BarAbs => &["bar_a"],
-            // Makers' spellings of a page: "min-1", "min⁻¹", "1/min", "r.p.m.".
-            Unit::Rpm => &["r_min", "min_1", "min-1", "1_min", "r_p_m", "rev_min"],
-            Unit::PsiG => &["psig"],
-            Unit::PsiA => &["psia", "psi_abs"],
-            // "Nl/min ANR": litres counted at ANR, whatever the N says.
-            Unit::LMinAnr => &["anr_l_min", "nl_min_anr"],
-            Unit::Nm => &["n_m"],
-            // "in·lbf", "in-lb", "lb-in", "in.lbs": all the inch-pound.
-            Unit::LbfIn => &["in_lbf", "in_lb", "lb_in", "in_lbs", "lbs_in"],
-            Unit::W => &["watt", "watts"],
-            // "ft³/min" is cfm.
-            Unit::Cfm => &["ft3_min"],
-            _ => &[],
-        }
+        self.facts().spellings
     }
 
     /// The reference conditions a volume-flow unit is counted at, for people (`None` for
     /// other units).
     pub fn reference_conditions(self) -> Option<&'static str> {
-        match self {
-            Unit::LMinAnr | Unit::LSAnr => Some("ANR (ISO 8778/6358): ρ0 = 1.185 kg/m³"),
-            Unit::LS | Unit::LMin | Unit::M3Min | Unit::Cfm => {
-                Some("free air (ISO 1217): 100 kPa, 20 °C, dry, ρ = 1.1884 kg/m³")
-            }
-            Unit::Scfm => Some("US standard air: 0.075 lb/ft³ = 1.2014 kg/m³"),
-            Unit::NlMin => Some("normal (DIN 1343): 101.325 kPa, 0 °C, dry, ρ = 1.2923 kg/m³"),
-            _ => None,
-        }
+        self.facts().reference
     }
 
     /// The factor k with SI = k·v for units without an offset (`None` for gauge units).
-    fn si_factor(self) -> Option<f64> {
-        use constants::*;
-        Some(match self {
-            Unit::S | Unit::RadS | Unit::Nm | Unit::KgS | Unit::Pa | Unit::M3SPa | Unit::W => 1.0,
-            Unit::Rpm => PI / 30.0,
-            Unit::GS => 1e-3,
-            Unit::LMinAnr => 1e-3 * RHO0_KG_M3 / 60.0,
-            Unit::LSAnr => 1e-3 * RHO0_KG_M3,
-            Unit::LS => 1e-3 * RHO_FREE_AIR_KG_M3,
-            Unit::LMin => 1e-3 * RHO_FREE_AIR_KG_M3 / 60.0,
-            Unit::M3Min => RHO_FREE_AIR_KG_M3 / 60.0,
-            Unit::Cfm => FT3_M3 * RHO_FREE_AIR_KG_M3 / 60.0,
-            Unit::Scfm => FT3_M3 * RHO_SCFM_KG_M3 / 60.0,
-            Unit::NlMin => 1e-3 * RHO_NORMAL_KG_M3 / 60.0,
-            Unit::Mpa => 1e6,
-            Unit::BarAbs => 1e5,
-            Unit::Kpa => 1e3,
-            Unit::PsiA => PSI_PA,
-            // 1 dm³/(s·bar) = 1e-3 m³/s per 1e5 Pa.
-            Unit::Dm3SBar => 1e-8,
-            Unit::LbfFt => LBF_N * FT_M,
-            Unit::LbfIn => LBF_N * IN_M,
-            Unit::Kw => 1e3,
-            Unit::Hp => HP_W,
-            Unit::BarG | Unit::PsiG => return None,
-        })
+    pub fn si_factor(self) -> Option<f64> {
+        match self.facts().scale {
+            Scale::Decimal(k) => Some(pow10(k)),
+            Scale::Factor(k) => Some(k),
+            Scale::Gauge(_) => None,
+        }
     }
 
     /// Converts a value in this unit to SI. `p_atm_pa` is needed for gauge pressure.
     pub fn to_si(self, v: f64, p_atm_pa: f64) -> f64 {
-        match self {
+        match (self, self.facts().scale) {
             // One rounding (fused multiply-add), so that every absolute pressure has a
             // gauge value that converts back to it exactly.
-            Unit::BarG => v.mul_add(1e5, p_atm_pa),
-            Unit::PsiG => v.mul_add(constants::PSI_PA, p_atm_pa),
-            // The original units keep their original arithmetic (bit-identical imports).
-            Unit::S | Unit::RadS | Unit::Nm | Unit::KgS | Unit::Pa | Unit::M3SPa | Unit::W => v,
-            Unit::Rpm => v * PI / 30.0,
-            Unit::GS => v * 1e-3,
-            Unit::LMinAnr => v * 1e-3 * RHO0_KG_M3 / 60.0,
-            Unit::LSAnr => v * 1e-3 * RHO0_KG_M3,
-            Unit::Mpa => v * 1e6,
-            Unit::BarAbs => v * 1e5,
-            Unit::Kpa => v * 1e3,
-            Unit::Dm3SBar => v * 1e-8,
-            u => v * u.si_factor().unwrap_or(1.0),
+            (_, Scale::Gauge(k)) => v.mul_add(k, p_atm_pa),
+            (_, Scale::Decimal(0)) => v,
+            (_, Scale::Decimal(k)) => v * pow10(k),
+            // These three keep the arithmetic they had before the table (bit-identical
+            // imports); a test checks each against its factor.
+            (Unit::Rpm, _) => v * PI / 30.0,
+            (Unit::LMinAnr, _) => v * 1e-3 * RHO0_KG_M3 / 60.0,
+            (Unit::LSAnr, _) => v * 1e-3 * RHO0_KG_M3,
+            (_, Scale::Factor(k)) => v * k,
         }
     }
 
     /// The power of ten k when the unit is exactly 10^k SI units (g/s: −3, MPa: 6,
     /// dm³/(s·bar): −8, SI units: 0), else `None`.
     pub fn decimal_exponent(self) -> Option<i32> {
-        match self {
-            Unit::S | Unit::RadS | Unit::Nm | Unit::KgS | Unit::Pa | Unit::M3SPa => Some(0),
-            Unit::GS => Some(-3),
-            Unit::Mpa => Some(6),
-            Unit::BarAbs => Some(5),
-            Unit::Kpa => Some(3),
-            Unit::Dm3SBar => Some(-8),
-            Unit::Kw => Some(3),
-            Unit::W => Some(0),
+        match self.facts().scale {
+            Scale::Decimal(k) => Some(k),
             _ => None,
         }
     }
@@ -384,21 +435,16 @@ impl Unit {
 
     /// Converts an SI value back to this unit (inverse of [`Unit::to_si`]).
     pub fn from_si(self, v: f64, p_atm_pa: f64) -> f64 {
-        match self {
-            Unit::BarG => (v - p_atm_pa) * 1e-5,
-            Unit::PsiG => (v - p_atm_pa) / constants::PSI_PA,
+        match (self, self.facts().scale) {
+            (Unit::BarG, _) => (v - p_atm_pa) * 1e-5,
+            (_, Scale::Gauge(k)) => (v - p_atm_pa) / k,
             // Exact where SI is the unit (no division by one).
-            Unit::S | Unit::RadS | Unit::Nm | Unit::KgS | Unit::Pa | Unit::M3SPa | Unit::W => v,
-            Unit::GS => v * 1e3,
-            Unit::Mpa => v * 1e-6,
-            Unit::BarAbs => v * 1e-5,
-            Unit::Kpa => v * 1e-3,
-            Unit::Kw => v * 1e-3,
-            Unit::Dm3SBar => v * 1e8,
-            Unit::Rpm => v * 30.0 / PI,
-            Unit::LMinAnr => v * 60.0 / (1e-3 * RHO0_KG_M3),
-            Unit::LSAnr => v / (1e-3 * RHO0_KG_M3),
-            u => v / u.si_factor().unwrap_or(1.0),
+            (_, Scale::Decimal(0)) => v,
+            (_, Scale::Decimal(k)) => v * pow10(-k),
+            // The arithmetic these had before the table (bit-identical exports).
+            (Unit::Rpm, _) => v * 30.0 / PI,
+            (Unit::LMinAnr, _) => v * 60.0 / (1e-3 * RHO0_KG_M3),
+            (_, Scale::Factor(k)) => v / k,
         }
     }
 }
@@ -500,6 +546,116 @@ mod tests {
                 assert!((u.from_si(si, 101_325.0) - 3.7).abs() < 1e-12);
             }
         }
+    }
+
+    /// The table lists every unit once, in the order of the variants, with a factor, a
+    /// source, and spellings that name no other unit of its quantities.
+    #[test]
+    fn the_unit_table_is_in_variant_order_and_complete() {
+        for (i, f) in UNITS.iter().enumerate() {
+            assert_eq!(f.unit as usize, i, "{}", f.suffix);
+            assert!(!f.source.is_empty(), "{}", f.suffix);
+            assert!(!f.spellings.contains(&f.suffix), "{}", f.suffix);
+        }
+        for q in Quantity::ALL {
+            let mut names: Vec<&str> = q
+                .units()
+                .iter()
+                .flat_map(|u| std::iter::once(u.suffix()).chain(u.aliases().iter().copied()))
+                .collect();
+            let n = names.len();
+            names.sort_unstable();
+            names.dedup();
+            assert_eq!(names.len(), n, "{q:?}: a spelling names two units");
+        }
+        // Every unit is a unit of some quantity.
+        for f in &UNITS {
+            assert!(
+                Quantity::ALL.iter().any(|q| q.units().contains(&f.unit)),
+                "{}",
+                f.suffix
+            );
+        }
+    }
+
+    /// docs/formats.md lists every unit of the table and every spelling of it.
+    #[test]
+    fn the_docs_list_every_unit_and_spelling() {
+        let docs = include_str!("../../docs/formats.md");
+        let at = docs.find("### Units and their spellings").unwrap();
+        let section = &docs[at..];
+        for f in &UNITS {
+            for name in std::iter::once(&f.suffix).chain(f.spellings) {
+                assert!(section.contains(&format!("`{name}`")), "{name}");
+            }
+        }
+    }
+
+    /// The units that keep their former arithmetic agree with their factor in the table,
+    /// and a decimal factor is its literal.
+    #[test]
+    fn kept_arithmetic_agrees_with_the_table() {
+        for u in [Unit::Rpm, Unit::LMinAnr, Unit::LSAnr] {
+            let k = u.si_factor().unwrap();
+            for v in [1.0, 3.7, 12_200.0] {
+                let si = u.to_si(v, 0.0);
+                assert!((si - v * k).abs() <= 4.0 * f64::EPSILON * si, "{u:?}");
+                assert!(
+                    (u.from_si(si, 0.0) - v).abs() <= 4.0 * f64::EPSILON * v,
+                    "{u:?}"
+                );
+            }
+        }
+        assert_eq!(pow10(-3), 1e-3);
+        assert_eq!(pow10(-6), 1e-6);
+        assert_eq!(pow10(-8), 1e-8);
+        assert_eq!(pow10(-2), 1e-2);
+        assert_eq!(pow10(6), 1e6);
+    }
+
+    /// Makers' spellings of issue 44, each to its SI value by a closed form written out
+    /// here (not read from the table).
+    #[test]
+    fn makers_spellings_convert_by_closed_forms() {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+        let lbf_ft = 0.453_592_37 * 9.806_65 * 0.3048;
+        let rho_n = 101_325.0 / (287.052_87 * 273.15);
+        for (q, text, v, want) in [
+            (
+                Quantity::Speed,
+                "u_min",
+                12_200.0,
+                12_200.0 * 2.0 * PI / 60.0,
+            ),
+            (Quantity::Speed, "upm", 60.0, 2.0 * PI),
+            (Quantity::Speed, "min_1", 60.0, 2.0 * PI),
+            (Quantity::Speed, "1_min", 60.0, 2.0 * PI),
+            (Quantity::Flow1, "nl_s", 1.0, 1e-3 * rho_n),
+            (Quantity::Flow1, "nl_min", 60.0, 1e-3 * rho_n),
+            (Quantity::Torque, "ft_lb", 1.0, lbf_ft),
+            (Quantity::Torque, "lb_ft", 2.0, 2.0 * lbf_ft),
+            (Quantity::Torque, "ft_lbf", 1.0, lbf_ft),
+            (Quantity::Torque, "kgf_m", 1.0, 9.806_65),
+            (Quantity::Torque, "kgfm", 1.0, 9.806_65),
+            (Quantity::Torque, "kgf_cm", 100.0, 9.806_65),
+            (Quantity::Torque, "n_cm", 29.4, 0.294),
+            (Quantity::PPort1, "barg", 6.3, 731_325.0),
+            (Quantity::PPort1, "bar_ü", 6.3, 731_325.0),
+            (
+                Quantity::PPort1,
+                "psig",
+                90.0,
+                90.0 * 6_894.757_293_168_361 + 101_325.0,
+            ),
+        ] {
+            let u = unit_of(q, text).unwrap_or_else(|e| panic!("{text}: {e}"));
+            let si = u.to_si(v, 101_325.0);
+            assert!(close(si, want), "{text}: {si} vs {want}");
+            assert!((u.from_si(si, 101_325.0) - v).abs() <= 1e-12 * v, "{text}");
+        }
+        // Normal litres and ANR litres are different air: 1 Nl is 1.2923/1.185 ANR litres.
+        let ratio = Unit::NlS.to_si(1.0, 0.0) / Unit::LSAnr.to_si(1.0, 0.0);
+        assert!((ratio - rho_n / 1.185).abs() < 1e-12, "{ratio}");
     }
 
     #[test]

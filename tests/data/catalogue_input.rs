@@ -166,7 +166,16 @@ fn bad_catalogue_input_is_located() {
     );
     let rig7 =
         "[[experiment]]\nkind = \"catalogue\"\n[experiment.figures]\nstall_torque = \"0.3 N·m\"\n";
-    refused(rig7, &[], &["needs its supply pressure"]);
+    // Named at the experiment's table in rig.toml, where the key belongs.
+    refused(
+        rig7,
+        &[],
+        &[
+            "rig.toml:8:1 (key 'kind')",
+            "needs its supply pressure",
+            "add p_supply",
+        ],
+    );
     // A figure that cannot be placed on a curve.
     let rig9 = "[[experiment]]\nkind = \"catalogue\"\np_supply = \"6.3 bar_g\"\n[experiment.figures]\nstall_torque = \"0.3 N·m\"\nair_at_free_speed = \"4 l/s\"\n";
     refused(rig9, &[], &["rig.toml:12:1", "needs free_speed"]);
@@ -223,4 +232,181 @@ fn a_figure_above_torque_speed_names_its_key() {
         &[("c.csv", "speed_rpm,torque_nm\n0,0.1\n")],
         &["rig.toml:13:1 (key 'max_power')", "above torque·speed"],
     );
+}
+
+/// A curve point beyond the printed free speed with a torque above zero (issue 45: the row
+/// `22000,0.05,115` with free speed 20000 rpm) is refused at its cell; at or below the free
+/// speed, or with a torque within reading tolerance of zero, it passes.
+#[test]
+fn a_curve_point_beyond_the_free_speed_is_refused_at_its_cell() {
+    let rig = "[[experiment]]\nkind = \"catalogue\"\nfile = \"c.csv\"\np_supply = \"6.3 bar(g)\"\n[experiment.figures]\nfree_speed = \"20000 rpm\"\n";
+    let curves = "speed_rpm,torque_nm,power_w\n0,0.3,\n10000,0.15,157\n22000,0.05,115\n";
+    refused(
+        rig,
+        &[("c.csv", curves)],
+        &[
+            "c.csv:4:2 (column 'torque_nm')",
+            "beyond the printed free speed 20000 rpm (rig.toml line 12)",
+        ],
+    );
+    for ok in [
+        "speed_rpm,torque_nm,power_w\n0,0.3,\n10000,0.15,157\n19000,0.05,99\n",
+        "speed_rpm,torque_nm,power_w\n0,0.3,\n10000,0.15,157\n20500,0.001,2\n",
+    ] {
+        let dir = dataset(rig, &[("c.csv", ok)]);
+        let (code, _, err) = check(dir.path());
+        assert_eq!(code, 0, "{ok}: {err}");
+    }
+}
+
+/// A catalogue experiment with neither a curve file nor figures says so at its table, not
+/// "missing column for speed" of a file it does not have.
+#[test]
+fn a_page_with_neither_curves_nor_figures_says_so() {
+    let rig = "[[experiment]]\nkind = \"catalogue\"\np_supply = \"6.3 bar(g)\"\n";
+    refused(
+        rig,
+        &[],
+        &[
+            "rig.toml:8:1 (key 'kind')",
+            "neither curves nor key figures",
+        ],
+    );
+    let dir = dataset(rig, &[]);
+    let (_, _, err) = check(dir.path());
+    assert!(!err.contains("missing column"), "{err}");
+}
+
+/// A duplicate key is named with its line and column, not by its first letter.
+#[test]
+fn a_duplicate_key_is_named() {
+    let rig = format!("{FIGURES}max_power = \"0.1 kW\"\n");
+    refused(
+        &rig,
+        &[],
+        &["rig.toml:20:1 (key 'max_power')", "duplicate key"],
+    );
+    let dir = dataset(&rig, &[]);
+    let (_, _, err) = check(dir.path());
+    assert!(!err.contains("(value '"), "{err}");
+}
+
+/// `check .` names the dataset by its folder's real name; `check` prints units as people
+/// write them (N·m, l/s, W), not column suffixes.
+#[test]
+fn check_names_the_folder_and_prints_units_as_people_write_them() {
+    let curves = "speed_rpm,torque_nm,air_l_s\n0,0.3,2\n4000,0.2,3\n8000,0.1,4\n12000,0,5\n";
+    let rig = "[[experiment]]\nkind = \"catalogue\"\nfile = \"c.csv\"\np_supply = \"6.3 bar(g)\"\n[experiment.figures]\nmax_power = \"0.126 kW\"\nspeed_at_max_power = \"6000 rpm\"\n";
+    let dir = dataset(rig, &[("c.csv", curves)]);
+    let out = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(["check", "."])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let name = dir.path().file_name().unwrap().to_string_lossy();
+    assert!(text.starts_with(&format!("dataset {name} (")), "{text}");
+    for shown in [
+        "[N·m]",
+        "[l/s]",
+        "[rpm]",
+        " kW ",
+        "= kg/s",
+        "N·m, ",
+        "in l/s counts air",
+    ] {
+        assert!(text.contains(shown), "'{shown}' not in:\n{text}");
+    }
+    for suffix in ["[nm]", "[l_s]", " nm,", " kw ", " l_s ", "kg_s"] {
+        assert!(!text.contains(suffix), "'{suffix}' in:\n{text}");
+    }
+}
+
+/// Estimates and cost of `vanefit fit` on a dataset folder.
+fn fitted(dir: &Path) -> (f64, Vec<(String, f64)>) {
+    let out = dir.join("fit.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(["fit", "--starts", "8", "--out"])
+        .arg(&out)
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fit: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let params = fit["parameters"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(_, p)| p["estimated"] == true)
+        .map(|(k, p)| (k.clone(), p["value"].as_f64().unwrap()))
+        .collect();
+    (fit["cost"].as_f64().unwrap(), params)
+}
+
+/// A page printed in makers' spellings (U/min, min⁻¹, ft-lb, lb-ft, kgf·m, Nl/s, Nl/min,
+/// psig) reads to the same SI values as the same page in SI units, and fits the same.
+/// Each number is converted here by its closed form (lb = 0.45359237 kg, g_n = 9.80665
+/// m/s², ft = 0.3048 m, in = 0.0254 m; ρn = 101325/(287.05287·273.15) kg/m³ of DIN 1343).
+#[test]
+fn a_page_in_makers_spellings_fits_like_the_page_in_si() {
+    let lbf = 0.453_592_37 * 9.806_65;
+    let lbf_ft = lbf * 0.3048;
+    let psi = lbf / (0.0254 * 0.0254);
+    let rho_n = 101_325.0 / (287.052_87 * 273.15);
+    let rad_s = std::f64::consts::PI / 30.0;
+    // The shipped page's figures (measurements/ar034-synthetic-catalogue), at 90 psi g.
+    let (free, w_max, p_max, t_max, stall, air_max, air_free) =
+        (12_200.0, 5_860.0, 97.9, 0.16, 0.294, 4.6e-3, 5.68e-3);
+    let p_supply = 90.0 * psi + 101_325.0;
+    let si = format!(
+        "[[experiment]]\nkind = \"catalogue\"\np_supply_mpa = {}\n[experiment.figures]\nfree_speed = \"{} rad_s\"\nspeed_at_max_power = \"{} rad_s\"\nmax_power = \"{p_max} W\"\ntorque_at_max_power = \"{t_max} N·m\"\nstall_torque = \"{stall} N·m\"\nair_at_max_power = \"{air_max} kg_s\"\nair_at_free_speed = \"{air_free} kg_s\"\n",
+        p_supply * 1e-6,
+        free * rad_s,
+        w_max * rad_s
+    );
+    let makers = format!(
+        "[[experiment]]\nkind = \"catalogue\"\np_supply = \"90 psig\"\n[experiment.figures]\nfree_speed = \"{free} U/min\"\nspeed_at_max_power = \"{w_max} min⁻¹\"\nmax_power = \"{p_max} watts\"\ntorque_at_max_power = \"{} ft-lb\"\nstall_torque = \"{} kgf·m\"\nair_at_max_power = \"{} Nl/s\"\nair_at_free_speed = \"{} Nl/min\"\n",
+        t_max / lbf_ft,
+        stall / 9.806_65,
+        air_max / (1e-3 * rho_n),
+        air_free / (1e-3 * rho_n) * 60.0
+    );
+    let lb_ft = makers.replace("ft-lb", "lb-ft");
+    let (a, b, c) = (
+        dataset(&si, &[]),
+        dataset(&makers, &[]),
+        dataset(&lb_ft, &[]),
+    );
+    let load = |d: &tempfile::TempDir| Dataset::load(d.path()).unwrap();
+    let (ds_si, ds_makers) = (load(&a), load(&b));
+    let (ea, eb) = (&ds_si.experiments[0], &ds_makers.experiments[0]);
+    assert!((ea.p_supply_pa.unwrap() / eb.p_supply_pa.unwrap() - 1.0).abs() < 1e-12);
+    for (fa, fb) in ea.figures.iter().zip(&eb.figures) {
+        assert_eq!(fa.key, fb.key);
+        assert!(
+            (fa.si / fb.si - 1.0).abs() < 1e-12,
+            "{}: {} vs {}",
+            fa.key,
+            fa.si,
+            fb.si
+        );
+    }
+    let (cost_si, est_si) = fitted(a.path());
+    for d in [&b, &c] {
+        let (cost, est) = fitted(d.path());
+        assert!(
+            (cost / cost_si - 1.0).abs() < 1e-6,
+            "cost {cost} vs {cost_si}"
+        );
+        assert_eq!(est.len(), est_si.len());
+        for ((name, v), (_, v_si)) in est.iter().zip(&est_si) {
+            assert!((v / v_si - 1.0).abs() < 1e-4, "{name}: {v} vs {v_si}");
+        }
+    }
 }

@@ -451,6 +451,12 @@ pub(super) fn recording(
     curves: Option<Recording>,
     figures: &[Figure],
 ) -> Result<Recording, DataError> {
+    if curves.is_none() && figures.is_empty() {
+        return Err(src.at(
+            "kind",
+            "this catalogue experiment gives neither curves nor key figures: give a curve file (file = \"curves.csv\": speed_rpm and any of torque, power and air columns) or an [experiment.figures] table (free_speed = \"9000 rpm\", …), or both".into(),
+        ));
+    }
     let mut rec = curves.unwrap_or_else(|| Recording {
         file: src.rig.0.to_path_buf(),
         columns: Vec::new(),
@@ -462,10 +468,59 @@ pub(super) fn recording(
     let keys = FigureKeys::new(rec.rows(), &rows);
     add_figure_columns(&mut rec, &rows, figures);
     append_figure_rows(&mut rec, rows, src.p_atm_pa);
-    check_curves(&rec, src.tolerance, |q, row, message| {
-        keys.locate(src, &rec, q, row, message)
-    })?;
+    let locate = |q, row, message| keys.locate(src, &rec, q, row, message);
+    check_curves(&rec, src.tolerance, locate)?;
+    check_beyond_free_speed(&rec, keys.n_curve_rows, figures, src.tolerance, locate)?;
     Ok(rec)
+}
+
+/// Refuses a curve point beyond the printed free speed whose torque or power is above zero
+/// by more than three reading tolerances of its curve's full scale: the torque is 0 at the
+/// free speed and falls with speed, so no point beyond it has a torque (a misread speed, or
+/// a point of another pressure). Only the curve rows (the first `n_curve_rows`) are looked
+/// at; `locate` places the message at the cell.
+fn check_beyond_free_speed(
+    rec: &Recording,
+    n_curve_rows: usize,
+    figures: &[Figure],
+    tolerance: f64,
+    locate: impl Fn(Quantity, usize, String) -> DataError,
+) -> Result<(), DataError> {
+    let Some(free) = figures.iter().find(|f| f.key == "free_speed") else {
+        return Ok(());
+    };
+    let speed = rec.values(Quantity::Speed)?;
+    for q in [Quantity::Torque, Quantity::Power] {
+        let Some(col) = rec.column(q) else { continue };
+        let full_scale = col
+            .si
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max);
+        for i in 0..n_curve_rows.min(speed.len()) {
+            let v = col.si[i];
+            if speed[i] > free.si && v.is_finite() && v > 3.0 * tolerance * full_scale {
+                let at = free
+                    .line
+                    .map_or(String::new(), |l| format!(" (rig.toml line {l})"));
+                return Err(locate(
+                    q,
+                    i,
+                    format!(
+                        "{} {} {} at {:.0} rpm, beyond the printed free speed {} {}{at}: the torque is 0 at free speed and falls with speed, so no point beyond it has a torque or power (a misread speed, or a point of another pressure?)",
+                        q.words(),
+                        &col.raw[i],
+                        col.unit.symbol(),
+                        Unit::Rpm.from_si(speed[i], 0.0),
+                        free.written,
+                        free.unit.symbol()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The quantities of a catalogue's curves, in the order of a figure row's cells.
@@ -776,6 +831,27 @@ mod tests {
             ("120 watts", Quantity::Power, Unit::W),
             ("7.4 ft³/min", Quantity::Flow1, Unit::Cfm),
             ("180 Nl/min ANR", Quantity::Flow1, Unit::LMinAnr),
+            // Issue 44's spellings.
+            ("12200 U/min", Quantity::Speed, Unit::Rpm),
+            ("12200 UpM", Quantity::Speed, Unit::Rpm),
+            ("3.9 Nl/s", Quantity::Flow1, Unit::NlS),
+            ("230 Nl/min", Quantity::Flow1, Unit::NlMin),
+            ("0.12 ft-lb", Quantity::Torque, Unit::LbfFt),
+            ("0.12 lb-ft", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft·lbf", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft.lbf", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft lbf", Quantity::Torque, Unit::LbfFt),
+            ("0.12 ft.lbs", Quantity::Torque, Unit::LbfFt),
+            ("6.3 barg", Quantity::PPort1, Unit::BarG),
+            ("6.3 bar(ü)", Quantity::PPort1, Unit::BarG),
+            ("6.3 bar ü", Quantity::PPort1, Unit::BarG),
+            ("6.3 BAR(Ü)", Quantity::PPort1, Unit::BarG),
+            ("90 psig", Quantity::PPort1, Unit::PsiG),
+            ("0.03 kgf·m", Quantity::Torque, Unit::KgfM),
+            ("0.03 kgf m", Quantity::Torque, Unit::KgfM),
+            ("0.03 kgfm", Quantity::Torque, Unit::KgfM),
+            ("3 kgf·cm", Quantity::Torque, Unit::KgfCm),
+            ("29 N·cm", Quantity::Torque, Unit::NCm),
         ] {
             assert_eq!(parse_value(text, q, p).map(|r| r.1), Ok(u), "{text}");
         }
@@ -787,6 +863,63 @@ mod tests {
             parse_value("0.12", Quantity::Power, p),
             Err(ValueError::NoUnit { .. })
         ));
+    }
+
+    /// Makers' spellings read as printed give the SI value of a closed form written out
+    /// here: 12200 U/min = 12200·2π/60 rad/s, 6.3 barg = 6.3e5 Pa + p_atm, 0.12 ft-lb =
+    /// 0.12·0.3048·0.45359237·9.80665 N·m, 3.9 Nl/s = 3.9e-3 m³/s · 101325/(287.05287·273.15)
+    /// kg/m³, 0.03 kgf·m = 0.03·9.80665 N·m.
+    #[test]
+    fn makers_spellings_give_closed_form_si_values() {
+        let p = 101_325.0;
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
+        for (text, q, want) in [
+            (
+                "12200 U/min",
+                Quantity::Speed,
+                12_200.0 * std::f64::consts::PI / 30.0,
+            ),
+            (
+                "12200 min⁻¹",
+                Quantity::Speed,
+                12_200.0 * std::f64::consts::PI / 30.0,
+            ),
+            ("6.3 barg", Quantity::PPort1, 6.3e5 + p),
+            ("6.3 bar(ü)", Quantity::PPort1, 6.3e5 + p),
+            (
+                "90 psig",
+                Quantity::PPort1,
+                90.0 * 0.453_592_37 * 9.806_65 / 0.0254_f64.powi(2) + p,
+            ),
+            (
+                "0.12 ft-lb",
+                Quantity::Torque,
+                0.12 * 0.3048 * 0.453_592_37 * 9.806_65,
+            ),
+            (
+                "0.12 lb-ft",
+                Quantity::Torque,
+                0.12 * 0.3048 * 0.453_592_37 * 9.806_65,
+            ),
+            ("0.03 kgf·m", Quantity::Torque, 0.03 * 9.806_65),
+            (
+                "3.9 Nl/s",
+                Quantity::Flow1,
+                3.9e-3 * 101_325.0 / (287.052_87 * 273.15),
+            ),
+            (
+                "234 Nl/min",
+                Quantity::Flow1,
+                234e-3 / 60.0 * 101_325.0 / (287.052_87 * 273.15),
+            ),
+        ] {
+            let (si, _, _) = parse_value(text, q, p).unwrap_or_else(|e| panic!("{text}: {e}"));
+            assert!(close(si, want), "{text}: {si} vs {want}");
+        }
+        // Stated gauge: no warning about how it was read.
+        for stated in ["6.3 barg", "6.3 bar(ü)", "90 psig"] {
+            assert_eq!(supply_notation(stated, p), None, "{stated}");
+        }
     }
 
     /// "~9000 rpm", "approx. 0.3 N·m", "ca. 180 l/min": read as printed.

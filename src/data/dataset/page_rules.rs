@@ -11,7 +11,7 @@
 
 use super::catalogue::{figure_rows, interpolate};
 use crate::sim::recording::{ExperimentData, Figure};
-use crate::units::Quantity;
+use crate::units::{Quantity, Unit};
 
 /// Stall torque over torque at max power outside this range breaks the makers' "about 2".
 pub const STALL_OVER_MAX_POWER_TORQUE: (f64, f64) = (1.4, 3.0);
@@ -32,33 +32,76 @@ pub struct PageWarning {
     pub message: String,
 }
 
-/// Unit conversions that a misread unit multiplies a value by (a ratio near one of them,
-/// or its inverse, names the likely slip).
-const SLIPS: [(f64, &str); 7] = [
-    (
-        8.850_746,
-        "N·m printed where lbf·in was meant (or the reverse)",
-    ),
-    (
-        1.355_818,
-        "lbf·ft printed where N·m was meant (or the reverse)",
-    ),
-    (
-        12.0,
-        "lbf·ft printed where lbf·in was meant (or the reverse)",
-    ),
-    (1000.0, "kW printed where W was meant (or the reverse)"),
-    (1.341_022, "hp and kW confused"),
-    (60.0, "l/min and l/s confused"),
-    (2.118_88, "cfm and l/s confused"),
+/// Pairs of units a page confuses: (smaller unit, larger unit) of one quantity. A value
+/// in the smaller unit printed as the larger one reads `factor` times too large, where the
+/// factor is their ratio in the unit table ([`crate::units::UNITS`]).
+const SLIPS: [(Unit, Unit); 10] = [
+    (Unit::LbfIn, Unit::Nm),
+    (Unit::Nm, Unit::LbfFt),
+    (Unit::LbfIn, Unit::LbfFt),
+    (Unit::NCm, Unit::Nm),
+    (Unit::Nm, Unit::KgfM),
+    (Unit::W, Unit::Kw),
+    (Unit::Hp, Unit::Kw),
+    (Unit::LMin, Unit::LS),
+    (Unit::Cfm, Unit::LS),
+    (Unit::NlMin, Unit::NlS),
 ];
 
-fn slip(ratio: f64) -> Option<&'static str> {
-    let r = if ratio < 1.0 { 1.0 / ratio } else { ratio };
-    SLIPS
-        .iter()
-        .find(|(f, _)| (r / f - 1.0).abs() < 0.05)
-        .map(|(_, what)| *what)
+/// How many of `small` make one `large` (both without an offset).
+fn slip_factor(small: Unit, large: Unit) -> f64 {
+    large.si_factor().unwrap_or(1.0) / small.si_factor().unwrap_or(1.0)
+}
+
+/// The slip a value that reads `ratio` times what it should names: "N·cm printed as N·m"
+/// where it reads about 100 times too large, "N·m printed as N·cm" where 100 times too
+/// small (within 5 %).
+fn slip(ratio: f64) -> Option<String> {
+    SLIPS.iter().find_map(|&(small, large)| {
+        let f = slip_factor(small, large);
+        if (ratio / f - 1.0).abs() < 0.05 {
+            Some(format!("{} printed as {}", small.symbol(), large.symbol()))
+        } else if (ratio * f - 1.0).abs() < 0.05 {
+            Some(format!("{} printed as {}", large.symbol(), small.symbol()))
+        } else {
+            None
+        }
+    })
+}
+
+/// The slip of quantity `q` that would bring `ratio`, a ratio makers state as about
+/// `typical` (expected within `range`), back inside its range, the one that brings it
+/// nearest `typical`: a stall torque 210 times the torque at max power is a stall torque
+/// in N·cm printed as N·m (210/100 = 2.1).
+fn rule_slip(ratio: f64, typical: f64, range: (f64, f64), q: Quantity) -> Option<String> {
+    let mut best: Option<(f64, String)> = None;
+    for &(small, large) in SLIPS.iter() {
+        if !q.units().contains(&small) {
+            continue;
+        }
+        let f = slip_factor(small, large);
+        // A factor within the rule's own width cannot be told from an unusual motor.
+        if f < range.1 / range.0 {
+            continue;
+        }
+        for (corrected, what) in [
+            (
+                ratio / f,
+                format!("{} printed as {}", small.symbol(), large.symbol()),
+            ),
+            (
+                ratio * f,
+                format!("{} printed as {}", large.symbol(), small.symbol()),
+            ),
+        ] {
+            let off = (corrected / typical).ln().abs();
+            let inside = (range.0..=range.1).contains(&corrected);
+            if inside && best.as_ref().is_none_or(|b| off < b.0) {
+                best = Some((off, what));
+            }
+        }
+    }
+    best.map(|b| b.1)
 }
 
 /// The warnings of one catalogue experiment (none for other kinds).
@@ -93,7 +136,8 @@ pub fn page_warnings(ex: &ExperimentData) -> Vec<PageWarning> {
                 stall,
                 format!(
                     "stall torque is {r:.2} × the torque at max power; makers state about 2 (expected {lo}–{hi}){}",
-                    slip(r / 2.0).map_or(String::new(), |s| format!(": {s}?"))
+                    rule_slip(r, 2.0, (lo, hi), Quantity::Torque)
+                        .map_or(String::new(), |s| format!(": likely a unit slip ({s}?)"))
                 ),
             ));
         }
@@ -166,11 +210,11 @@ fn figures_against_curves(ex: &ExperimentData) -> Vec<PageWarning> {
                 message: format!(
                     "{key} = {} {} is {ratio:.3} × the page's own curve at {:.0} rpm ({:.4} {}){}",
                     f.written,
-                    f.unit.suffix(),
+                    f.unit.symbol(),
                     w * 30.0 / std::f64::consts::PI,
                     unit.from_si(on_curve, 0.0),
-                    unit.suffix(),
-                    slip(ratio).map_or(String::new(), |s| format!(": {s}?"))
+                    unit.symbol(),
+                    slip(ratio).map_or(String::new(), |s| format!(": likely a unit slip ({s}?)"))
                 ),
             });
         }
@@ -237,6 +281,34 @@ mod tests {
         assert!(w[0].1.contains("lbf·in"), "{}", w[0].1);
         // The same figure in the curve's unit agrees with it.
         assert!(warnings("stall_torque = \"13.1 lbf·in\"\n", CURVE).is_empty());
+    }
+
+    /// A stall torque slipped to N·cm but labelled N·m (issue 45: 209.79 × the torque at
+    /// max power) is named as the likely slip; a ratio merely off the rule of thumb names
+    /// none, and no slip whose factor the rule's own width (1.4–3) cannot tell apart.
+    #[test]
+    fn a_stall_torque_in_n_cm_printed_as_n_m_is_named_a_unit_slip() {
+        let air = "speed_rpm,air_l_s\n0,2\n6000,3\n12000,4\n";
+        let figures = |stall: &str| {
+            format!("free_speed = \"12000 rpm\"\nspeed_at_max_power = \"6000 rpm\"\ntorque_at_max_power = \"0.14 N·m\"\nstall_torque = \"{stall}\"\n")
+        };
+        let w = warnings(&figures("29.37 N·m"), air);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].0, "stall_torque");
+        assert!(
+            w[0].1.contains("209.79 × the torque at max power")
+                && w[0].1.contains("likely a unit slip (N·cm printed as N·m?)"),
+            "{}",
+            w[0].1
+        );
+        // 4.5 × is off the rule, but no slip brings it back by a factor the rule can tell.
+        let w = warnings(&figures("0.63 N·m"), air);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(!w[0].1.contains("slip"), "{}", w[0].1);
+        assert_eq!(
+            super::rule_slip(0.02, 2.0, (1.4, 3.0), crate::units::Quantity::Torque).as_deref(),
+            Some("N·m printed as N·cm")
+        );
     }
 
     #[test]

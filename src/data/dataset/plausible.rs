@@ -87,8 +87,8 @@ pub(super) fn check_recording(rec: &Recording, p_atm_pa: f64) -> Result<(), Data
             format!(
                 "{} {} is not possible as {what} (the range is {range} {})",
                 shown(col.si[k]),
-                col.unit.suffix(),
-                col.unit.suffix()
+                col.unit.symbol(),
+                col.unit.symbol()
             ),
         )
         .at(rec.lines[k])
