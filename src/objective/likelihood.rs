@@ -275,6 +275,33 @@ impl Target {
         self.with_nuisances(items)
     }
 
+    /// The same target with a geared page's unprinted gearbox efficiency as a nuisance:
+    /// its pages were moved to the motor shaft with the prior's median η̂
+    /// (`model::gear::Gear::prior`), so if the true η is η̂·e^δ every stated torque and
+    /// power is off by the factor e^−δ ≈ 1 − δ, one δ for all of them, with prior
+    /// σ(δ) = `ln_sd`. The nuisance's shape is the stated value itself on the torque and
+    /// power rows (0 elsewhere), which profiled out (`super::nuisance`) widens the
+    /// intervals of what sets the torque's scale, so that `predict`'s bands hold η's spread.
+    /// Unchanged when `ln_sd` is not > 0 (η printed) or no torque or power is stated.
+    pub(crate) fn with_gear_efficiency(self, ln_sd: f64) -> Self {
+        let shape: Vec<f64> = self
+            .channels
+            .iter()
+            .flat_map(|c| {
+                let scaled = c.stated && matches!(c.quantity, Quantity::Torque | Quantity::Power);
+                c.data.iter().map(move |v| if scaled { *v } else { 0.0 })
+            })
+            .collect();
+        if !(ln_sd > 0.0) || shape.iter().all(|v| *v == 0.0) {
+            return self;
+        }
+        self.with_nuisances(vec![Nuisance {
+            label: "gearbox efficiency (ln η, prior)".into(),
+            prior_sd: ln_sd,
+            shape,
+        }])
+    }
+
     /// The same target with `more` nuisances added (shapes over every compared row, in
     /// channel order); unchanged if they do not fit the rows.
     pub(crate) fn with_nuisances(mut self, more: Vec<Nuisance>) -> Self {
