@@ -27,6 +27,7 @@ use super::option::ControlOpt;
 use crate::data::fitfile::FitFile;
 use crate::model::effects::EffectSet;
 use crate::model::motor::{Load, Motor};
+use crate::model::gear::Gear;
 use crate::model::params::MotorParams;
 use crate::units::constants::P_ATM_PA;
 use std::path::PathBuf;
@@ -93,12 +94,12 @@ impl MotorOptions {
     /// motor as in `simulate`. `default_brake_nm_s_rad` is the study's brake when
     /// `--brake-nm-s-rad` is not given (0: no load).
     pub fn check(&self, default_brake_nm_s_rad: f64) -> Result<Plant, ControlError> {
-        let (params, mut effects, extra) = match &self.params {
+        let (params, mut effects, extra, gear) = match &self.params {
             Some(p) => {
                 let f = FitFile::read(p)?;
-                (f.params, f.effects, f.extra)
+                (f.params, f.effects, f.extra, f.gear)
             }
-            None => (MotorParams::default(), EffectSet::empty(), Vec::new()),
+            None => (MotorParams::default(), EffectSet::empty(), Vec::new(), None),
         };
         if let Some(list) = &self.effects {
             effects = EffectSet::parse_list(list).map_err(SettingsError::Effects)?;
@@ -115,6 +116,7 @@ impl MotorOptions {
         Ok(Plant {
             motor: Motor::new(params, effects).with_extra(&extra),
             load,
+            gear,
         })
     }
 }
@@ -124,9 +126,17 @@ impl MotorOptions {
 pub struct Plant {
     motor: Motor,
     load: Load,
+    gear: Option<Gear>,
 }
 
 impl Plant {
+    /// The gearbox of a geared motor's fit: the studies run at the MOTOR shaft (its speed,
+    /// torque and brake), which turns G times as fast as the gearbox's output (`None`: no
+    /// gearbox).
+    pub fn gear(&self) -> Option<Gear> {
+        self.gear
+    }
+
     /// The motor.
     pub fn motor(&self) -> &Motor {
         &self.motor

@@ -113,12 +113,20 @@ pub fn model_description(fit: &FitFile, guid: &str) -> Result<String, FmuError> 
         }
     }
     let effects = fit.effects.ids();
-    let description = format!(
+    let mut description = format!(
         "Pneumatic vane motor fitted by vanefit to dataset '{}'; effects: [{}]; discovered terms: {}",
         fit.dataset,
         effects.join(", "),
         fit.extra.len()
     );
+    if let Some(g) = &fit.gear {
+        description.push_str(&format!(
+            "; geared: speed, torque and load are at the MOTOR shaft; the gearbox output turns {} times slower with {:.6} (efficiency times ratio) times the torque ({})",
+            g.ratio,
+            g.efficiency * g.ratio,
+            g.describe()
+        ));
+    }
     let mut x = String::new();
     x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     let _ = writeln!(

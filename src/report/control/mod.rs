@@ -111,6 +111,37 @@ impl<'a> Writer<'a> {
     }
 }
 
+/// Which shaft a geared motor's study is at, as `shaft.json` says it: the motor's, with
+/// the gearbox that relates it to the output (docs/formats.md, "Geared motors").
+pub fn shaft_json(g: &crate::model::gear::Gear) -> serde_json::Value {
+    serde_json::json!({
+        "shaft": "motor",
+        "gear_ratio": g.ratio,
+        "gear_efficiency": g.efficiency,
+        "gear_efficiency_printed": g.efficiency_printed,
+        "note": shaft_note(g),
+    })
+}
+
+/// One line for people: the study's speeds, torques and brake are the motor shaft's.
+pub fn shaft_note(g: &crate::model::gear::Gear) -> String {
+    format!(
+        "geared motor: every speed, torque and load of this study is at the MOTOR shaft; the gearbox's output turns {} times slower with η·G = {:.4} times the torque ({})",
+        g.ratio,
+        g.efficiency * g.ratio,
+        g.describe()
+    )
+}
+
+/// Writes `shaft.json` ([`shaft_json`]) into `dir`, for a geared motor's study.
+pub fn write_shaft(
+    g: &crate::model::gear::Gear,
+    dir: &Path,
+    on_written: &mut dyn FnMut(&Path),
+) -> Result<(), ControlReportError> {
+    Writer::new(dir, on_written).json("shaft.json", &shaft_json(g))
+}
+
 /// The CSV tables and JSON summaries a study's `write` (e.g. [`bode::write`]) would write,
 /// as (file name, text), without writing anything or drawing the figures.
 pub fn texts<R>(
