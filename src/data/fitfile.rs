@@ -1125,6 +1125,34 @@ mod tests {
         );
     }
 
+    /// A geared fit's gearbox is written and read back; an ungeared file has no `gear`;
+    /// a gearbox that cannot be is refused at its line.
+    #[test]
+    fn the_gearbox_round_trips_and_bad_ones_are_refused() {
+        let mut f = FitFile::from_params("g", MotorParams::default(), EffectSet::empty());
+        assert!(f.to_json().get("gear").is_none());
+        f.gear = Some(Gear::new(29.0, None));
+        let text = serde_json::to_string_pretty(&f.to_json()).unwrap();
+        let back = FitFile::parse(Path::new("f.json"), &text).unwrap();
+        assert_eq!(back.gear, f.gear);
+        for bad in [
+            r#"{"parameters": {},
+ "gear": {"ratio": 0, "efficiency": 0.9}}"#,
+            r#"{"parameters": {},
+ "gear": {"ratio": 4, "efficiency": 1.5}}"#,
+            r#"{"parameters": {},
+ "gear": {"ratio": 4}}"#,
+            r#"{"parameters": {},
+ "gear": {"ratio": 4, "efficiency": 0.9, "efficiency_ln_sd": -1}}"#,
+            r#"{"parameters": {},
+ "gear": 4}"#,
+        ] {
+            let e = FitFile::parse(Path::new("f.json"), bad).unwrap_err();
+            assert_eq!(e.line, Some(2), "{bad}: {e}");
+            assert!(e.message.contains("gear"), "{e}");
+        }
+    }
+
     #[test]
     fn partial_file_means_defaults_and_unknown_names_fail_with_line() {
         let f = FitFile::parse(

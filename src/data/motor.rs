@@ -551,6 +551,36 @@ mod tests {
         assert_eq!(e.key(), "displacement_cm3");
     }
 
+    /// A gearbox: the ratio finite and > 0, the efficiency in (0, 1] and only with a
+    /// ratio; without an efficiency, the prior's.
+    #[test]
+    fn gearbox_keys_are_checked_and_named() {
+        let table = |ratio: Option<f64>, eta: Option<f64>| MotorSection {
+            gear_ratio: ratio,
+            gear_efficiency: eta,
+            ..MotorSection::default()
+        };
+        assert_eq!(table(None, None).gear(), Ok(None));
+        let g = table(Some(4.0), Some(0.9)).gear().unwrap().unwrap();
+        assert_eq!((g.ratio, g.efficiency, g.efficiency_printed), (4.0, 0.9, true));
+        let g = table(Some(4.0), None).gear().unwrap().unwrap();
+        assert!(!g.efficiency_printed && g.efficiency_ln_sd > 0.0);
+        for (ratio, eta, key) in [
+            (Some(0.0), None, "gear_ratio"),
+            (Some(-2.0), None, "gear_ratio"),
+            (Some(f64::NAN), None, "gear_ratio"),
+            (Some(f64::INFINITY), None, "gear_ratio"),
+            (Some(4.0), Some(0.0), "gear_efficiency"),
+            (Some(4.0), Some(1.01), "gear_efficiency"),
+            (Some(4.0), Some(f64::NAN), "gear_efficiency"),
+            (None, Some(0.9), "gear_efficiency"),
+        ] {
+            let e = table(ratio, eta).gear().unwrap_err();
+            assert_eq!(e.key(), key, "{ratio:?} {eta:?}: {e}");
+            assert!(e.to_string().contains(key), "{e}");
+        }
+    }
+
     #[test]
     fn bad_tables_name_their_key() {
         let mut m = ar034_by_geometry();

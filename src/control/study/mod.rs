@@ -313,6 +313,27 @@ mod tests {
         (r.free_speed_rad_s, speeds)
     }
 
+    /// A geared fit's gearbox reaches the studies' plant; an ungeared one has none.
+    #[test]
+    fn a_geared_fit_says_its_studies_are_at_the_motor_shaft() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut fit = FitFile::from_params("demo", MotorParams::default(), EffectSet::empty());
+        let plant = |fit: &FitFile| {
+            let path = dir.path().join("fit.json");
+            fit.write(&path).unwrap();
+            MotorOptions {
+                params: Some(path),
+                ..MotorOptions::default()
+            }
+            .check(0.0)
+            .unwrap()
+        };
+        assert_eq!(plant(&fit).gear(), None);
+        fit.gear = Some(Gear::new(4.0, Some(0.9)));
+        let g = plant(&fit).gear().unwrap();
+        assert_eq!((g.ratio, g.efficiency), (4.0, 0.9));
+    }
+
     #[test]
     fn discovered_terms_of_the_fit_file_act_in_the_studies() {
         let dir = tempfile::tempdir().unwrap();

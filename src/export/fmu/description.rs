@@ -161,3 +161,29 @@ pub fn model_description(fit: &FitFile, guid: &str) -> Result<String, FmuError> 
     x.push_str("    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
     Ok(x)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::gear::Gear;
+    use crate::model::{EffectSet, MotorParams};
+
+    /// A geared fit's FMU says its speed, torque and load are the motor shaft's; an
+    /// ungeared one says nothing of shafts.
+    #[test]
+    fn a_geared_fmu_names_the_motor_shaft() {
+        let mut fit = FitFile::from_params("g", MotorParams::default(), EffectSet::empty());
+        let plain = model_description(&fit, "id").unwrap();
+        assert!(!plain.contains("shaft;") && !plain.contains("MOTOR"));
+        fit.gear = Some(Gear::new(4.0, Some(0.9)));
+        let geared = model_description(&fit, "id").unwrap();
+        assert!(geared.contains("geared: speed, torque and load are at the MOTOR shaft"));
+        for name in ["speed", "torque_shaft", "t_load", "omega"] {
+            let line = geared
+                .lines()
+                .find(|l| l.contains(&format!("name=\"{name}\"")))
+                .unwrap();
+            assert!(line.contains("MOTOR shaft; gearbox output: speed/4"), "{line}");
+        }
+    }
+}

@@ -290,3 +290,24 @@ fn trace_figure(title: &str, runs: &[(&str, &Trace)]) -> Figure {
 fn pairs(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
     x.iter().zip(y).map(|(x, y)| (*x, *y)).collect()
 }
+
+#[cfg(test)]
+mod shaft_tests {
+    use super::*;
+    use crate::model::gear::Gear;
+
+    /// A geared study says it is at the motor shaft, with η·G for the output's torque.
+    #[test]
+    fn a_geared_study_names_the_motor_shaft() {
+        let g = Gear::new(4.0, Some(0.9));
+        let note = shaft_note(&g);
+        assert!(note.contains("MOTOR shaft") && note.contains("3.6000"), "{note}");
+        let doc = shaft_json(&g);
+        assert_eq!(doc["shaft"], "motor");
+        assert_eq!(doc["gear_ratio"], 4.0);
+        let dir = tempfile::tempdir().unwrap();
+        let mut seen = Vec::new();
+        write_shaft(&g, dir.path(), &mut |p| seen.push(p.to_path_buf())).unwrap();
+        assert_eq!(seen, vec![dir.path().join("shaft.json")]);
+    }
+}
