@@ -178,7 +178,7 @@ mod tests {
         fit.gear = Some(Gear::new(4.0, Some(0.9)));
         let geared = model_description(&fit, "id").unwrap();
         assert!(geared.contains("geared: speed, torque and load are at the MOTOR shaft"));
-        for name in ["speed", "torque_shaft", "t_load", "omega"] {
+        for name in ["speed", "torque_shaft", "t_load", "c_brake", "omega"] {
             let line = geared
                 .lines()
                 .find(|l| l.contains(&format!("name=\"{name}\"")))
