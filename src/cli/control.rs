@@ -344,12 +344,18 @@ pub(crate) fn run(args: ControlArgs) -> Result<(), Failure> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("control-{}", study.name())));
     let _lock = prepare_dir(&out).map_err(|e| Failure(format!("--out {e}")))?;
+    let gear = plant.gear();
     let result = study
         .check_on(plant)
         .and_then(|checked| checked.run())
         .map_err(Failure::control)?;
     let mut print = |p: &Path| say!("wrote {}", p.display());
     write_study(&result, &out, &mut print)?;
+    if let Some(g) = &gear {
+        vanefit::report::control::write_shaft(g, &out, &mut print)
+            .map_err(|e| Failure(e.to_string()))?;
+        say!("{}", vanefit::report::control::shaft_note(g));
+    }
     match &result {
         StudyResult::Throttle(r) => print_throttle(r),
         StudyResult::Bode(r) => print_bode(r),

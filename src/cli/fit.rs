@@ -357,6 +357,13 @@ fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) 
     if !setup.space.effects.is_empty() {
         say!("effects: {}", setup.space.effects.ids().join(", "));
     }
+    if let Some(g) = ds.gear() {
+        say!(
+            "geared motor: the pages' figures are the OUTPUT shaft's, moved to the motor shaft (speed × G, torque ÷ η·G, power ÷ η); the parameters below are the MOTOR shaft's (with the gearbox's drag in its friction). {}{}",
+            g.describe(),
+            if g.efficiency_printed { "" } else { "; its spread is profiled out of the likelihood as a gain on the pages' torques and powers, so the intervals hold it" }
+        );
+    }
     for ex in ds.experiments.iter().filter(|e| e.kind == Kind::Catalogue) {
         say!(
             "{}: catalogue points weigh with their reading tolerance ({:.0} % of each curve's full scale) as σ, not a noise estimate, and carry no sensor offsets",

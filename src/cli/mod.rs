@@ -286,6 +286,10 @@ fn check(dir: &Path) -> Result<(), Failure> {
             say!("    {l}");
         }
     }
+    if let Some(g) = ds.gear() {
+        say!("    {}{}", g.describe(), if g.efficiency_printed { "" } else { "  ASSUMED (gear_efficiency not given)" });
+        say!("    the pages' figures are the gearbox's OUTPUT shaft's; they are fitted at the motor shaft (speed × G, torque ÷ η·G, power ÷ η)");
+    }
     // A page without its displacement: the size a fit starts from, estimated from the page.
     if let Ok(Some(e)) = vanefit::task::page_displacement_of(&ds) {
         say!("    {}", vanefit::task::displacement_first_line(&e));
@@ -305,11 +309,12 @@ fn check(dir: &Path) -> Result<(), Failure> {
                     });
             let to = |v: f64| c.unit.from_si(v, ds.p_atm_pa);
             say!(
-                "    {:<20} {:>13} .. {:<13} [{}]",
+                "    {:<20} {:>13} .. {:<13} [{}]{}",
                 c.name,
                 num(to(lo)),
                 num(to(hi)),
-                c.unit.symbol()
+                c.unit.symbol(),
+                if ds.gear().is_some() { " at the motor shaft" } else { "" }
             );
         }
         catalogue::print(ex, ds.p_atm_pa);

@@ -566,9 +566,13 @@ impl Dataset {
             .map_err(|e| located(&rig_path, text, Table::Motor, e.key(), e.to_string()))?;
         check_rig(&rig_path, text, &rig)?;
         let p_atm_pa = rig.conditions.p_atm_pa;
+        let gear = rig.motor.gear().ok().flatten();
         let mut experiments = Vec::with_capacity(rig.experiment.len());
         for (k, ex) in rig.experiment.iter().enumerate() {
-            let data = experiment_data(dir, (&rig_path, text), k, ex, p_atm_pa)?;
+            let mut data = experiment_data(dir, (&rig_path, text), k, ex, p_atm_pa)?;
+            if let Some(g) = &gear {
+                geared(&mut data, g, (&rig_path, text))?;
+            }
             check_experiment(&data, &|key: &str, message: String| {
                 located(&rig_path, text, Table::Experiment(k), key, message)
             })?;
@@ -595,6 +599,39 @@ fn dataset_name(dir: &Path) -> String {
     named(dir)
         .or_else(|| dir.canonicalize().ok().as_deref().and_then(named))
         .unwrap_or_default()
+}
+
+/// A geared motor's experiment moved to the motor shaft (a catalogue page's figures are
+/// the output shaft's); a rig recording is refused at `gear_ratio`: a rig measures at the
+/// motor shaft, where no gearbox sits between the motor and its sensors.
+fn geared(
+    data: &mut ExperimentData,
+    gear: &crate::model::gear::Gear,
+    rig: (&Path, &str),
+) -> Result<(), DataError> {
+    if data.kind != Kind::Catalogue {
+        return Err(located(
+            rig.0,
+            rig.1,
+            Table::Motor,
+            "gear_ratio",
+            format!(
+                "gear_ratio is for catalogue pages (figures at a gearbox's output shaft); experiment '{}' is a {} recording, which a rig takes at the motor shaft: remove gear_ratio or fit the pages alone",
+                data.file,
+                data.kind.id()
+            ),
+        ));
+    }
+    catalogue::to_motor_shaft(&mut data.recording, &mut data.figures, gear);
+    Ok(())
+}
+
+impl Dataset {
+    /// The motor's gearbox, when `[motor]` gives `gear_ratio` (checked when read): the
+    /// catalogue pages' figures were the output shaft's and are held at the motor shaft.
+    pub fn gear(&self) -> Option<crate::model::gear::Gear> {
+        self.motor.gear().ok().flatten()
+    }
 }
 
 impl ExperimentSection {
@@ -895,7 +932,7 @@ fn located(path: &Path, text: &str, table: Table, key: &str, message: String) ->
 
 fn check_rig(path: &Path, text: &str, rig: &RigFile) -> Result<(), DataError> {
     // The motor is checked here, where its keys can be located, not first by `fit`.
-    if let Err(e) = rig.motor.nominal_params() {
+    if let Err(e) = rig.motor.nominal_params().and(rig.motor.gear()) {
         return Err(located(path, text, Table::Motor, e.key(), e.to_string()));
     }
     check_conditions(path, text, &rig.conditions)?;

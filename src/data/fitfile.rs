@@ -9,6 +9,7 @@ use crate::model::extra::{
     balance_name, coefficient_unit, describe, formula, pressure_id, speed_id, BalanceId, Chamber,
     ExtraTerm, LeakPath, PressureFactor as P, SpeedFactor as W,
 };
+use crate::model::gear::Gear;
 use crate::model::params::{spec, MotorParams, ParamSet, PARAMS};
 use crate::sim::recording::ExperimentData;
 use crate::units::Quantity;
@@ -257,6 +258,10 @@ pub struct FitFile {
     /// The likelihood profiles the intervals were read from, one per estimated parameter
     /// (empty without profile intervals).
     pub profiles: Vec<ProfilePath>,
+    /// The gearbox of a geared motor (`gear` in the file; docs/formats.md, "Geared
+    /// motors"): the parameters are the motor shaft's, the pages were the output shaft's.
+    /// `None`: no gearbox, and no `gear` in the file.
+    pub gear: Option<Gear>,
 }
 
 /// A parameter's likelihood profile as a fit file keeps it: the parameter held at each
@@ -324,6 +329,7 @@ impl FitFile {
             covariance: None,
             conditions: None,
             profiles: Vec::new(),
+            gear: None,
         }
     }
 
@@ -373,6 +379,9 @@ impl FitFile {
         }
         if !self.profiles.is_empty() {
             doc.insert("profiles".into(), Value::Object(self.profiles_json()));
+        }
+        if let Some(g) = &self.gear {
+            doc.insert("gear".into(), gear_to_json(g));
         }
         doc.insert("version".into(), env!("CARGO_PKG_VERSION").into());
         Value::Object(doc)
@@ -486,8 +495,21 @@ impl FitFile {
             covariance,
             conditions: r.conditions(obj)?,
             profiles: r.profiles(obj)?,
+            gear: r.gear(obj)?,
         })
     }
+}
+
+/// The `gear` object: `{"ratio": G, "efficiency": η, "efficiency_printed": bool,
+/// "efficiency_ln_sd": σ(ln η), "shaft": "motor"}`: the parameters are the motor shaft's.
+fn gear_to_json(g: &Gear) -> Value {
+    serde_json::json!({
+        "ratio": g.ratio,
+        "efficiency": g.efficiency,
+        "efficiency_printed": g.efficiency_printed,
+        "efficiency_ln_sd": g.efficiency_ln_sd,
+        "parameters_at": "motor shaft",
+    })
 }
 
 /// The identifiability verdicts written in the parameter entries (informative: a malformed
@@ -644,6 +666,46 @@ impl Reader<'_> {
                 .map(Some)
                 .map_err(|m| self.fail(here(), m.0)),
         }
+    }
+
+    /// `gear` (absent or null: no gearbox): ratio finite and > 0, efficiency in (0, 1],
+    /// σ(ln η) finite and ≥ 0.
+    fn gear(&self, obj: &Map<String, Value>) -> Result<Option<Gear>, FitFileError> {
+        let here = || self.line_of("\"gear\"");
+        let g = match obj.get("gear") {
+            None | Some(Value::Null) => return Ok(None),
+            Some(Value::Object(g)) => g,
+            Some(_) => return Err(self.fail(here(), "gear must be an object".into())),
+        };
+        let num = |k: &str| g.get(k).and_then(Value::as_f64);
+        let (Some(ratio), Some(efficiency)) = (num("ratio"), num("efficiency")) else {
+            return Err(self.fail(here(), "gear needs ratio and efficiency (numbers)".into()));
+        };
+        let ln_sd = num("efficiency_ln_sd").unwrap_or(0.0);
+        if !(ratio.is_finite() && ratio > 0.0) {
+            return Err(self.fail(here(), format!("gear.ratio = {ratio} must be finite and > 0")));
+        }
+        if !(efficiency > 0.0 && efficiency <= 1.0) {
+            return Err(self.fail(
+                here(),
+                format!("gear.efficiency = {efficiency} must be in (0, 1]"),
+            ));
+        }
+        if !(ln_sd.is_finite() && ln_sd >= 0.0) {
+            return Err(self.fail(
+                here(),
+                format!("gear.efficiency_ln_sd = {ln_sd} must be finite and >= 0"),
+            ));
+        }
+        Ok(Some(Gear {
+            ratio,
+            efficiency,
+            efficiency_ln_sd: ln_sd,
+            efficiency_printed: g
+                .get("efficiency_printed")
+                .and_then(Value::as_bool)
+                .unwrap_or(ln_sd == 0.0),
+        }))
     }
 
     /// `profiles` (absent or null: none): each entry an object of two equal-length columns.
@@ -1062,6 +1124,34 @@ mod tests {
             FitConditions::of(1e5, &[ex(None, None)]).p_supply_range_pa,
             None
         );
+    }
+
+    /// A geared fit's gearbox is written and read back; an ungeared file has no `gear`;
+    /// a gearbox that cannot be is refused at its line.
+    #[test]
+    fn the_gearbox_round_trips_and_bad_ones_are_refused() {
+        let mut f = FitFile::from_params("g", MotorParams::default(), EffectSet::empty());
+        assert!(f.to_json().get("gear").is_none());
+        f.gear = Some(Gear::new(29.0, None));
+        let text = serde_json::to_string_pretty(&f.to_json()).unwrap();
+        let back = FitFile::parse(Path::new("f.json"), &text).unwrap();
+        assert_eq!(back.gear, f.gear);
+        for bad in [
+            r#"{"parameters": {},
+ "gear": {"ratio": 0, "efficiency": 0.9}}"#,
+            r#"{"parameters": {},
+ "gear": {"ratio": 4, "efficiency": 1.5}}"#,
+            r#"{"parameters": {},
+ "gear": {"ratio": 4}}"#,
+            r#"{"parameters": {},
+ "gear": {"ratio": 4, "efficiency": 0.9, "efficiency_ln_sd": -1}}"#,
+            r#"{"parameters": {},
+ "gear": 4}"#,
+        ] {
+            let e = FitFile::parse(Path::new("f.json"), bad).unwrap_err();
+            assert_eq!(e.line, Some(2), "{bad}: {e}");
+            assert!(e.message.contains("gear"), "{e}");
+        }
     }
 
     #[test]

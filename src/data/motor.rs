@@ -45,6 +45,14 @@ pub struct MotorSection {
     /// Angle of the leading vane when the exhaust opens (the expanded volume), °.
     #[serde(default)]
     alpha_exp_deg: Option<f64>,
+    /// Gearbox ratio G = motor speed / output speed: the page's figures are the output
+    /// shaft's (docs/formats.md, "Geared motors").
+    #[serde(default)]
+    pub gear_ratio: Option<f64>,
+    /// Gearbox efficiency η in (0, 1], where the page prints it (otherwise a prior,
+    /// [`crate::model::gear::Gear::prior`]).
+    #[serde(default)]
+    pub gear_efficiency: Option<f64>,
 }
 
 /// A `[motor]` table that does not describe a motor; each names the key to blame.
@@ -79,6 +87,16 @@ pub enum MotorSpecError {
     /// The displacement is given twice, in m³ and in cm³.
     #[error("[motor] gives both displacement_cm3 and displacement_m3; give one")]
     DisplacementTwice,
+    /// A gearbox key with a value that cannot be, or an efficiency without a ratio.
+    #[error("[motor] {key} = {value} {reason}")]
+    BadGear {
+        /// `gear_ratio` or `gear_efficiency`.
+        key: &'static str,
+        /// Its value as given (NaN where it is missing).
+        value: f64,
+        /// What is wrong.
+        reason: &'static str,
+    },
 }
 
 impl MotorSpecError {
@@ -89,6 +107,7 @@ impl MotorSpecError {
             MotorSpecError::GeometryAndVolume { key } => key,
             MotorSpecError::BadGeometry { key, .. } => key,
             MotorSpecError::DisplacementTwice => "displacement_cm3",
+            MotorSpecError::BadGear { key, .. } => key,
             MotorSpecError::Param(e) => crate::model::params::spec(&e.name)
                 .and_then(|s| s.rig_key)
                 .unwrap_or(&e.name),
@@ -118,6 +137,42 @@ impl MotorSection {
             self.displacement_m3 = Some(cm3 * 1e-6);
         }
         Ok(())
+    }
+
+    /// The gearbox, when the table gives `gear_ratio` (finite, > 0) and perhaps
+    /// `gear_efficiency` (in (0, 1]); `None` for a motor without one.
+    pub fn gear(&self) -> Result<Option<crate::model::gear::Gear>, MotorSpecError> {
+        let bad = |key, value, reason| Err(MotorSpecError::BadGear { key, value, reason });
+        let Some(ratio) = self.gear_ratio else {
+            return match self.gear_efficiency {
+                Some(eta) => bad(
+                    "gear_efficiency",
+                    eta,
+                    "needs gear_ratio (motor speed / output speed)",
+                ),
+                None => Ok(None),
+            };
+        };
+        if !(ratio.is_finite() && ratio > 0.0) {
+            return bad(
+                "gear_ratio",
+                ratio,
+                "must be a finite ratio > 0 (motor speed / output speed)",
+            );
+        }
+        if let Some(eta) = self.gear_efficiency {
+            if !(eta > 0.0 && eta <= 1.0) {
+                return bad(
+                    "gear_efficiency",
+                    eta,
+                    "must be in (0, 1] (output power / motor power)",
+                );
+            }
+        }
+        Ok(Some(crate::model::gear::Gear::new(
+            ratio,
+            self.gear_efficiency,
+        )))
     }
 
     fn geometry_values(&self) -> [Option<f64>; 6] {
@@ -533,6 +588,36 @@ mod tests {
             toml::from_str("displacement_cm3 = 4.1\ndisplacement_m3 = 4.1e-6").unwrap();
         let e = both.resolve_units().unwrap_err();
         assert_eq!(e.key(), "displacement_cm3");
+    }
+
+    /// A gearbox: the ratio finite and > 0, the efficiency in (0, 1] and only with a
+    /// ratio; without an efficiency, the prior's.
+    #[test]
+    fn gearbox_keys_are_checked_and_named() {
+        let table = |ratio: Option<f64>, eta: Option<f64>| MotorSection {
+            gear_ratio: ratio,
+            gear_efficiency: eta,
+            ..MotorSection::default()
+        };
+        assert_eq!(table(None, None).gear(), Ok(None));
+        let g = table(Some(4.0), Some(0.9)).gear().unwrap().unwrap();
+        assert_eq!((g.ratio, g.efficiency, g.efficiency_printed), (4.0, 0.9, true));
+        let g = table(Some(4.0), None).gear().unwrap().unwrap();
+        assert!(!g.efficiency_printed && g.efficiency_ln_sd > 0.0);
+        for (ratio, eta, key) in [
+            (Some(0.0), None, "gear_ratio"),
+            (Some(-2.0), None, "gear_ratio"),
+            (Some(f64::NAN), None, "gear_ratio"),
+            (Some(f64::INFINITY), None, "gear_ratio"),
+            (Some(4.0), Some(0.0), "gear_efficiency"),
+            (Some(4.0), Some(1.01), "gear_efficiency"),
+            (Some(4.0), Some(f64::NAN), "gear_efficiency"),
+            (None, Some(0.9), "gear_efficiency"),
+        ] {
+            let e = table(ratio, eta).gear().unwrap_err();
+            assert_eq!(e.key(), key, "{ratio:?} {eta:?}: {e}");
+            assert!(e.to_string().contains(key), "{e}");
+        }
     }
 
     #[test]

@@ -10,6 +10,7 @@
 pub(crate) mod effects;
 pub(crate) mod extra;
 pub(crate) mod friction;
+pub(crate) mod gear;
 pub(crate) mod geometry;
 pub(crate) mod jacobian;
 pub(crate) mod motor;
@@ -23,6 +24,7 @@ pub(crate) mod thermo;
 pub use effects::{
     CatalogEffect, Category, Effect, EffectSet, ShowsIn, SupplyValve, Term, UnknownEffect,
 };
+pub use gear::Gear;
 pub use geometry::{PortTiming, VaneGeometry};
 pub use jacobian::BoundaryRate;
 pub use motor::{

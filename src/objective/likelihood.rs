@@ -275,6 +275,33 @@ impl Target {
         self.with_nuisances(items)
     }
 
+    /// The same target with a geared page's unprinted gearbox efficiency as a nuisance:
+    /// its pages were moved to the motor shaft with the prior's median η̂
+    /// (`model::gear::Gear::prior`), so if the true η is η̂·e^δ every stated torque and
+    /// power is off by the factor e^−δ ≈ 1 − δ, one δ for all of them, with prior
+    /// σ(δ) = `ln_sd`. The nuisance's shape is the stated value itself on the torque and
+    /// power rows (0 elsewhere), which profiled out (`super::nuisance`) widens the
+    /// intervals of what sets the torque's scale, so that `predict`'s bands hold η's spread.
+    /// Unchanged when `ln_sd` is not > 0 (η printed) or no torque or power is stated.
+    pub(crate) fn with_gear_efficiency(self, ln_sd: f64) -> Self {
+        let shape: Vec<f64> = self
+            .channels
+            .iter()
+            .flat_map(|c| {
+                let scaled = c.stated && matches!(c.quantity, Quantity::Torque | Quantity::Power);
+                c.data.iter().map(move |v| if scaled { *v } else { 0.0 })
+            })
+            .collect();
+        if !(ln_sd > 0.0) || shape.iter().all(|v| *v == 0.0) {
+            return self;
+        }
+        self.with_nuisances(vec![Nuisance {
+            label: "gearbox efficiency (ln η, prior)".into(),
+            prior_sd: ln_sd,
+            shape,
+        }])
+    }
+
     /// The same target with `more` nuisances added (shapes over every compared row, in
     /// channel order); unchanged if they do not fit the rows.
     pub(crate) fn with_nuisances(mut self, more: Vec<Nuisance>) -> Self {
@@ -398,6 +425,54 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
     use rand_xoshiro::Xoshiro256PlusPlus;
+
+    /// The gearbox nuisance is the stated torques and powers themselves (one common gain),
+    /// nothing on speed or air; none when η is printed or nothing is stated.
+    #[test]
+    fn the_gearbox_efficiency_is_a_gain_on_stated_torque_and_power() {
+        let channel = |q, data: Vec<f64>, stated| ChannelTarget {
+            file: "page.csv".into(),
+            quantity: q,
+            rows: (0..data.len()).collect(),
+            data,
+            sigma: 0.01,
+            stated,
+        };
+        let page = Target {
+            channels: vec![
+                channel(Quantity::Speed, vec![100.0, 200.0], true),
+                channel(Quantity::Torque, vec![0.3, 0.2], true),
+                channel(Quantity::Power, vec![20.0, 40.0], true),
+                channel(Quantity::Flow1, vec![0.004], true),
+            ],
+            nuisances: None,
+        };
+        let geared = page.clone().with_gear_efficiency(0.05);
+        let items = geared.nuisances().unwrap().items();
+        assert_eq!(items.len(), 1);
+        assert_eq!(items[0].prior_sd, 0.05);
+        assert_eq!(items[0].shape, vec![0.0, 0.0, 0.3, 0.2, 20.0, 40.0, 0.0]);
+        // A common 3 % low reading of torque and power is absorbed up to its prior: the
+        // profiled χ² is far below the unprofiled one.
+        let sim: Vec<Vec<f64>> = geared
+            .channels
+            .iter()
+            .map(|c| {
+                let k = if matches!(c.quantity, Quantity::Torque | Quantity::Power) {
+                    0.97
+                } else {
+                    1.0
+                };
+                c.data.iter().map(|v| v * k).collect()
+            })
+            .collect();
+        let chi2 = |t: &Target| t.residual_vector(&sim).iter().map(|r| r * r).sum::<f64>();
+        assert!(chi2(&geared) < 0.5 * chi2(&page), "{} {}", chi2(&geared), chi2(&page));
+        assert!(page.clone().with_gear_efficiency(0.0).nuisances().is_none());
+        let mut recorded = page;
+        recorded.channels.iter_mut().for_each(|c| c.stated = false);
+        assert!(recorded.with_gear_efficiency(0.05).nuisances().is_none());
+    }
 
     #[test]
     fn noise_of_a_smooth_curve_with_a_jump_is_the_noise() {

@@ -10,6 +10,7 @@
 //! less than 1e-7 relative on a 1 rpm grid).
 
 use super::{PredictError, PredictOptions};
+use crate::model::gear::Gear;
 use crate::model::motor::Motor;
 use crate::sim::operating_point::{at_speeds, catalogue_row, CatalogueRow, OperatingPoint};
 
@@ -36,13 +37,21 @@ impl Outcome {
     /// pressure) where given, else at `curve_points` speeds from 0 to each free speed. The
     /// reference row is computed once and reused for an asked pressure equal to it, so that
     /// the factors there are exactly 1 for every motor.
+    ///
+    /// With a gearbox (`gear`) every figure is the output shaft's (`Gear`'s law), and
+    /// `curve_speeds` are output speeds: the motor is solved at G times them, and at the
+    /// maximum power on a grid G times as fine, so that the output's figures lie on the
+    /// asked grid as an ungeared motor's do.
     pub fn of(
         motor: &Motor,
         options: &PredictOptions,
         curve_speeds: Option<&[Vec<f64>]>,
+        gear: Option<&Gear>,
     ) -> Result<Self, PredictError> {
+        let ratio = gear.map_or(1.0, |g| g.ratio);
+        let grid = options.speed_grid_rad_s * ratio;
         let row_at = |p: f64| {
-            catalogue_row(motor, &options.conditions(p), options.speed_grid_rad_s).map_err(
+            catalogue_row(motor, &options.conditions(p), grid).map_err(
                 |source| PredictError::AtPressure {
                     p_supply_pa: p,
                     source,
@@ -66,8 +75,8 @@ impl Outcome {
             .iter()
             .enumerate()
             .map(|(i, r)| {
-                let speeds = match curve_speeds {
-                    Some(s) => s[i].clone(),
+                let speeds: Vec<f64> = match curve_speeds {
+                    Some(s) => s[i].iter().map(|w| w * ratio).collect(),
                     None => (0..n)
                         .map(|k| r.free_speed_rad_s * k as f64 / (n - 1) as f64)
                         .collect(),
@@ -80,11 +89,39 @@ impl Outcome {
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self {
+        let motor_shaft = Self {
             rows,
             reference,
             curves,
+        };
+        Ok(match gear {
+            Some(g) => motor_shaft.at_output(g),
+            None => motor_shaft,
         })
+    }
+
+    /// The same figures at a gearbox's output shaft: speeds ÷ G, torques × η·G, powers × η,
+    /// air unchanged (`model::gear`).
+    fn at_output(self, g: &Gear) -> Self {
+        let row = |r: CatalogueRow| CatalogueRow {
+            free_speed_rad_s: g.output_speed(r.free_speed_rad_s),
+            max_power_w: g.output_power(r.max_power_w),
+            speed_at_max_power_rad_s: g.output_speed(r.speed_at_max_power_rad_s),
+            torque_at_max_power_nm: g.output_torque(r.torque_at_max_power_nm),
+            stall_torque_nm: g.output_torque(r.stall_torque_nm),
+            speed_grid_rad_s: g.output_speed(r.speed_grid_rad_s),
+            optimum: point_at_output(g, r.optimum),
+            ..r
+        };
+        Self {
+            rows: self.rows.into_iter().map(row).collect(),
+            reference: row(self.reference),
+            curves: self
+                .curves
+                .into_iter()
+                .map(|c| c.into_iter().map(|p| point_at_output(g, p)).collect())
+                .collect(),
+        }
     }
 
     /// The flat vector of figures (see the module documentation), smooth or as shown.
@@ -98,6 +135,16 @@ impl Outcome {
             }
         }
         out
+    }
+}
+
+/// An operating point at a gearbox's output shaft.
+fn point_at_output(g: &Gear, p: OperatingPoint) -> OperatingPoint {
+    OperatingPoint {
+        speed_rad_s: g.output_speed(p.speed_rad_s),
+        torque_nm: g.output_torque(p.torque_nm),
+        power_w: g.output_power(p.power_w),
+        ..p
     }
 }
 

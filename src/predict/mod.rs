@@ -170,6 +170,9 @@ pub struct Prediction {
     /// The catalogue figures whose band rests on the motor prior rather than on the data
     /// ([`RestsOnPrior`]); empty for a fit without a prior or without delta-method bands.
     pub resting: Vec<RestsOnPrior>,
+    /// The fit's gearbox: every figure, curve and band is its output shaft's (`None`: the
+    /// motor's own shaft, there being no gearbox).
+    pub gear: Option<crate::model::gear::Gear>,
 }
 
 /// A predicted figure whose band rests on the prior: knowing the parameters that rest on
@@ -303,7 +306,7 @@ fn centre_and_figures(
     options: &PredictOptions,
 ) -> Result<(Outcome, Vec<Vec<f64>>), PredictError> {
     options.check()?;
-    let centre = Outcome::of(&fitted_motor(fit), options, None)?;
+    let centre = Outcome::of(&fitted_motor(fit), options, None, fit.gear.as_ref())?;
     let speeds = centre
         .curves
         .iter()
@@ -335,7 +338,9 @@ pub fn predict_with(
     let (centre, speeds) = centre_and_figures(fit, options)?;
     let unc = ParamUncertainty::of(fit, options.fixed_spread);
     let shown = centre.flat(false);
-    let figures = |m: &Motor| Outcome::of(m, options, Some(&speeds)).map(|o| o.flat(true));
+    let figures = |m: &Motor| {
+        Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true))
+    };
     let unreliable = samples::delta_unreliable(fit);
     let use_samples = match request.choice {
         BandChoice::Delta => false,
@@ -423,6 +428,7 @@ pub fn predict_with(
         bands: made,
         fit_warnings: fit_warnings(fit),
         resting,
+        gear: fit.gear,
     })
 }
 
@@ -513,7 +519,9 @@ pub fn check_bands(
     let (centre, speeds) = centre_and_figures(fit, options)?;
     let unc = ParamUncertainty::of(fit, options.fixed_spread);
     let smooth = centre.flat(true);
-    let figures = |m: &Motor| Outcome::of(m, options, Some(&speeds)).map(|o| o.flat(true));
+    let figures = |m: &Motor| {
+        Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true))
+    };
     let delta = unc.delta_bands(fit, &smooth, &figures)?;
     let mc = unc.monte_carlo_bands(fit, samples, seed, &figures)?;
     let (Some(delta), Some(mc)) = (delta, mc) else {

@@ -158,6 +158,13 @@ pub fn markdown(
         run.threads,
         out.method.id()
     );
+    if let Some(g) = ds.gear() {
+        let _ = writeln!(
+            md,
+            "Geared motor: the pages' figures are the gearbox's OUTPUT shaft's and were moved to the motor shaft (speed × G, torque ÷ η·G, power ÷ η); the parameters are the MOTOR shaft's. {}.\n",
+            g.describe()
+        );
+    }
     goodness_section(&mut md, out);
     parameter_section(&mut md, &parameter_rows(ds, setup, out));
     let warnings = bound_warnings(out);

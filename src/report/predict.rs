@@ -254,6 +254,8 @@ pub fn catalogue_csv(pr: &Prediction, display: &PressureDisplay) -> String {
     let mut header = vec![display.column()];
     header.extend(banded_header(&CATALOGUE));
     header.extend(["extrapolated".to_string(), "speed_grid_rpm".to_string()]);
+    let (shaft_header, shaft_cells) = shaft_columns(pr);
+    header.extend(shaft_header);
     let grid = csv_number(rpm(pr.options.speed_grid_rad_s));
     let rows: Vec<Vec<String>> = pr
         .pressures
@@ -262,6 +264,7 @@ pub fn catalogue_csv(pr: &Prediction, display: &PressureDisplay) -> String {
             let mut r = vec![display.text(p.p_supply_pa)];
             r.extend(banded_cells(&p.figures, &CATALOGUE));
             r.extend([flag(p).to_string(), grid.clone()]);
+            r.extend(shaft_cells.iter().cloned());
             r
         })
         .collect();
@@ -292,12 +295,15 @@ pub fn curves_csv(pr: &Prediction, display: &PressureDisplay) -> String {
     let mut header = vec![display.column(), "speed_rpm".into()];
     header.extend(banded_header(&CURVE));
     header.push("extrapolated".into());
+    let (shaft_header, shaft_cells) = shaft_columns(pr);
+    header.extend(shaft_header);
     let mut rows = Vec::new();
     for p in &pr.pressures {
         for c in &p.curve {
             let mut r = vec![display.text(p.p_supply_pa), csv_number(rpm(c.speed_rad_s))];
             r.extend(banded_cells(&[c.torque_nm, c.power_w, c.air_kg_s], &CURVE));
             r.push(flag(p).to_string());
+            r.extend(shaft_cells.iter().cloned());
             rows.push(r);
         }
     }
@@ -332,10 +338,38 @@ fn markdown_table(
     text
 }
 
-/// The catalogue and the factors as Markdown tables (what the command line prints).
+/// Which shaft a geared motor's figures are for, for people (`None` without a gearbox,
+/// where the motor's shaft is the only one).
+pub fn shaft_note(pr: &Prediction) -> Option<String> {
+    let g = pr.gear.as_ref()?;
+    Some(format!(
+        "Figures at the gearbox's OUTPUT shaft, as the page printed them ({}). The motor shaft turns {} times as fast, with torque ÷ {:.4} (η·G) and power ÷ {:.4} (η); air is the same on either shaft.",
+        g.describe(),
+        g.ratio,
+        g.efficiency * g.ratio,
+        g.efficiency
+    ))
+}
+
+/// The columns a geared prediction's CSV rows end with: the shaft, the ratio and the
+/// efficiency (none without a gearbox, so that an ungeared motor's files keep their
+/// columns).
+fn shaft_columns(pr: &Prediction) -> (Vec<String>, Vec<String>) {
+    match &pr.gear {
+        None => (Vec::new(), Vec::new()),
+        Some(g) => (
+            ["shaft", "gear_ratio", "gear_efficiency"].map(String::from).to_vec(),
+            vec!["output".into(), csv_number(g.ratio), csv_number(g.efficiency)],
+        ),
+    }
+}
+
+/// The catalogue and the factors as Markdown tables (what the command line prints), after
+/// the shaft of a geared motor's figures.
 pub fn tables_markdown(pr: &Prediction, display: &PressureDisplay) -> String {
+    let shaft = shaft_note(pr).map_or(String::new(), |n| format!("{n}\n\n"));
     format!(
-        "{}\nCorrection factors relative to {} {}:\n\n{}",
+        "{shaft}{}\nCorrection factors relative to {} {}:\n\n{}",
         markdown_table(pr, display, &CATALOGUE, |p| &p.figures),
         display.text(pr.options.reference_pa),
         display.label(),

@@ -395,7 +395,9 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         resume: o.resume,
     };
     let outcome = estimate_fit(engine, &data, &setup, observer)?;
-    let file = fit_file(&ds.name, &setup, &outcome, o.seed);
+    let mut file = fit_file(&ds.name, &setup, &outcome, o.seed);
+    // The parameters are the motor shaft's; the gearbox says how the pages' shaft relates.
+    file.gear = ds.gear();
     Ok(Fit {
         dataset: ds,
         data,

@@ -27,6 +27,7 @@ use super::option::ControlOpt;
 use crate::data::fitfile::FitFile;
 use crate::model::effects::EffectSet;
 use crate::model::motor::{Load, Motor};
+use crate::model::gear::Gear;
 use crate::model::params::MotorParams;
 use crate::units::constants::P_ATM_PA;
 use std::path::PathBuf;
@@ -93,12 +94,12 @@ impl MotorOptions {
     /// motor as in `simulate`. `default_brake_nm_s_rad` is the study's brake when
     /// `--brake-nm-s-rad` is not given (0: no load).
     pub fn check(&self, default_brake_nm_s_rad: f64) -> Result<Plant, ControlError> {
-        let (params, mut effects, extra) = match &self.params {
+        let (params, mut effects, extra, gear) = match &self.params {
             Some(p) => {
                 let f = FitFile::read(p)?;
-                (f.params, f.effects, f.extra)
+                (f.params, f.effects, f.extra, f.gear)
             }
-            None => (MotorParams::default(), EffectSet::empty(), Vec::new()),
+            None => (MotorParams::default(), EffectSet::empty(), Vec::new(), None),
         };
         if let Some(list) = &self.effects {
             effects = EffectSet::parse_list(list).map_err(SettingsError::Effects)?;
@@ -115,6 +116,7 @@ impl MotorOptions {
         Ok(Plant {
             motor: Motor::new(params, effects).with_extra(&extra),
             load,
+            gear,
         })
     }
 }
@@ -124,9 +126,17 @@ impl MotorOptions {
 pub struct Plant {
     motor: Motor,
     load: Load,
+    gear: Option<Gear>,
 }
 
 impl Plant {
+    /// The gearbox of a geared motor's fit: the studies run at the MOTOR shaft (its speed,
+    /// torque and brake), which turns G times as fast as the gearbox's output (`None`: no
+    /// gearbox).
+    pub fn gear(&self) -> Option<Gear> {
+        self.gear
+    }
+
     /// The motor.
     pub fn motor(&self) -> &Motor {
         &self.motor
@@ -301,6 +311,27 @@ mod tests {
         let r = study(&plant, &settings).unwrap();
         let speeds = r.speed.iter().map(|p| p.speed_rad_s).collect();
         (r.free_speed_rad_s, speeds)
+    }
+
+    /// A geared fit's gearbox reaches the studies' plant; an ungeared one has none.
+    #[test]
+    fn a_geared_fit_says_its_studies_are_at_the_motor_shaft() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut fit = FitFile::from_params("demo", MotorParams::default(), EffectSet::empty());
+        let plant = |fit: &FitFile| {
+            let path = dir.path().join("fit.json");
+            fit.write(&path).unwrap();
+            MotorOptions {
+                params: Some(path),
+                ..MotorOptions::default()
+            }
+            .check(0.0)
+            .unwrap()
+        };
+        assert_eq!(plant(&fit).gear(), None);
+        fit.gear = Some(Gear::new(4.0, Some(0.9)));
+        let g = plant(&fit).gear().unwrap();
+        assert_eq!((g.ratio, g.efficiency), (4.0, 0.9));
     }
 
     #[test]

@@ -753,6 +753,30 @@ fn torque_below(points: &[(f64, f64)], x: f64) -> Option<(f64, f64)> {
     points.iter().rev().find(|p| p.0 <= x).copied()
 }
 
+/// A geared motor's page moved to the motor shaft, which the model describes: each speed
+/// × G, each torque ÷ (η·G), each power ÷ η, air as printed (`Gear`'s law; docs/formats.md,
+/// "Geared motors"), in the recording's SI values and in its figures'. The text as printed
+/// (`raw`, `written`) stays the output shaft's, for messages and reports.
+pub(super) fn to_motor_shaft(
+    rec: &mut Recording,
+    figures: &mut [Figure],
+    gear: &crate::model::gear::Gear,
+) {
+    let convert = |q: Quantity, v: f64| match q {
+        Quantity::Speed => gear.motor_speed(v),
+        Quantity::Torque => gear.motor_torque(v),
+        Quantity::Power => gear.motor_power(v),
+        _ => v,
+    };
+    for col in &mut rec.columns {
+        let q = col.quantity;
+        col.si.iter_mut().for_each(|v| *v = convert(q, *v));
+    }
+    for f in figures {
+        f.si = convert(f.quantity, f.si);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -588,6 +588,7 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
             threads: out.run.threads,
         }),
         extra: Vec::new(),
+        gear: None,
         covariance: out.log_covariance(&setup.space),
         conditions: Some(out.conditions),
         profiles: out

@@ -42,7 +42,10 @@ impl FitData {
         let cost = CostModel::new(ds, options)?;
         let (smooth_ds, inputs) = smooth_inputs(ds);
         let smoothed = CostModel::new(&smooth_ds, options)?;
-        let target = Target::new(&smoothed, &smooth_ds)?.with_offsets();
+        let gear_ln_sd = ds.gear().map_or(0.0, |g| g.efficiency_ln_sd);
+        let target = Target::new(&smoothed, &smooth_ds)?
+            .with_offsets()
+            .with_gear_efficiency(gear_ln_sd);
         let raised = match raise_supply(&smooth_ds) {
             Some(ds) => Some(CostModel::new(&ds, options)?),
             None => None,

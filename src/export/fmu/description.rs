@@ -113,12 +113,20 @@ pub fn model_description(fit: &FitFile, guid: &str) -> Result<String, FmuError> 
         }
     }
     let effects = fit.effects.ids();
-    let description = format!(
+    let mut description = format!(
         "Pneumatic vane motor fitted by vanefit to dataset '{}'; effects: [{}]; discovered terms: {}",
         fit.dataset,
         effects.join(", "),
         fit.extra.len()
     );
+    if let Some(g) = &fit.gear {
+        description.push_str(&format!(
+            "; geared: speed, torque and load are at the MOTOR shaft; the gearbox output turns {} times slower with {:.6} (efficiency times ratio) times the torque ({})",
+            g.ratio,
+            g.efficiency * g.ratio,
+            g.describe()
+        ));
+    }
     let mut x = String::new();
     x.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     let _ = writeln!(
@@ -152,4 +160,30 @@ pub fn model_description(fit: &FitFile, guid: &str) -> Result<String, FmuError> 
     }));
     x.push_str("    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
     Ok(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::gear::Gear;
+    use crate::model::{EffectSet, MotorParams};
+
+    /// A geared fit's FMU says its speed, torque and load are the motor shaft's; an
+    /// ungeared one says nothing of shafts.
+    #[test]
+    fn a_geared_fmu_names_the_motor_shaft() {
+        let mut fit = FitFile::from_params("g", MotorParams::default(), EffectSet::empty());
+        let plain = model_description(&fit, "id").unwrap();
+        assert!(!plain.contains("shaft;") && !plain.contains("MOTOR"));
+        fit.gear = Some(Gear::new(4.0, Some(0.9)));
+        let geared = model_description(&fit, "id").unwrap();
+        assert!(geared.contains("geared: speed, torque and load are at the MOTOR shaft"));
+        for name in ["speed", "torque_shaft", "t_load", "c_brake", "omega"] {
+            let line = geared
+                .lines()
+                .find(|l| l.contains(&format!("name=\"{name}\"")))
+                .unwrap();
+            assert!(line.contains("MOTOR shaft; gearbox output: speed/4"), "{line}");
+        }
+    }
 }

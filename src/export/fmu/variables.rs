@@ -355,10 +355,29 @@ fn states_and_fixed_parameters(p_atm: f64) -> Vec<Variable> {
     v
 }
 
+/// A geared motor's shaft variables say that they are the motor shaft's (the FMU models
+/// the motor; the gearbox's output turns G times slower with η·G times the torque,
+/// docs/formats.md, "Geared motors").
+fn at_motor_shaft(vars: &mut [Variable], g: &crate::model::gear::Gear) {
+    let note = format!(
+        " (MOTOR shaft; gearbox output: speed/{}, torque × {:.6})",
+        g.ratio,
+        g.efficiency * g.ratio
+    );
+    for v in vars.iter_mut() {
+        if [vr::SPEED, vr::TORQUE_SHAFT, vr::T_LOAD, vr::C_BRAKE, vr::STATES[3]].contains(&v.vr) {
+            v.description.push_str(&note);
+        }
+    }
+}
+
 /// Every variable of the FMU of `fit`, in the order of `modelDescription.xml`.
 pub fn variables(fit: &FitFile) -> Result<Vec<Variable>, FmuError> {
     let mut v = inputs_and_outputs(fit);
     v.extend(states_and_fixed_parameters(p_atm_start(fit)));
+    if let Some(g) = &fit.gear {
+        at_motor_shaft(&mut v, g);
+    }
     for (k, p) in model_parameters(fit)?.into_iter().enumerate() {
         v.push(with_start(
             var(

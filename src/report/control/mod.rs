@@ -111,6 +111,37 @@ impl<'a> Writer<'a> {
     }
 }
 
+/// Which shaft a geared motor's study is at, as `shaft.json` says it: the motor's, with
+/// the gearbox that relates it to the output (docs/formats.md, "Geared motors").
+pub fn shaft_json(g: &crate::model::gear::Gear) -> serde_json::Value {
+    serde_json::json!({
+        "shaft": "motor",
+        "gear_ratio": g.ratio,
+        "gear_efficiency": g.efficiency,
+        "gear_efficiency_printed": g.efficiency_printed,
+        "note": shaft_note(g),
+    })
+}
+
+/// One line for people: the study's speeds, torques and brake are the motor shaft's.
+pub fn shaft_note(g: &crate::model::gear::Gear) -> String {
+    format!(
+        "geared motor: every speed, torque and load of this study is at the MOTOR shaft; the gearbox's output turns {} times slower with η·G = {:.4} times the torque ({})",
+        g.ratio,
+        g.efficiency * g.ratio,
+        g.describe()
+    )
+}
+
+/// Writes `shaft.json` ([`shaft_json`]) into `dir`, for a geared motor's study.
+pub fn write_shaft(
+    g: &crate::model::gear::Gear,
+    dir: &Path,
+    on_written: &mut dyn FnMut(&Path),
+) -> Result<(), ControlReportError> {
+    Writer::new(dir, on_written).json("shaft.json", &shaft_json(g))
+}
+
 /// The CSV tables and JSON summaries a study's `write` (e.g. [`bode::write`]) would write,
 /// as (file name, text), without writing anything or drawing the figures.
 pub fn texts<R>(
@@ -258,4 +289,25 @@ fn trace_figure(title: &str, runs: &[(&str, &Trace)]) -> Figure {
 /// Pairs of (x, y) from two columns.
 fn pairs(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
     x.iter().zip(y).map(|(x, y)| (*x, *y)).collect()
+}
+
+#[cfg(test)]
+mod shaft_tests {
+    use super::*;
+    use crate::model::gear::Gear;
+
+    /// A geared study says it is at the motor shaft, with η·G for the output's torque.
+    #[test]
+    fn a_geared_study_names_the_motor_shaft() {
+        let g = Gear::new(4.0, Some(0.9));
+        let note = shaft_note(&g);
+        assert!(note.contains("MOTOR shaft") && note.contains("3.6000"), "{note}");
+        let doc = shaft_json(&g);
+        assert_eq!(doc["shaft"], "motor");
+        assert_eq!(doc["gear_ratio"], 4.0);
+        let dir = tempfile::tempdir().unwrap();
+        let mut seen = Vec::new();
+        write_shaft(&g, dir.path(), &mut |p| seen.push(p.to_path_buf())).unwrap();
+        assert_eq!(seen, vec![dir.path().join("shaft.json")]);
+    }
 }
