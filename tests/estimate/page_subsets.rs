@@ -48,7 +48,7 @@ fn goodness_chi2(stdout: &str) -> Option<f64> {
 }
 
 /// The full walk: 254 pages (about 110 reach a fit, 8 starts each; the others are refused
-/// when read). Slow in a debug build, about a minute in release.
+/// when read). 13 s in a release build; slow in a debug one.
 #[test]
 #[ignore = "254 pages; run with --ignored in release"]
 fn every_subset_of_the_shipped_figures_fits_or_says_what_to_add() {
