@@ -12,7 +12,7 @@ use vanefit::model::EffectSet;
 use vanefit::report::explain;
 use vanefit::report::fit as report;
 use vanefit::task::{
-    displacement_first_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
+    displacement_start_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
     ParamRange, Pinning,
 };
 
@@ -262,7 +262,7 @@ impl FitObserver for Progress {
         }
     }
     fn displacement(&self, estimate: &DisplacementEstimate) {
-        say!("{}", displacement_first_line(estimate));
+        say!("{}", displacement_start_line(estimate));
     }
 }
 

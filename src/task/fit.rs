@@ -8,7 +8,7 @@ use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::fit::displacement::{describe_cm3, DisplacementEstimate};
+use crate::estimate::fit::displacement::{describe_fitted, DisplacementEstimate};
 use crate::estimate::fit::setup::{
     catalogue_only, displacement_unprinted, page_displacement, page_estimates, search_space,
     PageChoice, SetupError, SpaceRequest,
@@ -22,7 +22,6 @@ use crate::estimate::optimize::settings::MultiStartConfig;
 use crate::estimate::problem::space::SpaceError;
 use crate::io::side_path;
 use crate::model::effects::EffectSet;
-use crate::model::params::ParamId;
 use crate::objective::cost::{CostError, CostOptions};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
@@ -248,7 +247,17 @@ pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
     lines
 }
 
-/// The first estimate of a page's displacement as `fit` and `check` print it.
+/// Where `fit` starts the displacement of a page that does not print it: the similarity
+/// estimate's value only, so that the fit's output states one displacement estimate, the
+/// fit's own ([`Fit::displacement_line`]).
+pub fn displacement_start_line(estimate: &DisplacementEstimate) -> String {
+    let v = estimate.v_disp_m3 * 1e6;
+    format!(
+        "the page does not print the displacement: the fit estimates it with the other parameters, its search centred on {v:.3} cm³ by similarity with AR034-11 (torque per supply pressure, air per revolution)"
+    )
+}
+
+/// The similarity estimate of a page's displacement as `check` prints it.
 pub fn displacement_first_line(estimate: &DisplacementEstimate) -> String {
     format!(
         "{}, by similarity with AR034-11 (torque per supply pressure, air per revolution): the page does not print it, so the fit estimates it with the other parameters",
@@ -314,15 +323,8 @@ impl Fit {
     /// in words ("displacement estimated from the page: 4.1 cm³ [3.8, 4.5] (95 %)"; the
     /// interval is the page estimate's where the fit gives none).
     pub fn displacement_line(&self) -> Option<String> {
-        let first = self.displacement.as_ref()?;
-        let v = self.outcome.params.v_disp();
-        let ci = self
-            .file
-            .ci95
-            .iter()
-            .find(|(n, _)| n == ParamId::V_DISP.name())
-            .map_or(first.ci95_m3, |(_, c)| *c);
-        Some(describe_cm3(v, ci))
+        self.displacement.as_ref()?;
+        Some(describe_fitted(&self.file))
     }
 }
 
