@@ -325,6 +325,9 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     let fitted = fitted.map_err(Failure::fit)?;
     let written = write_fit(&fitted, &args.out, !args.no_plots)?;
     print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
+    for w in &fitted.figure_warnings {
+        say!("{w}");
+    }
     if let Some(line) = fitted.displacement_line() {
         say!("{line}: not printed on the page, fitted with the other parameters (every size-scaled default and prior follows it)");
     }

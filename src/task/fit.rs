@@ -23,7 +23,9 @@ use crate::estimate::problem::space::SpaceError;
 use crate::io::side_path;
 use crate::model::effects::EffectSet;
 use crate::objective::cost::{CostError, CostOptions};
+use crate::predict::{PredictOptions, ROW_FIGURES};
 use crate::report::fit as report;
+use crate::units::Unit;
 use crate::report::plot::PlotError;
 use std::path::{Path, PathBuf};
 
@@ -316,6 +318,9 @@ pub struct Fit {
     /// For pages that do not print the displacement: its first estimate from the pages
     /// (the fit then estimates `v_disp` with the rest; its interval is the fit file's).
     pub displacement: Option<DisplacementEstimate>,
+    /// For catalogue pages: a warning per printed figure outside the fit's 95 % band at its
+    /// page's pressure ([`figures_outside_bands`]).
+    pub figure_warnings: Vec<String>,
 }
 
 impl Fit {
@@ -398,6 +403,11 @@ pub(crate) fn fit_dataset<O: FitObserver>(
     };
     let outcome = estimate_fit(engine, &data, &setup, observer)?;
     let file = fit_file(&ds.name, &setup, &outcome, o.seed);
+    let figure_warnings = if catalogue_only(&ds) {
+        figures_outside_bands(&ds, &file)
+    } else {
+        Vec::new()
+    };
     Ok(Fit {
         dataset: ds,
         data,
@@ -407,7 +417,58 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         seed: o.seed,
         pinning: choice.map(|c| c.pinning).unwrap_or_default(),
         displacement,
+        figure_warnings,
     })
+}
+
+/// For a dataset of catalogue pages: a warning for each printed key figure that lies
+/// outside the fit's own 95 % band (`predict`'s delta-method band from the fit file) at
+/// its page's supply pressure, naming it: the fit does not reproduce what the page prints.
+/// A page whose figures cannot be predicted from the fit gets one warning that says so.
+pub fn figures_outside_bands(ds: &Dataset, file: &FitFile) -> Vec<String> {
+    let mut out = Vec::new();
+    for ex in &ds.experiments {
+        let (Some(p), false) = (ex.p_supply_pa, ex.figures.is_empty()) else {
+            continue;
+        };
+        let mut options = PredictOptions::new(ds.p_atm_pa);
+        options.pressures_pa = vec![p];
+        options.reference_pa = p;
+        let bar_g = Unit::BarG.from_si(p, ds.p_atm_pa);
+        let prediction = match crate::predict::predict(file, &options) {
+            Ok(pr) => pr,
+            Err(e) => {
+                out.push(format!(
+                    "WARNING: the page at {bar_g:.3} bar g ({}): its figures could not be checked against the fit's bands: {e}",
+                    ex.file
+                ));
+                continue;
+            }
+        };
+        let at = &prediction.pressures[0].figures;
+        for f in &ex.figures {
+            let Some(k) = ROW_FIGURES.iter().position(|r| *r == f.key) else {
+                continue;
+            };
+            let Some([lo, hi]) = at[k].band95 else {
+                continue;
+            };
+            if (lo..=hi).contains(&f.si) {
+                continue;
+            }
+            let shown = |v: f64| crate::report::explain::number(f.unit.from_si(v, ds.p_atm_pa), 4);
+            let unit = f.unit.symbol();
+            out.push(format!(
+                "WARNING: the printed {} ({} {unit}, page at {bar_g:.2} bar g) lies outside the fit's 95 % band [{}, {}] {unit} (fit: {} {unit}): the fit does not reproduce it",
+                f.key,
+                f.written,
+                shown(lo),
+                shown(hi),
+                shown(at[k].value)
+            ));
+        }
+    }
+    out
 }
 
 /// The files a fit left next to its fit file.
@@ -446,7 +507,7 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
         &run.outcome,
         run.seed,
         &written.plots,
-    );
+    ) + &report::figure_warnings(&run.figure_warnings);
     crate::io::write_atomic(&md, text.as_bytes()).map_err(write_error(&md))?;
     written.report = md;
     Ok(written)

@@ -130,3 +130,51 @@ fn walk(pick: impl Fn(&[&str]) -> bool) {
     eprintln!("{walked} pages: {fitted} fit, {refused} refused with a reason");
     assert_eq!(fitted + refused, walked);
 }
+
+/// A page whose max power is printed at a speed the model cannot put it at (the shipped
+/// figures with the speed at max power moved to 4000 rpm and the max power to the torque
+/// there, 0.16 N·m × 4000 rpm = 67 W): the fit matches the power and torque at 4000 rpm, but
+/// its own maximum of power lies elsewhere, and the fit says so, naming the figures, in its
+/// output and its report.
+#[test]
+fn printed_figures_outside_the_fits_bands_are_named() {
+    let figures = shipped_figures();
+    let moved: Vec<(String, String)> = figures
+        .iter()
+        .filter(|(k, _)| ["free_speed", "torque_at_max_power"].contains(&k.as_str()))
+        .cloned()
+        .chain([
+            ("speed_at_max_power".to_string(), "4000 rpm".to_string()),
+            ("max_power".to_string(), "0.067 kW".to_string()),
+        ])
+        .collect();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("moved");
+    page(&dir, &moved.iter().collect::<Vec<_>>(), false);
+    let out = dir.join("fit.json");
+    let o = vanefit(&[
+        "fit",
+        dir.to_str().unwrap(),
+        "--starts",
+        "8",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let warned = |text: &str, key: &str| {
+        text.lines()
+            .any(|l| l.contains(&format!("printed {key} (")) && l.contains("outside the fit's 95 % band"))
+    };
+    assert!(warned(&stdout, "speed_at_max_power"), "{stdout}");
+    let report = std::fs::read_to_string(dir.join("fit.report.md")).unwrap();
+    assert!(warned(&report, "speed_at_max_power"), "{report}");
+    // The shipped page's own figures all lie within the bands of its fit: no warning.
+    let all: Vec<&(String, String)> = figures.iter().collect();
+    let whole = tmp.path().join("whole");
+    page(&whole, &all, true);
+    let o = vanefit(&["fit", whole.to_str().unwrap(), "--starts", "8", "--no-plots", "--out", whole.join("fit.json").to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(!stdout.contains("outside the fit's 95 % band"), "{stdout}");
+}
