@@ -72,7 +72,9 @@ pub enum EstimateError {
     /// No start reached a cost that can be evaluated: the best point of the multi-start
     /// still carries the cost's failure penalty (`objective::cost::FAILURE_PENALTY`), so
     /// there is no estimate to report.
-    #[error("no start of the fit reached a cost that can be evaluated, so there is no estimate: {why}")]
+    #[error(
+        "no start of the fit reached a cost that can be evaluated, so there is no estimate: {why}"
+    )]
     NoFiniteCost {
         /// Why the cost at the best start could not be evaluated (the cost model's words).
         why: String,

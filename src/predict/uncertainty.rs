@@ -516,7 +516,11 @@ mod tests {
         // y = e^(k·ln c) is y·sinh(k·h)/h, so the band's factor is exp(1.96·s·sinh(k·h)/h).
         let s = 0.02 / Z95;
         let want = (Z95 * s * (k * s).sinh() / s).exp();
-        assert!((hi / center[0] / want - 1.0).abs() < 1e-6, "{} vs {want}", hi / center[0]);
+        assert!(
+            (hi / center[0] / want - 1.0).abs() < 1e-6,
+            "{} vs {want}",
+            hi / center[0]
+        );
         // A figure ≤ 0 keeps the linear band.
         assert_eq!(log_band(-1.0, 0.5), [-1.5, -0.5]);
     }

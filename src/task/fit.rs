@@ -25,8 +25,8 @@ use crate::model::effects::EffectSet;
 use crate::objective::cost::{CostError, CostOptions};
 use crate::predict::{PredictOptions, ROW_FIGURES};
 use crate::report::fit as report;
-use crate::units::Unit;
 use crate::report::plot::PlotError;
+use crate::units::Unit;
 use std::path::{Path, PathBuf};
 
 /// Options of a fit as given (unchecked); [`FitOptions::check`] makes them [`FitSettings`].

@@ -42,8 +42,12 @@ fn page(dir: &Path, figures: &[&(String, String)], displacement: bool) {
 
 /// The χ² of the fit's goodness line ("goodness of fit: chi2 0.3 over 4 rows, …").
 fn goodness_chi2(stdout: &str) -> Option<f64> {
-    let line = stdout.lines().find(|l| l.starts_with("goodness of fit: chi2 "))?;
-    let word = line["goodness of fit: chi2 ".len()..].split_whitespace().next()?;
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("goodness of fit: chi2 "))?;
+    let word = line["goodness of fit: chi2 ".len()..]
+        .split_whitespace()
+        .next()?;
     word.parse().ok()
 }
 
@@ -87,7 +91,9 @@ fn walk(pick: impl Fn(&[&str]) -> bool) {
                 continue;
             }
             walked += 1;
-            let dir = tmp.path().join(format!("{}{mask:03}", u8::from(displacement)));
+            let dir = tmp
+                .path()
+                .join(format!("{}{mask:03}", u8::from(displacement)));
             page(&dir, &sub, displacement);
             let out = dir.join("fit.json");
             let o = vanefit(&[
@@ -106,7 +112,10 @@ fn walk(pick: impl Fn(&[&str]) -> bool) {
                 Some(0) => {
                     let chi2 = goodness_chi2(&stdout)
                         .unwrap_or_else(|| panic!("{what}: no goodness line\n{stdout}"));
-                    assert!(chi2.is_finite(), "{what}: exit 0 with chi2 {chi2}\n{stdout}");
+                    assert!(
+                        chi2.is_finite(),
+                        "{what}: exit 0 with chi2 {chi2}\n{stdout}"
+                    );
                     let file: serde_json::Value =
                         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
                     let cost = file["cost"].as_f64().unwrap();
@@ -117,7 +126,9 @@ fn walk(pick: impl Fn(&[&str]) -> bool) {
                     // Refused with a reason that names what the page lacks: a figure another
                     // needs, or what to add.
                     assert!(
-                        err.contains("needs") || err.contains("add ") || err.contains("missing column"),
+                        err.contains("needs")
+                            || err.contains("add ")
+                            || err.contains("missing column"),
                         "{what}: {err}"
                     );
                     assert!(!out.exists(), "{what}: refused but wrote {}", out.display());
@@ -164,8 +175,9 @@ fn printed_figures_outside_the_fits_bands_are_named() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     let warned = |text: &str, key: &str| {
-        text.lines()
-            .any(|l| l.contains(&format!("printed {key} (")) && l.contains("outside the fit's 95 % band"))
+        text.lines().any(|l| {
+            l.contains(&format!("printed {key} (")) && l.contains("outside the fit's 95 % band")
+        })
     };
     assert!(warned(&stdout, "speed_at_max_power"), "{stdout}");
     let report = std::fs::read_to_string(dir.join("fit.report.md")).unwrap();
@@ -174,7 +186,15 @@ fn printed_figures_outside_the_fits_bands_are_named() {
     let all: Vec<&(String, String)> = figures.iter().collect();
     let whole = tmp.path().join("whole");
     page(&whole, &all, true);
-    let o = vanefit(&["fit", whole.to_str().unwrap(), "--starts", "8", "--no-plots", "--out", whole.join("fit.json").to_str().unwrap()]);
+    let o = vanefit(&[
+        "fit",
+        whole.to_str().unwrap(),
+        "--starts",
+        "8",
+        "--no-plots",
+        "--out",
+        whole.join("fit.json").to_str().unwrap(),
+    ]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(!stdout.contains("outside the fit's 95 % band"), "{stdout}");
 }

@@ -82,9 +82,8 @@ pub fn fitted_interval(
 ) -> Option<[Option<f64>; 2]> {
     match ci95 {
         Some([lo, hi]) if lo <= v_m3 && v_m3 <= hi => Some([Some(lo), Some(hi)]),
-        _ => verdict.filter(|[lo, hi]| {
-            lo.is_none_or(|lo| lo <= v_m3) && hi.is_none_or(|hi| v_m3 <= hi)
-        }),
+        _ => verdict
+            .filter(|[lo, hi]| lo.is_none_or(|lo| lo <= v_m3) && hi.is_none_or(|hi| v_m3 <= hi)),
     }
 }
 

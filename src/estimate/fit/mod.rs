@@ -343,7 +343,11 @@ fn check_evaluated(
     theta: &[f64],
 ) -> Result<(), EstimateError> {
     let motor = Motor::new(space.params(theta)?, space.effects.clone());
-    match objective.cost.evaluate(&motor, objective.solver.as_ref()).failed {
+    match objective
+        .cost
+        .evaluate(&motor, objective.solver.as_ref())
+        .failed
+    {
         Some(why) => Err(EstimateError::NoFiniteCost { why }),
         None => Ok(()),
     }
@@ -722,7 +726,10 @@ mod tests {
         match check_evaluated(&broken, &space, &theta) {
             Err(e @ EstimateError::NoFiniteCost { .. }) => {
                 let text = e.to_string();
-                assert!(text.contains("no estimate") && text.contains("step size"), "{text}");
+                assert!(
+                    text.contains("no estimate") && text.contains("step size"),
+                    "{text}"
+                );
             }
             other => panic!("{other:?}"),
         }
