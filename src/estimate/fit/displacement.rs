@@ -93,7 +93,7 @@ pub fn describe_fitted_cm3(v_m3: f64, interval: Option<[Option<f64>; 2]>) -> Str
     match interval {
         Some([Some(lo), Some(hi)]) => describe_cm3(v_m3, [lo, hi]),
         Some([lo, hi]) => {
-            let end = |e: Option<f64>| e.map_or("open".to_string(), |v| cm3_digits(v));
+            let end = |e: Option<f64>| e.map_or("open".to_string(), cm3_digits);
             format!(
                 "displacement estimated from the page: {} cm³ [{}, {}] (95 %; the page does not bound it on the open side)",
                 cm3_digits(v_m3),
