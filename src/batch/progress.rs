@@ -75,7 +75,7 @@ impl crate::task::fit::FitObserver for UnitProgress<'_> {
         }
     }
     fn displacement(&self, estimate: &crate::estimate::fit::displacement::DisplacementEstimate) {
-        let line = crate::task::fit::displacement_first_line(estimate);
+        let line = crate::task::fit::displacement_start_line(estimate);
         crate::io::say_line(format_args!("{line}"));
     }
 }

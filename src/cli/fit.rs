@@ -12,7 +12,7 @@ use vanefit::model::EffectSet;
 use vanefit::report::explain;
 use vanefit::report::fit as report;
 use vanefit::task::{
-    displacement_first_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
+    displacement_start_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
     ParamRange, Pinning,
 };
 
@@ -262,7 +262,7 @@ impl FitObserver for Progress {
         }
     }
     fn displacement(&self, estimate: &DisplacementEstimate) {
-        say!("{}", displacement_first_line(estimate));
+        say!("{}", displacement_start_line(estimate));
     }
 }
 
@@ -325,6 +325,9 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     let fitted = fitted.map_err(Failure::fit)?;
     let written = write_fit(&fitted, &args.out, !args.no_plots)?;
     print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
+    for w in &fitted.figure_warnings {
+        say!("{w}");
+    }
     if let Some(line) = fitted.displacement_line() {
         say!("{line}: not printed on the page, fitted with the other parameters (every size-scaled default and prior follows it)");
     }

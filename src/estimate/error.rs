@@ -69,6 +69,16 @@ pub enum EstimateError {
         /// What is wrong with it.
         why: ResultsLineError,
     },
+    /// No start reached a cost that can be evaluated: the best point of the multi-start
+    /// still carries the cost's failure penalty (`objective::cost::FAILURE_PENALTY`), so
+    /// there is no estimate to report.
+    #[error(
+        "no start of the fit reached a cost that can be evaluated, so there is no estimate: {why}"
+    )]
+    NoFiniteCost {
+        /// Why the cost at the best start could not be evaluated (the cost model's words).
+        why: String,
+    },
     /// The best point breaks a model constraint (it cannot: penalised points never win).
     #[error("best parameters: {0}")]
     BestParameters(#[from] ParamError),

@@ -434,17 +434,19 @@ impl Reference {
     }
 
     /// The reference of stated points (a catalogue's curve read off a printed page): σ is
-    /// the reading tolerance, `tolerance`·max|y| (the curve's full scale), not a noise
-    /// estimate; with fewer than `MIN_POINTS` distinct abscissae the polynomial has degree
-    /// (distinct − 1) through them (a single point is a constant over a point-wide range),
-    /// otherwise it is fitted as any reference is.
+    /// the reading tolerance, `tolerance`·`full_scale` (the curve's full scale, SI: max|y|
+    /// where the page prints a value other than 0), not a noise estimate; with fewer than
+    /// `MIN_POINTS` distinct abscissae the polynomial has degree (distinct − 1) through them
+    /// (a single point is a constant over a point-wide range), otherwise it is fitted as
+    /// any reference is.
     pub fn stated(
         x: &[f64],
         y: &[f64],
         options: &ReferenceOptions,
         tolerance: f64,
+        full_scale: f64,
     ) -> Result<Reference, ReferenceError> {
-        let ymax = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let ymax = full_scale;
         let mut distinct: Vec<f64> = x.to_vec();
         distinct.sort_by(f64::total_cmp);
         distinct.dedup();
@@ -825,6 +827,57 @@ impl ChannelReference {
     }
 }
 
+/// The full scale of a stated (catalogue) channel of quantity `q` with values `ys`, SI, on
+/// which its reading tolerance is taken: max|y|; for a torque printed only as the 0 at free
+/// speed, the largest torque the page implies, power/speed of its rows (the torque at max
+/// power is P_max/ω there). `None` where the page gives no magnitude at all: a reading
+/// tolerance of 0 would make any deviation from the 0 infinitely unlikely, a cost that
+/// cannot be evaluated.
+fn stated_full_scale(q: Quantity, rec: &Recording, ys: &[f64]) -> Option<f64> {
+    let ymax = ys.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if ymax > 0.0 {
+        return Some(ymax);
+    }
+    let implied = match (q, rec.values(Quantity::Power), rec.values(Quantity::Speed)) {
+        (Quantity::Torque, Ok(p), Ok(w)) => p
+            .iter()
+            .zip(w)
+            .filter(|(p, w)| p.is_finite() && **w > 0.0)
+            .fold(0.0f64, |m, (p, w)| m.max((p / w).abs())),
+        _ => 0.0,
+    };
+    (implied > 0.0).then_some(implied)
+}
+
+/// Why a stated channel has no full scale ([`stated_full_scale`]), with what to add: for a
+/// page of figures only (its recording is rig.toml's) at the free speed's key, else at the
+/// channel's column (`column_error`).
+fn no_full_scale(
+    data: &ExperimentData,
+    q: Quantity,
+    column: &str,
+    column_error: impl Fn(String) -> DataError,
+) -> DataError {
+    if q != Quantity::Torque {
+        return column_error(format!(
+            "{column} is 0 in every row: no full scale to weigh its reading tolerance on; add a value other than 0"
+        ));
+    }
+    let message = "the page prints no torque but the 0 at free speed, which says where the torque is 0 and not how large it is, so the fit has no scale to weigh it on: add the stall torque (stall_torque), the torque at max power (torque_at_max_power) or the max power with its speed (max_power, speed_at_max_power)".to_string();
+    let rec = &data.recording;
+    let free = data.figures.iter().find(|f| f.key == "free_speed");
+    match free {
+        Some(f) if rec.file.file_name().is_some_and(|n| n == "rig.toml") => DataError {
+            file: rec.file.clone(),
+            line: f.line,
+            column: Some((1, f.key.clone())),
+            named: crate::data::dataset::Named::Key,
+            message,
+        },
+        _ => column_error(message),
+    }
+}
+
 /// Fits the reference of every measured channel of an experiment. Errors name the file
 /// and the channel's column.
 pub fn experiment_references(
@@ -854,17 +907,24 @@ pub fn experiment_references(
         if ys.is_empty() {
             continue;
         }
-        let fitted = match data.tolerance {
-            None => Reference::fit(&xs, &ys, options),
-            Some(tol) => Reference::stated(&xs, &ys, options, tol),
-        };
-        let reference = fitted.map_err(|e| {
-            let mut err = DataError::new(
-                &rec.file,
-                format!("no reference response against {}: {e}", abscissa.column),
-            );
+        let column_error = |message: String| {
+            let mut err = DataError::new(&rec.file, message);
             err.column = Some((i + 1, col.name.clone()));
             err
+        };
+        let fitted = match data.tolerance {
+            None => Reference::fit(&xs, &ys, options),
+            Some(tol) => {
+                let scale = stated_full_scale(q, rec, &ys)
+                    .ok_or_else(|| no_full_scale(data, q, &col.name, column_error))?;
+                Reference::stated(&xs, &ys, options, tol, scale)
+            }
+        };
+        let reference = fitted.map_err(|e| {
+            column_error(format!(
+                "no reference response against {}: {e}",
+                abscissa.column
+            ))
         })?;
         out.push(ChannelReference {
             kind: data.kind,

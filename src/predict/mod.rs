@@ -264,15 +264,7 @@ pub fn displacement_from_page(fit: &FitFile) -> Option<String> {
     if !(follows && fit.estimated.iter().any(|n| n == v_disp)) {
         return None;
     }
-    let v = fit.params.v_disp();
-    let ci = fit.ci95.iter().find(|(n, _)| n == v_disp).map(|(_, c)| *c);
-    let text = match ci {
-        Some(c) => crate::estimate::fit::displacement::describe_cm3(v, c),
-        None => format!(
-            "displacement estimated from the page: {:.3} cm³ (no interval: not identifiable)",
-            v * 1e6
-        ),
-    };
+    let text = crate::estimate::fit::displacement::describe_fitted(fit);
     Some(format!(
         "The {text} (the page does not print it): the bands carry its uncertainty, and every size-scaled default and prior follows it."
     ))

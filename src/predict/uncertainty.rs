@@ -27,7 +27,9 @@
 //! to [1e-4, 0.05]: one standard deviation probes the figure over the width the band is
 //! about, and stays far above the steady solver's 1e-9 relative noise), Var y = gᵀ·C·g and
 //! the band is y ± 1.96·√Var y (a 95 % band when y is close to linear over the parameters'
-//! spread).
+//! spread). A positive figure's band is propagated in log space, y·exp(∓1.96·√Var y/y): a
+//! positive quantity has a positive band however wide, and for a narrow band the two agree
+//! to second order.
 
 use super::PredictError;
 use crate::data::fitfile::FitFile;
@@ -241,8 +243,7 @@ impl ParamUncertainty {
             .map(|i| {
                 let g = DVector::from_fn(self.len(), |j, _| jac[(i, j)]);
                 let var = (g.transpose() * &self.cov * &g)[(0, 0)].max(0.0);
-                let half = Z95 * var.sqrt();
-                [center[i] - half, center[i] + half]
+                log_band(center[i], Z95 * var.sqrt())
             })
             .collect();
         Ok(Some(bands))
@@ -360,6 +361,20 @@ impl ParamUncertainty {
             })
             .collect();
         Ok(Some(bands))
+    }
+}
+
+/// The 95 % band of a figure y with delta-method half-width `half` (1.96·√Var y): for a
+/// positive figure propagated in log space, y·exp(∓half/y) (Var ln y = Var y/y² to first
+/// order), so that a positive quantity keeps a positive band and the band's ends are the
+/// same factor either side of y, as the parameters' log-normal spread makes them; a
+/// figure ≤ 0 (a torque past free speed) keeps the linear y ∓ half.
+fn log_band(y: f64, half: f64) -> [f64; 2] {
+    if y > 0.0 {
+        let f = (half / y).exp();
+        [y / f, y * f]
+    } else {
+        [y - half, y + half]
     }
 }
 
@@ -482,6 +497,32 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!((all[0].0 - 1.0).abs() < 1e-6, "{:?}", all[0]);
+    }
+
+    /// A positive figure with a spread wider than itself (a linear band would reach below
+    /// 0) keeps a positive band, the same factor either side of it, the factor of the
+    /// log-space delta method.
+    #[test]
+    fn a_positive_figure_has_a_positive_band() {
+        let f = fit_file();
+        let u = ParamUncertainty::of(&f, None);
+        let k = 60.0;
+        let y = |m: &Motor| Ok(vec![(m.params().c_in1() / 1e-9).powf(k)]);
+        let center = y(&u.motor_at(&f, &u.log_values).unwrap()).unwrap();
+        let [lo, hi] = u.delta_bands(&f, &center, &y).unwrap().unwrap()[0];
+        assert!(lo > 0.0 && lo < center[0] && center[0] < hi, "{lo} {hi}");
+        assert!(((hi / center[0]) * (lo / center[0]) - 1.0).abs() < 1e-9);
+        // σ of ln c_in1 is s = 0.02/1.96 and the step h = s: the central difference of
+        // y = e^(k·ln c) is y·sinh(k·h)/h, so the band's factor is exp(1.96·s·sinh(k·h)/h).
+        let s = 0.02 / Z95;
+        let want = (Z95 * s * (k * s).sinh() / s).exp();
+        assert!(
+            (hi / center[0] / want - 1.0).abs() < 1e-6,
+            "{} vs {want}",
+            hi / center[0]
+        );
+        // A figure ≤ 0 keeps the linear band.
+        assert_eq!(log_band(-1.0, 0.5), [-1.5, -0.5]);
     }
 
     #[test]

@@ -128,6 +128,19 @@ pub fn terminal_table(rows: &[ParamRow]) -> Vec<String> {
     lines
 }
 
+/// The report's section of a page's printed figures outside the fit's bands
+/// (`task::fit::figures_outside_bands`); empty without any.
+pub fn figure_warnings(warnings: &[String]) -> String {
+    if warnings.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from("\n## Printed figures outside the fit's bands\n\n");
+    for w in warnings {
+        let _ = writeln!(md, "- {w}");
+    }
+    md
+}
+
 /// The report of a fit, `<fit>.report.md`: run, goodness of fit with what its numbers mean,
 /// estimated and fixed parameters, systematic errors, and the plots (`plots`: file names
 /// next to the report).

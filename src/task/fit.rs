@@ -8,7 +8,7 @@ use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
-use crate::estimate::fit::displacement::{describe_cm3, DisplacementEstimate};
+use crate::estimate::fit::displacement::{describe_fitted, DisplacementEstimate};
 use crate::estimate::fit::setup::{
     catalogue_only, displacement_unprinted, page_displacement, page_estimates, search_space,
     PageChoice, SetupError, SpaceRequest,
@@ -22,10 +22,11 @@ use crate::estimate::optimize::settings::MultiStartConfig;
 use crate::estimate::problem::space::SpaceError;
 use crate::io::side_path;
 use crate::model::effects::EffectSet;
-use crate::model::params::ParamId;
 use crate::objective::cost::{CostError, CostOptions};
+use crate::predict::{PredictOptions, ROW_FIGURES};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
+use crate::units::{Quantity, Unit};
 use std::path::{Path, PathBuf};
 
 /// Options of a fit as given (unchecked); [`FitOptions::check`] makes them [`FitSettings`].
@@ -248,7 +249,17 @@ pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
     lines
 }
 
-/// The first estimate of a page's displacement as `fit` and `check` print it.
+/// Where `fit` starts the displacement of a page that does not print it: the similarity
+/// estimate's value only, so that the fit's output states one displacement estimate, the
+/// fit's own ([`Fit::displacement_line`]).
+pub fn displacement_start_line(estimate: &DisplacementEstimate) -> String {
+    let v = estimate.v_disp_m3 * 1e6;
+    format!(
+        "the page does not print the displacement: the fit estimates it with the other parameters, its search centred on {v:.3} cm³ by similarity with AR034-11 (torque per supply pressure, air per revolution)"
+    )
+}
+
+/// The similarity estimate of a page's displacement as `check` prints it.
 pub fn displacement_first_line(estimate: &DisplacementEstimate) -> String {
     format!(
         "{}, by similarity with AR034-11 (torque per supply pressure, air per revolution): the page does not print it, so the fit estimates it with the other parameters",
@@ -307,6 +318,9 @@ pub struct Fit {
     /// For pages that do not print the displacement: its first estimate from the pages
     /// (the fit then estimates `v_disp` with the rest; its interval is the fit file's).
     pub displacement: Option<DisplacementEstimate>,
+    /// For catalogue pages: a warning per printed figure outside the fit's 95 % band at its
+    /// page's pressure ([`figures_outside_bands`]).
+    pub figure_warnings: Vec<String>,
 }
 
 impl Fit {
@@ -314,15 +328,8 @@ impl Fit {
     /// in words ("displacement estimated from the page: 4.1 cm³ [3.8, 4.5] (95 %)"; the
     /// interval is the page estimate's where the fit gives none).
     pub fn displacement_line(&self) -> Option<String> {
-        let first = self.displacement.as_ref()?;
-        let v = self.outcome.params.v_disp();
-        let ci = self
-            .file
-            .ci95
-            .iter()
-            .find(|(n, _)| n == ParamId::V_DISP.name())
-            .map_or(first.ci95_m3, |(_, c)| *c);
-        Some(describe_cm3(v, ci))
+        self.displacement.as_ref()?;
+        Some(describe_fitted(&self.file))
     }
 }
 
@@ -398,6 +405,11 @@ pub(crate) fn fit_dataset<O: FitObserver>(
     let mut file = fit_file(&ds.name, &setup, &outcome, o.seed);
     // The parameters are the motor shaft's; the gearbox says how the pages' shaft relates.
     file.gear = ds.gear();
+    let figure_warnings = if catalogue_only(&ds) {
+        figures_outside_bands(&ds, &file)
+    } else {
+        Vec::new()
+    };
     Ok(Fit {
         dataset: ds,
         data,
@@ -407,7 +419,71 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         seed: o.seed,
         pinning: choice.map(|c| c.pinning).unwrap_or_default(),
         displacement,
+        figure_warnings,
     })
+}
+
+/// For a dataset of catalogue pages: a warning for each printed key figure that lies
+/// outside the fit's own 95 % band (`predict`'s delta-method band from the fit file) at
+/// its page's supply pressure, naming it: the fit does not reproduce what the page prints.
+/// A page whose figures cannot be predicted from the fit gets one warning that says so.
+pub fn figures_outside_bands(ds: &Dataset, file: &FitFile) -> Vec<String> {
+    let mut out = Vec::new();
+    for ex in &ds.experiments {
+        let (Some(p), false) = (ex.p_supply_pa, ex.figures.is_empty()) else {
+            continue;
+        };
+        let mut options = PredictOptions::new(ds.p_atm_pa);
+        options.pressures_pa = vec![p];
+        options.reference_pa = p;
+        let bar_g = Unit::BarG.from_si(p, ds.p_atm_pa);
+        let prediction = match crate::predict::predict(file, &options) {
+            Ok(pr) => pr,
+            Err(e) => {
+                out.push(format!(
+                    "WARNING: the page at {bar_g:.3} bar g ({}): its figures could not be checked against the fit's bands: {e}",
+                    ex.file
+                ));
+                continue;
+            }
+        };
+        let at = &prediction.pressures[0].figures;
+        for f in &ex.figures {
+            let Some(k) = ROW_FIGURES.iter().position(|r| *r == f.key) else {
+                continue;
+            };
+            let Some([lo, hi]) = at[k].band95 else {
+                continue;
+            };
+            // The bands are the shaft's the page printed (a gearbox's output); the figures
+            // were read onto the motor shaft.
+            if (lo..=hi).contains(&printed_shaft(file.gear.as_ref(), f.quantity, f.si)) {
+                continue;
+            }
+            let shown = |v: f64| crate::report::explain::number(f.unit.from_si(v, ds.p_atm_pa), 4);
+            let unit = f.unit.symbol();
+            out.push(format!(
+                "WARNING: the printed {} ({} {unit}, page at {bar_g:.2} bar g) lies outside the fit's 95 % band [{}, {}] {unit} (fit: {} {unit}): the fit does not reproduce it",
+                f.key,
+                f.written,
+                shown(lo),
+                shown(hi),
+                shown(at[k].value)
+            ));
+        }
+    }
+    out
+}
+
+/// A figure held at the motor shaft (SI) back at the shaft its page printed it for: a
+/// gearbox's output shaft (`model::gear`), or the motor's own without one.
+fn printed_shaft(gear: Option<&crate::model::gear::Gear>, q: Quantity, motor_si: f64) -> f64 {
+    match (gear, q) {
+        (Some(g), Quantity::Speed) => g.output_speed(motor_si),
+        (Some(g), Quantity::Torque) => g.output_torque(motor_si),
+        (Some(g), Quantity::Power) => g.output_power(motor_si),
+        _ => motor_si,
+    }
 }
 
 /// The files a fit left next to its fit file.
@@ -446,7 +522,7 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
         &run.outcome,
         run.seed,
         &written.plots,
-    );
+    ) + &report::figure_warnings(&run.figure_warnings);
     crate::io::write_atomic(&md, text.as_bytes()).map_err(write_error(&md))?;
     written.report = md;
     Ok(written)

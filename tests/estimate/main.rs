@@ -10,6 +10,7 @@ mod coverage;
 mod export_petab;
 mod fit_likelihood;
 mod multistart;
+mod page_subsets;
 mod recovery;
 mod sampler;
 extern crate twin;

@@ -412,8 +412,10 @@ fn check_figures(src: &Source<'_>, figures: &[Figure]) -> Result<(), DataError> 
 type Cell<'a> = Option<(f64, Option<&'a Figure>)>;
 
 /// The figures as rows of the curves: cells (speed, torque, power, air), `None` where not
-/// given, with the rig.toml line of the row's first figure. Torque at max power is compared
-/// only when no max power is given (power = torque·speed there: the same information twice).
+/// given, with the rig.toml line of the row's first figure. Every printed figure is a cell
+/// the fit compares, the torque at max power beside the max power too: each is rounded on
+/// its own, and a torque channel with no magnitude but the 0 at free speed would have no
+/// scale (`objective::reference`).
 pub(super) fn figure_rows(figures: &[Figure]) -> Vec<([Cell<'_>; 4], u64)> {
     let get = |k: &str| figures.iter().find(|f| f.key == k).map(|f| (f.si, Some(f)));
     let line = |k: &str| figures.iter().find(|f| f.key == k).and_then(|f| f.line);
@@ -426,11 +428,7 @@ pub(super) fn figure_rows(figures: &[Figure]) -> Vec<([Cell<'_>; 4], u64)> {
     }
     if let Some(w) = get("speed_at_max_power") {
         let p = get("max_power");
-        let t = if p.is_some() {
-            None
-        } else {
-            get("torque_at_max_power")
-        };
+        let t = get("torque_at_max_power");
         let a = get("air_at_max_power");
         if p.is_some() || t.is_some() || a.is_some() {
             rows.push(([Some(w), t, p, a], line("speed_at_max_power")));

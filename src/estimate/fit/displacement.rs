@@ -23,6 +23,7 @@
 //! fixed size-dependent parameters following it (`estimate::problem::prior`, `estimate::problem::space`), and
 //! its profile interval is the one reported with the fit.
 
+use crate::data::fitfile::FitFile;
 use crate::data::motor::MotorSection;
 use crate::estimate::problem::fit_data::FitData;
 use crate::estimate::problem::prior::Prior;
@@ -62,17 +63,71 @@ impl DisplacementEstimate {
 /// "displacement estimated from the page: 4.1 cm³ [3.8, 4.5]" (3 significant digits) of a
 /// value and its 95 % interval in m³.
 pub fn describe_cm3(v_m3: f64, ci95_m3: [f64; 2]) -> String {
-    let digits = |v: f64| {
-        let v = v * 1e6;
-        let d = (2 - v.abs().log10().floor() as i32).max(0) as usize;
-        format!("{v:.d$}")
-    };
     format!(
         "displacement estimated from the page: {} cm³ [{}, {}] (95 %)",
-        digits(v_m3),
-        digits(ci95_m3[0]),
-        digits(ci95_m3[1])
+        cm3_digits(v_m3),
+        cm3_digits(ci95_m3[0]),
+        cm3_digits(ci95_m3[1])
     )
+}
+
+/// The fit's displacement (m³) with the 95 % interval that the fit file gives it: the
+/// profile interval `ci95` where it holds the estimate, else the verdict's ends (`None`:
+/// open), as [`describe_fitted_cm3`] words it. An interval is the estimate's own or none:
+/// the page's similarity estimate's interval belongs to another estimate.
+pub fn fitted_interval(
+    v_m3: f64,
+    ci95: Option<[f64; 2]>,
+    verdict: Option<[Option<f64>; 2]>,
+) -> Option<[Option<f64>; 2]> {
+    match ci95 {
+        Some([lo, hi]) if lo <= v_m3 && v_m3 <= hi => Some([Some(lo), Some(hi)]),
+        _ => verdict
+            .filter(|[lo, hi]| lo.is_none_or(|lo| lo <= v_m3) && hi.is_none_or(|hi| v_m3 <= hi)),
+    }
+}
+
+/// "displacement estimated from the page: 4.1 cm³ [3.8, open] (95 %)", or "(no 95 %
+/// interval: …)" without one ([`fitted_interval`]).
+pub fn describe_fitted_cm3(v_m3: f64, interval: Option<[Option<f64>; 2]>) -> String {
+    match interval {
+        Some([Some(lo), Some(hi)]) => describe_cm3(v_m3, [lo, hi]),
+        Some([lo, hi]) => {
+            let end = |e: Option<f64>| e.map_or("open".to_string(), cm3_digits);
+            format!(
+                "displacement estimated from the page: {} cm³ [{}, {}] (95 %; the page does not bound it on the open side)",
+                cm3_digits(v_m3),
+                end(lo),
+                end(hi)
+            )
+        }
+        None => format!(
+            "displacement estimated from the page: {} cm³ (no 95 % interval: the fit did not bound it)",
+            cm3_digits(v_m3)
+        ),
+    }
+}
+
+/// The displacement a fit file gives a page that does not print it, in words, with the
+/// interval the file gives it ([`fitted_interval`]: the estimate's own, never the
+/// similarity estimate's).
+pub fn describe_fitted(file: &FitFile) -> String {
+    let name = ParamId::V_DISP.name();
+    let v = file.params.v_disp();
+    let ci = file.ci95.iter().find(|(n, _)| n == name).map(|(_, c)| *c);
+    let verdict = file
+        .verdicts
+        .iter()
+        .find(|d| d.name == name)
+        .map(|d| d.bounds95);
+    describe_fitted_cm3(v, fitted_interval(v, ci, verdict))
+}
+
+/// A volume in m³ as cm³ to 3 significant digits.
+fn cm3_digits(v_m3: f64) -> String {
+    let v = v_m3 * 1e6;
+    let d = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.d$}")
 }
 
 /// Whether a `[motor]` table leaves the displacement to be estimated: no displacement and

@@ -47,7 +47,7 @@ use crate::estimate::profile::uncertainty::{self, Interval};
 use crate::model::motor::Motor;
 use crate::model::params::{MotorParams, ParamId};
 use crate::numerics::DefaultSolver;
-use crate::objective::cost::{ChannelResiduals, CostModel};
+use crate::objective::cost::{ChannelResiduals, CostModel, FAILURE_PENALTY};
 use crate::sim::experiment::SimError;
 use nalgebra::DMatrix;
 use std::path::PathBuf;
@@ -317,6 +317,9 @@ fn search(
         setup.resume,
     )?;
     let best = run.best().clone();
+    if best.cost >= FAILURE_PENALTY {
+        check_evaluated(objective, &setup.space, &best.theta)?;
+    }
     observer.phase("maximum likelihood", 0);
     let best_theta = finish(problem, &best.theta, best.cost, settings);
     let clusters = cluster(&run.results, &setup.space, 0.02);
@@ -334,6 +337,26 @@ fn search(
         clusters,
         points,
     })
+}
+
+/// The error of a best start whose cost could not be evaluated: the cost model's penalty
+/// keeps the optimizer's values finite, so the search itself runs on, but a best start that
+/// never had a finite cost is no estimate ([`EstimateError::NoFiniteCost`]). `Ok` where the
+/// cost at `theta` was evaluated (a real cost as high as the penalty).
+fn check_evaluated(
+    objective: &DataObjective<'_>,
+    space: &ParamSpace,
+    theta: &[f64],
+) -> Result<(), EstimateError> {
+    let motor = Motor::new(space.params(theta)?, space.effects.clone());
+    match objective
+        .cost
+        .evaluate(&motor, objective.solver.as_ref())
+        .failed
+    {
+        Some(why) => Err(EstimateError::NoFiniteCost { why }),
+        None => Ok(()),
+    }
 }
 
 /// The estimate and what is known of it (the fields of [`FitOutcome`] of the same names).
@@ -668,6 +691,70 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
 mod tests {
     use super::*;
     use crate::model::effects::EffectSet;
+
+    /// A solver that never solves: every simulation fails, so every cost is the penalty.
+    struct NeverSolves;
+
+    impl crate::numerics::ode::StiffSolver for NeverSolves {
+        fn solve(
+            &self,
+            _rhs: &crate::numerics::ode::Rhs<'_>,
+            _t0: f64,
+            _x0: crate::model::motor::State,
+            _t_out: &[f64],
+        ) -> Result<Vec<crate::model::motor::State>, crate::numerics::ode::SolveError> {
+            Err(crate::numerics::ode::SolveError::StepSizeUnderflow { t: 0.0 })
+        }
+    }
+
+    /// A best start whose cost was never evaluated is an error that says why, not an
+    /// estimate; one whose cost was evaluated passes.
+    #[test]
+    fn a_best_start_without_a_finite_cost_is_an_error() {
+        use crate::data::synth::{synthesize, SensorNoise, SynthPlan};
+        let motor = Motor::default_motor();
+        let plan = SynthPlan {
+            ramp_duration_s: 20.0,
+            throttle_duration_s: 20.0,
+            sample_rate_hz: 5.0,
+            ..SynthPlan::default()
+        };
+        let solver = DefaultSolver::default();
+        let experiments = synthesize(&motor, &solver, &plan, &SensorNoise::none(), 1).unwrap();
+        let ds = crate::data::dataset::Dataset {
+            dir: PathBuf::from("mem"),
+            name: "mem".into(),
+            synthetic: true,
+            description: None,
+            motor: crate::data::dataset::MotorSection::default(),
+            p_atm_pa: crate::units::constants::P_ATM_PA,
+            temperature_k: crate::units::constants::T0_K,
+            experiments,
+        };
+        let cost = CostModel::new(&ds, crate::objective::cost::CostOptions::default()).unwrap();
+        let space =
+            ParamSpace::new(&["c_in1"], MotorParams::default(), EffectSet::empty()).unwrap();
+        let theta = vec![0.0];
+        let broken = DataObjective {
+            cost: &cost,
+            solver: Box::new(NeverSolves),
+        };
+        match check_evaluated(&broken, &space, &theta) {
+            Err(e @ EstimateError::NoFiniteCost { .. }) => {
+                let text = e.to_string();
+                assert!(
+                    text.contains("no estimate") && text.contains("step size"),
+                    "{text}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        let working = DataObjective {
+            cost: &cost,
+            solver: Box::new(DefaultSolver::default()),
+        };
+        assert!(check_evaluated(&working, &space, &theta).is_ok());
+    }
 
     #[test]
     fn log_covariance_follows_the_coordinate_transforms() {
