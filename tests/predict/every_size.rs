@@ -344,3 +344,21 @@ fn styled_pages_print_at_every_size() {
         }
     }
 }
+
+/// A motor of any size is [`twin::page::random_motor`]'s motor of its seed made that large:
+/// at its own size it is that motor bit for bit, and at 8× the size (lengths × 2) its
+/// conductances are × 4, friction × 8 and 16, inertia × 32 (the same random effects).
+#[test]
+fn sized_motors_are_the_random_motors_scaled() {
+    use twin::page::{random_motor, random_motor_sized};
+    for seed in 0..20u64 {
+        let m = random_motor(seed, &SPREAD);
+        assert_eq!(random_motor_sized(seed, m.v_disp, &SPREAD), m);
+        let big = random_motor_sized(seed, 8.0 * m.v_disp, &SPREAD);
+        let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-12;
+        assert!(close(big.c_in1, 4.0 * m.c_in1) && close(big.c_12, 4.0 * m.c_12));
+        assert!(close(big.t_coulomb, 8.0 * m.t_coulomb) && close(big.visc, 16.0 * m.visc));
+        assert!(close(big.inertia, 32.0 * m.inertia) && close(big.vol1, 8.0 * m.vol1));
+        assert_eq!((big.z, big.eps, big.n_poly, big.b_crit), (m.z, m.eps, m.n_poly, m.b_crit));
+    }
+}
