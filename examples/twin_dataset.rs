@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release --example twin_dataset -- OUT_DIR [--seed S] [--rate HZ]
 //!     [--noise-scale K] [--offsets] [--brake-torque] [--stiction TS,WS] [--leak-dp2 K]
-//!     [--seal G,WS] [--vane-w2 C] [--base-perturb SEED] [--varied SEED]
+//!     [--seal G,WS] [--vane-w2 C] [--base-perturb SEED] [--varied SEED] [--size-cm3 V]
 //! ```
 //!
 //! Noise is K × the shipped dataset's (flows 0.01 g/s, speed 5 rpm, torque 2 mN·m, pressure
@@ -15,14 +15,17 @@
 //! `--seal` is g_seal and w_seal (rad/s); `--vane-w2` is c_w2 in N·m·s²/rad²;
 //! `--base-perturb` moves the conductances and friction by seeded factors in [0.7, 1.4];
 //! `--varied SEED` writes `tests/estimate/coverage.rs`'s case SEED (its base motor, rate, noise,
-//! offsets and brake-torque channel; it overrides the other recording options and the seed).
+//! offsets and brake-torque channel; it overrides the other recording options and the seed);
+//! `--size-cm3 V` makes the motor V cm³ large by geometric similarity and scales the rig to
+//! it (brake, throttle range, sensor noise and offsets; `twin::sizes::scaled_motor` and
+//! `scaled_config`), the missing physics given as is.
 
 use std::path::PathBuf;
 use twin::{Breakaway, NoiseSigmas, OffsetSpec, RecordConfig, SealLeakage, TwinMotor};
 
 const USAGE: &str = "usage: twin_dataset OUT_DIR [--seed S] [--rate HZ] [--noise-scale K] \
 [--offsets] [--brake-torque] [--stiction TS,WS] [--leak-dp2 K] [--seal G,WS] [--vane-w2 C] \
-[--base-perturb SEED] [--varied SEED]";
+[--base-perturb SEED] [--varied SEED] [--size-cm3 V]";
 
 struct Args {
     out: PathBuf,
@@ -53,7 +56,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     );
     let (mut seed, mut motor, mut cfg) = (1, TwinMotor::default(), RecordConfig::default());
     let (mut noise_scale, mut offsets, mut base) = (1.0, false, None);
-    let mut varied = None;
+    let (mut varied, mut size_cm3) = (None, None);
     while let Some(flag) = it.next() {
         match flag.as_str() {
             "--seed" => seed = number(&flag, it.next())?,
@@ -79,6 +82,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--vane-w2" => motor.vane_friction_speed_squared = Some(number(&flag, it.next())?),
             "--base-perturb" => base = Some(number::<u64>(&flag, it.next())?),
             "--varied" => varied = Some(number::<u64>(&flag, it.next())?),
+            "--size-cm3" => size_cm3 = Some(number::<f64>(&flag, it.next())?),
             _ => return Err(format!("unknown argument '{flag}'")),
         }
     }
@@ -99,6 +103,14 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         motor = twin::perturbed_motor(s).with_effects_of(&motor);
         cfg = twin::varied_config(s);
         seed = s;
+    }
+    if let Some(v) = size_cm3 {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(format!("--size-cm3 {v} must be a positive displacement in cm³"));
+        }
+        let s = v * 1e-6 / motor.v_disp;
+        motor = twin::sizes::scaled_motor(&motor, v * 1e-6);
+        cfg = twin::sizes::scaled_config(&cfg, s);
     }
     Ok(Args {
         out,

@@ -92,21 +92,30 @@ pub(crate) fn classify(truth: &Drawn, d: &Diagnosis) -> (Class, bool) {
     (class, law)
 }
 
-/// The effect drawn from `seed` and the twin's perturbed motor of `seed` with it.
-fn random_motor(seed: u64) -> (Drawn, twin::TwinMotor) {
+/// The effect drawn from `seed`, the twin's perturbed motor of `seed` with it and the rig
+/// it is recorded on (20 Hz, rig noise), all at the size `DIAG_SIZES` gives the seed
+/// ([`crate::support::table_size_cm3`]; unset: the 3.8 cm³ reference motor).
+fn random_motor(seed: u64) -> (Drawn, twin::TwinMotor, twin::RecordConfig) {
     let drawn = twin::laws::draw(seed);
+    let size = crate::support::table_size_cm3(seed);
+    let (motor, cfg) = crate::support::sized(
+        twin::perturbed_motor(1000 + seed),
+        crate::twin_data::twin_rig_config(),
+        size,
+    );
+    let drawn = size.map_or(drawn, |v| drawn.scaled(v * 1e-6 / 3.8e-6));
     let motor = twin::TwinMotor {
         laws: vec![drawn],
-        ..twin::perturbed_motor(1000 + seed)
+        ..motor
     };
-    (drawn, motor)
+    (drawn, motor, cfg)
 }
 
 /// A random case: the twin's perturbed motor of `seed` with the effect drawn from `seed`,
 /// recorded as a rig does (20 Hz, rig noise).
 pub(crate) fn random_case(seed: u64) -> (Drawn, vanefit::data::Dataset) {
-    let (drawn, motor) = random_motor(seed);
-    let ds = crate::twin_data::twin_dataset(&motor, &crate::twin_data::twin_rig_config(), seed);
+    let (drawn, motor, cfg) = random_motor(seed);
+    let ds = crate::twin_data::twin_dataset(&motor, &cfg, seed);
     (drawn, ds)
 }
 
@@ -126,8 +135,9 @@ pub(crate) fn random_row(seed: u64, opts: &DiagnoseOptions) -> (Class, bool, Str
         })
         .collect();
     let (before, after) = d.noise_ratios();
+    let v_cm3 = crate::support::table_size_cm3(seed).unwrap_or(3.8);
     let row = format!(
-        "| {seed} | {} | {} | {:.0} | {before:.2} → {after:.2} | {class:?} | {} | {} | {wall_s:.0} |\n",
+        "| {seed} | {v_cm3:.2} | {} | {} | {:.0} | {before:.2} → {after:.2} | {class:?} | {} | {} | {wall_s:.0} |\n",
         drawn.describe(),
         if found.is_empty() {
             "-".to_string()
@@ -144,11 +154,12 @@ pub(crate) fn random_row(seed: u64, opts: &DiagnoseOptions) -> (Class, bool, Str
 }
 
 /// The table header.
-const HEADER: &str = "| seed | drawn | selected | ΔBIC | noise ratio | class | law | evaluations | wall s |\n|---|---|---|---|---|---|---|---|---|\n";
+const HEADER: &str = "| seed | V_disp cm³ | drawn | selected | ΔBIC | noise ratio | class | law | evaluations | wall s |\n|---|---|---|---|---|---|---|---|---|---|\n";
 
 /// The random-effect table over `RANDOM_CASES` draws (default 30, seeds 1..), the command
-/// line's default options (`DIAG_EFFORT=quick` for the quick ones); writes
-/// `target/random-effects.md` with the rates.
+/// line's default options (`DIAG_EFFORT=quick` for the quick ones), on motors of the size
+/// `DIAG_SIZES` says (e.g. `1-150`: drawn per seed; unset: 3.8 cm³); writes
+/// `target/random-effects.md` (or `RANDOM_OUT_MD`) with the rates.
 #[test]
 #[ignore]
 fn random_effect_table() {
@@ -161,10 +172,14 @@ fn random_effect_table() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(1);
     let (opts, opts_name) = crate::support::table_options();
-    let mut md = format!("Options: {opts_name}.\n\n{HEADER}");
+    let sizes = std::env::var("DIAG_SIZES").unwrap_or("3.8".into());
+    let mut md = format!("Options: {opts_name}; motor sizes {sizes} cm³.\n\n{HEADER}");
     let mut counts = [0usize; 4];
     let mut laws = 0;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/random-effects.md");
+    let path = std::env::var_os("RANDOM_OUT_MD").map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/random-effects.md"),
+        std::path::PathBuf::from,
+    );
     for seed in first..first + n {
         let (class, law, row) = random_row(seed, &opts);
         counts[class as usize] += 1;
@@ -226,9 +241,9 @@ fn random_cases_to_disk() {
         std::path::PathBuf::from,
     );
     for seed in seeds {
-        let (drawn, motor) = random_motor(seed);
+        let (drawn, motor, cfg) = random_motor(seed);
         let path = out.join(format!("random-{seed}"));
-        twin::write_dataset(&path, &motor, &crate::twin_data::twin_rig_config(), seed).unwrap();
+        twin::write_dataset(&path, &motor, &cfg, seed).unwrap();
         println!("{}: {}", path.display(), drawn.describe());
     }
 }

@@ -106,3 +106,37 @@ pub fn evaluations(d: &vanefit::diagnose::Diagnosis) -> u64 {
         .map(|c| c.fitted.evaluations)
         .sum()
 }
+
+/// The size of the motor of table row `seed`, cm³, from `DIAG_SIZES` (the size dimension of
+/// the random-effect and false-alarm tables): unset, the reference motor (3.8 cm³, the
+/// tables as they were); `LO-HI` (e.g. `1-150`), a displacement drawn log-uniformly in that
+/// band per seed (`twin::sizes::displacement_in_band`); one number, that size.
+pub fn table_size_cm3(seed: u64) -> Option<f64> {
+    let v = std::env::var("DIAG_SIZES").ok()?;
+    match v.split_once('-') {
+        Some((lo, hi)) => {
+            let band = (lo.trim().parse().ok()?, hi.trim().parse().ok()?);
+            Some(twin::sizes::displacement_in_band(seed, band) * 1e6)
+        }
+        None => v.trim().parse().ok(),
+    }
+}
+
+/// `motor` and `cfg` (made for the 3.8 cm³ reference) at `size_cm3` (unchanged when `None`):
+/// the motor by geometric similarity, the rig scaled to it (tests/twin/sizes.rs).
+pub fn sized(
+    motor: twin::TwinMotor,
+    cfg: twin::RecordConfig,
+    size_cm3: Option<f64>,
+) -> (twin::TwinMotor, twin::RecordConfig) {
+    match size_cm3 {
+        None => (motor, cfg),
+        Some(v) => {
+            let s = v * 1e-6 / motor.v_disp;
+            (
+                twin::sizes::scaled_motor(&motor, v * 1e-6),
+                twin::sizes::scaled_config(&cfg, s),
+            )
+        }
+    }
+}

@@ -154,13 +154,16 @@ fn twin_leakage_and_vane_friction_pair() {
 
 /// A clean twin dataset: a perturbed motor ([`twin::perturbed_motor`]) recorded with a
 /// varied configuration ([`twin::varied_config`]: rate, noise levels, brake channel) but
-/// without calibration offsets (a rig's zero errors are not in any model).
+/// without calibration offsets (a rig's zero errors are not in any model), both at the size
+/// `DIAG_SIZES` gives the seed ([`crate::support::table_size_cm3`]; unset: 3.8 cm³).
 fn clean_twin(seed: u64) -> Dataset {
     let cfg = twin::RecordConfig {
         offsets: twin::record::OffsetSpec::None,
         ..twin::varied_config(seed)
     };
-    twin_dataset(&twin::perturbed_motor(seed), &cfg, seed)
+    let size = crate::support::table_size_cm3(seed);
+    let (motor, cfg) = crate::support::sized(twin::perturbed_motor(seed), cfg, size);
+    twin_dataset(&motor, &cfg, seed)
 }
 
 /// One row of the false-alarm table.
@@ -173,7 +176,8 @@ fn false_alarm_row(seed: u64, opts: &DiagnoseOptions) -> (bool, String) {
         .fold(f64::INFINITY, f64::min);
     let selected: Vec<&str> = d.selected.iter().map(|s| s.effect.as_str()).collect();
     let row = format!(
-        "| twin seed {seed} | {} | {:.3} | {} | {:.1} | {} | {:.1} |\n",
+        "| twin seed {seed} | {:.2} | {} | {:.3} | {} | {:.1} | {} | {:.1} |\n",
+        crate::support::table_size_cm3(seed).unwrap_or(3.8),
         d.mismatch,
         d.baseline.noise_ratio,
         if selected.is_empty() {
@@ -199,8 +203,9 @@ fn clean_twin_datasets_are_not_flagged() {
 }
 
 /// At most 1 false alarm in 20 clean twin datasets (different base motors, rates and noise
-/// levels), the command line's default options (`DIAG_EFFORT=quick` for the quick ones);
-/// writes `target/false-alarms.md`:
+/// levels), the command line's default options (`DIAG_EFFORT=quick` for the quick ones), on
+/// motors of the size `DIAG_SIZES` says (e.g. `1-150`; unset: 3.8 cm³); writes
+/// `target/false-alarms.md` (or `FALSE_ALARMS_OUT_MD`):
 ///
 /// ```sh
 /// cargo test --release --test diagnose -- --ignored --nocapture false_alarm_table
@@ -209,10 +214,14 @@ fn clean_twin_datasets_are_not_flagged() {
 #[ignore]
 fn false_alarm_table() {
     let (opts, opts_name) = crate::support::table_options();
+    let sizes = std::env::var("DIAG_SIZES").unwrap_or("3.8".into());
     let mut md = format!(
-        "Options: {opts_name}.\n\n| dataset | mismatch | noise ratio | selected | best ΔBIC | evaluations | wall s |\n|---|---|---|---|---|---|---|\n",
+        "Options: {opts_name}; motor sizes {sizes} cm³.\n\n| dataset | V_disp cm³ | mismatch | noise ratio | selected | best ΔBIC | evaluations | wall s |\n|---|---|---|---|---|---|---|---|\n",
     );
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/false-alarms.md");
+    let path = std::env::var_os("FALSE_ALARMS_OUT_MD").map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/false-alarms.md"),
+        std::path::PathBuf::from,
+    );
     let mut alarms = 0;
     for seed in 1..=20 {
         let (mismatch, row) = false_alarm_row(seed, &opts);

@@ -3,6 +3,7 @@
 //! independent twin ([`twin_catalogue`]).
 
 mod catalogue_predict;
+mod every_size;
 mod geared;
 mod page_coverage;
 mod page_pairs;

@@ -17,11 +17,11 @@ use twin::page::{page_style, print_page, random_motor, row_values, truth, FIGURE
 use twin::page::{AIR_UNITS, POWER_UNITS, SPEED_UNITS, TORQUE_UNITS};
 
 /// Pressures of the prediction, bar g.
-const BAR_G: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 7.0];
+pub(crate) const BAR_G: [f64; 5] = [3.0, 4.0, 5.0, 6.0, 7.0];
 /// Reference pressure of the correction factors, bar g (vanefit's default).
 const REFERENCE_BAR_G: f64 = 6.3;
 /// vanefit's catalogue.csv columns in [`FIGURES`] order, with their value per SI unit.
-const COLUMNS: [(&str, f64); 7] = [
+pub(crate) const COLUMNS: [(&str, f64); 7] = [
     ("free_speed_rpm", 30.0 / std::f64::consts::PI),
     ("max_power_w", 1.0),
     ("speed_at_max_power_rpm", 30.0 / std::f64::consts::PI),
@@ -35,24 +35,24 @@ const FACTORS: [&str; 4] = ["power", "speed", "torque", "air"];
 
 /// A predicted value, its band (`None` where vanefit printed none) and the truth.
 #[derive(Debug, Clone, Copy)]
-struct Check {
-    value: f64,
-    band: Option<(f64, f64)>,
-    truth: f64,
+pub(crate) struct Check {
+    pub(crate) value: f64,
+    pub(crate) band: Option<(f64, f64)>,
+    pub(crate) truth: f64,
 }
 
 impl Check {
-    fn holds(&self) -> bool {
+    pub(crate) fn holds(&self) -> bool {
         self.band
             .is_some_and(|(lo, hi)| lo <= self.truth && self.truth <= hi)
     }
     /// Half the band's width relative to the value (0 without a band).
-    fn half_width(&self) -> f64 {
+    pub(crate) fn half_width(&self) -> f64 {
         self.band
             .map_or(0.0, |(lo, hi)| 0.5 * (hi - lo) / self.value.abs())
     }
     /// Relative error of the point prediction.
-    fn error(&self) -> f64 {
+    pub(crate) fn error(&self) -> f64 {
         self.value / self.truth - 1.0
     }
     /// Relative error of the band's geometric centre √(lo·hi): with bands from posterior
@@ -135,7 +135,7 @@ fn vanefit(args: &[&str]) -> Result<String, (Option<i32>, String)> {
 }
 
 /// A CSV as its rows of (column → cell).
-fn table(path: &Path) -> Result<Vec<std::collections::HashMap<String, String>>, String> {
+pub(crate) fn table(path: &Path) -> Result<Vec<std::collections::HashMap<String, String>>, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().ok_or("empty csv")?.split(',').collect();
@@ -151,7 +151,7 @@ fn table(path: &Path) -> Result<Vec<std::collections::HashMap<String, String>>, 
 }
 
 /// (value, band) of `column` in a row: the band is `None` when its cells are empty.
-fn banded(
+pub(crate) fn banded(
     row: &std::collections::HashMap<String, String>,
     column: &str,
 ) -> Result<(f64, Option<(f64, f64)>), String> {

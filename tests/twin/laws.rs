@@ -281,6 +281,39 @@ impl Drawn {
     }
 }
 
+impl Drawn {
+    /// This effect (drawn for the 3.8 cm³ reference motor) on a motor `s` times its
+    /// displacement, by the geometric similarity of tests/twin/sizes.rs (lengths × s^⅓, the
+    /// supply and so the typical pressures the same): a leak's coefficient × s^⅔ (the gap's
+    /// area; its flow at the typical pressures then stays the same share of the motor's);
+    /// the Stribeck excess × s and its speed × s^{-⅓} (torques ∝ s, speeds ∝ s^{-⅓}); the
+    /// power-law viscous coefficient × s^{3/2} (the loss c·ω^{3/2} × s at the speeds ×
+    /// s^{-⅓}); the mean-pressure coefficient × s (a torque at the same pressures); the
+    /// load-dependent fraction μ unchanged (a share of the air torque).
+    pub fn scaled(self, s: f64) -> Drawn {
+        match self {
+            Drawn::Leak(l) => Drawn::Leak(Leak {
+                coefficient: l.coefficient * s.powf(2.0 / 3.0),
+                ..l
+            }),
+            Drawn::Friction(f) => Drawn::Friction(match f {
+                FrictionLaw::ExponentialStribeck {
+                    excess_nm,
+                    w_s_rad_s,
+                } => FrictionLaw::ExponentialStribeck {
+                    excess_nm: excess_nm * s,
+                    w_s_rad_s: w_s_rad_s * s.powf(-1.0 / 3.0),
+                },
+                FrictionLaw::ViscousPower { c } => FrictionLaw::ViscousPower {
+                    c: c * s.powf(1.5),
+                },
+                FrictionLaw::LoadDependent { mu } => FrictionLaw::LoadDependent { mu },
+                FrictionLaw::MeanPressure { k } => FrictionLaw::MeanPressure { k: k * s },
+            }),
+        }
+    }
+}
+
 /// Factor drawn log-uniformly in [lo, hi].
 fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
     (lo.ln() + rng.random::<f64>() * (hi / lo).ln()).exp()

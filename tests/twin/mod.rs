@@ -24,7 +24,9 @@ pub mod page;
 pub mod pair;
 pub mod record;
 pub mod rig;
+pub mod sizes;
 pub mod steady;
+pub mod styles;
 
 pub use cases::{perturbed_motor, perturbed_motor_within, varied_config, CALIBRATION_TOL};
 pub use experiment::Conditions;

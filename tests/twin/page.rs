@@ -81,10 +81,31 @@ fn normal(rng: &mut Xoshiro256PlusPlus) -> f64 {
 /// 6.758e-9 and 1.171e-8 m³/(s·Pa), leaks 2.078e-9 and 7.62e-10, dead volume 0.1 cm³, volumes
 /// 2 cm³, inertia 2e-4 kg·m², friction 0.02 N·m and 6e-5 N·m·s/rad) at 3.8 cm³.
 pub fn random_motor(seed: u64, sp: &Spread) -> TwinMotor {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x9a6e_5000_0000_0001);
+    let mut rng = motor_rng(seed);
     let v_disp = (1.5e-6f64.ln() + rng.random::<f64>() * 10f64.ln()).exp();
+    draw_around(&mut rng, v_disp, sp)
+}
+
+/// [`random_motor`]'s motor `seed` with the displacement `v_disp_m3` instead of its own:
+/// the same size laws (geometric similarity from AR034-11, see the module documentation),
+/// the same spreads and the same random effects (the seed's size draw is made and set
+/// aside, so that `random_motor_sized(seed, v, sp)` is `random_motor(seed, sp)` at its own
+/// size). For motors of any size (tests/twin/sizes.rs draws them per size band).
+pub fn random_motor_sized(seed: u64, v_disp_m3: f64, sp: &Spread) -> TwinMotor {
+    let mut rng = motor_rng(seed);
+    let _size_draw = rng.random::<f64>();
+    draw_around(&mut rng, v_disp_m3, sp)
+}
+
+fn motor_rng(seed: u64) -> Xoshiro256PlusPlus {
+    Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x9a6e_5000_0000_0001)
+}
+
+/// A motor of displacement `v_disp` (m³) around AR034-11's values scaled to its size, each
+/// parameter × its own log-normal factor of [`Spread`].
+fn draw_around(rng: &mut Xoshiro256PlusPlus, v_disp: f64, sp: &Spread) -> TwinMotor {
     let s = v_disp / V_REF_M3;
-    let mut ln = |sigma: f64| (sigma * normal(&mut rng)).exp();
+    let mut ln = |sigma: f64| (sigma * normal(rng)).exp();
     let area = s.powf(2.0 / 3.0);
     let m = TwinMotor {
         c_in1: 6.758e-9 * area * ln(sp.conductance),
@@ -350,7 +371,7 @@ pub struct Page {
 
 /// Round speed step of a curve: 1, 2 or 5 × 10ⁿ rpm giving at most `n` points below the free
 /// speed.
-fn speed_step_rpm(free_rpm: f64, n: usize) -> f64 {
+pub fn speed_step_rpm(free_rpm: f64, n: usize) -> f64 {
     let raw = free_rpm / (n as f64 + 0.5);
     let decade = 10f64.powf(raw.log10().floor());
     [1.0, 2.0, 2.5, 5.0, 10.0]
