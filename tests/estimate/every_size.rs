@@ -22,7 +22,6 @@
 use crate::twin;
 
 use rayon::prelude::*;
-use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
 use twin::files::parameters;
@@ -259,6 +258,67 @@ fn band_line(label: &str, fits: &[Fitted], failed: usize, reference_s: f64) -> S
 
 const HEAD: &str = "| size band | datasets fitted | failed | closed 95 % intervals holding the truth | intervals holding it, an open end unbounded | estimates without a closed interval | worst estimate error | estimates on a bound | noise ratio median / max | median fit s | fit time / 3.8 cm³'s |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
+/// A size band of [`SIZE_BANDS_CM3`] cut to the rigs' range [`RIG_RANGE_CM3`], cm³.
+fn rig_band(b: usize) -> (f64, f64) {
+    (
+        SIZE_BANDS_CM3[b].0.max(RIG_RANGE_CM3.0),
+        SIZE_BANDS_CM3[b].1.min(RIG_RANGE_CM3.1),
+    )
+}
+
+/// A fit's row of the per-dataset table.
+fn dataset_line(band: &str, f: &Fitted) -> String {
+    let names = |keep: &dyn Fn(&Estimate) -> bool| -> String {
+        let v: Vec<&str> = f
+            .estimates
+            .iter()
+            .filter(|e| keep(e))
+            .map(|e| e.name.as_str())
+            .collect();
+        v.join(", ")
+    };
+    let worst = f
+        .estimates
+        .iter()
+        .max_by(|a, b| a.error().abs().total_cmp(&b.error().abs()))
+        .map_or("–".into(), |e| {
+            format!("{} {:+.1} %", e.name, 100.0 * e.error())
+        });
+    format!(
+        "| {band} | {} | {:.2} | {:.2} | {} | {worst} | {} | {:.1} |",
+        f.seed,
+        f.v_cm3,
+        f.noise_ratio,
+        names(&|e| !e.covers()),
+        names(&|e| e.on_bound()),
+        f.wall_s
+    )
+}
+
+/// Each job (band, seed, displacement m³) written and fitted, `threads` at a time.
+fn run_jobs(
+    jobs: &[(Option<usize>, u64, f64)],
+    starts: &str,
+    threads: usize,
+) -> Vec<(Option<usize>, Result<Fitted, String>)> {
+    let tmp = tempfile::tempdir().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        jobs.par_iter()
+            .map(|&(b, seed, v)| {
+                let dir = tmp.path().join(format!("{b:?}-{seed}"));
+                let r = fit_case(seed, v, starts, &dir);
+                let brief = r.as_ref().map(|f| (f.noise_ratio, f.wall_s));
+                eprintln!("band {b:?} seed {seed} {:.2} cm³: {brief:?}", v * 1e6);
+                (b, r)
+            })
+            .collect()
+    })
+}
+
 #[test]
 #[ignore = "long: rig datasets of every size written and fitted; run with --ignored --nocapture"]
 fn every_size_rig_table() {
@@ -271,112 +331,49 @@ fn every_size_rig_table() {
     let bands: Vec<usize> = env("RIG_BANDS").map_or((0..SIZE_BANDS_CM3.len()).collect(), |v| {
         v.split(',').filter_map(|x| x.trim().parse().ok()).collect()
     });
-    // The bands cut to the rigs' range; band None: the reference motor (3.8 cm³).
-    let cut = |b: usize| {
-        (
-            SIZE_BANDS_CM3[b].0.max(RIG_RANGE_CM3.0),
-            SIZE_BANDS_CM3[b].1.min(RIG_RANGE_CM3.1),
-        )
-    };
+    // Band None: the reference motor (3.8 cm³), the same seeds.
     let mut jobs: Vec<(Option<usize>, u64, f64)> = (1..=n).map(|s| (None, s, 3.8e-6)).collect();
     for &b in &bands {
-        for s in 1..=n {
-            jobs.push((Some(b), s, displacement_in_band(s, cut(b))));
-        }
+        jobs.extend((1..=n).map(|s| (Some(b), s, displacement_in_band(s, rig_band(b)))));
     }
-    let tmp = tempfile::tempdir().unwrap();
     let t0 = std::time::Instant::now();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    let results: Vec<(Option<usize>, Result<Fitted, String>)> = pool.install(|| {
-        jobs.par_iter()
-            .map(|&(b, seed, v)| {
-                let dir = tmp.path().join(format!("{b:?}-{seed}"));
-                let r = fit_case(seed, v, &starts, &dir);
-                eprintln!(
-                    "band {b:?} seed {seed} {:.2} cm³: {:?}",
-                    v * 1e6,
-                    r.as_ref().map(|f| (f.noise_ratio, f.wall_s))
-                );
-                (b, r)
-            })
-            .collect()
-    });
+    let results = run_jobs(&jobs, &starts, threads);
     let of = |band: Option<usize>| -> (Vec<Fitted>, Vec<String>) {
-        let mut ok = Vec::new();
-        let mut bad = Vec::new();
-        for (b, r) in &results {
-            if *b == band {
-                match r {
-                    Ok(f) => ok.push(f.clone()),
-                    Err(e) => bad.push(e.clone()),
-                }
-            }
-        }
-        (ok, bad)
+        let mine = results.iter().filter(|(b, _)| *b == band).map(|(_, r)| r);
+        let ok = mine
+            .clone()
+            .filter_map(|r| r.as_ref().ok().cloned())
+            .collect();
+        (ok, mine.filter_map(|r| r.as_ref().err().cloned()).collect())
     };
-    let (reference, ref_failed) = of(None);
+    let (reference, mut failures) = of(None);
     let reference_s = median(reference.iter().map(|f| f.wall_s).collect());
     let mut md = format!(
         "Binary: `{}`; {n} dataset(s) per size band (seeds 1..={n}: tests/estimate/coverage.rs's motors and recording configurations, scaled), `fit --starts {starts} --threads 1`; {:.0} s wall on {threads} threads.\n\n{HEAD}\n",
         vanefit_bin(),
         t0.elapsed().as_secs_f64()
     );
-    md += &(band_line(
+    md += &band_line(
         "3.8 cm³ (reference)",
         &reference,
-        ref_failed.len(),
+        failures.len(),
         reference_s,
-    ) + "\n");
-    let mut failures = ref_failed;
-    let mut per_dataset = String::from("\n| size band | seed | V_disp cm³ | noise ratio | intervals missing the truth | worst estimate error | on a bound | fit s |\n|---|---|---|---|---|---|---|---|\n");
+    );
+    let mut per_dataset = String::from("\n\n| size band | seed | V_disp cm³ | noise ratio | intervals missing the truth | worst estimate error | on a bound | fit s |\n|---|---|---|---|---|---|---|---|\n");
     for &b in &bands {
         let (fits, bad) = of(Some(b));
-        md += &(band_line(&band_label(cut(b)), &fits, bad.len(), reference_s) + "\n");
+        md += &format!(
+            "\n{}",
+            band_line(&band_label(rig_band(b)), &fits, bad.len(), reference_s)
+        );
         failures.extend(bad);
         for f in &fits {
-            let missed: Vec<&str> = f
-                .estimates
-                .iter()
-                .filter(|e| !e.covers())
-                .map(|e| e.name.as_str())
-                .collect();
-            let worst = f
-                .estimates
-                .iter()
-                .max_by(|a, b| a.error().abs().total_cmp(&b.error().abs()));
-            let bound: Vec<&str> = f
-                .estimates
-                .iter()
-                .filter(|e| e.on_bound())
-                .map(|e| e.name.as_str())
-                .collect();
-            let _ = writeln!(
-                per_dataset,
-                "| {} | {} | {:.2} | {:.2} | {} | {} | {} | {:.1} |",
-                band_label(cut(b)),
-                f.seed,
-                f.v_cm3,
-                f.noise_ratio,
-                missed.join(", "),
-                worst.map_or("–".into(), |e| format!(
-                    "{} {:+.1} %",
-                    e.name,
-                    100.0 * e.error()
-                )),
-                bound.join(", "),
-                f.wall_s
-            );
+            per_dataset += &(dataset_line(&band_label(rig_band(b)), f) + "\n");
         }
     }
     md += &per_dataset;
-    if !failures.is_empty() {
-        md += "\nFailed:\n\n";
-        for e in &failures {
-            md += &format!("- {e}\n");
-        }
+    for (k, e) in failures.iter().enumerate() {
+        md += &format!("{}- {e}\n", if k == 0 { "\nFailed:\n\n" } else { "" });
     }
     let out = env("RIG_OUT")
         .unwrap_or_else(|| format!("{}/target/every-size-rigs.md", env!("CARGO_MANIFEST_DIR")));
