@@ -106,7 +106,9 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     }
     if let Some(v) = size_cm3 {
         if !(v > 0.0 && v.is_finite()) {
-            return Err(format!("--size-cm3 {v} must be a positive displacement in cm³"));
+            return Err(format!(
+                "--size-cm3 {v} must be a positive displacement in cm³"
+            ));
         }
         let s = v * 1e-6 / motor.v_disp;
         motor = twin::sizes::scaled_motor(&motor, v * 1e-6);

@@ -22,7 +22,6 @@
 use crate::twin;
 
 use rayon::prelude::*;
-use std::fmt::Write as _;
 use std::path::Path;
 use std::process::Command;
 use twin::files::parameters;
@@ -82,7 +81,17 @@ fn fit_case(seed: u64, v_disp_m3: f64, starts: &str, dir: &Path) -> Result<Fitte
         .map_err(|e| format!("twin: {e}"))?;
     let fit = dir.join("fit.json");
     let (data_s, fit_s) = (data.to_str().unwrap(), fit.to_str().unwrap());
-    let args = ["fit", data_s, "--out", fit_s, "--no-plots", "--threads", "1", "--starts", starts];
+    let args = [
+        "fit",
+        data_s,
+        "--out",
+        fit_s,
+        "--no-plots",
+        "--threads",
+        "1",
+        "--starts",
+        starts,
+    ];
     run(&args)?;
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&fit).map_err(|e| e.to_string())?)
@@ -99,10 +108,17 @@ fn fit_case(seed: u64, v_disp_m3: f64, starts: &str, dir: &Path) -> Result<Fitte
         };
         let ends = |k: &str| -> (Option<f64>, Option<f64>) {
             let a = p[k].as_array();
-            (a.and_then(|a| a.first()?.as_f64()), a.and_then(|a| a.get(1)?.as_f64()))
+            (
+                a.and_then(|a| a.first()?.as_f64()),
+                a.and_then(|a| a.get(1)?.as_f64()),
+            )
         };
-        let (lo, hi) = if p["ci95"].is_array() { ends("ci95") } else { ends("bounds95") };
-        let recorded = p["bounds"].as_array().and_then(|b| Some((b.first()?.as_f64()?, b.get(1)?.as_f64()?)));
+        let (lo, hi) = if p["ci95"].is_array() {
+            ends("ci95")
+        } else {
+            ends("bounds95")
+        };
+        let recorded = recorded_bounds(p);
         estimates.push(Estimate {
             name: name.clone(),
             truth: t,
@@ -117,23 +133,48 @@ fn fit_case(seed: u64, v_disp_m3: f64, starts: &str, dir: &Path) -> Result<Fitte
         v_cm3: v_disp_m3 * 1e6,
         seed,
         estimates,
-        noise_ratio: json["statistics"]["noise_ratio"].as_f64().unwrap_or(f64::NAN),
+        noise_ratio: json["statistics"]["noise_ratio"]
+            .as_f64()
+            .unwrap_or(f64::NAN),
         wall_s: json["run"]["wall_s"].as_f64().unwrap_or(f64::NAN),
     })
+}
+
+/// The search bounds a fit file records for a parameter, `[lo, hi]` under `bounds` or
+/// `search_bounds` (SI), if it does.
+fn recorded_bounds(p: &serde_json::Value) -> Option<(f64, f64)> {
+    let b = p["bounds"]
+        .as_array()
+        .or_else(|| p["search_bounds"].as_array())?;
+    Some((b.first()?.as_f64()?, b.get(1)?.as_f64()?))
 }
 
 /// The search bounds vanefit prints for the fit (`export-petab`'s parameters.tsv:
 /// lowerBound, upperBound per parameterId), unless every estimate in the fit file records
 /// its own.
-fn search_bounds(json: &serde_json::Value, fit: &Path, data: &Path, dir: &Path) -> Vec<(String, (f64, f64))> {
+fn search_bounds(
+    json: &serde_json::Value,
+    fit: &Path,
+    data: &Path,
+    dir: &Path,
+) -> Vec<(String, (f64, f64))> {
     let recorded = json["parameters"].as_object().is_some_and(|ps| {
-        ps.values().filter(|p| p["estimated"] == serde_json::Value::Bool(true)).all(|p| p["bounds"].is_array())
+        ps.values()
+            .filter(|p| p["estimated"] == serde_json::Value::Bool(true))
+            .all(|p| recorded_bounds(p).is_some())
     });
     if recorded {
         return Vec::new();
     }
     let out = dir.join("petab");
-    let args = ["export-petab", "--dataset", data.to_str().unwrap(), "--out", out.to_str().unwrap(), fit.to_str().unwrap()];
+    let args = [
+        "export-petab",
+        "--dataset",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        fit.to_str().unwrap(),
+    ];
     if run(&args).is_err() {
         return Vec::new();
     }
@@ -142,18 +183,29 @@ fn search_bounds(json: &serde_json::Value, fit: &Path, data: &Path, dir: &Path) 
         .skip(1)
         .filter_map(|l| {
             let c: Vec<&str> = l.split('\t').collect();
-            Some((c.first()?.to_string(), (c.get(3)?.parse().ok()?, c.get(4)?.parse().ok()?)))
+            Some((
+                c.first()?.to_string(),
+                (c.get(3)?.parse().ok()?, c.get(4)?.parse().ok()?),
+            ))
         })
         .collect()
 }
 
 fn run(args: &[&str]) -> Result<String, String> {
-    let out = Command::new(vanefit_bin()).args(args).output().map_err(|e| e.to_string())?;
+    let out = Command::new(vanefit_bin())
+        .args(args)
+        .output()
+        .map_err(|e| e.to_string())?;
     if out.status.success() {
         Ok(String::from_utf8_lossy(&out.stdout).into_owned())
     } else {
         let err = String::from_utf8_lossy(&out.stderr);
-        Err(format!("vanefit {} {}: {}", args[0], out.status, err.lines().next().unwrap_or("")))
+        Err(format!(
+            "vanefit {} {}: {}",
+            args[0],
+            out.status,
+            err.lines().next().unwrap_or("")
+        ))
     }
 }
 
@@ -166,14 +218,22 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// ratios, fit time and its ratio to the reference's.
 fn band_line(label: &str, fits: &[Fitted], failed: usize, reference_s: f64) -> String {
     let all: Vec<&Estimate> = fits.iter().flat_map(|f| &f.estimates).collect();
-    let pct = |k: usize| format!("{k}/{} ({:.0} %)", all.len(), 100.0 * k as f64 / all.len().max(1) as f64);
+    let pct = |k: usize| {
+        format!(
+            "{k}/{} ({:.0} %)",
+            all.len(),
+            100.0 * k as f64 / all.len().max(1) as f64
+        )
+    };
     let closed_held = all.iter().filter(|e| e.closed && e.covers()).count();
     let held = all.iter().filter(|e| e.covers()).count();
     let worst = fits
         .iter()
         .flat_map(|f| f.estimates.iter().map(move |e| (e, f.v_cm3)))
         .max_by(|a, b| a.0.error().abs().total_cmp(&b.0.error().abs()))
-        .map_or("–".into(), |(e, v)| format!("{:+.1} % ({}, {v:.2} cm³)", 100.0 * e.error(), e.name));
+        .map_or("–".into(), |(e, v)| {
+            format!("{:+.1} % ({}, {v:.2} cm³)", 100.0 * e.error(), e.name)
+        });
     let mut bound: std::collections::BTreeMap<&str, usize> = Default::default();
     for e in all.iter().filter(|e| e.on_bound()) {
         *bound.entry(e.name.as_str()).or_default() += 1;
@@ -198,90 +258,125 @@ fn band_line(label: &str, fits: &[Fitted], failed: usize, reference_s: f64) -> S
 
 const HEAD: &str = "| size band | datasets fitted | failed | closed 95 % intervals holding the truth | intervals holding it, an open end unbounded | estimates without a closed interval | worst estimate error | estimates on a bound | noise ratio median / max | median fit s | fit time / 3.8 cm³'s |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
+/// A size band of [`SIZE_BANDS_CM3`] cut to the rigs' range [`RIG_RANGE_CM3`], cm³.
+fn rig_band(b: usize) -> (f64, f64) {
+    (
+        SIZE_BANDS_CM3[b].0.max(RIG_RANGE_CM3.0),
+        SIZE_BANDS_CM3[b].1.min(RIG_RANGE_CM3.1),
+    )
+}
+
+/// A fit's row of the per-dataset table.
+fn dataset_line(band: &str, f: &Fitted) -> String {
+    let names = |keep: &dyn Fn(&Estimate) -> bool| -> String {
+        let v: Vec<&str> = f
+            .estimates
+            .iter()
+            .filter(|e| keep(e))
+            .map(|e| e.name.as_str())
+            .collect();
+        v.join(", ")
+    };
+    let worst = f
+        .estimates
+        .iter()
+        .max_by(|a, b| a.error().abs().total_cmp(&b.error().abs()))
+        .map_or("–".into(), |e| {
+            format!("{} {:+.1} %", e.name, 100.0 * e.error())
+        });
+    format!(
+        "| {band} | {} | {:.2} | {:.2} | {} | {worst} | {} | {:.1} |",
+        f.seed,
+        f.v_cm3,
+        f.noise_ratio,
+        names(&|e| !e.covers()),
+        names(&|e| e.on_bound()),
+        f.wall_s
+    )
+}
+
+/// Each job (band, seed, displacement m³) written and fitted, `threads` at a time.
+fn run_jobs(
+    jobs: &[(Option<usize>, u64, f64)],
+    starts: &str,
+    threads: usize,
+) -> Vec<(Option<usize>, Result<Fitted, String>)> {
+    let tmp = tempfile::tempdir().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        jobs.par_iter()
+            .map(|&(b, seed, v)| {
+                let dir = tmp.path().join(format!("{b:?}-{seed}"));
+                let r = fit_case(seed, v, starts, &dir);
+                let brief = r.as_ref().map(|f| (f.noise_ratio, f.wall_s));
+                eprintln!("band {b:?} seed {seed} {:.2} cm³: {brief:?}", v * 1e6);
+                (b, r)
+            })
+            .collect()
+    })
+}
+
 #[test]
 #[ignore = "long: rig datasets of every size written and fitted; run with --ignored --nocapture"]
 fn every_size_rig_table() {
     let env = |k: &str| std::env::var(k).ok();
-    let n: u64 = env("RIG_PER_BAND").and_then(|v| v.parse().ok()).unwrap_or(3);
+    let n: u64 = env("RIG_PER_BAND")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(3);
     let starts = env("RIG_STARTS").unwrap_or("4".into());
     let threads: usize = env("RIG_THREADS").and_then(|v| v.parse().ok()).unwrap_or(2);
     let bands: Vec<usize> = env("RIG_BANDS").map_or((0..SIZE_BANDS_CM3.len()).collect(), |v| {
         v.split(',').filter_map(|x| x.trim().parse().ok()).collect()
     });
-    // The bands cut to the rigs' range; band None: the reference motor (3.8 cm³).
-    let cut = |b: usize| (SIZE_BANDS_CM3[b].0.max(RIG_RANGE_CM3.0), SIZE_BANDS_CM3[b].1.min(RIG_RANGE_CM3.1));
+    // Band None: the reference motor (3.8 cm³), the same seeds.
     let mut jobs: Vec<(Option<usize>, u64, f64)> = (1..=n).map(|s| (None, s, 3.8e-6)).collect();
     for &b in &bands {
-        for s in 1..=n {
-            jobs.push((Some(b), s, displacement_in_band(s, cut(b))));
-        }
+        jobs.extend((1..=n).map(|s| (Some(b), s, displacement_in_band(s, rig_band(b)))));
     }
-    let tmp = tempfile::tempdir().unwrap();
     let t0 = std::time::Instant::now();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    let results: Vec<(Option<usize>, Result<Fitted, String>)> = pool.install(|| {
-        jobs.par_iter()
-            .map(|&(b, seed, v)| {
-                let dir = tmp.path().join(format!("{b:?}-{seed}"));
-                let r = fit_case(seed, v, &starts, &dir);
-                eprintln!("band {b:?} seed {seed} {:.2} cm³: {:?}", v * 1e6, r.as_ref().map(|f| (f.noise_ratio, f.wall_s)));
-                (b, r)
-            })
-            .collect()
-    });
+    let results = run_jobs(&jobs, &starts, threads);
     let of = |band: Option<usize>| -> (Vec<Fitted>, Vec<String>) {
-        let mut ok = Vec::new();
-        let mut bad = Vec::new();
-        for (b, r) in &results {
-            if *b == band {
-                match r {
-                    Ok(f) => ok.push(f.clone()),
-                    Err(e) => bad.push(e.clone()),
-                }
-            }
-        }
-        (ok, bad)
+        let mine = results.iter().filter(|(b, _)| *b == band).map(|(_, r)| r);
+        let ok = mine
+            .clone()
+            .filter_map(|r| r.as_ref().ok().cloned())
+            .collect();
+        (ok, mine.filter_map(|r| r.as_ref().err().cloned()).collect())
     };
-    let (reference, ref_failed) = of(None);
+    let (reference, mut failures) = of(None);
     let reference_s = median(reference.iter().map(|f| f.wall_s).collect());
     let mut md = format!(
         "Binary: `{}`; {n} dataset(s) per size band (seeds 1..={n}: tests/estimate/coverage.rs's motors and recording configurations, scaled), `fit --starts {starts} --threads 1`; {:.0} s wall on {threads} threads.\n\n{HEAD}\n",
         vanefit_bin(),
         t0.elapsed().as_secs_f64()
     );
-    md += &(band_line("3.8 cm³ (reference)", &reference, ref_failed.len(), reference_s) + "\n");
-    let mut failures = ref_failed;
-    let mut per_dataset = String::from("\n| size band | seed | V_disp cm³ | noise ratio | intervals missing the truth | worst estimate error | on a bound | fit s |\n|---|---|---|---|---|---|---|---|\n");
+    md += &band_line(
+        "3.8 cm³ (reference)",
+        &reference,
+        failures.len(),
+        reference_s,
+    );
+    let mut per_dataset = String::from("\n\n| size band | seed | V_disp cm³ | noise ratio | intervals missing the truth | worst estimate error | on a bound | fit s |\n|---|---|---|---|---|---|---|---|\n");
     for &b in &bands {
         let (fits, bad) = of(Some(b));
-        md += &(band_line(&band_label(cut(b)), &fits, bad.len(), reference_s) + "\n");
+        md += &format!(
+            "\n{}",
+            band_line(&band_label(rig_band(b)), &fits, bad.len(), reference_s)
+        );
         failures.extend(bad);
         for f in &fits {
-            let missed: Vec<&str> = f.estimates.iter().filter(|e| !e.covers()).map(|e| e.name.as_str()).collect();
-            let worst = f.estimates.iter().max_by(|a, b| a.error().abs().total_cmp(&b.error().abs()));
-            let bound: Vec<&str> = f.estimates.iter().filter(|e| e.on_bound()).map(|e| e.name.as_str()).collect();
-            let _ = writeln!(
-                per_dataset,
-                "| {} | {} | {:.2} | {:.2} | {} | {} | {} | {:.1} |",
-                band_label(cut(b)),
-                f.seed,
-                f.v_cm3,
-                f.noise_ratio,
-                missed.join(", "),
-                worst.map_or("–".into(), |e| format!("{} {:+.1} %", e.name, 100.0 * e.error())),
-                bound.join(", "),
-                f.wall_s
-            );
+            per_dataset += &(dataset_line(&band_label(rig_band(b)), f) + "\n");
         }
     }
     md += &per_dataset;
-    if !failures.is_empty() {
-        md += "\nFailed:\n\n";
-        for e in &failures {
-            md += &format!("- {e}\n");
-        }
+    for (k, e) in failures.iter().enumerate() {
+        md += &format!("{}- {e}\n", if k == 0 { "\nFailed:\n\n" } else { "" });
     }
-    let out = env("RIG_OUT").unwrap_or_else(|| format!("{}/target/every-size-rigs.md", env!("CARGO_MANIFEST_DIR")));
+    let out = env("RIG_OUT")
+        .unwrap_or_else(|| format!("{}/target/every-size-rigs.md", env!("CARGO_MANIFEST_DIR")));
     std::fs::write(&out, &md).unwrap();
     println!("{md}\n(written to {out})");
 }
@@ -298,8 +393,14 @@ fn the_rig_scales_with_the_motor() {
     let big = scaled_rig_config(7, 8.0 * 3.8e-6);
     let l = 2.0f64; // length ratio
     let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-12;
-    assert!(close(big.conditions.brake_nm_s_rad, base.conditions.brake_nm_s_rad * l.powi(4)));
-    assert!(close(big.conditions.c_throttle_m3_s_pa.0, base.conditions.c_throttle_m3_s_pa.0 * l * l));
+    assert!(close(
+        big.conditions.brake_nm_s_rad,
+        base.conditions.brake_nm_s_rad * l.powi(4)
+    ));
+    assert!(close(
+        big.conditions.c_throttle_m3_s_pa.0,
+        base.conditions.c_throttle_m3_s_pa.0 * l * l
+    ));
     assert!(close(big.noise.flow1_g_s, base.noise.flow1_g_s * l * l));
     assert!(close(big.noise.torque_nm, base.noise.torque_nm * l.powi(3)));
     assert!(close(big.noise.speed_rpm, base.noise.speed_rpm / l));

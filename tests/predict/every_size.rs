@@ -7,8 +7,8 @@
 //!
 //! Per size band × style: how many 95 % bands hold the truth at 3–7 bar g, the worst point
 //! error at 5–7 bar g and at 3 bar g, the median band half-width, the pages refused (exit
-//! 1) or failed (any other exit ≠ 0) and why (the first line of stderr, grouped), and the
-//! fits that exit 0 though their cost could not be evaluated. The same motors (seeds) are
+//! status 1) or failed (any other exit ≠ 0) and why (the first line of stderr, grouped),
+//! and the fits that exit 0 though their cost could not be evaluated. The same motors (seeds) are
 //! printed in every style, so the styles compare on one set of motors.
 //!
 //! ```sh
@@ -20,6 +20,7 @@
 //! [`SIZE_BANDS_CM3`], comma-separated; default all), `SIZE_STYLES` (style names; default
 //! all), `SIZE_STARTS` (`fit --starts`; default vanefit's), `SIZE_THREADS` (pages run at
 //! once, default 2), `SIZE_OUT` (the markdown file; default target/every-size-pages.md),
+//! `SIZE_DIR` (keep the pages, fits and predictions there),
 //! `VANEFIT_BIN` (the binary; default the one cargo builds).
 
 use crate::page_coverage::{banded, table, Check, BAR_G, COLUMNS};
@@ -63,8 +64,14 @@ fn run(args: &[&str], dir: &Path) -> Result<String, (Option<i32>, String)> {
     let err = String::from_utf8_lossy(&out.stderr);
     let first = err.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
     let first = first.replace(&format!("{}/", dir.display()), "");
-    let code = out.status.code().map_or("a signal".into(), |c| c.to_string());
-    Err((out.status.code(), format!("{} exit {code}: {first}", args[0])))
+    let code = out
+        .status
+        .code()
+        .map_or("a signal".into(), |c| c.to_string());
+    Err((
+        out.status.code(),
+        format!("{} exit {code}: {first}", args[0]),
+    ))
 }
 
 /// Prints, fits and predicts the page of `kind` of motor `seed` of `band` in `dir`.
@@ -75,7 +82,12 @@ fn evaluate(seed: u64, band: (f64, f64), kind: PageKind, dir: &Path) -> Outcome 
     }
 }
 
-fn try_evaluate(seed: u64, band: (f64, f64), kind: PageKind, dir: &Path) -> Result<Outcome, String> {
+fn try_evaluate(
+    seed: u64,
+    band: (f64, f64),
+    kind: PageKind,
+    dir: &Path,
+) -> Result<Outcome, String> {
     let motor = random_motor_in_band(seed, band, &SPREAD);
     let page = styled_page(seed, kind);
     let page_dir = dir.join("page");
@@ -84,7 +96,15 @@ fn try_evaluate(seed: u64, band: (f64, f64), kind: PageKind, dir: &Path) -> Resu
     let fit = dir.join("fit.json");
     let (fit_s, page_s) = (fit.to_str().unwrap(), page_dir.to_str().unwrap());
     let starts = std::env::var("SIZE_STARTS").ok();
-    let mut args = vec!["fit", page_s, "--out", fit_s, "--no-plots", "--threads", "1"];
+    let mut args = vec![
+        "fit",
+        page_s,
+        "--out",
+        fit_s,
+        "--no-plots",
+        "--threads",
+        "1",
+    ];
     if let Some(s) = &starts {
         args.extend(["--starts", s.as_str()]);
     }
@@ -96,7 +116,13 @@ fn try_evaluate(seed: u64, band: (f64, f64), kind: PageKind, dir: &Path) -> Resu
     let unevaluable = fit_out.contains("chi2 inf") || fit_out.contains("J 10000000000");
     let pred = dir.join("predict");
     let args = [
-        "predict", fit_s, "--pressures", "3,4,5,6,7", "--unit", "bar_g", "--out",
+        "predict",
+        fit_s,
+        "--pressures",
+        "3,4,5,6,7",
+        "--unit",
+        "bar_g",
+        "--out",
         pred.to_str().unwrap(),
     ];
     run(&args, dir).map_err(|(_, e)| e)?;
@@ -106,10 +132,18 @@ fn try_evaluate(seed: u64, band: (f64, f64), kind: PageKind, dir: &Path) -> Resu
     }
     let mut checks = Vec::new();
     for (row, t) in cat.iter().zip(&truth) {
-        let mut f = [Check { value: 0.0, band: None, truth: 0.0 }; 7];
+        let mut f = [Check {
+            value: 0.0,
+            band: None,
+            truth: 0.0,
+        }; 7];
         for (k, (col, per_si)) in COLUMNS.iter().enumerate() {
             let (value, band) = banded(row, col)?;
-            f[k] = Check { value, band, truth: t[k] * per_si };
+            f[k] = Check {
+                value,
+                band,
+                truth: t[k] * per_si,
+            };
         }
         checks.push(f);
     }
@@ -171,13 +205,22 @@ impl Cell {
                 .max_by(|a, b| a.abs().total_cmp(&b.abs()))
                 .map_or("–".to_string(), |e| format!("{:+.1} %", 100.0 * e))
         };
-        let hw = median(all.iter().filter(|c| c.band.is_some()).map(Check::half_width).collect());
+        let hw = median(
+            all.iter()
+                .filter(|c| c.band.is_some())
+                .map(Check::half_width)
+                .collect(),
+        );
         let pct = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{:.1} %", 100.0 * v));
         let wall = median(self.wall_s.clone()).map_or("–".to_string(), |w| format!("{w:.2}"));
         let share = if all.is_empty() {
             "–".to_string()
         } else {
-            format!("{held}/{} ({:.0} %)", all.len(), 100.0 * held as f64 / all.len() as f64)
+            format!(
+                "{held}/{} ({:.0} %)",
+                all.len(),
+                100.0 * held as f64 / all.len() as f64
+            )
         };
         format!(
             "| {label} | {pages} | {} | {} | {} | {} | {share} | {} | {} | {} | {wall} |",
@@ -201,7 +244,11 @@ pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
 const HEAD: &str = "| | pages | fitted | refused (exit 1) | failed (exit ≠ 0, 1) | exit 0, cost not evaluable | bands holding the truth, 3–7 bar g | worst error 5–7 bar g | worst error 3 bar g | median band half-width | median fit s |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// The markdown report of all cells.
-fn report(cells: &BTreeMap<(PageKind, usize), Cell>, bands: &[usize], kinds: &[PageKind]) -> String {
+fn report(
+    cells: &BTreeMap<(PageKind, usize), Cell>,
+    bands: &[usize],
+    kinds: &[PageKind],
+) -> String {
     let mut s = String::new();
     for kind in kinds {
         let _ = writeln!(s, "\n#### Page style: {}\n\n{HEAD}", kind.name());
@@ -232,15 +279,16 @@ fn merge(into: &mut Cell, c: &Cell) {
     into.wall_s.extend(&c.wall_s);
 }
 
-/// The refusals and failures grouped by style and message (digits as `#`, so that one
-/// message at other lines or values is one group).
+/// The refusals and failures grouped by style and message (a file's line and column as
+/// `L:C`, so that one message at other lines is one group).
 fn reasons(cells: &BTreeMap<(PageKind, usize), Cell>) -> String {
     let mut groups: BTreeMap<(PageKind, String), usize> = BTreeMap::new();
     for ((kind, _), c) in cells {
         for (what, list) in [("refused", &c.refused), ("failed", &c.failed)] {
             for e in list {
-                let key: String = e.chars().map(|ch| if ch.is_ascii_digit() { '#' } else { ch }).collect();
-                *groups.entry((*kind, format!("{what}: {key}"))).or_default() += 1;
+                *groups
+                    .entry((*kind, format!("{what}: {}", without_position(e))))
+                    .or_default() += 1;
             }
         }
     }
@@ -249,6 +297,21 @@ fn reasons(cells: &BTreeMap<(PageKind, usize), Cell>) -> String {
         let _ = writeln!(s, "| {} | {} | {n} |", kind.name(), msg.replace('|', "\\|"));
     }
     s
+}
+
+/// `msg` with the line and column after a page's file name (`rig.toml:12:3`) as `L:C`.
+fn without_position(msg: &str) -> String {
+    let mut out = msg.to_string();
+    for file in ["rig.toml:", "curves.csv:"] {
+        if let Some(i) = out.find(file) {
+            let start = i + file.len();
+            let end = out[start..]
+                .find(|c: char| !(c.is_ascii_digit() || c == ':'))
+                .map_or(out.len(), |k| start + k);
+            out.replace_range(start..end, "L:C:");
+        }
+    }
+    out
 }
 
 /// Number or list from the environment.
@@ -260,24 +323,40 @@ fn env_list<T: std::str::FromStr>(name: &str) -> Option<Vec<T>> {
 #[test]
 #[ignore = "long: pages of every size and style through fit and predict; run with --ignored --nocapture"]
 fn every_size_page_table() {
-    let n: u64 = env_list("SIZE_PAGES").and_then(|v| v.first().copied()).unwrap_or(4);
+    let n: u64 = env_list("SIZE_PAGES")
+        .and_then(|v| v.first().copied())
+        .unwrap_or(4);
     let bands: Vec<usize> = env_list("SIZE_BANDS").unwrap_or((0..SIZE_BANDS_CM3.len()).collect());
     let kinds: Vec<PageKind> = match std::env::var("SIZE_STYLES") {
-        Ok(v) => PageKind::ALL.into_iter().filter(|k| v.split(',').any(|n| n.trim() == k.name())).collect(),
+        Ok(v) => PageKind::ALL
+            .into_iter()
+            .filter(|k| v.split(',').any(|n| n.trim() == k.name()))
+            .collect(),
         Err(_) => PageKind::ALL.to_vec(),
     };
-    let threads = env_list("SIZE_THREADS").and_then(|v| v.first().copied()).unwrap_or(2);
+    let threads = env_list("SIZE_THREADS")
+        .and_then(|v| v.first().copied())
+        .unwrap_or(2);
     let jobs: Vec<(PageKind, usize, u64)> = kinds
         .iter()
-        .flat_map(|k| bands.iter().flat_map(move |b| (0..n).map(move |i| (*k, *b, 10_000 * (*b as u64 + 1) + i))))
+        .flat_map(|k| {
+            bands
+                .iter()
+                .flat_map(move |b| (0..n).map(move |i| (*k, *b, 10_000 * (*b as u64 + 1) + i)))
+        })
         .collect();
+    // SIZE_DIR keeps the pages, fits and predictions there (else a temporary folder).
     let tmp = tempfile::tempdir().unwrap();
+    let root = std::env::var_os("SIZE_DIR").map_or(tmp.path().to_path_buf(), Into::into);
     let t0 = std::time::Instant::now();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     let outcomes: Vec<((PageKind, usize, u64), Outcome)> = pool.install(|| {
         jobs.par_iter()
             .map(|&(kind, b, seed)| {
-                let dir = tmp.path().join(format!("{}-{seed}", kind.name()));
+                let dir = root.join(format!("{}-{seed}", kind.name()));
                 let o = evaluate(seed, SIZE_BANDS_CM3[b], kind, &dir);
                 eprintln!("{} {seed}: {}", kind.name(), summary(&o));
                 ((kind, b, seed), o)
@@ -298,9 +377,8 @@ fn every_size_page_table() {
         t0.elapsed().as_secs_f64(),
         report(&cells, &bands, &kinds)
     );
-    let out = std::env::var("SIZE_OUT").unwrap_or_else(|_| {
-        format!("{}/target/every-size-pages.md", env!("CARGO_MANIFEST_DIR"))
-    });
+    let out = std::env::var("SIZE_OUT")
+        .unwrap_or_else(|_| format!("{}/target/every-size-pages.md", env!("CARGO_MANIFEST_DIR")));
     std::fs::write(&out, &md).unwrap();
     println!("{md}\n(written to {out})");
 }
@@ -309,7 +387,11 @@ fn summary(o: &Outcome) -> String {
     match o {
         Outcome::Judged(c, bad, _) => {
             let held = c.iter().flatten().filter(|x| x.holds()).count();
-            format!("{held}/{} bands hold{}", 7 * c.len(), if *bad { ", cost not evaluable" } else { "" })
+            format!(
+                "{held}/{} bands hold{}",
+                7 * c.len(),
+                if *bad { ", cost not evaluable" } else { "" }
+            )
         }
         Outcome::Refused(e) => format!("refused: {e}"),
         Outcome::Failed(e) => format!("failed: {e}"),
@@ -325,20 +407,41 @@ fn styled_pages_print_at_every_size() {
         let seed = 10_000 * (b as u64 + 1);
         let motor = random_motor_in_band(seed, band, &SPREAD);
         let v_cm3 = motor.v_disp * 1e6;
-        assert!(band.0 <= v_cm3 && v_cm3 <= band.1, "{v_cm3} cm³ outside {band:?}");
+        assert!(
+            band.0 <= v_cm3 && v_cm3 <= band.1,
+            "{v_cm3} cm³ outside {band:?}"
+        );
         for kind in PageKind::ALL {
             let page = styled_page(seed, kind);
             let dir = tmp.path().join(format!("{}-{b}", kind.name()));
             let row = print_styled_page(&dir, &motor, &page).unwrap();
             let toml = std::fs::read_to_string(dir.join("rig.toml")).unwrap();
-            assert_eq!(toml.contains("displacement_m3"), page.style.displacement, "{toml}");
+            assert_eq!(
+                toml.contains("displacement_m3"),
+                page.style.displacement,
+                "{toml}"
+            );
             assert!(!toml.contains("vanes"), "{toml}");
-            assert_eq!(toml.contains("gear_ratio"), kind == PageKind::Geared, "{toml}");
-            assert_eq!(toml.matches("[[experiment]]").count(), 1 + usize::from(kind == PageKind::SecondPressure));
+            assert_eq!(
+                toml.contains("gear_ratio"),
+                kind == PageKind::Geared,
+                "{toml}"
+            );
+            assert_eq!(
+                toml.matches("[[experiment]]").count(),
+                1 + usize::from(kind == PageKind::SecondPressure)
+            );
             if let Some(g) = page.gear {
-                let plain = styled_truth(&motor, &twin::styles::styled_page(seed, PageKind::Full), &[page.style.supply.1]).unwrap()[0];
+                let plain = styled_truth(
+                    &motor,
+                    &twin::styles::styled_page(seed, PageKind::Full),
+                    &[page.style.supply.1],
+                )
+                .unwrap()[0];
                 assert!((row.free_speed_rad_s * g.ratio / plain[0] - 1.0).abs() < 1e-12);
-                assert!((row.stall_torque_nm / (g.efficiency * g.ratio * plain[4]) - 1.0).abs() < 1e-12);
+                assert!(
+                    (row.stall_torque_nm / (g.efficiency * g.ratio * plain[4]) - 1.0).abs() < 1e-12
+                );
                 assert!((3.0..=30.0).contains(&g.ratio) && (0.85..=0.95).contains(&g.efficiency));
             }
         }
@@ -359,6 +462,9 @@ fn sized_motors_are_the_random_motors_scaled() {
         assert!(close(big.c_in1, 4.0 * m.c_in1) && close(big.c_12, 4.0 * m.c_12));
         assert!(close(big.t_coulomb, 8.0 * m.t_coulomb) && close(big.visc, 16.0 * m.visc));
         assert!(close(big.inertia, 32.0 * m.inertia) && close(big.vol1, 8.0 * m.vol1));
-        assert_eq!((big.z, big.eps, big.n_poly, big.b_crit), (m.z, m.eps, m.n_poly, m.b_crit));
+        assert_eq!(
+            (big.z, big.eps, big.n_poly, big.b_crit),
+            (m.z, m.eps, m.n_poly, m.b_crit)
+        );
     }
 }

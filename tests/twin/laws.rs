@@ -304,9 +304,7 @@ impl Drawn {
                     excess_nm: excess_nm * s,
                     w_s_rad_s: w_s_rad_s * s.powf(-1.0 / 3.0),
                 },
-                FrictionLaw::ViscousPower { c } => FrictionLaw::ViscousPower {
-                    c: c * s.powf(1.5),
-                },
+                FrictionLaw::ViscousPower { c } => FrictionLaw::ViscousPower { c: c * s.powf(1.5) },
                 FrictionLaw::LoadDependent { mu } => FrictionLaw::LoadDependent { mu },
                 FrictionLaw::MeanPressure { k } => FrictionLaw::MeanPressure { k: k * s },
             }),

@@ -12,7 +12,9 @@
 use super::catalogue::{catalogue_row, curve_point, TwinRow};
 use super::experiment::Conditions;
 use super::motor::{TwinMotor, P_ATM_PA};
-use super::page::{page_style, row_values, significant, speed_step_rpm, PageStyle, PageUnit, FIGURES};
+use super::page::{
+    page_style, row_values, significant, speed_step_rpm, PageStyle, PageUnit, FIGURES,
+};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use std::fmt::Write as _;
@@ -200,7 +202,11 @@ pub fn styled_page(seed: u64, kind: PageKind) -> StyledPage {
             let printed = rng.random::<bool>();
             page.gear = Some(Gear {
                 ratio: significant(g, 3).parse().unwrap(),
-                efficiency: if printed { (eta * 100.0).round() / 100.0 } else { eta },
+                efficiency: if printed {
+                    (eta * 100.0).round() / 100.0
+                } else {
+                    eta
+                },
                 efficiency_printed: printed,
             });
         }
