@@ -287,7 +287,15 @@ fn check(dir: &Path) -> Result<(), Failure> {
         }
     }
     if let Some(g) = ds.gear() {
-        say!("    {}{}", g.describe(), if g.efficiency_printed { "" } else { "  ASSUMED (gear_efficiency not given)" });
+        say!(
+            "    {}{}",
+            g.describe(),
+            if g.efficiency_printed {
+                ""
+            } else {
+                "  ASSUMED (gear_efficiency not given)"
+            }
+        );
         say!("    the pages' figures are the gearbox's OUTPUT shaft's; they are fitted at the motor shaft (speed × G, torque ÷ η·G, power ÷ η)");
     }
     // A page without its displacement: the size a fit starts from, estimated from the page.

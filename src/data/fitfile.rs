@@ -683,7 +683,10 @@ impl Reader<'_> {
         };
         let ln_sd = num("efficiency_ln_sd").unwrap_or(0.0);
         if !(ratio.is_finite() && ratio > 0.0) {
-            return Err(self.fail(here(), format!("gear.ratio = {ratio} must be finite and > 0")));
+            return Err(self.fail(
+                here(),
+                format!("gear.ratio = {ratio} must be finite and > 0"),
+            ));
         }
         if !(efficiency > 0.0 && efficiency <= 1.0) {
             return Err(self.fail(

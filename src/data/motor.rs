@@ -601,7 +601,10 @@ mod tests {
         };
         assert_eq!(table(None, None).gear(), Ok(None));
         let g = table(Some(4.0), Some(0.9)).gear().unwrap().unwrap();
-        assert_eq!((g.ratio, g.efficiency, g.efficiency_printed), (4.0, 0.9, true));
+        assert_eq!(
+            (g.ratio, g.efficiency, g.efficiency_printed),
+            (4.0, 0.9, true)
+        );
         let g = table(Some(4.0), None).gear().unwrap().unwrap();
         assert!(!g.efficiency_printed && g.efficiency_ln_sd > 0.0);
         for (ratio, eta, key) in [

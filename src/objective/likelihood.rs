@@ -292,7 +292,7 @@ impl Target {
                 c.data.iter().map(move |v| if scaled { *v } else { 0.0 })
             })
             .collect();
-        if !(ln_sd > 0.0) || shape.iter().all(|v| *v == 0.0) {
+        if ln_sd.is_nan() || ln_sd <= 0.0 || shape.iter().all(|v| *v == 0.0) {
             return self;
         }
         self.with_nuisances(vec![Nuisance {
@@ -467,7 +467,12 @@ mod tests {
             })
             .collect();
         let chi2 = |t: &Target| t.residual_vector(&sim).iter().map(|r| r * r).sum::<f64>();
-        assert!(chi2(&geared) < 0.5 * chi2(&page), "{} {}", chi2(&geared), chi2(&page));
+        assert!(
+            chi2(&geared) < 0.5 * chi2(&page),
+            "{} {}",
+            chi2(&geared),
+            chi2(&page)
+        );
         assert!(page.clone().with_gear_efficiency(0.0).nuisances().is_none());
         let mut recorded = page;
         recorded.channels.iter_mut().for_each(|c| c.stated = false);

@@ -51,12 +51,12 @@ impl Outcome {
         let ratio = gear.map_or(1.0, |g| g.ratio);
         let grid = options.speed_grid_rad_s * ratio;
         let row_at = |p: f64| {
-            catalogue_row(motor, &options.conditions(p), grid).map_err(
-                |source| PredictError::AtPressure {
+            catalogue_row(motor, &options.conditions(p), grid).map_err(|source| {
+                PredictError::AtPressure {
                     p_supply_pa: p,
                     source,
-                },
-            )
+                }
+            })
         };
         let reference = row_at(options.reference_pa)?;
         let rows = options

@@ -330,9 +330,8 @@ pub fn predict_with(
     let (centre, speeds) = centre_and_figures(fit, options)?;
     let unc = ParamUncertainty::of(fit, options.fixed_spread);
     let shown = centre.flat(false);
-    let figures = |m: &Motor| {
-        Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true))
-    };
+    let figures =
+        |m: &Motor| Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true));
     let unreliable = samples::delta_unreliable(fit);
     let use_samples = match request.choice {
         BandChoice::Delta => false,
@@ -511,9 +510,8 @@ pub fn check_bands(
     let (centre, speeds) = centre_and_figures(fit, options)?;
     let unc = ParamUncertainty::of(fit, options.fixed_spread);
     let smooth = centre.flat(true);
-    let figures = |m: &Motor| {
-        Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true))
-    };
+    let figures =
+        |m: &Motor| Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true));
     let delta = unc.delta_bands(fit, &smooth, &figures)?;
     let mc = unc.monte_carlo_bands(fit, samples, seed, &figures)?;
     let (Some(delta), Some(mc)) = (delta, mc) else {

@@ -358,8 +358,14 @@ fn shaft_columns(pr: &Prediction) -> (Vec<String>, Vec<String>) {
     match &pr.gear {
         None => (Vec::new(), Vec::new()),
         Some(g) => (
-            ["shaft", "gear_ratio", "gear_efficiency"].map(String::from).to_vec(),
-            vec!["output".into(), csv_number(g.ratio), csv_number(g.efficiency)],
+            ["shaft", "gear_ratio", "gear_efficiency"]
+                .map(String::from)
+                .to_vec(),
+            vec![
+                "output".into(),
+                csv_number(g.ratio),
+                csv_number(g.efficiency),
+            ],
         ),
     }
 }

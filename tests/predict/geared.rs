@@ -124,14 +124,15 @@ fn predict(fit: &Path, dir: &Path, name: &str) -> (String, Vec<BTreeMap<String, 
     ]);
     let text = std::fs::read_to_string(out.join("catalogue.csv")).unwrap();
     let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(String::from)
-        .collect();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
     let rows = lines
-        .map(|l| header.iter().cloned().zip(l.split(',').map(String::from)).collect())
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
         .collect();
     (stdout, rows)
 }
@@ -158,7 +159,10 @@ fn a_geared_page_fits_the_motor_and_predicts_its_output_shaft() {
     }
     assert_eq!(geared["gear"]["ratio"], 4.0);
     assert_eq!(geared["gear"]["efficiency"], 0.9);
-    assert!(plain.get("gear").is_none(), "an ungeared fit file has no gear");
+    assert!(
+        plain.get("gear").is_none(),
+        "an ungeared fit file has no gear"
+    );
 
     let (plain_out, plain_rows) = predict(&plain_file, dir.path(), "p-plain");
     let (geared_out, geared_rows) = predict(&geared_file, dir.path(), "p-geared");
@@ -213,20 +217,31 @@ fn an_unprinted_efficiency_rests_on_its_prior_and_widens_the_bands() {
     // One stage: the prior's median is 0.95; the page is made with it.
     let (g, eta) = (4.0, 0.95);
     let (plain_file, plain) = fit(Path::new(SHIPPED), dir.path(), "plain");
-    let (printed_file, _) = fit(&geared_page(dir.path(), g, eta, true), dir.path(), "printed");
+    let (printed_file, _) = fit(
+        &geared_page(dir.path(), g, eta, true),
+        dir.path(),
+        "printed",
+    );
     let (prior_file, prior) = fit(&geared_page(dir.path(), g, eta, false), dir.path(), "prior");
     assert_eq!(prior["gear"]["efficiency_printed"], false);
     assert_eq!(prior["gear"]["efficiency"], 0.95);
     let nuisances = &prior["statistics"]["nuisances"];
     assert!(
-        nuisances.as_object().unwrap().keys().any(|k| k.contains("gearbox")),
+        nuisances
+            .as_object()
+            .unwrap()
+            .keys()
+            .any(|k| k.contains("gearbox")),
         "{nuisances}"
     );
     // Each motor-shaft estimate within the ungeared fit's own interval.
     let a = estimates(&plain);
     for (name, (v, _)) in estimates(&prior) {
         if let (_, Some([lo, hi])) = a[&name] {
-            assert!(lo <= v && v <= hi, "{name} = {v:e} outside [{lo:e}, {hi:e}]");
+            assert!(
+                lo <= v && v <= hi,
+                "{name} = {v:e} outside [{lo:e}, {hi:e}]"
+            );
         }
     }
     let (_, printed_rows) = predict(&printed_file, dir.path(), "p-printed");
@@ -279,9 +294,18 @@ fn bad_gearbox_keys_exit_1_naming_the_key() {
         ("gear_ratio = -4.0\n", "gear_ratio"),
         ("gear_ratio = nan\n", "gear_ratio"),
         ("gear_ratio = inf\n", "gear_ratio"),
-        ("gear_ratio = 4.0\ngear_efficiency = 0.0\n", "gear_efficiency"),
-        ("gear_ratio = 4.0\ngear_efficiency = 1.2\n", "gear_efficiency"),
-        ("gear_ratio = 4.0\ngear_efficiency = nan\n", "gear_efficiency"),
+        (
+            "gear_ratio = 4.0\ngear_efficiency = 0.0\n",
+            "gear_efficiency",
+        ),
+        (
+            "gear_ratio = 4.0\ngear_efficiency = 1.2\n",
+            "gear_efficiency",
+        ),
+        (
+            "gear_ratio = 4.0\ngear_efficiency = nan\n",
+            "gear_efficiency",
+        ),
         ("gear_efficiency = 0.9\n", "gear_efficiency"),
     ] {
         let (code, stderr) = check_with(dir.path(), lines);

@@ -183,7 +183,10 @@ mod tests {
                 .lines()
                 .find(|l| l.contains(&format!("name=\"{name}\"")))
                 .unwrap();
-            assert!(line.contains("MOTOR shaft; gearbox output: speed/4"), "{line}");
+            assert!(
+                line.contains("MOTOR shaft; gearbox output: speed/4"),
+                "{line}"
+            );
         }
     }
 }

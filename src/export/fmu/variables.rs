@@ -365,7 +365,15 @@ fn at_motor_shaft(vars: &mut [Variable], g: &crate::model::gear::Gear) {
         g.efficiency * g.ratio
     );
     for v in vars.iter_mut() {
-        if [vr::SPEED, vr::TORQUE_SHAFT, vr::T_LOAD, vr::C_BRAKE, vr::STATES[3]].contains(&v.vr) {
+        if [
+            vr::SPEED,
+            vr::TORQUE_SHAFT,
+            vr::T_LOAD,
+            vr::C_BRAKE,
+            vr::STATES[3],
+        ]
+        .contains(&v.vr)
+        {
             v.description.push_str(&note);
         }
     }

@@ -301,7 +301,10 @@ mod shaft_tests {
     fn a_geared_study_names_the_motor_shaft() {
         let g = Gear::new(4.0, Some(0.9));
         let note = shaft_note(&g);
-        assert!(note.contains("MOTOR shaft") && note.contains("3.6000"), "{note}");
+        assert!(
+            note.contains("MOTOR shaft") && note.contains("3.6000"),
+            "{note}"
+        );
         let doc = shaft_json(&g);
         assert_eq!(doc["shaft"], "motor");
         assert_eq!(doc["gear_ratio"], 4.0);
