@@ -258,7 +258,7 @@ impl MotorSection {
                 "given".to_string()
             } else {
                 format!(
-                    "(assumed, not printed{note}; source: {})",
+                    "(assumed, not printed; source: {}{note})",
                     assumed_source(key)
                 )
             }
@@ -289,7 +289,7 @@ impl MotorSection {
                 from(
                     self.dead_volume_m3.is_some(),
                     "dead_volume_m3",
-                    &format!(": 0.1 cm³ × {size:.3}, the displacement's ratio to AR034-11's")
+                    &format!(", here × {size:.3}")
                 )
             ),
         ];
