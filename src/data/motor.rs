@@ -272,15 +272,15 @@ impl MotorSection {
 pub const ASSUMED_SOURCES: [(&str, &str); 4] = [
     (
         "displacement_m3",
-        "the paper's motor AR034-11 (W. Beater, appendix); a fit of catalogue pages alone estimates it from the pages (docs/estimation.md, \"A page without a displacement\")",
+        "the paper's motor AR034-11 (W. Beater; docs/model.md); a fit of catalogue pages alone estimates it from the pages (docs/estimation.md, \"A page without a displacement\")",
     ),
     (
         "vanes",
-        "the paper's motor AR034-11 (W. Beater, appendix); vane air motors have 3 to 10 vanes, most 4 to 7 (Hydraulics & Pneumatics, Fluid Power Basics, \"Air motors\")",
+        "the paper's motor AR034-11 (W. Beater; docs/model.md); vane air motors have 3 to 10 vanes (Hydraulics & Pneumatics, Fluid Power Basics, \"Air motors\")",
     ),
     (
         "expansion_ratio",
-        "the paper's motor AR034-11 (W. Beater, appendix: V_exp/V_fill from its port timing)",
+        "the paper's motor AR034-11 (W. Beater; docs/model.md)",
     ),
     (
         "dead_volume_m3",
@@ -313,7 +313,7 @@ impl MotorSection {
                 "given".to_string()
             } else {
                 format!(
-                    "(assumed, not printed{note}; source: {})",
+                    "(assumed, not printed; source: {}{note})",
                     assumed_source(key)
                 )
             }
@@ -344,7 +344,7 @@ impl MotorSection {
                 from(
                     self.dead_volume_m3.is_some(),
                     "dead_volume_m3",
-                    &format!(": 0.1 cm³ × {size:.3}, the displacement's ratio to AR034-11's")
+                    &format!(", here × {size:.3}")
                 )
             ),
         ];

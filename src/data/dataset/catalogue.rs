@@ -496,9 +496,9 @@ fn check_beyond_free_speed(
             .copied()
             .filter(|v| v.is_finite())
             .fold(0.0, f64::max);
-        for i in 0..n_curve_rows.min(speed.len()) {
-            let v = col.si[i];
-            if speed[i] > free.si && v.is_finite() && v > 3.0 * tolerance * full_scale {
+        let curve_rows = speed.iter().zip(&col.si).take(n_curve_rows).enumerate();
+        for (i, (&w, &v)) in curve_rows {
+            if w > free.si && v.is_finite() && v > 3.0 * tolerance * full_scale {
                 let at = free
                     .line
                     .map_or(String::new(), |l| format!(" (rig.toml line {l})"));
@@ -510,7 +510,7 @@ fn check_beyond_free_speed(
                         q.words(),
                         &col.raw[i],
                         col.unit.symbol(),
-                        Unit::Rpm.from_si(speed[i], 0.0),
+                        Unit::Rpm.from_si(w, 0.0),
                         free.written,
                         free.unit.symbol()
                     ),
