@@ -4,7 +4,7 @@
 //! a fleet, so both give the same fit for a seed.
 
 use super::{Opt, OptionError};
-use crate::data::dataset::{DataError, Dataset};
+use crate::data::dataset::{DataError, Dataset, FIGURES};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
@@ -205,13 +205,50 @@ fn page_choice(
         return Ok(None);
     }
     let nominal = ds.nominal_params()?;
-    let choice =
-        page_estimates(data, nominal, o.priors, displacement.is_some()).map_err(setup_error)?;
+    let choice = page_estimates(data, nominal, o.priors, displacement.is_some())
+        .map_err(|e| page_setup_error(ds, e))?;
     observer.pinning(choice.limit_pct, &choice.pinning);
     match choice.nothing_pinned() {
-        Some(e) => Err(setup_error(e)),
+        Some(e) => Err(page_setup_error(ds, e)),
         None => Ok(Some(choice)),
     }
+}
+
+/// [`setup_error`] for pages: one that pins nothing says which of the key figures the
+/// pages do not print could be added ([`unprinted_figures`]).
+fn page_setup_error(ds: &Dataset, e: SetupError) -> FitError {
+    let SetupError::NothingPinned { names, limit_pct } = e else {
+        return setup_error(e);
+    };
+    let add = unprinted_figures(ds)
+        .iter()
+        .map(|(key, words)| format!("the {words} ({key})"))
+        .collect::<Vec<_>>();
+    let figures = match add.as_slice() {
+        [] => String::new(),
+        [one] => format!("{one}, "),
+        [first @ .., last] => format!("{} or {last}, ", first.join(", ")),
+    };
+    let before = format!(
+        "the catalogue pins none of {} to within {limit_pct:.0} % (1σ), so the fit would be the motor prior alone: add {figures}curves, or a rig experiment, or name parameters with ",
+        names.join(", ")
+    );
+    FitError::Option(OptionError::of_within(Opt::FitEstimate, before, ""))
+}
+
+/// The key figures (rig.toml key, words) that no catalogue page of `ds` prints, in
+/// [`FIGURES`] order, without the minimum start torque (never compared).
+pub fn unprinted_figures(ds: &Dataset) -> Vec<(&'static str, &'static str)> {
+    FIGURES
+        .iter()
+        .filter(|(key, _, _)| *key != "min_start_torque")
+        .filter(|(key, _, _)| {
+            !ds.experiments
+                .iter()
+                .any(|e| e.figures.iter().any(|f| f.key == *key))
+        })
+        .map(|(key, _, words)| (*key, *words))
+        .collect()
 }
 
 /// The pinning as the command line prints it: a heading, then one line per parameter

@@ -198,3 +198,39 @@ fn printed_figures_outside_the_fits_bands_are_named() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(!stdout.contains("outside the fit's 95 % band"), "{stdout}");
 }
+
+/// A page that pins none of the parameters (the stall torque alone: one number, and the
+/// conductances, leaks and friction all move it) exits 1 before the fit, naming the
+/// figures it could add, not the one it prints; no fit file.
+#[test]
+fn a_page_that_pins_nothing_says_which_figures_to_add() {
+    let figures = shipped_figures();
+    let stall: Vec<&(String, String)> = figures
+        .iter()
+        .filter(|(k, _)| k == "stall_torque")
+        .collect();
+    let tmp = tempfile::tempdir().unwrap();
+    for displacement in [true, false] {
+        let dir = tmp.path().join(format!("stall{displacement}"));
+        page(&dir, &stall, displacement);
+        let out = dir.join("fit.json");
+        let o = vanefit(&[
+            "fit",
+            dir.to_str().unwrap(),
+            "--no-plots",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("pins none of") && err.contains("add the free speed (free_speed)"),
+            "{err}"
+        );
+        assert!(
+            err.contains("(air_at_free_speed)") && !err.contains("(stall_torque)"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+}

@@ -242,3 +242,35 @@ fn size_sd(data: &FitData, section: &MotorSection, v: f64) -> Option<f64> {
     let var = cov[(0, 0)];
     (var.is_finite() && var > 0.0).then(|| var.sqrt())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An estimate is stated with an interval that holds it, or with none: never with
+    /// another estimate's interval (issue 44: "1000 cm³ [178, 264] (95 %)").
+    #[test]
+    fn an_estimate_lies_inside_its_own_interval() {
+        let v = 1000e-6;
+        // A profile interval that holds it is the one stated.
+        let held = fitted_interval(v, Some([800e-6, 1200e-6]), None);
+        assert_eq!(held, Some([Some(800e-6), Some(1200e-6)]));
+        assert!(describe_fitted_cm3(v, held).contains("1000 cm³ [800, 1200] (95 %)"));
+        // One that does not is dropped for the verdict's ends, open where the profile is.
+        let open = fitted_interval(v, Some([178e-6, 264e-6]), Some([Some(500e-6), None]));
+        assert_eq!(open, Some([Some(500e-6), None]));
+        assert!(describe_fitted_cm3(v, open).contains("1000 cm³ [500, open]"));
+        // A verdict that does not hold it either: no interval, said so.
+        let none = fitted_interval(
+            v,
+            Some([178e-6, 264e-6]),
+            Some([Some(178e-6), Some(264e-6)]),
+        );
+        assert_eq!(none, None);
+        let text = describe_fitted_cm3(v, none);
+        assert!(
+            text.contains("1000 cm³ (no 95 % interval") && !text.contains('['),
+            "{text}"
+        );
+    }
+}

@@ -254,8 +254,8 @@ pub struct Pinning {
 /// of every candidate at the nominal motor.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PageChoice {
-    /// The parameters to estimate, in θ order (empty: the pages pin none of the candidates,
-    /// [`PageChoice::nothing_pinned`]).
+    /// The parameters to estimate, in θ order (see [`PageChoice::nothing_pinned`] for pages
+    /// that pin none of the candidates).
     pub names: Vec<String>,
     /// The candidates.
     pub candidates: Vec<String>,
@@ -266,9 +266,12 @@ pub struct PageChoice {
 }
 
 impl PageChoice {
-    /// The error of a choice that estimates nothing.
+    /// The error of pages that pin none of the candidates: without a prior the fit would
+    /// estimate nothing; with one it would be the prior alone, every figure it predicts the
+    /// default motor's, and nothing the page prints would move it.
     pub fn nothing_pinned(&self) -> Option<SetupError> {
-        self.names.is_empty().then(|| SetupError::NothingPinned {
+        let pinned = self.pinning.iter().any(|p| p.pinned);
+        (!pinned).then(|| SetupError::NothingPinned {
             names: self.candidates.clone(),
             limit_pct: self.limit_pct,
         })
