@@ -322,7 +322,11 @@ fn check(dir: &Path) -> Result<(), Failure> {
                 num(to(lo)),
                 num(to(hi)),
                 c.unit.symbol(),
-                if ds.gear().is_some() { " at the motor shaft" } else { "" }
+                if ds.gear().is_some() {
+                    " at the motor shaft"
+                } else {
+                    ""
+                }
             );
         }
         catalogue::print(ex, ds.p_atm_pa);
