@@ -147,14 +147,12 @@ pub fn markdown(
     };
     let _ = writeln!(
         md,
-        "{} starts (seed {seed}, {} converged to the best minimum), {} evaluations, {:.1} s on \
-         {} thread(s); {effects}. The estimate is the maximum of the likelihood of the recorded \
-         rows, reached from the best start; intervals by {}.\n",
+        "{} starts (seed {seed}, {} converged to the best minimum), {} evaluations; {effects}. \
+         The estimate is the maximum of the likelihood of the recorded rows, reached from the \
+         best start; intervals by {}.\n",
         run.results.len(),
         run.converged(),
         out.evaluations,
-        out.wall_s,
-        run.threads,
         out.method.id()
     );
     goodness_section(&mut md, out);
