@@ -441,6 +441,7 @@ fn study(s: &Study) -> (&CommonArgs, ControlStudy) {
     };
     let motor = MotorOptions {
         params: common.params.clone(),
+        params_text: None,
         effects: common.effects.clone(),
         brake_nm_s_rad: common.brake_nm_s_rad,
     };

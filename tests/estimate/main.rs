@@ -7,6 +7,7 @@ mod cli_fit;
 #[path = "../common/mod.rs"]
 mod common;
 mod coverage;
+mod export_fmu;
 mod export_petab;
 mod fit_likelihood;
 mod multistart;
