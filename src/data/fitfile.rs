@@ -886,7 +886,7 @@ mod tests {
                 chi2: 12.5,
                 n_points: 10,
                 dof: 8,
-                chi2_per_dof: 12.5 / 8.0,
+                chi2_per_dof: Some(12.5 / 8.0),
                 noise_ratio: 1.1,
                 noise_ratio_limit: 1.3,
                 noise_reached: true,

@@ -196,12 +196,32 @@ pub fn markdown(
 }
 
 /// χ² of a fit as the terminal and the report name it: `chi2 X over N rows, chi2/dof Y
-/// (dof D)`, the rows against the data's own noise (docs/model.md, "χ² and χ²/dof").
+/// (dof D)`, the rows against the data's own noise (docs/model.md, "χ² and χ²/dof");
+/// `chi2/dof undefined (dof D ≤ 0)` when there are no more rows than estimated parameters.
 pub fn chi2_summary(g: &crate::estimate::fit::goodness::GoodnessOfFit) -> String {
-    format!(
-        "chi2 {:.1} over {} rows, chi2/dof {:.3} (dof {})",
-        g.chi2, g.n_points, g.chi2_per_dof, g.dof
-    )
+    match g.chi2_per_dof {
+        Some(r) => format!(
+            "chi2 {:.1} over {} rows, chi2/dof {r:.3} (dof {})",
+            g.chi2, g.n_points, g.dof
+        ),
+        None => format!(
+            "chi2 {:.1} over {} rows, chi2/dof undefined (dof {} ≤ 0)",
+            g.chi2, g.n_points, g.dof
+        ),
+    }
+}
+
+/// The warning of a fit with no degrees of freedom left (dof = n − k ≤ 0): χ²/dof is
+/// undefined and a small χ² says nothing about the model; `None` when dof > 0.
+pub fn dof_warning(g: &crate::estimate::fit::goodness::GoodnessOfFit) -> Option<String> {
+    (g.dof <= 0).then(|| {
+        let k = g.n_points as i64 - g.dof;
+        format!(
+            "{} rows for {k} estimated parameters (dof {} ≤ 0): chi2/dof is undefined and a \
+             small chi2 does not show that the model fits; the data cannot test it",
+            g.n_points, g.dof
+        )
+    })
 }
 
 /// The likelihood χ² of a fit (what the estimate minimises), named apart from χ², with the
@@ -248,6 +268,9 @@ fn goodness_section(md: &mut String, out: &FitOutcome) {
         );
     }
     let likelihood = likelihood_chi2_summary(out);
+    if let Some(warning) = out.goodness.as_ref().and_then(dof_warning) {
+        let _ = writeln!(md, "* **warning:** {warning}");
+    }
     if let Some(line) = &likelihood {
         let _ = writeln!(md, "* {line}");
     }

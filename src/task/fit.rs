@@ -4,7 +4,7 @@
 //! a fleet, so both give the same fit for a seed.
 
 use super::{Opt, OptionError};
-use crate::data::dataset::{DataError, Dataset};
+use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
@@ -213,6 +213,22 @@ fn page_choice(
     }
 }
 
+/// The experiment that would pin each open parameter, said once: a page fit prints its
+/// pinning (`most_sensitive_experiment` at the nominal motor) before it fits, and the fit's
+/// report repeats that answer rather than a second one at the fitted motor, where the
+/// ranking of two nearly equal experiments can flip. Parameters the pinning does not name
+/// keep the fit's answer.
+fn one_would_pin(would_pin: &mut [(ParamId, Kind)], pinning: &[Pinning]) {
+    for p in pinning {
+        let (Some(id), Some(kind)) = (ParamId::from_name(&p.name), p.pinned_by) else {
+            continue;
+        };
+        if let Some(entry) = would_pin.iter_mut().find(|(i, _)| *i == id) {
+            entry.1 = kind;
+        }
+    }
+}
+
 /// The pinning as the command line prints it: a heading, then one line per parameter
 /// (relative 1σ, and estimated or the value it stays fixed at and what would pin it).
 pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
@@ -394,7 +410,10 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         results_file,
         resume: o.resume,
     };
-    let outcome = estimate_fit(engine, &data, &setup, observer)?;
+    let mut outcome = estimate_fit(engine, &data, &setup, observer)?;
+    if let Some(c) = &choice {
+        one_would_pin(&mut outcome.would_pin, &c.pinning);
+    }
     let file = fit_file(&ds.name, &setup, &outcome, o.seed);
     Ok(Fit {
         dataset: ds,
@@ -448,4 +467,45 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
     crate::io::write_atomic(&md, text.as_bytes()).map_err(write_error(&md))?;
     written.report = md;
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pinning(name: &str, by: Option<Kind>) -> Pinning {
+        Pinning {
+            name: name.into(),
+            relative_sd: 0.25,
+            pinned: false,
+            value: 0.5,
+            pinned_by: by,
+            prior_factor: Some(1.6),
+        }
+    }
+
+    /// A page fit that printed "the outlet_throttle experiment would pin b_crit" before
+    /// fitting says the same of b_crit after it, though the fitted motor ranks the pressure
+    /// ramp first; a parameter the pinning says nothing of keeps the fit's answer, and one
+    /// the fit pinned gets no hint.
+    #[test]
+    fn the_fit_repeats_the_pinnings_experiment() {
+        let mut would_pin = vec![
+            (ParamId::B_CRIT, Kind::PressureRamp),
+            (ParamId::C_12, Kind::Datasheet),
+        ];
+        let said = [
+            pinning("b_crit", Some(Kind::OutletThrottle)),
+            pinning("c_12", None),
+            pinning("visc", Some(Kind::OutletThrottle)),
+        ];
+        one_would_pin(&mut would_pin, &said);
+        assert_eq!(
+            would_pin,
+            vec![
+                (ParamId::B_CRIT, Kind::OutletThrottle),
+                (ParamId::C_12, Kind::Datasheet),
+            ]
+        );
+    }
 }
