@@ -174,12 +174,13 @@ pub fn markdown(
     if !out.nuisances.is_empty() {
         let _ = writeln!(
             md,
-            "## Systematic errors at the estimate\n\nSensor offsets (in the sensor's SI unit) \
-             and the supply-pressure sensor's offset (Pa), profiled out within their \
-             calibration tolerances:\n\n| offset | value (SI) |\n|---|---|"
+            "## Systematic errors at the estimate\n\nSensor offsets and the supply-pressure \
+             sensor's offset, profiled out within their calibration tolerances (each in the \
+             unit people read that sensor in):\n\n| offset | value | unit |\n|---|---|---|"
         );
         for (k, v) in &out.nuisances {
-            let _ = writeln!(md, "| {k} | {} |", number(*v, 4));
+            let (value, unit) = offset_in_reading_unit(k, *v);
+            let _ = writeln!(md, "| {k} | {} | {unit} |", number(value, 4));
         }
         let _ = writeln!(md);
     }
@@ -267,10 +268,10 @@ fn goodness_section(md: &mut String, out: &FitOutcome) {
             chi2_summary(g)
         );
     }
-    let likelihood = likelihood_chi2_summary(out);
     if let Some(warning) = out.goodness.as_ref().and_then(dof_warning) {
         let _ = writeln!(md, "* **warning:** {warning}");
     }
+    let likelihood = likelihood_chi2_summary(out);
     if let Some(line) = &likelihood {
         let _ = writeln!(md, "* {line}");
     }
@@ -656,6 +657,32 @@ fn column_label(column: &str) -> String {
     }
 }
 
+/// A sensor offset (SI, labelled `<file> <quantity prefix> offset` or `supply pressure
+/// sensor offset`) in the unit people read that sensor in: speed in rpm, flows in g/s,
+/// torque in N·m, pressures in kPa (an offset is a difference: absolute and gauge alike).
+/// An unknown label keeps its SI value and says so.
+fn offset_in_reading_unit(label: &str, v_si: f64) -> (f64, &'static str) {
+    use crate::units::{Quantity, Unit};
+    let quantity = if label.starts_with("supply pressure") {
+        Some(Quantity::PPort1)
+    } else {
+        let prefix = label
+            .strip_suffix(" offset")
+            .and_then(|l| l.rsplit(' ').next());
+        Quantity::ALL
+            .into_iter()
+            .find(|q| Some(q.prefix()) == prefix)
+    };
+    let unit = match quantity {
+        Some(Quantity::Speed) => Unit::Rpm,
+        Some(Quantity::Flow1 | Quantity::Flow2) => Unit::GS,
+        Some(Quantity::PPort1 | Quantity::PPort2) => return (v_si * 1e-3, "kPa"),
+        Some(q) => q.si_unit(),
+        None => return (v_si, "SI"),
+    };
+    (unit.from_si(v_si, 0.0), unit.symbol())
+}
+
 /// A column's quantity in words (`p_port1_mpa` → "port 1 pressure"), for panel titles.
 fn quantity_words(column: &str) -> String {
     crate::units::parse_column(column)
@@ -714,10 +741,38 @@ mod tests {
         assert_eq!(lines.len(), 7);
     }
 
+    /// Each sensor offset of the report's table carries its own unit: rpm for speed
+    /// (1 rad/s = 30/π rpm), g/s for flows, N·m for torque, kPa for the supply pressure.
+    #[test]
+    fn offsets_are_given_each_in_its_unit() {
+        let (v, u) = offset_in_reading_unit("ramp.csv speed offset", 0.01444);
+        assert_eq!(u, "rpm");
+        assert!((v - 0.01444 * 30.0 / std::f64::consts::PI).abs() < 1e-12);
+        let (v, u) = offset_in_reading_unit("ramp.csv flow1 offset", 1.029e-6);
+        assert_eq!(u, "g/s");
+        assert!((v - 1.029e-3).abs() < 1e-15);
+        assert_eq!(
+            offset_in_reading_unit("datasheet.csv torque offset", -3.6e-4),
+            (-3.6e-4, "N·m")
+        );
+        let (v, u) = offset_in_reading_unit("supply pressure sensor offset", -147.9);
+        assert_eq!(u, "kPa");
+        assert!((v + 0.1479).abs() < 1e-12);
+    }
+
     /// Overlay axes name the quantity and its unit, not the raw column.
     #[test]
     fn axes_name_quantity_and_unit() {
-        assert_eq!(column_label("p_port1_mpa"), "port 1 pressure [MPa]");
+        assert_eq!(column_label("p_port1_mpa"), "port 1 pressure [MPa abs]");
+        assert_eq!(column_label("p_port1_bar_g"), "port 1 pressure [bar(g)]");
+        // Every pressure unit an axis can carry says absolute or gauge.
+        for u in crate::units::Quantity::PPort1.units() {
+            let s = u.symbol();
+            assert!(
+                s.ends_with(" abs") || s.ends_with("(a)") || s.ends_with("(g)"),
+                "{s}"
+            );
+        }
         assert_eq!(column_label("torque_nm"), "torque [N·m]");
         assert_eq!(
             column_label("air_l_min_anr"),

@@ -217,7 +217,8 @@ impl Unit {
         }
     }
 
-    /// The unit as people write it, for axis titles (`N·m`, `bar(g)`, `l/min ANR`).
+    /// The unit as people write it, for axis titles (`N·m`, `bar(g)`, `l/min ANR`); a
+    /// pressure unit says whether it is absolute or gauge (`MPa abs`, `bar(g)`).
     pub fn symbol(self) -> &'static str {
         match self {
             Unit::S => "s",
@@ -228,11 +229,11 @@ impl Unit {
             Unit::KgS => "kg/s",
             Unit::LMinAnr => "l/min ANR",
             Unit::LSAnr => "l/s ANR",
-            Unit::Mpa => "MPa",
+            Unit::Mpa => "MPa abs",
             Unit::BarAbs => "bar(a)",
             Unit::BarG => "bar(g)",
-            Unit::Pa => "Pa",
-            Unit::Kpa => "kPa",
+            Unit::Pa => "Pa abs",
+            Unit::Kpa => "kPa abs",
             Unit::M3SPa => "m³/(s·Pa)",
             Unit::Dm3SBar => "dm³/(s·bar)",
             Unit::LbfFt => "lbf·ft",
