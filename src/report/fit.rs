@@ -328,13 +328,26 @@ fn parameter_section(md: &mut String, rows: &[ParamRow]) {
     let _ = writeln!(md);
 }
 
+/// The fitted motor's curves at a catalogue page's supply pressure, from standstill to the
+/// free speed, with their 95 % bands (computed by the task layer with `predict`; the
+/// report only draws them over the page's points).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PageCurve {
+    /// The page's file (as rig.toml names the experiment).
+    pub file: String,
+    /// Torque, power and air against speed, SI.
+    pub points: Vec<crate::predict::CurvePoint>,
+}
+
 /// Every plot of a fit, written next to its fit file `out` (`<stem>.waterfall.svg`,
 /// `.parameters.svg`, `.profiles.svg`, one overlay per experiment): the paths written.
+/// `page_curves`: the model over each catalogue page's whole speed range.
 pub(crate) fn plots(
     dataset: &Dataset,
     cost: &CostModel,
     space: &ParamSpace,
     outcome: &FitOutcome,
+    page_curves: &[PageCurve],
     out: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let results = &outcome.run.results;
@@ -357,6 +370,7 @@ pub(crate) fn plots(
         dataset,
         cost,
         &[("fit", fit)],
+        page_curves,
         &out.with_extension(""),
     )?);
     Ok(written)
@@ -485,11 +499,14 @@ pub(crate) fn parameters_across_starts(
 }
 
 /// One figure per experiment: for each channel, the recorded data, the reference polynomial
-/// and one or more simulations, in the recording's units. Returns the files written.
+/// and one or more simulations, in the recording's units; a catalogue page's channel
+/// against speed with its model curve over the whole speed range and the curve's 95 % band
+/// (`page_curves`) instead of the fit at the page's speeds only. Returns the files written.
 pub(crate) fn overlays(
     ds: &Dataset,
     cost: &CostModel,
     runs: &[(&str, &[ChannelResiduals])],
+    page_curves: &[PageCurve],
     prefix: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let mut written = Vec::new();
@@ -515,7 +532,16 @@ pub(crate) fn overlays(
             if ax.log10 {
                 chart = chart.log_x();
             }
-            chart = with_simulations(chart, runs, &ex.file, reference, p_atm);
+            let curve = page_curves
+                .iter()
+                .find(|c| c.file == ex.file)
+                .and_then(|c| model_curve(c, reference, p_atm));
+            chart = with_simulations(chart, runs, &ex.file, reference, p_atm, curve.is_none());
+            if let Some((line, band)) = curve {
+                chart = chart
+                    .with(Series::line("fit (model)", line))
+                    .with(Series::line("fit's 95 % band", band));
+            }
             panels.push(chart);
             residuals.push(residual_panel(
                 runs,
@@ -542,14 +568,58 @@ pub(crate) fn overlays(
     Ok(written)
 }
 
+/// A series' (x, y) points in the chart's units.
+type Points = Vec<(f64, f64)>;
+
+/// The model curve of a page's channel `reference` against speed, in the channel's units,
+/// and its 95 % band as one closed outline (the lower edge out, the upper edge back);
+/// `None` for a channel the curve does not hold or an abscissa other than speed.
+fn model_curve(
+    curve: &PageCurve,
+    reference: &ChannelReference,
+    p_atm: f64,
+) -> Option<(Points, Points)> {
+    use crate::predict::CurvePoint;
+    use crate::units::Quantity;
+    let ax = &reference.abscissa;
+    if ax.quantity != Quantity::Speed || ax.log10 {
+        return None;
+    }
+    let of: fn(&CurvePoint) -> &crate::predict::Banded = match reference.quantity {
+        Quantity::Torque => |p| &p.torque_nm,
+        Quantity::Power => |p| &p.power_w,
+        Quantity::Flow1 => |p| &p.air_kg_s,
+        _ => return None,
+    };
+    let at = |p: &CurvePoint, y: f64| {
+        (
+            ax.display(p.speed_rad_s, p_atm),
+            reference.display(y, p_atm),
+        )
+    };
+    let line = curve.points.iter().map(|p| at(p, of(p).value)).collect();
+    let edge = |side: usize| {
+        curve
+            .points
+            .iter()
+            .filter_map(move |p| of(p).band95.map(|b| at(p, b[side])))
+    };
+    let band: Vec<(f64, f64)> = edge(0)
+        .chain(edge(1).collect::<Vec<_>>().into_iter().rev())
+        .collect();
+    Some((line, band))
+}
+
 /// Adds to `chart` the reference polynomial (once) and each model's simulation of the
-/// channel `reference` of experiment `file`, sorted along the abscissa.
+/// channel `reference` of experiment `file`, sorted along the abscissa (`fit_lines`: also
+/// the simulations through several points, else only single-point markers).
 fn with_simulations(
     mut chart: Chart,
     runs: &[(&str, &[ChannelResiduals])],
     file: &str,
     reference: &ChannelReference,
     p_atm: f64,
+    fit_lines: bool,
 ) -> Chart {
     let ax = &reference.abscissa;
     for (k, (name, res)) in runs.iter().enumerate() {
@@ -579,6 +649,9 @@ fn with_simulations(
                 .map(|(x, m, _)| (ax.display(*x, p_atm), reference.display(*m, p_atm)))
                 .collect();
             chart = chart.with(Series::line("reference polynomial", line));
+        }
+        if !fit_lines {
+            continue;
         }
         let line = pairs
             .iter()
@@ -791,6 +864,49 @@ mod tests {
         );
     }
 
+    /// A page's model curve is drawn over the whole speed range it was computed on (from
+    /// standstill to the free speed, in rpm), not at the page's speeds only, with its band as
+    /// one outline: the lower edge out, the upper edge back.
+    #[test]
+    fn a_page_curve_spans_the_whole_speed_range_with_its_band() {
+        use crate::predict::{Banded, CurvePoint};
+        let free_rad_s = 2000.0;
+        let n = 11;
+        let points: Vec<CurvePoint> = (0..n)
+            .map(|k| {
+                let w = free_rad_s * k as f64 / (n - 1) as f64;
+                let t = 0.2 * (1.0 - w / free_rad_s);
+                let banded = |v: f64| Banded {
+                    value: v,
+                    band95: Some([v - 0.01, v + 0.01]),
+                };
+                CurvePoint {
+                    speed_rad_s: w,
+                    torque_nm: banded(t),
+                    power_w: banded(t * w),
+                    air_kg_s: banded(1e-3),
+                }
+            })
+            .collect();
+        let curve = PageCurve {
+            file: "page.csv".into(),
+            points,
+        };
+        // The page's points lie in the middle of the range only.
+        let reference = torque_reference(
+            &[5000.0, 7000.0, 9000.0, 11000.0],
+            &[0.15, 0.13, 0.11, 0.09],
+        );
+        let (line, band) = model_curve(&curve, &reference, 1e5).unwrap();
+        assert_eq!(line.len(), n);
+        assert_eq!(line[0], (0.0, 0.2));
+        let free_rpm = free_rad_s * 30.0 / std::f64::consts::PI;
+        assert!((line[n - 1].0 - free_rpm).abs() < 1e-9 && line[n - 1].1.abs() < 1e-12);
+        assert_eq!(band.len(), 2 * n);
+        assert!((band[0].1 - 0.19).abs() < 1e-12 && (band[2 * n - 1].1 - 0.21).abs() < 1e-12);
+        assert!((band[n - 1].0 - free_rpm).abs() < 1e-9 && (band[n].0 - free_rpm).abs() < 1e-9);
+    }
+
     /// A torque channel of a catalogue page against speed, its reference fitted to `y`.
     fn torque_reference(x: &[f64], y: &[f64]) -> ChannelReference {
         let (quantity, unit) = crate::units::parse_column("torque_nm").unwrap();
@@ -869,7 +985,14 @@ mod tests {
         let reference = torque_reference(&[100.0, 200.0, 300.0, 400.0], &[0.3, 0.2, 0.1, 0.0]);
         let fit = vec![channel_residuals(&reference, vec![1], vec![0.21])];
         let one = [("fit", fit.as_slice())];
-        let chart = with_simulations(Chart::new("t", "x", "y"), &one, "page.csv", &reference, 1e5);
+        let chart = with_simulations(
+            Chart::new("t", "x", "y"),
+            &one,
+            "page.csv",
+            &reference,
+            1e5,
+            true,
+        );
         assert_eq!(chart.series.len(), 1);
         assert_eq!(chart.series[0].name, "fit");
         assert_eq!(chart.series[0].style, Style::Marker);
@@ -889,6 +1012,7 @@ mod tests {
             "page.csv",
             &reference,
             1e5,
+            true,
         );
         let styles: Vec<_> = chart
             .series

@@ -427,6 +427,38 @@ pub(crate) fn fit_dataset<O: FitObserver>(
     })
 }
 
+/// Points of a page's model curve in the fit's plot: as many as `predict`'s default curve
+/// twice over, so that the curve is smooth between the page's points.
+const PAGE_CURVE_POINTS: usize = 2 * crate::predict::DEFAULT_CURVE_POINTS - 1;
+
+/// The fitted motor over each catalogue page's whole speed range (standstill to the free
+/// speed) at the page's supply pressure, with the 95 % bands of `predict` (the fit file's
+/// covariance): what the fit's plot draws over the page's points. A page without a stated
+/// supply pressure, or one the prediction fails at, gets none (its plot then shows the fit
+/// at the page's speeds).
+fn page_curves(run: &Fit) -> Vec<report::PageCurve> {
+    use crate::predict::{predict, PredictOptions};
+    run.dataset
+        .experiments
+        .iter()
+        .filter(|ex| ex.kind == Kind::Catalogue)
+        .filter_map(|ex| {
+            let mut options = PredictOptions::new(run.dataset.p_atm_pa);
+            options.pressures_pa = vec![ex.p_supply_pa?];
+            options.curve_points = PAGE_CURVE_POINTS;
+            let at = predict(&run.file, &options)
+                .ok()?
+                .pressures
+                .into_iter()
+                .next()?;
+            Some(report::PageCurve {
+                file: ex.file.clone(),
+                points: at.curve,
+            })
+        })
+        .collect()
+}
+
 /// The files a fit left next to its fit file.
 #[derive(Debug, Clone, Default)]
 pub struct FitWritten {
@@ -453,6 +485,7 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
             &run.data.cost,
             &run.setup.space,
             &run.outcome,
+            &page_curves(run),
             out,
         )?;
     }
