@@ -314,11 +314,11 @@ def test_ctrl_c_interrupts_a_running_fit(tmp_path):
         time.sleep(0.05)
     assert marker.exists(), child.communicate()
     child.send_signal(signal.SIGINT)
-    t_sent = time.time()
-    stdout, stderr = child.communicate(timeout=120)
+    stdout, stderr = child.communicate(timeout=600)
     assert child.returncode == 0 and stdout.strip() == "interrupted", (stdout, stderr)
-    assert time.time() - t_sent < 30
-    assert not out.exists() and _starts_recorded(out) >= 1
+    # Stopped within the run, judged by what it recorded rather than by the clock (a busy
+    # machine stretches the wall time): some of its 6 starts finished, not all.
+    assert not out.exists() and 1 <= _starts_recorded(out) < 6
 
 
 def _tempdir_entries():
