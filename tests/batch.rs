@@ -445,3 +445,31 @@ fn csv_cell(s: &str) -> String {
         s.to_string()
     }
 }
+
+/// A catalogue dataset's fit says what the pages pin (as `vanefit fit` prints it) in that
+/// unit's own `fit.log`, not as a block among the batch's progress lines: stdout holds none
+/// of it, and one progress line points to the log.
+#[test]
+fn a_catalogue_units_pinning_goes_to_its_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let o = vanefit(&["synth", "ds/page", "--catalogue", "--seed", "3"], p);
+    assert!(o.status.success(), "{}", text(&o));
+    let manifest = "[batch]\ndatasets = [\"ds/*\"]\ntasks = [\"fit\"]\n\n[fit]\nstarts = 2\n\
+                    seed = 1\nmax_iters = 60\nuncertainty = \"none\"\nplots = false\n";
+    std::fs::write(p.join("m.toml"), manifest).unwrap();
+    let o = vanefit(&["batch", "m.toml", "--out", "r"], p);
+    assert!(o.status.success(), "{}", text(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(!stdout.contains("catalogue only"), "{}", text(&o));
+    let log = read(&p.join("r/page/fit/fit.log"));
+    assert!(
+        log.starts_with("catalogue only: what it pins down"),
+        "{log}"
+    );
+    assert!(log.lines().count() > 2, "{log}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let pointers: Vec<&str> = stderr.lines().filter(|l| l.contains("fit.log")).collect();
+    assert_eq!(pointers.len(), 1, "{stderr}");
+    assert!(pointers[0].contains("page/fit: catalogue only"), "{stderr}");
+}

@@ -186,16 +186,18 @@ fn columns(text: &str) -> Vec<(String, Vec<f64>)> {
 }
 
 /// Runs the control study `study` (`throttle-inlet`, `throttle-outlet`, `bode`, `step`,
-/// `disturbance`, `min-speed`, `design`) on the motor of the fit file `fit` (none: the
+/// `disturbance`, `min-speed`, `design`) on the motor of the fit file `fit`, or of the
+/// fit-file text `fit_text` (a fit held in memory; `fit` then only names it) (neither: the
 /// default motor) with `options` (JSON: every option by name). Returns its tables (CSV
 /// text read into columns, by file stem) and its JSON summaries (text, by file stem);
 /// writes its files and figures into `out` when given.
 #[pyfunction]
-#[pyo3(signature = (study, fit, options, out))]
+#[pyo3(signature = (study, fit, fit_text, options, out))]
 pub fn control(
     py: Python<'_>,
     study: &str,
     fit: Option<PathBuf>,
+    fit_text: Option<String>,
     options: &str,
     out: Option<PathBuf>,
 ) -> PyResult<(Tables, Vec<(String, String)>)> {
@@ -204,6 +206,7 @@ pub fn control(
     let study = ControlStudy {
         motor: MotorOptions {
             params: fit,
+            params_text: fit_text,
             effects: o
                 .0
                 .get("effects")

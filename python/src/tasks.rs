@@ -81,6 +81,49 @@ pub fn predict(
     .to_string())
 }
 
+/// Writes the fitted motor as an FMU to the file `out` (as `vanefit export-fmu`): the fit
+/// file `fit`, or its text `fit_text` (held in memory; `fit` then only names it), and the
+/// shared library `binary` (none: `$VANEFIT_FMU_BINARY`, else where the build left it).
+/// Returns the summary JSON (`variables`, `model_parameters`, `bytes`, `guid`, `binary`).
+/// A fit that cannot be read is a DataError, one the FMU cannot represent or a library not
+/// found a ParameterError, a file that cannot be written a VanefitError.
+#[pyfunction]
+#[pyo3(signature = (fit, fit_text, out, binary))]
+pub fn export_fmu(
+    py: Python<'_>,
+    fit: PathBuf,
+    fit_text: Option<String>,
+    out: PathBuf,
+    binary: Option<PathBuf>,
+) -> PyResult<String> {
+    use vanefit::export::fmu::FmuError;
+    if out.is_dir() {
+        return Err(ParameterError::new_err(format!(
+            "out {}: is a folder, not a file",
+            out.display()
+        )));
+    }
+    let opts = vanefit::task::FmuOptions {
+        fit,
+        fit_text,
+        out,
+        binary,
+    };
+    let done = py
+        .detach(|| vanefit::task::export_fmu(&opts))
+        .map_err(|e| match e {
+            FmuError::FitFile(_) => data_err(e),
+            FmuError::Unrepresentable { .. } | FmuError::NoBinary { .. } => param_err(e),
+            _ => VanefitError::new_err(e.to_string()),
+        })?;
+    let s = &done.summary;
+    Ok(serde_json::json!({
+        "variables": s.variables, "model_parameters": s.model_parameters,
+        "bytes": s.bytes, "guid": s.guid, "binary": done.binary,
+    })
+    .to_string())
+}
+
 /// Writes the fit as a PEtab v1 problem into `out` (as `vanefit export-petab`); returns the
 /// summary JSON (`measurements`, `observables`, `conditions`, `chi2_rows`, `chi2_priors`,
 /// `chi2_motor_priors`, `objective`).

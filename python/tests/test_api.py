@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 import vanefit
-from conftest import DATASET, run_cli
+from conftest import DATASET, ROOT, run_cli
 
 
 @pytest.fixture(scope="module")
@@ -314,11 +314,11 @@ def test_ctrl_c_interrupts_a_running_fit(tmp_path):
         time.sleep(0.05)
     assert marker.exists(), child.communicate()
     child.send_signal(signal.SIGINT)
-    t_sent = time.time()
-    stdout, stderr = child.communicate(timeout=120)
+    stdout, stderr = child.communicate(timeout=600)
     assert child.returncode == 0 and stdout.strip() == "interrupted", (stdout, stderr)
-    assert time.time() - t_sent < 30
-    assert not out.exists() and _starts_recorded(out) >= 1
+    # Stopped within the run, judged by what it recorded rather than by the clock (a busy
+    # machine stretches the wall time): some of its 6 starts finished, not all.
+    assert not out.exists() and 1 <= _starts_recorded(out) < 6
 
 
 def _tempdir_entries():
@@ -420,6 +420,36 @@ def test_control_options_are_the_commands(study):
             assert ours[name] == default, name
         else:
             assert ours[name] == pytest.approx(float(default), rel=1e-12), name
+
+
+def test_control_takes_a_fit_in_memory_as_its_signature_says(tmp_path):
+    """control(study, fit) with a Fit held in memory (no file behind it) runs the study on
+    that fit's motor: the same tables as with the fit file's path."""
+    fit_file = ROOT / "fits" / "ar034-synthetic.json"
+    in_memory = vanefit.Fit.from_json(fit_file.read_text())
+    assert in_memory.path is None
+    options = dict(kp=1.2, ki=5.0, duration_s=1.0)
+    from_memory = vanefit.control("step", in_memory, **options)
+    from_path = vanefit.control("step", fit_file, **options)
+    assert list(from_memory.tables) == list(from_path.tables)
+    for name in from_path.tables:
+        pd.testing.assert_frame_equal(from_memory.tables[name], from_path.tables[name])
+    # and the motor is the fit's, not the default one
+    default = vanefit.control("step", **options)
+    assert not from_memory.tables["step"].equals(default.tables["step"])
+
+
+def test_the_namespace_is_the_public_api():
+    """The package exposes its API (__all__) and its submodules, not the typing helpers,
+    numpy or json that its implementation imports."""
+    import types
+
+    public = {n for n in dir(vanefit) if not n.startswith("_")}
+    modules = {n for n in public if isinstance(getattr(vanefit, n), types.ModuleType)}
+    assert public - modules == set(vanefit.__all__) - {"__version__"}
+    for helper in ["Any", "Dict", "List", "Optional", "Union", "Mapping", "np", "json", "os"]:
+        assert not hasattr(vanefit, helper), helper
+    assert callable(vanefit.export_fmu)
 
 
 def test_control_files_and_tables_are_the_commands(tmp_path):

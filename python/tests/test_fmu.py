@@ -270,3 +270,28 @@ def test_export_refuses_an_effect_the_fmu_cannot_represent(tmp_path):
     assert "sensor_lag" in p.stderr, p.stderr
     assert not (tmp_path / "lag.fmu").exists()
     assert os.listdir(tmp_path) == ["lag.json"]
+
+
+def test_python_exports_the_fmu_the_command_exports(fmus, tmp_path):
+    """vanefit.export_fmu, from a file's path and from a Fit held in memory, writes the FMU
+    the command writes (same entries, same bytes), which FMPy validates."""
+    import vanefit
+
+    cli_fmu, _ = fmus["fitted"]
+    from_path = vanefit.export_fmu(FIT, tmp_path / "path.fmu")
+    in_memory = vanefit.Fit.from_json(FIT.read_text())
+    assert in_memory.path is None
+    from_memory = vanefit.export_fmu(in_memory, tmp_path / "memory.fmu")
+    assert from_path["guid"] == from_memory["guid"]
+    assert from_path["variables"] == len(read_model_description(str(cli_fmu)).modelVariables)
+    with zipfile.ZipFile(cli_fmu) as want:
+        for made in (tmp_path / "path.fmu", tmp_path / "memory.fmu"):
+            with zipfile.ZipFile(made) as got:
+                assert got.namelist() == want.namelist()
+                for name in want.namelist():
+                    assert got.read(name) == want.read(name), (made, name)
+    assert validate_fmu(str(tmp_path / "memory.fmu")) == []
+    doc = json.loads(FIT.read_text())
+    doc["model"]["effects"] = ["sensor_lag"]
+    with pytest.raises(vanefit.ParameterError, match="sensor_lag"):
+        vanefit.export_fmu(vanefit.Fit.from_json(json.dumps(doc)), tmp_path / "lag.fmu")

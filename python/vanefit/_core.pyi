@@ -26,6 +26,7 @@ __all__ = [
     "diagnose",
     "predict",
     "export_petab",
+    "export_fmu",
     "synth",
     "control",
     "chain_diagnostics",
@@ -139,6 +140,7 @@ def predict(
     out: Optional[_Path],
 ) -> str: ...
 def export_petab(fit: _Path, fit_text: Optional[str], dataset: _Path, out: _Path) -> str: ...
+def export_fmu(fit: _Path, fit_text: Optional[str], out: _Path, binary: Optional[_Path]) -> str: ...
 def synth(
     out: _Path,
     fit: Optional[_Path],
@@ -152,6 +154,7 @@ def synth(
 def control(
     study: str,
     fit: Optional[_Path],
+    fit_text: Optional[str],
     options: str,
     out: Optional[_Path],
 ) -> Tuple[List[Tuple[str, _Columns]], List[Tuple[str, str]]]: ...

@@ -73,7 +73,7 @@ class FitStatistics:
     chi2: float
     n_points: int
     dof: int
-    chi2_per_dof: float
+    chi2_per_dof: Optional[float]
     noise_ratio: float
     noise_ratio_limit: float
     noise_reached: bool
@@ -106,8 +106,10 @@ class FitStatistics:
     def __str__(self) -> str:
         verdict = ("the model explains the data to within their noise" if self.noise_reached
                    else "the model misses")
+        per_dof = ("undefined" if self.chi2_per_dof is None
+                   else f"{self.chi2_per_dof:.3f}")
         return (f"chi2 {self.chi2:.1f} over {self.n_points} rows (dof {self.dof}, "
-                f"chi2/dof {self.chi2_per_dof:.3f}); noise ratio {self.noise_ratio:.3f} "
+                f"chi2/dof {per_dof}); noise ratio {self.noise_ratio:.3f} "
                 f"(limit {self.noise_ratio_limit:.3f}): {verdict}")
 
 

@@ -54,6 +54,7 @@ impl BatchProgress {
             last: Mutex::new(Instant::now()),
             total: AtomicUsize::new(0),
             count: AtomicUsize::new(0),
+            notes: Mutex::new(Vec::new()),
         }
     }
 }
@@ -65,18 +66,34 @@ pub(crate) struct UnitProgress<'a> {
     last: Mutex<Instant>,
     total: AtomicUsize,
     count: AtomicUsize,
+    /// What `vanefit fit` prints before it fits (a catalogue's pinning, its displacement),
+    /// kept for the unit's own log (`fit.log`) rather than printed among other units'
+    /// progress lines.
+    notes: Mutex<Vec<String>>,
 }
 
-/// A batch prints a catalogue's pinning on stdout, as `vanefit fit` does.
+impl UnitProgress<'_> {
+    /// The unit's notes so far, taken (empty: none).
+    pub(crate) fn take_notes(&self) -> Vec<String> {
+        std::mem::take(&mut *self.notes.lock().unwrap_or_else(|p| p.into_inner()))
+    }
+
+    fn note(&self, lines: impl IntoIterator<Item = String>) {
+        self.notes
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .extend(lines);
+    }
+}
+
+/// A batch keeps a catalogue's pinning and displacement (what `vanefit fit` prints) for
+/// the unit's `fit.log`: printed here, they would interleave with other units' lines.
 impl crate::task::fit::FitObserver for UnitProgress<'_> {
     fn pinning(&self, limit_pct: f64, rows: &[crate::task::fit::Pinning]) {
-        for line in crate::task::fit::pinning_lines(limit_pct, rows) {
-            crate::io::say_line(format_args!("{line}"));
-        }
+        self.note(crate::task::fit::pinning_lines(limit_pct, rows));
     }
     fn displacement(&self, estimate: &crate::estimate::fit::displacement::DisplacementEstimate) {
-        let line = crate::task::fit::displacement_start_line(estimate);
-        crate::io::say_line(format_args!("{line}"));
+        self.note([crate::task::fit::displacement_start_line(estimate)]);
     }
 }
 

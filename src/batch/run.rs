@@ -57,6 +57,14 @@ pub(crate) enum UnitError {
     /// A prediction without a finished fit of its dataset.
     #[error("no fit to predict from: the fit of this dataset is {0}")]
     NoFit(String),
+    /// The unit's log could not be written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
     /// A bug: the unit panicked (the batch goes on).
     #[error("internal error: {0}")]
     Panic(String),
@@ -214,6 +222,28 @@ fn run_one(
     Ok(status)
 }
 
+/// Writes what a unit's fit said before fitting (`notes`: a catalogue's pinning, its
+/// displacement) to the unit's `fit.log`, and one progress line pointing there; nothing
+/// without notes.
+fn write_notes(
+    folder: &Path,
+    notes: &[String],
+    progress: &BatchProgress,
+    label: &str,
+) -> Result<(), UnitError> {
+    if notes.is_empty() {
+        return Ok(());
+    }
+    let path = folder.join("fit.log");
+    let text: String = notes.iter().map(|l| format!("{l}\n")).collect();
+    crate::io::write_atomic(&path, text.as_bytes()).map_err(|source| UnitError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    progress.line(&format!("{label}: {}: see {}", notes[0], path.display()));
+    Ok(())
+}
+
 /// Does a unit's work through the same task function as its command; the result in one
 /// line for the status file and the summary.
 fn execute(
@@ -234,7 +264,9 @@ fn execute(
             let out = folder.join("fit.json");
             let starts = side_path(&out, "starts.jsonl");
             let ds = crate::data::dataset::Dataset::load(&unit.path).map_err(FitError::from)?;
-            let fitted = fit_dataset(engine, ds, &settings, Some(starts), &observer)?;
+            let fitted = fit_dataset(engine, ds, &settings, Some(starts), &observer);
+            write_notes(&folder, &observer.take_notes(), progress, &unit.label())?;
+            let fitted = fitted?;
             write_fit(&fitted, &out, manifest.fit_plots)?;
             Ok(match &fitted.outcome.goodness {
                 Some(g) => format!(

@@ -447,6 +447,7 @@ fn study(s: &Study) -> (&CommonArgs, ControlStudy) {
     };
     let motor = MotorOptions {
         params: common.params.clone(),
+        params_text: None,
         effects: common.effects.clone(),
         brake_nm_s_rad: common.brake_nm_s_rad,
     };
@@ -574,13 +575,13 @@ fn print_step(r: &StepStudy) {
     }
     say!(
         "step {:.0} -> {:.0} rpm: rise time (10-90 %) {:.3} s, overshoot {:.1} %, settling (2 %) \
-        {:.3} s, mean error over the last 10 % {:.2} rpm; command {:.2} .. {:.2} V",
+        {:.3} s, mean error over the last 10 % {} rpm; command {:.2} .. {:.2} V",
         s.from_rpm(),
         s.to_rpm(),
         m.rise_time_s,
         m.overshoot_pct,
         m.settling_time_s,
-        rpm(m.final_error_rad_s),
+        explain::fixed(rpm(m.final_error_rad_s), 2),
         tr.command_v.iter().cloned().fold(f64::INFINITY, f64::min),
         tr.command_v
             .iter()
@@ -594,13 +595,13 @@ fn print_disturbance(r: &DisturbanceStudy) {
     say!("{}", describe_loop(&r.lp));
     say!(
         "load step {} N*m at {:.0} rpm: largest drop {:.0} rpm, back within 1 % after {:.3} s, \
-        mean error over the last 10 % {:.2} rpm; without control the speed settles {:.0} rpm \
+        mean error over the last 10 % {} rpm; without control the speed settles {:.0} rpm \
         lower",
         s.load_step_nm(),
         s.rpm(),
         rpm(d.max_drop_rad_s),
         d.recovery_time_s,
-        rpm(d.final_error_rad_s),
+        explain::fixed(rpm(d.final_error_rad_s), 2),
         rpm(r.open_error_rad_s),
     );
 }
@@ -693,7 +694,7 @@ fn print_design_run(name: &str, run: &DesignRun, step_rpm: f64) {
         "{name}: kp {:.4} V/({} rpm), ki {:.4} V/({} rpm*s) [G(s) = ({:.4} s + {:.4})/s]; \
         crossover {:.3} rad/s ({:.3} Hz), phase margin {:.1} deg, gain margin {:.1} dB; \
         simulated +{:.0} rpm step: overshoot {:.1} %, rise {:.3} s, settling {:.3} s, mean \
-        error over the last 10 % {:.2} rpm",
+        error over the last 10 % {} rpm",
         pi.kp,
         pi.speed_unit_rpm,
         pi.ki,
@@ -708,7 +709,7 @@ fn print_design_run(name: &str, run: &DesignRun, step_rpm: f64) {
         st.overshoot_pct,
         st.rise_time_s,
         st.settling_time_s,
-        rpm(st.final_error_rad_s)
+        explain::fixed(rpm(st.final_error_rad_s), 2)
     );
 }
 

@@ -83,6 +83,7 @@ pub(crate) fn run_fmu(args: &ExportFmuArgs) -> Result<(), Failure> {
     }
     let done = vanefit::task::export_fmu(&vanefit::task::FmuOptions {
         fit: args.fit.clone(),
+        fit_text: None,
         out: args.out.clone(),
         binary: args.binary.clone(),
     })?;

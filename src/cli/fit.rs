@@ -436,6 +436,9 @@ fn print_goodness(out: &FitOutcome) {
             g.noise_ratio,
             g.noise_ratio_limit
         );
+        if let Some(warning) = report::dof_warning(g) {
+            eprintln!("warning: {warning}");
+        }
     }
     let likelihood = report::likelihood_chi2_summary(out);
     if let Some(line) = &likelihood {

@@ -169,6 +169,9 @@ pub(crate) fn run(args: &PredictArgs) -> Result<(), Failure> {
         .options()
         .and_then(|o| o.check(fit_atmosphere_pa(&fit)))
         .map_err(Failure::option)?;
+    for warning in settings.far_extrapolations(&fit) {
+        eprintln!("WARNING: {warning}");
+    }
     let bar = Progress::default();
     let prediction = predict_observed(&fit, &settings, &|what, done, total| {
         bar.tell(what, done, total)

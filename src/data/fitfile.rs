@@ -70,15 +70,15 @@ pub struct Starts {
     pub converged: usize,
 }
 
-/// Cost evaluations, wall time and threads of the run that made the fit.
+/// The work of the run that made the fit: its cost evaluations, which depend on the seed and
+/// the data only. The run's wall time and worker threads (one per core by default) are
+/// facts of the machine, not of the fit: they are printed, never written, so that a fit
+/// file is reproducible byte for byte. Older files also carry `wall_s` and `threads`;
+/// readers accept and ignore them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct RunInfo {
     /// Cost evaluations of the whole run.
     pub evaluations: u64,
-    /// Wall time, s.
-    pub wall_s: f64,
-    /// Worker threads.
-    pub threads: usize,
 }
 
 /// The joint uncertainty of the estimated parameters (`covariance` in the file): the
@@ -243,7 +243,7 @@ pub struct FitFile {
     pub starts: Option<Starts>,
     /// Seed of the start design.
     pub seed: Option<u64>,
-    /// Evaluations, wall time and threads of the fit.
+    /// The fit's cost evaluations.
     pub run: Option<RunInfo>,
     /// Terms outside the catalog (`model.discovered`, written by `vanefit diagnose`).
     pub extra: Vec<ExtraTerm>,
@@ -951,7 +951,7 @@ mod tests {
                 chi2: 12.5,
                 n_points: 10,
                 dof: 8,
-                chi2_per_dof: 12.5 / 8.0,
+                chi2_per_dof: Some(12.5 / 8.0),
                 noise_ratio: 1.1,
                 noise_ratio_limit: 1.3,
                 noise_reached: true,

@@ -114,10 +114,11 @@ pub struct GoodnessOfFit {
     pub chi2: f64,
     /// Compared points.
     pub n_points: usize,
-    /// Degrees of freedom, n − k.
-    pub dof: usize,
-    /// χ²/dof.
-    pub(crate) chi2_per_dof: f64,
+    /// Degrees of freedom, n − k: zero or negative when the fit estimates as many
+    /// parameters as it has rows or more (files written before this clamped it to ≥ 1).
+    pub dof: i64,
+    /// χ²/dof; `None` (`null` in the file) when dof ≤ 0, where it is undefined.
+    pub(crate) chi2_per_dof: Option<f64>,
     /// r: RMS residual over noise, channels averaged alike (eq. \[1\]).
     pub noise_ratio: f64,
     /// The largest r of a model that reaches the noise (eq. \[2\]).

@@ -44,6 +44,7 @@ use super::nuisance::{Nuisance, Nuisances};
 use super::reference::{Reference, ReferenceOptions};
 use crate::data::dataset::{Dataset, Kind};
 use crate::model::motor::Motor;
+use crate::model::spec::SizeLaw;
 use crate::numerics::DefaultSolver;
 use crate::units::Quantity;
 
@@ -77,15 +78,20 @@ impl ChannelTarget {
     }
 }
 
-/// Typical calibration tolerance (1σ) of a rig's sensor, SI: the zero offset a calibrated
-/// sensor may still carry. Flow meters 0.02 g/s (0.2% of a 10 g/s range), speed 2 rpm,
+/// Typical calibration tolerance (1σ) of a rig's sensor, SI, for a motor `size` times
+/// AR034-11's displacement: the zero offset a calibrated sensor may still carry. For the
+/// reference motor's rig: flow meters 0.02 g/s (0.2% of a 10 g/s range), speed 2 rpm,
 /// torque 2 mN·m (0.2% of a 1 N·m transducer), the supply-pressure sensor 2 kPa (0.2% of
-/// 1 MPa); `None` for quantities without one (time, the throttle's conductance setting).
-pub fn calibration_tolerance(q: Quantity) -> Option<f64> {
+/// 1 MPa). A rig sized to its motor has sensors ranged to what they measure, and a zero
+/// error that is the same share of the range: flows × s^⅔, speeds × s^{-⅓}, torques × s
+/// (`SizeLaw`); pressures do not change. `None` for quantities without one (time, the
+/// throttle's conductance setting).
+pub fn calibration_tolerance(q: Quantity, size: f64) -> Option<f64> {
+    let f = |k: f64| size.powf(k);
     match q {
-        Quantity::Flow1 | Quantity::Flow2 => Some(2e-5),
-        Quantity::Speed => Some(2.0 * std::f64::consts::PI / 60.0),
-        Quantity::Torque => Some(2e-3),
+        Quantity::Flow1 | Quantity::Flow2 => Some(2e-5 * f(SizeLaw::MASS_FLOW)),
+        Quantity::Speed => Some(2.0 * std::f64::consts::PI / 60.0 * f(SizeLaw::SPEED)),
+        Quantity::Torque => Some(2e-3 * f(SizeLaw::TORQUE)),
         Quantity::PPort1 => Some(2e3),
         _ => None,
     }
@@ -255,13 +261,14 @@ impl Target {
     }
 
     /// The same target with a constant offset of each compared sensor as a nuisance, with
-    /// the sensor's [`calibration_tolerance`] as prior σ (one per channel and recording).
-    pub(crate) fn with_offsets(self) -> Self {
+    /// the sensor's [`calibration_tolerance`] for a motor `size` times AR034-11's as prior σ
+    /// (one per channel and recording).
+    pub(crate) fn with_offsets(self, size: f64) -> Self {
         let n = self.n_points();
         let mut items = Vec::new();
         let mut start = 0;
         for c in &self.channels {
-            if let Some(tau) = calibration_tolerance(c.quantity).filter(|_| !c.stated) {
+            if let Some(tau) = calibration_tolerance(c.quantity, size).filter(|_| !c.stated) {
                 let mut shape = vec![0.0; n];
                 shape[start..start + c.rows.len()].fill(1.0);
                 items.push(Nuisance {

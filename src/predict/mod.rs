@@ -372,7 +372,7 @@ pub fn predict_with(
         value: shown[i],
         band95: bands.as_ref().map(|b| b[i]),
     };
-    let tolerance = calibration_tolerance(Quantity::PPort1).unwrap_or(0.0);
+    let tolerance = calibration_tolerance(Quantity::PPort1, 1.0).unwrap_or(0.0);
     let range = fit.conditions.and_then(|c| c.p_supply_range_pa);
     let stride = N_ROW + N_FACTORS + N_CURVE * options.curve_points;
     let pressures = centre

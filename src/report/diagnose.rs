@@ -533,7 +533,37 @@ fn selected(md: &mut String, d: &Diagnosis) {
                     .join(", ")
             }
         );
+        let _ = writeln!(md, "{}\n", extended_without_intervals(d));
     }
+}
+
+/// What the extended model's values are not: they carry no intervals (the diagnosis fits
+/// every candidate model to compare them, and profiling each would multiply its time), and
+/// how to get them: a fit with the selected catalog effects switched on, which profiles
+/// like any fit (discovered terms outside the catalog are not refitted that way).
+fn extended_without_intervals(d: &Diagnosis) -> String {
+    let effects = d.extended.fitted.effects.ids();
+    let refit = if effects.is_empty() {
+        "the discovered terms are outside the catalog, so no `vanefit fit` refits them; their \
+         values are point estimates"
+            .to_string()
+    } else {
+        format!(
+            "for 95 % intervals, refit with the effects switched on: `vanefit fit <dataset> \
+             --effects {} --out <fit.json>`{}",
+            effects.join(","),
+            if d.extended.fitted.extra.is_empty() {
+                ""
+            } else {
+                " (without the discovered terms, which no fit of the catalog carries)"
+            }
+        )
+    };
+    format!(
+        "The extended model's values (`extended.json`) are the best fit of the model and carry \
+         no intervals: the diagnosis fits every candidate model to compare them, and profiling \
+         each would multiply its time; {refit}."
+    )
 }
 
 /// Writes `diagnosis.json`, `extended.json` (the extended model's fit file), `report.md`

@@ -82,9 +82,32 @@ pub fn value(name: &str, v: f64, digits: usize) -> String {
     }
 }
 
+/// `v` with `decimals` decimals, never a negative zero: a value that rounds to zero prints
+/// as `0.00`, not `-0.00` (a mean error of −0.001 rpm is no error to the shown precision).
+pub fn fixed(v: f64, decimals: usize) -> String {
+    let text = format!("{v:.decimals$}");
+    match text.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+        _ => text,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What rounds to zero loses its sign; what does not keeps it.
+    #[test]
+    fn fixed_never_prints_a_negative_zero() {
+        assert_eq!(fixed(-0.001, 2), "0.00");
+        assert_eq!(fixed(-0.0, 2), "0.00");
+        assert_eq!(fixed(-0.004999, 2), "0.00");
+        assert_eq!(fixed(-0.006, 2), "-0.01");
+        assert_eq!(fixed(0.004, 2), "0.00");
+        assert_eq!(fixed(-12.5, 1), "-12.5");
+        assert_eq!(fixed(-0.2, 0), "0");
+        assert_eq!(fixed(f64::NAN, 2), "NaN");
+    }
 
     #[test]
     fn numbers_are_short_and_conductances_come_in_both_units() {

@@ -161,14 +161,12 @@ pub fn markdown(
     };
     let _ = writeln!(
         md,
-        "{} starts (seed {seed}, {} converged to the best minimum), {} evaluations, {:.1} s on \
-         {} thread(s); {effects}. The estimate is the maximum of the likelihood of the recorded \
-         rows, reached from the best start; intervals by {}.\n",
+        "{} starts (seed {seed}, {} converged to the best minimum), {} evaluations; {effects}. \
+         The estimate is the maximum of the likelihood of the recorded rows, reached from the \
+         best start; intervals by {}.\n",
         run.results.len(),
         run.converged(),
         out.evaluations,
-        out.wall_s,
-        run.threads,
         out.method.id()
     );
     if let Some(g) = ds.gear() {
@@ -205,12 +203,13 @@ pub fn markdown(
     if !out.nuisances.is_empty() {
         let _ = writeln!(
             md,
-            "## Systematic errors at the estimate\n\nSensor offsets (in the sensor's SI unit) \
-             and the supply-pressure sensor's offset (Pa), profiled out within their \
-             calibration tolerances:\n\n| offset | value (SI) |\n|---|---|"
+            "## Systematic errors at the estimate\n\nSensor offsets and the supply-pressure \
+             sensor's offset, profiled out within their calibration tolerances (each in the \
+             unit people read that sensor in):\n\n| offset | value | unit |\n|---|---|---|"
         );
         for (k, v) in &out.nuisances {
-            let _ = writeln!(md, "| {k} | {} |", number(*v, 4));
+            let (value, unit) = offset_in_reading_unit(k, *v);
+            let _ = writeln!(md, "| {k} | {} | {unit} |", number(value, 4));
         }
         let _ = writeln!(md);
     }
@@ -252,12 +251,32 @@ pub fn bound_warnings(out: &FitOutcome) -> Vec<String> {
 }
 
 /// χ² of a fit as the terminal and the report name it: `chi2 X over N rows, chi2/dof Y
-/// (dof D)`, the rows against the data's own noise (docs/model.md, "χ² and χ²/dof").
+/// (dof D)`, the rows against the data's own noise (docs/model.md, "χ² and χ²/dof");
+/// `chi2/dof undefined (dof D ≤ 0)` when there are no more rows than estimated parameters.
 pub fn chi2_summary(g: &crate::estimate::fit::goodness::GoodnessOfFit) -> String {
-    format!(
-        "chi2 {:.1} over {} rows, chi2/dof {:.3} (dof {})",
-        g.chi2, g.n_points, g.chi2_per_dof, g.dof
-    )
+    match g.chi2_per_dof {
+        Some(r) => format!(
+            "chi2 {:.1} over {} rows, chi2/dof {r:.3} (dof {})",
+            g.chi2, g.n_points, g.dof
+        ),
+        None => format!(
+            "chi2 {:.1} over {} rows, chi2/dof undefined (dof {} ≤ 0)",
+            g.chi2, g.n_points, g.dof
+        ),
+    }
+}
+
+/// The warning of a fit with no degrees of freedom left (dof = n − k ≤ 0): χ²/dof is
+/// undefined and a small χ² says nothing about the model; `None` when dof > 0.
+pub fn dof_warning(g: &crate::estimate::fit::goodness::GoodnessOfFit) -> Option<String> {
+    (g.dof <= 0).then(|| {
+        let k = g.n_points as i64 - g.dof;
+        format!(
+            "{} rows for {k} estimated parameters (dof {} ≤ 0): chi2/dof is undefined and a \
+             small chi2 does not show that the model fits; the data cannot test it",
+            g.n_points, g.dof
+        )
+    })
 }
 
 /// The likelihood χ² of a fit (what the estimate minimises), named apart from χ², with the
@@ -302,6 +321,9 @@ fn goodness_section(md: &mut String, out: &FitOutcome) {
             g.noise_ratio_limit,
             chi2_summary(g)
         );
+    }
+    if let Some(warning) = out.goodness.as_ref().and_then(dof_warning) {
+        let _ = writeln!(md, "* **warning:** {warning}");
     }
     let likelihood = likelihood_chi2_summary(out);
     if let Some(line) = &likelihood {
@@ -360,13 +382,26 @@ fn parameter_section(md: &mut String, rows: &[ParamRow]) {
     let _ = writeln!(md);
 }
 
+/// The fitted motor's curves at a catalogue page's supply pressure, from standstill to the
+/// free speed, with their 95 % bands (computed by the task layer with `predict`; the
+/// report only draws them over the page's points).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PageCurve {
+    /// The page's file (as rig.toml names the experiment).
+    pub file: String,
+    /// Torque, power and air against speed, SI.
+    pub points: Vec<crate::predict::CurvePoint>,
+}
+
 /// Every plot of a fit, written next to its fit file `out` (`<stem>.waterfall.svg`,
 /// `.parameters.svg`, `.profiles.svg`, one overlay per experiment): the paths written.
+/// `page_curves`: the model over each catalogue page's whole speed range.
 pub(crate) fn plots(
     dataset: &Dataset,
     cost: &CostModel,
     space: &ParamSpace,
     outcome: &FitOutcome,
+    page_curves: &[PageCurve],
     out: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let results = &outcome.run.results;
@@ -389,6 +424,7 @@ pub(crate) fn plots(
         dataset,
         cost,
         &[("fit", fit)],
+        page_curves,
         &out.with_extension(""),
     )?);
     Ok(written)
@@ -517,11 +553,14 @@ pub(crate) fn parameters_across_starts(
 }
 
 /// One figure per experiment: for each channel, the recorded data, the reference polynomial
-/// and one or more simulations, in the recording's units. Returns the files written.
+/// and one or more simulations, in the recording's units; a catalogue page's channel
+/// against speed with its model curve over the whole speed range and the curve's 95 % band
+/// (`page_curves`) instead of the fit at the page's speeds only. Returns the files written.
 pub(crate) fn overlays(
     ds: &Dataset,
     cost: &CostModel,
     runs: &[(&str, &[ChannelResiduals])],
+    page_curves: &[PageCurve],
     prefix: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let mut written = Vec::new();
@@ -547,7 +586,16 @@ pub(crate) fn overlays(
             if ax.log10 {
                 chart = chart.log_x();
             }
-            chart = with_simulations(chart, runs, &ex.file, reference, p_atm);
+            let curve = page_curves
+                .iter()
+                .find(|c| c.file == ex.file)
+                .and_then(|c| model_curve(c, reference, p_atm));
+            chart = with_simulations(chart, runs, &ex.file, reference, p_atm, curve.is_none());
+            if let Some((line, band)) = curve {
+                chart = chart
+                    .with(Series::line("fit (model)", line))
+                    .with(Series::line("fit's 95 % band", band));
+            }
             panels.push(chart);
             residuals.push(residual_panel(
                 runs,
@@ -574,14 +622,58 @@ pub(crate) fn overlays(
     Ok(written)
 }
 
+/// A series' (x, y) points in the chart's units.
+type Points = Vec<(f64, f64)>;
+
+/// The model curve of a page's channel `reference` against speed, in the channel's units,
+/// and its 95 % band as one closed outline (the lower edge out, the upper edge back);
+/// `None` for a channel the curve does not hold or an abscissa other than speed.
+fn model_curve(
+    curve: &PageCurve,
+    reference: &ChannelReference,
+    p_atm: f64,
+) -> Option<(Points, Points)> {
+    use crate::predict::CurvePoint;
+    use crate::units::Quantity;
+    let ax = &reference.abscissa;
+    if ax.quantity != Quantity::Speed || ax.log10 {
+        return None;
+    }
+    let of: fn(&CurvePoint) -> &crate::predict::Banded = match reference.quantity {
+        Quantity::Torque => |p| &p.torque_nm,
+        Quantity::Power => |p| &p.power_w,
+        Quantity::Flow1 => |p| &p.air_kg_s,
+        _ => return None,
+    };
+    let at = |p: &CurvePoint, y: f64| {
+        (
+            ax.display(p.speed_rad_s, p_atm),
+            reference.display(y, p_atm),
+        )
+    };
+    let line = curve.points.iter().map(|p| at(p, of(p).value)).collect();
+    let edge = |side: usize| {
+        curve
+            .points
+            .iter()
+            .filter_map(move |p| of(p).band95.map(|b| at(p, b[side])))
+    };
+    let band: Vec<(f64, f64)> = edge(0)
+        .chain(edge(1).collect::<Vec<_>>().into_iter().rev())
+        .collect();
+    Some((line, band))
+}
+
 /// Adds to `chart` the reference polynomial (once) and each model's simulation of the
-/// channel `reference` of experiment `file`, sorted along the abscissa.
+/// channel `reference` of experiment `file`, sorted along the abscissa (`fit_lines`: also
+/// the simulations through several points, else only single-point markers).
 fn with_simulations(
     mut chart: Chart,
     runs: &[(&str, &[ChannelResiduals])],
     file: &str,
     reference: &ChannelReference,
     p_atm: f64,
+    fit_lines: bool,
 ) -> Chart {
     let ax = &reference.abscissa;
     for (k, (name, res)) in runs.iter().enumerate() {
@@ -611,6 +703,9 @@ fn with_simulations(
                 .map(|(x, m, _)| (ax.display(*x, p_atm), reference.display(*m, p_atm)))
                 .collect();
             chart = chart.with(Series::line("reference polynomial", line));
+        }
+        if !fit_lines {
+            continue;
         }
         let line = pairs
             .iter()
@@ -689,6 +784,32 @@ fn column_label(column: &str) -> String {
     }
 }
 
+/// A sensor offset (SI, labelled `<file> <quantity prefix> offset` or `supply pressure
+/// sensor offset`) in the unit people read that sensor in: speed in rpm, flows in g/s,
+/// torque in N·m, pressures in kPa (an offset is a difference: absolute and gauge alike).
+/// An unknown label keeps its SI value and says so.
+fn offset_in_reading_unit(label: &str, v_si: f64) -> (f64, &'static str) {
+    use crate::units::{Quantity, Unit};
+    let quantity = if label.starts_with("supply pressure") {
+        Some(Quantity::PPort1)
+    } else {
+        let prefix = label
+            .strip_suffix(" offset")
+            .and_then(|l| l.rsplit(' ').next());
+        Quantity::ALL
+            .into_iter()
+            .find(|q| Some(q.prefix()) == prefix)
+    };
+    let unit = match quantity {
+        Some(Quantity::Speed) => Unit::Rpm,
+        Some(Quantity::Flow1 | Quantity::Flow2) => Unit::GS,
+        Some(Quantity::PPort1 | Quantity::PPort2) => return (v_si * 1e-3, "kPa"),
+        Some(q) => q.si_unit(),
+        None => return (v_si, "SI"),
+    };
+    (unit.from_si(v_si, 0.0), unit.symbol())
+}
+
 /// A column's quantity in words (`p_port1_mpa` → "port 1 pressure"), for panel titles.
 fn quantity_words(column: &str) -> String {
     crate::units::parse_column(column)
@@ -747,10 +868,38 @@ mod tests {
         assert_eq!(lines.len(), 7);
     }
 
+    /// Each sensor offset of the report's table carries its own unit: rpm for speed
+    /// (1 rad/s = 30/π rpm), g/s for flows, N·m for torque, kPa for the supply pressure.
+    #[test]
+    fn offsets_are_given_each_in_its_unit() {
+        let (v, u) = offset_in_reading_unit("ramp.csv speed offset", 0.01444);
+        assert_eq!(u, "rpm");
+        assert!((v - 0.01444 * 30.0 / std::f64::consts::PI).abs() < 1e-12);
+        let (v, u) = offset_in_reading_unit("ramp.csv flow1 offset", 1.029e-6);
+        assert_eq!(u, "g/s");
+        assert!((v - 1.029e-3).abs() < 1e-15);
+        assert_eq!(
+            offset_in_reading_unit("datasheet.csv torque offset", -3.6e-4),
+            (-3.6e-4, "N·m")
+        );
+        let (v, u) = offset_in_reading_unit("supply pressure sensor offset", -147.9);
+        assert_eq!(u, "kPa");
+        assert!((v + 0.1479).abs() < 1e-12);
+    }
+
     /// Overlay axes name the quantity and its unit, not the raw column.
     #[test]
     fn axes_name_quantity_and_unit() {
-        assert_eq!(column_label("p_port1_mpa"), "port 1 pressure [MPa]");
+        assert_eq!(column_label("p_port1_mpa"), "port 1 pressure [MPa abs]");
+        assert_eq!(column_label("p_port1_bar_g"), "port 1 pressure [bar(g)]");
+        // Every pressure unit an axis can carry says absolute or gauge.
+        for u in crate::units::Quantity::PPort1.units() {
+            let s = u.symbol();
+            assert!(
+                s.ends_with(" abs") || s.ends_with("(a)") || s.ends_with("(g)"),
+                "{s}"
+            );
+        }
         assert_eq!(column_label("torque_nm"), "torque [N·m]");
         assert_eq!(
             column_label("air_l_min_anr"),
@@ -767,6 +916,49 @@ mod tests {
             axis_label(&ax),
             "port 2 nozzle conductance [m³/(s·Pa)] (log scale)"
         );
+    }
+
+    /// A page's model curve is drawn over the whole speed range it was computed on (from
+    /// standstill to the free speed, in rpm), not at the page's speeds only, with its band as
+    /// one outline: the lower edge out, the upper edge back.
+    #[test]
+    fn a_page_curve_spans_the_whole_speed_range_with_its_band() {
+        use crate::predict::{Banded, CurvePoint};
+        let free_rad_s = 2000.0;
+        let n = 11;
+        let points: Vec<CurvePoint> = (0..n)
+            .map(|k| {
+                let w = free_rad_s * k as f64 / (n - 1) as f64;
+                let t = 0.2 * (1.0 - w / free_rad_s);
+                let banded = |v: f64| Banded {
+                    value: v,
+                    band95: Some([v - 0.01, v + 0.01]),
+                };
+                CurvePoint {
+                    speed_rad_s: w,
+                    torque_nm: banded(t),
+                    power_w: banded(t * w),
+                    air_kg_s: banded(1e-3),
+                }
+            })
+            .collect();
+        let curve = PageCurve {
+            file: "page.csv".into(),
+            points,
+        };
+        // The page's points lie in the middle of the range only.
+        let reference = torque_reference(
+            &[5000.0, 7000.0, 9000.0, 11000.0],
+            &[0.15, 0.13, 0.11, 0.09],
+        );
+        let (line, band) = model_curve(&curve, &reference, 1e5).unwrap();
+        assert_eq!(line.len(), n);
+        assert_eq!(line[0], (0.0, 0.2));
+        let free_rpm = free_rad_s * 30.0 / std::f64::consts::PI;
+        assert!((line[n - 1].0 - free_rpm).abs() < 1e-9 && line[n - 1].1.abs() < 1e-12);
+        assert_eq!(band.len(), 2 * n);
+        assert!((band[0].1 - 0.19).abs() < 1e-12 && (band[2 * n - 1].1 - 0.21).abs() < 1e-12);
+        assert!((band[n - 1].0 - free_rpm).abs() < 1e-9 && (band[n].0 - free_rpm).abs() < 1e-9);
     }
 
     /// A torque channel of a catalogue page against speed, its reference fitted to `y`.
@@ -847,7 +1039,14 @@ mod tests {
         let reference = torque_reference(&[100.0, 200.0, 300.0, 400.0], &[0.3, 0.2, 0.1, 0.0]);
         let fit = vec![channel_residuals(&reference, vec![1], vec![0.21])];
         let one = [("fit", fit.as_slice())];
-        let chart = with_simulations(Chart::new("t", "x", "y"), &one, "page.csv", &reference, 1e5);
+        let chart = with_simulations(
+            Chart::new("t", "x", "y"),
+            &one,
+            "page.csv",
+            &reference,
+            1e5,
+            true,
+        );
         assert_eq!(chart.series.len(), 1);
         assert_eq!(chart.series[0].name, "fit");
         assert_eq!(chart.series[0].style, Style::Marker);
@@ -867,6 +1066,7 @@ mod tests {
             "page.csv",
             &reference,
             1e5,
+            true,
         );
         let styles: Vec<_> = chart
             .series

@@ -131,6 +131,9 @@ pub struct Chart {
     /// Names of the categories at x = 1, 2, … (a fleet's motors), written as the x tick
     /// labels instead of numbers; empty for a numeric x axis.
     pub(crate) x_names: Vec<String>,
+    /// The index into [`COLOURS`] of each series, set by a [`Figure`] so that a series
+    /// keeps one colour in every panel; empty (or short): the series' position.
+    pub(crate) colours: Vec<usize>,
 }
 
 /// Why a chart could not be drawn.
@@ -304,9 +307,14 @@ impl Chart {
             .map(|(k, s)| Entry {
                 name: &s.name,
                 style: s.style,
-                colour: COLOURS[k % COLOURS.len()],
+                colour: self.colour(k),
             })
             .collect()
+    }
+
+    /// The colour of the `k`-th series.
+    fn colour(&self, k: usize) -> RGBColor {
+        COLOURS[self.colours.get(k).copied().unwrap_or(k) % COLOURS.len()]
     }
 
     /// The room (width, height) the legend takes beside or below the chart, pixels.
@@ -398,8 +406,54 @@ impl Figure {
         self.render().map(|(svg, _)| svg)
     }
 
+    /// The panels with one colour per series name throughout the figure: a name takes the
+    /// colour it had in the first panel that showed it; a name not seen before keeps its
+    /// position's colour unless a series seen before holds that colour in the same panel,
+    /// and then takes the first colour neither used in the panel nor held by another name
+    /// (else the first free in the panel). (A single chart, or panels whose names do not
+    /// recur at other positions, keep their positions' colours.)
+    fn shared_colours(&self) -> Vec<Chart> {
+        let mut known: Vec<(String, usize)> = Vec::new();
+        let mut panels = self.panels.clone();
+        for chart in &mut panels {
+            let seen = |name: &str, known: &[(String, usize)]| {
+                known
+                    .iter()
+                    .find(|(n, _)| !n.is_empty() && n == name)
+                    .map(|(_, c)| *c)
+            };
+            let fixed: Vec<Option<usize>> =
+                chart.series.iter().map(|s| seen(&s.name, &known)).collect();
+            let mut taken: Vec<usize> = fixed.iter().flatten().copied().collect();
+            let mut colours = Vec::with_capacity(fixed.len());
+            for (k, (s, c)) in chart.series.iter().zip(&fixed).enumerate() {
+                let c = c.unwrap_or_else(|| {
+                    let c = if taken.contains(&(k % COLOURS.len())) {
+                        let owned = |c: &usize| known.iter().any(|(_, o)| o == c);
+                        let free = |c: &usize| !taken.contains(c);
+                        (0..COLOURS.len())
+                            .find(|c| free(c) && !owned(c))
+                            .or_else(|| (0..COLOURS.len()).find(free))
+                            .unwrap_or(k % COLOURS.len())
+                    } else {
+                        k % COLOURS.len()
+                    };
+                    taken.push(c);
+                    if !s.name.is_empty() {
+                        known.push((s.name.clone(), c));
+                    }
+                    c
+                });
+                colours.push(c);
+            }
+            chart.colours = colours;
+        }
+        panels
+    }
+
     /// The SVG and, per panel, where its plotting area and legend ended up.
     fn render(&self) -> Result<(String, Vec<PanelGeometry>), PlotError> {
+        let panels = self.shared_colours();
         let cols = self.columns.max(1).min(self.panels.len().max(1));
         let rows = self.panels.len().div_ceil(cols).max(1);
         let (mut widths, mut heights) = (vec![PANEL_W; cols], vec![PANEL_H; rows]);
@@ -415,7 +469,7 @@ impl Figure {
             let size = (widths.iter().sum::<u32>(), heights.iter().sum::<u32>());
             let root = SVGBackend::with_string(&mut buf, size).into_drawing_area();
             root.fill(&WHITE).map_err(err)?;
-            for (i, chart) in self.panels.iter().enumerate() {
+            for (i, chart) in panels.iter().enumerate() {
                 let (c, r) = (i % cols, i / cols);
                 let cell = root.clone().shrink(
                     (offset(&widths, c), offset(&heights, r)),
@@ -706,7 +760,7 @@ where
         .draw()
         .map_err(err)?;
     for (k, s) in chart.series.iter().enumerate() {
-        let colour = COLOURS[k % COLOURS.len()];
+        let colour = chart.colour(k);
         for run in visible_runs(chart, s) {
             draw_run(&mut cc, s.style, run, colour)?;
         }
@@ -783,6 +837,48 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A series keeps one colour in every panel of a figure (design.svg: "designed" and
+    /// the paper's gains in the open-loop panels and in the step, where the set-point comes
+    /// first), and the colours that the SVG draws are those.
+    #[test]
+    fn a_series_keeps_its_colour_across_panels() {
+        let line = |n: &str| Series::line(n, vec![(1.0, 1.0), (2.0, 2.0)]);
+        let panel = |names: &[&str]| {
+            names
+                .iter()
+                .fold(Chart::new("p", "x", "y"), |c, n| c.with(line(n)))
+        };
+        let figure = Figure::new(
+            vec![
+                panel(&["designed", "paper", "1"]),
+                panel(&["designed", "paper"]),
+                panel(&["set-point", "designed", "paper"]),
+                panel(&["other", "more"]),
+            ],
+            2,
+        );
+        let colours: Vec<Vec<usize>> = figure
+            .shared_colours()
+            .iter()
+            .map(|c| c.colours.clone())
+            .collect();
+        // designed 0 and paper 1 throughout; the set-point takes a colour no other name
+        // holds (not the "1" line's 2); panels of new names keep their positions' colours.
+        assert_eq!(
+            colours,
+            [vec![0, 1, 2], vec![0, 1], vec![3, 0, 1], vec![0, 1]]
+        );
+        let svg = figure.to_svg().unwrap();
+        let hex = |c: RGBColor| format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2);
+        assert!(
+            svg.contains(&hex(COLOURS[3])),
+            "the set-point's colour is drawn"
+        );
+        // A lone chart: the positions' colours, as before.
+        let lone = Figure::new(vec![panel(&["a", "b", "c"])], 1).shared_colours();
+        assert_eq!(lone[0].colours, [0, 1, 2]);
+    }
 
     /// Named categories (a fleet's motors) label the x axis by name, not by number.
     #[test]

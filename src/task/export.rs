@@ -123,6 +123,9 @@ pub fn petab_problem(fit_path: &Path, dataset: Option<&Path>) -> Result<PetabPro
 pub struct FmuOptions {
     /// The fit file (vanefit.fit/1).
     pub fit: PathBuf,
+    /// The fit file's text when the fit is held in memory (the Python package's `Fit`):
+    /// packed instead of the file's, `fit` then only names it in messages.
+    pub fit_text: Option<String>,
     /// The FMU to write.
     pub out: PathBuf,
     /// The shared library built from the `fmu/` crate.
@@ -141,10 +144,13 @@ pub struct FmuExport {
 /// Writes the FMU of a fit (docs/fmu.md): refuses an effect it cannot represent, finds the
 /// shared library, packs description, library and fit (temporary file, then rename).
 pub fn export_fmu(opts: &FmuOptions) -> Result<FmuExport, crate::export::fmu::FmuError> {
-    use crate::export::fmu::package::{find_binary, write_fmu, BINARY_ENV};
+    use crate::export::fmu::package::{find_binary, write_fmu, write_fmu_of, BINARY_ENV};
     // The fit is read and checked before the library is looked for: a fit the FMU cannot
     // represent is the more useful message.
-    let fit = FitFile::read(&opts.fit)?;
+    let fit = match &opts.fit_text {
+        Some(text) => FitFile::parse(&opts.fit, text)?,
+        None => FitFile::read(&opts.fit)?,
+    };
     crate::export::fmu::variables::model_parameters(&fit)?;
     let binary = match &opts.binary {
         Some(b) => find_binary(Some(b.clone()), None)?,
@@ -154,6 +160,9 @@ pub fn export_fmu(opts: &FmuOptions) -> Result<FmuExport, crate::export::fmu::Fm
             find_binary(env, exe.as_deref())?
         }
     };
-    let summary = write_fmu(&opts.fit, &binary, &opts.out)?;
+    let summary = match &opts.fit_text {
+        Some(text) => write_fmu_of(&opts.fit, text.as_bytes(), &binary, &opts.out)?,
+        None => write_fmu(&opts.fit, &binary, &opts.out)?,
+    };
     Ok(FmuExport { binary, summary })
 }

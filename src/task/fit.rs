@@ -4,7 +4,7 @@
 //! a fleet, so both give the same fit for a seed.
 
 use super::{Opt, OptionError};
-use crate::data::dataset::{DataError, Dataset, FIGURES};
+use crate::data::dataset::{DataError, Dataset, Kind, FIGURES};
 use crate::data::fitfile::FitFile;
 use crate::estimate::engine::Engine;
 use crate::estimate::error::EstimateError;
@@ -22,6 +22,7 @@ use crate::estimate::optimize::settings::MultiStartConfig;
 use crate::estimate::problem::space::SpaceError;
 use crate::io::side_path;
 use crate::model::effects::EffectSet;
+use crate::model::params::ParamId;
 use crate::objective::cost::{CostError, CostOptions};
 use crate::predict::{PredictOptions, ROW_FIGURES};
 use crate::report::fit as report;
@@ -251,6 +252,22 @@ pub fn unprinted_figures(ds: &Dataset) -> Vec<(&'static str, &'static str)> {
         .collect()
 }
 
+/// The experiment that would pin each open parameter, said once: a page fit prints its
+/// pinning (`most_sensitive_experiment` at the nominal motor) before it fits, and the fit's
+/// report repeats that answer rather than a second one at the fitted motor, where the
+/// ranking of two nearly equal experiments can flip. Parameters the pinning does not name
+/// keep the fit's answer.
+fn one_would_pin(would_pin: &mut [(ParamId, Kind)], pinning: &[Pinning]) {
+    for p in pinning {
+        let (Some(id), Some(kind)) = (ParamId::from_name(&p.name), p.pinned_by) else {
+            continue;
+        };
+        if let Some(entry) = would_pin.iter_mut().find(|(i, _)| *i == id) {
+            entry.1 = kind;
+        }
+    }
+}
+
 /// The pinning as the command line prints it: a heading, then one line per parameter
 /// (relative 1σ, and estimated or the value it stays fixed at and what would pin it).
 pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
@@ -438,7 +455,10 @@ pub(crate) fn fit_dataset<O: FitObserver>(
         results_file,
         resume: o.resume,
     };
-    let outcome = estimate_fit(engine, &data, &setup, observer)?;
+    let mut outcome = estimate_fit(engine, &data, &setup, observer)?;
+    if let Some(c) = &choice {
+        one_would_pin(&mut outcome.would_pin, &c.pinning);
+    }
     let mut file = fit_file(&ds.name, &setup, &outcome, o.seed);
     // The parameters are the motor shaft's; the gearbox says how the pages' shaft relates.
     file.gear = ds.gear();
@@ -523,6 +543,38 @@ fn printed_shaft(gear: Option<&crate::model::gear::Gear>, q: Quantity, motor_si:
     }
 }
 
+/// Points of a page's model curve in the fit's plot: as many as `predict`'s default curve
+/// twice over, so that the curve is smooth between the page's points.
+const PAGE_CURVE_POINTS: usize = 2 * crate::predict::DEFAULT_CURVE_POINTS - 1;
+
+/// The fitted motor over each catalogue page's whole speed range (standstill to the free
+/// speed) at the page's supply pressure, with the 95 % bands of `predict` (the fit file's
+/// covariance): what the fit's plot draws over the page's points. A page without a stated
+/// supply pressure, or one the prediction fails at, gets none (its plot then shows the fit
+/// at the page's speeds).
+fn page_curves(run: &Fit) -> Vec<report::PageCurve> {
+    use crate::predict::{predict, PredictOptions};
+    run.dataset
+        .experiments
+        .iter()
+        .filter(|ex| ex.kind == Kind::Catalogue)
+        .filter_map(|ex| {
+            let mut options = PredictOptions::new(run.dataset.p_atm_pa);
+            options.pressures_pa = vec![ex.p_supply_pa?];
+            options.curve_points = PAGE_CURVE_POINTS;
+            let at = predict(&run.file, &options)
+                .ok()?
+                .pressures
+                .into_iter()
+                .next()?;
+            Some(report::PageCurve {
+                file: ex.file.clone(),
+                points: at.curve,
+            })
+        })
+        .collect()
+}
+
 /// The files a fit left next to its fit file.
 #[derive(Debug, Clone, Default)]
 pub struct FitWritten {
@@ -549,6 +601,7 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
             &run.data.cost,
             &run.setup.space,
             &run.outcome,
+            &page_curves(run),
             out,
         )?;
     }
@@ -563,4 +616,45 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
     crate::io::write_atomic(&md, text.as_bytes()).map_err(write_error(&md))?;
     written.report = md;
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pinning(name: &str, by: Option<Kind>) -> Pinning {
+        Pinning {
+            name: name.into(),
+            relative_sd: 0.25,
+            pinned: false,
+            value: 0.5,
+            pinned_by: by,
+            prior_factor: Some(1.6),
+        }
+    }
+
+    /// A page fit that printed "the outlet_throttle experiment would pin b_crit" before
+    /// fitting says the same of b_crit after it, though the fitted motor ranks the pressure
+    /// ramp first; a parameter the pinning says nothing of keeps the fit's answer, and one
+    /// the fit pinned gets no hint.
+    #[test]
+    fn the_fit_repeats_the_pinnings_experiment() {
+        let mut would_pin = vec![
+            (ParamId::B_CRIT, Kind::PressureRamp),
+            (ParamId::C_12, Kind::Datasheet),
+        ];
+        let said = [
+            pinning("b_crit", Some(Kind::OutletThrottle)),
+            pinning("c_12", None),
+            pinning("visc", Some(Kind::OutletThrottle)),
+        ];
+        one_would_pin(&mut would_pin, &said);
+        assert_eq!(
+            would_pin,
+            vec![
+                (ParamId::B_CRIT, Kind::OutletThrottle),
+                (ParamId::C_12, Kind::Datasheet),
+            ]
+        );
+    }
 }

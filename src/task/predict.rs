@@ -257,7 +257,55 @@ pub struct PredictSettings {
     sampling: SamplingOptions,
 }
 
+/// How far beyond the supply pressures a fit covered a prediction is still an
+/// extrapolation worth reading: a factor of 2 on the absolute supply pressure either way. The
+/// model's flows scale with the absolute upstream pressure (choked ISO 6358 nozzles) and its
+/// torque with the chamber pressures, so at twice the highest fitted absolute pressure the
+/// forces on vanes and seals, the flows through the leak gaps and the friction load are
+/// twice what the fit ever saw: its leakage and friction laws are then a guess, and the 95 %
+/// bands (the parameters' uncertainty only) say nothing of that. The factor also keeps a
+/// catalogue page at 6.3 bar g predicting over the makers' own range of correction factors
+/// (3 to 7 bar g, ≈ 0.55 to 1.1 of 7.3 bar a) without the warning.
+pub const FAR_EXTRAPOLATION_FACTOR: f64 = 2.0;
+
+/// A pressure for a warning: two decimals, no trailing zeros.
+fn round2(v: f64) -> String {
+    let t = format!("{v:.2}");
+    t.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 impl PredictSettings {
+    /// Warnings, one per asked supply pressure (Pa absolute) that lies more than
+    /// [`FAR_EXTRAPOLATION_FACTOR`] beyond the absolute supply pressures `fit` covered
+    /// (`conditions.p_supply_range_pa`; none when the fit file does not say), in the unit of
+    /// the tables. The usual `*` marks every pressure outside the range; these are far
+    /// outside it.
+    pub fn far_extrapolations(&self, fit: &FitFile) -> Vec<String> {
+        let Some([lo, hi]) = fit.conditions.and_then(|c| c.p_supply_range_pa) else {
+            return Vec::new();
+        };
+        let f = FAR_EXTRAPOLATION_FACTOR;
+        let (lo_far, hi_far) = (lo / f, hi * f);
+        let d = &self.display;
+        let unit = d.label();
+        self.options
+            .pressures_pa
+            .iter()
+            .filter(|p| **p < lo_far || **p > hi_far)
+            .map(|p| {
+                format!(
+                    "--pressures {} {unit} ({:.3} MPa absolute) is far outside the supply pressures the fit covered ({} to {} {unit}): the prediction holds to within a factor of {f} on the absolute supply pressure ({} to {} {unit}), because beyond it the leakage and friction laws work at forces and flows the fit never saw and the 95 % bands do not include that; do not use these rows",
+                    d.text(*p),
+                    p * 1e-6,
+                    round2(d.value(lo)),
+                    round2(d.value(hi)),
+                    round2(d.value(lo_far)),
+                    round2(d.value(hi_far)),
+                )
+            })
+            .collect()
+    }
+
     /// The prediction layer's options (pressures in Pa absolute).
     pub fn engine_options(&self) -> &crate::predict::PredictOptions {
         &self.options

@@ -277,14 +277,14 @@ pub const UNITS: [UnitFacts; 32] = {
             Factor(1e-3 * RHO0_KG_M3 / 60.0), "ISO 8778 (ANR: 20 °C, 100 kPa, 65 % RH), ρ0 = 1.185 kg/m³ of ISO 6358"), ANR),
         flow(u(Unit::LSAnr, "l_s_anr", "l/s ANR", &["anr_l_s", "nl_s_anr"],
             Factor(1e-3 * RHO0_KG_M3), "ISO 8778 (ANR: 20 °C, 100 kPa, 65 % RH), ρ0 = 1.185 kg/m³ of ISO 6358"), ANR),
-        u(Unit::Mpa, "mpa", "MPa", &[], Decimal(6), SI),
+        u(Unit::Mpa, "mpa", "MPa abs", &[], Decimal(6), SI),
         u(Unit::BarAbs, "bar_abs", "bar(a)", &["bar_a", "bara"], Decimal(5),
             "1 bar = 100 kPa (SI Brochure, 9th ed., table 8)"),
         // "barg", and German "bar(ü)" (Überdruck, DIN 1314).
         u(Unit::BarG, "bar_g", "bar(g)", &["barg", "bar_ü", "barü", "bar_ue"], Gauge(1e5),
             "1 bar = 100 kPa (SI Brochure, table 8); gauge: above the rig's atmosphere (DIN 1314: Überdruck)"),
-        u(Unit::Pa, "pa", "Pa", &[], Decimal(0), SI),
-        u(Unit::Kpa, "kpa", "kPa", &[], Decimal(3), SI),
+        u(Unit::Pa, "pa", "Pa abs", &[], Decimal(0), SI),
+        u(Unit::Kpa, "kpa", "kPa abs", &[], Decimal(3), SI),
         u(Unit::M3SPa, "m3_s_pa", "m³/(s·Pa)", &[], Decimal(0), SI),
         // 1 dm³/(s·bar) = 1e-3 m³/s per 1e5 Pa.
         u(Unit::Dm3SBar, "dm3_s_bar", "dm³/(s·bar)", &[], Decimal(-8),
@@ -351,7 +351,8 @@ impl Unit {
     }
 
     /// The unit as people write it, for axis titles and messages (`N·m`, `bar(g)`,
-    /// `l/min ANR`).
+    /// `l/min ANR`); a pressure unit says whether it is absolute or gauge (`MPa abs`,
+    /// `bar(g)`).
     pub fn symbol(self) -> &'static str {
         self.facts().symbol
     }

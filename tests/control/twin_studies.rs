@@ -62,6 +62,7 @@ fn write_truth(m: TwinMotor, seed: u64) -> (TwinMotor, tempfile::TempDir, PathBu
 fn motor_options(params: &std::path::Path) -> MotorOptions {
     MotorOptions {
         params: Some(params.to_path_buf()),
+        params_text: None,
         effects: None,
         brake_nm_s_rad: Some(BRAKE),
     }

@@ -114,6 +114,12 @@ fn uncatalogued_torque_is_discovered_and_modelled() {
     let path = dir.path().join("extended.json");
     let file = vanefit::data::FitFile::read(&path).unwrap();
     assert_eq!(file.extra, d.extended.fitted.extra);
+    // Its values carry no intervals (the file says none), and the report says so and why.
+    assert!(file.ci95.is_empty() && file.statistics.is_none());
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    for needle in ["carry no intervals", "outside the catalog"] {
+        assert!(report.contains(needle), "{needle}:\n{report}");
+    }
 }
 
 /// The table for the README (every case, the command line's settings).

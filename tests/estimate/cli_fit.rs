@@ -141,6 +141,69 @@ fn short_fit_exports_a_fit_that_simulate_reads_back_and_resume_reproduces() {
     assert_eq!(torn["parameters"], doc["parameters"]);
 }
 
+/// A rerun leaves a clean clone clean: the fit file and its report hold no wall time and no
+/// thread count (facts of the machine, printed only), so two runs of the same fit on
+/// different thread counts write them byte for byte alike; a file that does carry the old
+/// `run.wall_s` and `run.threads` is still read.
+#[test]
+fn a_fit_file_and_its_report_are_reproducible_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |sub: &str, threads: &str| {
+        let folder = dir.path().join(sub);
+        std::fs::create_dir(&folder).unwrap();
+        let fit = folder.join("short.json");
+        let o = vanefit(&[
+            "fit",
+            DATASET,
+            "--starts",
+            "3",
+            "--max-iters",
+            "40",
+            "--uncertainty",
+            "none",
+            "--no-plots",
+            "--threads",
+            threads,
+            "--out",
+            fit.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let printed = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(
+            printed.contains(&format!(" s on {threads} thread(s)")),
+            "the run's time and threads are printed:\n{printed}"
+        );
+        let json = std::fs::read(&fit).unwrap();
+        let report = std::fs::read(folder.join("short.report.md")).unwrap();
+        (fit, json, report)
+    };
+    let (fit, json_1, report_1) = run("one", "1");
+    let (_, json_2, report_2) = run("two", "2");
+    assert!(json_1 == json_2, "fit files differ between reruns");
+    assert!(report_1 == report_2, "reports differ between reruns");
+    let doc: serde_json::Value = serde_json::from_slice(&json_1).unwrap();
+    let run_keys: Vec<&String> = doc["run"].as_object().unwrap().keys().collect();
+    assert_eq!(run_keys, ["evaluations"]);
+    let report = String::from_utf8(report_1).unwrap();
+    assert!(!report.contains("thread"), "{report}");
+
+    // An older file with the wall time and threads still reads.
+    let mut old = doc.clone();
+    old["run"]["wall_s"] = 1.38.into();
+    old["run"]["threads"] = 2.into();
+    std::fs::write(&fit, serde_json::to_string_pretty(&old).unwrap()).unwrap();
+    let sim = dir.path().join("sim");
+    let o = vanefit(&[
+        "simulate",
+        DATASET,
+        "--params",
+        fit.to_str().unwrap(),
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 #[test]
 fn bad_options_name_the_option_and_exit_1() {
     let dir = tempfile::tempdir().unwrap();

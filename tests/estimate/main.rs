@@ -8,6 +8,7 @@ mod cli_fit;
 mod common;
 mod coverage;
 mod every_size;
+mod export_fmu;
 mod export_petab;
 mod fit_likelihood;
 mod multistart;

@@ -376,3 +376,47 @@ fn delta_bands_agree_with_monte_carlo_on_the_shipped_fit() {
         .fold(1.0f64, |m, r| m.max(r));
     assert!(changed > 1.2, "{changed}");
 }
+
+/// A supply pressure ten times the fitted ones is not just marked `*`: predict warns loudly
+/// (stderr, once per such pressure, naming it, the covered range and the sane one, a factor
+/// of 2 on the absolute supply pressure), and says nothing of one inside that factor.
+#[test]
+fn a_pressure_far_beyond_the_fit_is_warned_about_loudly() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = fit_with_conditions(dir.path());
+    let doc: Value = serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    let p_atm = doc["conditions"]["p_atm_pa"].as_f64().unwrap();
+    let hi = doc["conditions"]["p_supply_range_pa"][1].as_f64().unwrap();
+    // Just inside and far outside twice the highest absolute supply pressure, in bar g.
+    let inside = ((2.0 * hi - p_atm) / 1e5 - 0.1).to_string();
+    let far = "60";
+    let out = dir.path().join("out");
+    let run = vanefit(&[
+        "predict",
+        fit.to_str().unwrap(),
+        "--pressures",
+        &format!("6,{inside},{far}"),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("WARNING"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    let limit = format!("{:.2}", (2.0 * hi - p_atm) / 1e5);
+    let limit = limit.trim_end_matches('0').trim_end_matches('.');
+    for needle in ["--pressures 60 bar g", "factor of 2", limit] {
+        assert!(
+            warnings[0].contains(needle),
+            "{needle} missing: {}",
+            warnings[0]
+        );
+    }
+}

@@ -82,6 +82,9 @@ pub(crate) fn step_window(
 pub struct MotorOptions {
     /// Fit file (`--params`, vanefit.fit/1); `None`: the default motor.
     pub params: Option<PathBuf>,
+    /// The fit file's text when the fit is held in memory (the Python package's `Fit`):
+    /// read instead of the file, `params` (if any) then only names it in messages.
+    pub params_text: Option<String>,
     /// Effects to switch on (`--effects`, comma-separated ids), overriding the fit file's.
     pub effects: Option<String>,
     /// Eddy-current brake on the shaft (`--brake-nm-s-rad`), N·m·s/rad; `None`: the study's
@@ -94,11 +97,16 @@ impl MotorOptions {
     /// motor as in `simulate`. `default_brake_nm_s_rad` is the study's brake when
     /// `--brake-nm-s-rad` is not given (0: no load).
     pub fn check(&self, default_brake_nm_s_rad: f64) -> Result<Plant, ControlError> {
-        let (params, mut effects, extra, gear) = match &self.params {
-            Some(p) => {
-                let f = FitFile::read(p)?;
-                (f.params, f.effects, f.extra, f.gear)
+        let fit = match (&self.params, &self.params_text) {
+            (p, Some(text)) => {
+                let name = p.clone().unwrap_or_else(|| PathBuf::from("<fit>"));
+                Some(FitFile::parse(&name, text)?)
             }
+            (Some(p), None) => Some(FitFile::read(p)?),
+            (None, None) => None,
+        };
+        let (params, mut effects, extra, gear) = match fit {
+            Some(f) => (f.params, f.effects, f.extra, f.gear),
             None => (MotorParams::default(), EffectSet::empty(), Vec::new(), None),
         };
         if let Some(list) = &self.effects {

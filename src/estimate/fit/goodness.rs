@@ -53,7 +53,9 @@ impl GoodnessOfFit {
     pub fn new(channels: &[ChannelChi2], k: usize) -> Self {
         let n_points: usize = channels.iter().map(|c| c.n).sum();
         let chi2: f64 = channels.iter().map(|c| c.chi2).sum();
-        let dof = n_points.saturating_sub(k).max(1);
+        // n − k, not clamped: with as many estimated parameters as rows or more, χ²/dof is
+        // undefined (the data cannot test the model), and says so.
+        let dof = n_points as i64 - k as i64;
         let used: Vec<&ChannelChi2> = channels.iter().filter(|c| c.n > 0).collect();
         let c = used.len().max(1) as f64;
         let r2 = used.iter().map(|ch| ch.chi2 / ch.n as f64).sum::<f64>() / c;
@@ -63,7 +65,7 @@ impl GoodnessOfFit {
             chi2,
             n_points,
             dof,
-            chi2_per_dof: chi2 / dof as f64,
+            chi2_per_dof: (dof > 0).then(|| chi2 / dof as f64),
             noise_ratio: r2.sqrt(),
             noise_ratio_limit: limit2.sqrt(),
             noise_reached: r2 <= limit2,
@@ -142,6 +144,27 @@ mod tests {
         }
     }
 
+    /// Four rows and eleven estimated parameters leave dof = 4 − 11 = −7: χ²/dof is
+    /// undefined (not χ²/1 from a dof clamped to 1), the summary says so and warns.
+    #[test]
+    fn no_degrees_of_freedom_leave_chi2_per_dof_undefined() {
+        let g = GoodnessOfFit::new(&[ch(0.272, 4)], 11);
+        assert_eq!(g.dof, -7);
+        assert_eq!(g.chi2_per_dof, None);
+        let line = crate::report::fit::chi2_summary(&g);
+        assert!(line.contains("chi2/dof undefined (dof -7 ≤ 0)"), "{line}");
+        let warning = crate::report::fit::dof_warning(&g).expect("a warning");
+        assert!(
+            warning.contains("4 rows for 11 estimated parameters"),
+            "{warning}"
+        );
+        let exact = GoodnessOfFit::new(&[ch(0.5, 11)], 11);
+        assert_eq!((exact.dof, exact.chi2_per_dof), (0, None));
+        let one = GoodnessOfFit::new(&[ch(0.5, 12)], 11);
+        assert_eq!((one.dof, one.chi2_per_dof), (1, Some(0.5)));
+        assert!(crate::report::fit::dof_warning(&one).is_none());
+    }
+
     /// A model at the noise scores r ≈ 1 and passes; a channel twice as far off fails,
     /// and the intervals widen by the ratio.
     #[test]
@@ -151,6 +174,7 @@ mod tests {
         assert!(ok.noise_reached);
         assert_eq!(ok.interval_scale, 1.0);
         assert_eq!(ok.dof, 1267);
+        assert_eq!(ok.chi2_per_dof, Some(1275.0 / 1267.0));
         let limit2 = 1.0 + 3.09 * (5.89f64 / 25.0 + 5.89 / 600.0 + 5.89 / 650.0).sqrt() / 3.0;
         assert!((ok.noise_ratio_limit - limit2.sqrt()).abs() < 1e-12);
         let bad = GoodnessOfFit::new(&[ch(100.0, 25), ch(600.0, 600), ch(650.0, 650)], 8);

@@ -607,8 +607,6 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
         seed: Some(seed),
         run: Some(RunInfo {
             evaluations: out.evaluations,
-            wall_s: out.wall_s,
-            threads: out.run.threads,
         }),
         extra: Vec::new(),
         gear: None,

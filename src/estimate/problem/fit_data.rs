@@ -43,8 +43,10 @@ impl FitData {
         let (smooth_ds, inputs) = smooth_inputs(ds);
         let smoothed = CostModel::new(&smooth_ds, options)?;
         let gear_ln_sd = ds.gear().map_or(0.0, |g| g.efficiency_ln_sd);
+        // The sensors' calibration tolerances follow the rig, which follows the motor's size.
+        let size = ds.nominal_params().map_or(1.0, |p| p.size());
         let target = Target::new(&smoothed, &smooth_ds)?
-            .with_offsets()
+            .with_offsets(size)
             .with_gear_efficiency(gear_ln_sd);
         let raised = match raise_supply(&smooth_ds) {
             Some(ds) => Some(CostModel::new(&ds, options)?),
@@ -85,7 +87,8 @@ impl FitData {
             .zip(up.iter().flatten())
             .map(|(a, b)| (b - a) / PRESSURE_STEP_PA)
             .collect();
-        let tau = calibration_tolerance(Quantity::PPort1).unwrap_or(PRESSURE_STEP_PA);
+        // A pressure sensor's tolerance does not depend on the motor's size.
+        let tau = calibration_tolerance(Quantity::PPort1, 1.0).unwrap_or(PRESSURE_STEP_PA);
         self.target.clone().with_nuisances(vec![Nuisance {
             label: "supply pressure sensor offset".into(),
             prior_sd: tau,

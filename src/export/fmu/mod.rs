@@ -13,7 +13,7 @@ pub(crate) mod runtime;
 pub(crate) mod units;
 pub(crate) mod variables;
 
-pub use package::{find_binary, write_fmu, FmuSummary};
+pub use package::{find_binary, write_fmu, write_fmu_of, FmuSummary};
 pub use runtime::{Inputs, MotorFmu, RuntimeError};
 pub use variables::vr;
 
@@ -38,12 +38,14 @@ pub enum FmuError {
     #[error(transparent)]
     FitFile(#[from] crate::data::fitfile::FitFileError),
     /// The FMU's shared library is not where it was looked for.
-    #[error("the FMU binary {name} was not found (looked at {tried}); build it with `cargo build --release -p vanefit-fmu` or name it with {env}")]
+    #[error("the FMU binary {name} was not found (looked at {tried}); build it with `cargo build --release` in {tree} (it builds the vanefit-fmu crate beside vanefit), or name it with --binary or {env}")]
     NoBinary {
         /// Its file name.
         name: String,
         /// Where it was looked for.
         tried: String,
+        /// The source tree vanefit was compiled from.
+        tree: &'static str,
         /// The environment variable that names it.
         env: &'static str,
     },

@@ -8,6 +8,11 @@ use crate::control::rpm;
 use crate::control::study::design::{DesignRun, DesignStudy};
 use crate::report::plot::{Chart, Figure, Legend, Series};
 
+/// The legend names of the two controllers, the same in every panel of `design.svg` (the
+/// figure then gives each one colour throughout).
+const DESIGNED: &str = "designed";
+const PAPER: &str = "paper gains (0.85 s + 4)/s";
+
 /// Writes the tables and the figure of `design`.
 pub fn write(w: &mut Writer, r: &DesignStudy) -> Result<(), ControlReportError> {
     let (d, p) = (&r.designed, &r.paper);
@@ -70,20 +75,14 @@ fn figure(r: &DesignStudy) -> Figure {
     let mag = Chart::new("Open loop |L| = |C P|", "f [Hz]", "|L|")
         .log_x()
         .log_y()
-        .with(Series::line("designed", pairs(f, &norms(&d.open_loop))))
-        .with(Series::line(
-            "paper (0.85 s + 4)/s",
-            pairs(f, &norms(&p.open_loop)),
-        ))
+        .with(Series::line(DESIGNED, pairs(f, &norms(&d.open_loop))))
+        .with(Series::line(PAPER, pairs(f, &norms(&p.open_loop))))
         .with(Series::line("1", vec![(f[0], 1.0), (f[f.len() - 1], 1.0)]));
     let ph = Chart::new("Open loop phase", "f [Hz]", "phase [deg]")
         .log_x()
         .legend(Legend::Right)
-        .with(Series::line("designed", pairs(f, &d.open_loop_phase_deg)))
-        .with(Series::line(
-            "paper (0.85 s + 4)/s",
-            pairs(f, &p.open_loop_phase_deg),
-        ));
+        .with(Series::line(DESIGNED, pairs(f, &d.open_loop_phase_deg)))
+        .with(Series::line(PAPER, pairs(f, &p.open_loop_phase_deg)));
     let xy = |tr: &Trace, v: &[f64]| {
         tr.t_s
             .iter()
@@ -101,10 +100,7 @@ fn figure(r: &DesignStudy) -> Figure {
         "set-point",
         xy(&d.trace, &d.trace.setpoint_rad_s),
     ))
-    .with(Series::line("designed", xy(&d.trace, &d.trace.speed_rad_s)))
-    .with(Series::line(
-        "paper gains",
-        xy(&p.trace, &p.trace.speed_rad_s),
-    ));
+    .with(Series::line(DESIGNED, xy(&d.trace, &d.trace.speed_rad_s)))
+    .with(Series::line(PAPER, xy(&p.trace, &p.trace.speed_rad_s)));
     Figure::new(vec![mag, ph, step], 2)
 }
