@@ -92,7 +92,7 @@ fn fit_case(seed: u64, v_disp_m3: f64, starts: &str, dir: &Path) -> Result<Fitte
         "--starts",
         starts,
     ];
-    run(&args)?;
+    let stdout = run(&args)?;
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&fit).map_err(|e| e.to_string())?)
             .map_err(|e| e.to_string())?;
@@ -136,7 +136,7 @@ fn fit_case(seed: u64, v_disp_m3: f64, starts: &str, dir: &Path) -> Result<Fitte
         noise_ratio: json["statistics"]["noise_ratio"]
             .as_f64()
             .unwrap_or(f64::NAN),
-        wall_s: json["run"]["wall_s"].as_f64().unwrap_or(f64::NAN),
+        wall_s: crate::common::fit_wall_s(&fit, &stdout).unwrap_or(f64::NAN),
     })
 }
 

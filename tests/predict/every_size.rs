@@ -147,15 +147,9 @@ fn try_evaluate(
         }
         checks.push(f);
     }
-    Ok(Outcome::Judged(checks, unevaluable, fit_wall_s(&fit)))
+    Ok(Outcome::Judged(checks, unevaluable, crate::common::fit_wall_s(&fit, &fit_out)))
 }
 
-/// The fit's own wall time (`run.wall_s` of the fit file), s.
-pub(crate) fn fit_wall_s(fit: &Path) -> Option<f64> {
-    let text = std::fs::read_to_string(fit).ok()?;
-    let json: serde_json::Value = serde_json::from_str(&text).ok()?;
-    json["run"]["wall_s"].as_f64()
-}
 
 /// What the pages of one size band and style gave.
 #[derive(Debug, Default)]

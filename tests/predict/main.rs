@@ -3,6 +3,9 @@
 //! independent twin ([`twin_catalogue`]).
 
 mod catalogue_predict;
+#[path = "../common/mod.rs"]
+#[allow(dead_code)] // this binary uses only the fit-time reader
+mod common;
 mod every_size;
 mod geared;
 mod page_coverage;
