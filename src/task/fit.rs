@@ -275,7 +275,9 @@ pub fn pinning_lines(limit_pct: f64, rows: &[Pinning]) -> Vec<String> {
         "catalogue only: what it pins down at the nominal motor (relative 1σ; pinned: ≤ {limit_pct:.0} %)"
     )];
     for p in rows {
-        let sd = if p.relative_sd.is_finite() {
+        // Beyond ×/÷ e^10 the pages do not see the parameter at all: a finite σ that large is
+        // the rounding of a zero sensitivity, not a width.
+        let sd = if p.relative_sd.is_finite() && p.relative_sd < UNSEEN_RELATIVE_SD {
             format!("{:.1} %", 100.0 * p.relative_sd)
         } else {
             "unseen".to_string()
@@ -531,6 +533,9 @@ pub fn figures_outside_bands(ds: &Dataset, file: &FitFile) -> Vec<String> {
     }
     out
 }
+
+/// Relative 1σ above which the pinning says a parameter is unseen (e^10 ≈ ×/÷ 22 000).
+const UNSEEN_RELATIVE_SD: f64 = 10.0;
 
 /// A figure held at the motor shaft (SI) back at the shaft its page printed it for: a
 /// gearbox's output shaft (`model::gear`), or the motor's own without one.
