@@ -4,7 +4,6 @@
 
 mod catalogue_predict;
 #[path = "../common/mod.rs"]
-#[allow(dead_code)] // this binary uses only the fit-time reader
 mod common;
 mod every_size;
 mod geared;
