@@ -59,34 +59,8 @@ from ._api import (  # noqa: F401
     __version__,
 )
 
-__all__ = [
-    "Dataset",
-    "Fit",
-    "FitStatistics",
-    "Diagnosis",
-    "Prediction",
-    "StudyResult",
-    "Likelihood",
-    "chain_diagnostics",
-    "DataError",
-    "ParameterError",
-    "VanefitError",
-    "load_dataset",
-    "default_parameters",
-    "read_fit",
-    "simulate",
-    "cost",
-    "fit",
-    "likelihood",
-    "export_petab",
-    "export_fmu",
-    "diagnose",
-    "predict",
-    "control",
-    "CONTROL_STUDIES",
-    "synth",
-    "__version__",
-]
+# One list of the public names, the implementation's.
+from ._api import __all__  # noqa: E402,F401
 
 # Submodules; each imports its optional dependency (matplotlib, petab, pypesto) only when
 # one of its functions is called.
