@@ -147,9 +147,12 @@ fn try_evaluate(
         }
         checks.push(f);
     }
-    Ok(Outcome::Judged(checks, unevaluable, crate::common::fit_wall_s(&fit, &fit_out)))
+    Ok(Outcome::Judged(
+        checks,
+        unevaluable,
+        crate::common::fit_wall_s(&fit, &fit_out),
+    ))
 }
-
 
 /// What the pages of one size band and style gave.
 #[derive(Debug, Default)]
