@@ -51,7 +51,7 @@ pub struct Gear {
 
 impl Gear {
     /// The gearbox of ratio `ratio` with the printed efficiency `efficiency`, or without
-    /// one the prior's: [`STAGE_EFFICIENCY`]^n with σ(ln η) = n·[`STAGE_LN_SD`] for its
+    /// one the prior's: `STAGE_EFFICIENCY`^n with σ(ln η) = n·`STAGE_LN_SD` for its
     /// n = ⌈log₁₀ G⌉ stages (of 1/G for a step-up; none at G = 1, which is no gearbox:
     /// η = 1 exactly). The stages of one gearbox share their make and lubrication, so
     /// their errors add rather than average.

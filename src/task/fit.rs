@@ -375,7 +375,7 @@ pub struct Fit {
     /// (the fit then estimates `v_disp` with the rest; its interval is the fit file's).
     pub displacement: Option<DisplacementEstimate>,
     /// For catalogue pages: a warning per printed figure outside the fit's 95 % band at its
-    /// page's pressure ([`figures_outside_bands`]).
+    /// page's pressure (`figures_outside_bands`).
     pub figure_warnings: Vec<String>,
 }
 

@@ -276,7 +276,7 @@ fn round2(v: f64) -> String {
 
 impl PredictSettings {
     /// Warnings, one per asked supply pressure (Pa absolute) that lies more than
-    /// [`FAR_EXTRAPOLATION_FACTOR`] beyond the absolute supply pressures `fit` covered
+    /// `FAR_EXTRAPOLATION_FACTOR` beyond the absolute supply pressures `fit` covered
     /// (`conditions.p_supply_range_pa`; none when the fit file does not say), in the unit of
     /// the tables. The usual `*` marks every pressure outside the range; these are far
     /// outside it.

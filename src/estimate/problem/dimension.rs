@@ -168,7 +168,7 @@ impl Dimension {
         logit(self.unit(v).clamp(1e-9, 1.0 - 1e-9))
     }
 
-    /// The bound that a value `v` sits on (within [`ON_BOUND_SHARE`] of the span), and the
+    /// The bound that a value `v` sits on (within `ON_BOUND_SHARE` of the span), and the
     /// bound's value, SI; `None` inside.
     pub fn bound_reached(&self, v: f64) -> Option<(BoundSide, f64)> {
         let u = self.unit(v);

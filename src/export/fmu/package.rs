@@ -72,7 +72,7 @@ pub fn binary_candidates(exe: Option<&Path>, cargo_target_dir: Option<&Path>) ->
 }
 
 /// The shared library: `$VANEFIT_FMU_BINARY` when set (it must exist), else the newest
-/// `libvanefit_fmu.so` among [`binary_candidates`] (with `$CARGO_TARGET_DIR`). The newest,
+/// `libvanefit_fmu.so` among `binary_candidates` (with `$CARGO_TARGET_DIR`). The newest,
 /// because `cargo build` and `cargo test` each update only their own copy.
 pub fn find_binary(env_value: Option<PathBuf>, exe: Option<&Path>) -> Result<PathBuf, FmuError> {
     let candidates: Vec<PathBuf> = match env_value {
