@@ -115,7 +115,7 @@ impl From<String> for Failure {
 
 /// Runs vanefit; Err((exit code, message)).
 fn vanefit(args: &[&str]) -> Result<String, (Option<i32>, String)> {
-    let out = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+    let out = Command::new(crate::every_size::vanefit_bin())
         .args(args)
         .output()
         .map_err(|e| (None, e.to_string()))?;
