@@ -364,13 +364,20 @@ impl ParamUncertainty {
     }
 }
 
+/// Largest half-width of a linear band, relative to the figure, that is still propagated in
+/// log space (a factor e² ≈ 7.4 either side): beyond it the figure is not resolved from 0.
+const LOG_BAND_MAX_RELATIVE: f64 = 2.0;
+
 /// The 95 % band of a figure y with delta-method half-width `half` (1.96·√Var y): for a
 /// positive figure propagated in log space, y·exp(∓half/y) (Var ln y = Var y/y² to first
 /// order), so that a positive quantity keeps a positive band and the band's ends are the
 /// same factor either side of y, as the parameters' log-normal spread makes them; a
-/// figure ≤ 0 (a torque past free speed) keeps the linear y ∓ half.
+/// figure ≤ 0 (a torque past free speed) keeps the linear y ∓ half, and so does one whose
+/// band reaches more than [`LOG_BAND_MAX_RELATIVE`] times itself: the fit does not tell it
+/// from zero (a curve's torque next to the free speed, whose sign the parameters' spread
+/// can change), and its log-space factor e^(half/y) would grow without bound as y → 0.
 fn log_band(y: f64, half: f64) -> [f64; 2] {
-    if y > 0.0 {
+    if y > 0.0 && half <= LOG_BAND_MAX_RELATIVE * y {
         let f = (half / y).exp();
         [y / f, y * f]
     } else {
@@ -523,6 +530,11 @@ mod tests {
         );
         // A figure ≤ 0 keeps the linear band.
         assert_eq!(log_band(-1.0, 0.5), [-1.5, -0.5]);
+        // So does a positive one that the band does not tell from zero (a torque next to
+        // the free speed): no factor e^(half/y) that overflows as y → 0.
+        assert_eq!(log_band(1e-6, 0.5), [1e-6 - 0.5, 1e-6 + 0.5]);
+        let [lo, hi] = log_band(1.0, 1.9);
+        assert!(lo > 0.0 && (hi * lo - 1.0).abs() < 1e-12, "{lo} {hi}");
     }
 
     #[test]

@@ -559,6 +559,13 @@ const PAGE_CURVE_POINTS: usize = 2 * crate::predict::DEFAULT_CURVE_POINTS - 1;
 /// at the page's speeds).
 fn page_curves(run: &Fit) -> Vec<report::PageCurve> {
     use crate::predict::{predict, PredictOptions};
+    // The plot holds a geared page's points at the motor shaft (where the fit compares
+    // them), so its model curve is the motor shaft's too, not the output's that `predict`
+    // gives a geared fit.
+    let motor_shaft = crate::data::fitfile::FitFile {
+        gear: None,
+        ..run.file.clone()
+    };
     run.dataset
         .experiments
         .iter()
@@ -567,7 +574,7 @@ fn page_curves(run: &Fit) -> Vec<report::PageCurve> {
             let mut options = PredictOptions::new(run.dataset.p_atm_pa);
             options.pressures_pa = vec![ex.p_supply_pa?];
             options.curve_points = PAGE_CURVE_POINTS;
-            let at = predict(&run.file, &options)
+            let at = predict(&motor_shaft, &options)
                 .ok()?
                 .pressures
                 .into_iter()
