@@ -534,6 +534,24 @@ pub struct Dataset {
     pub experiments: Vec<ExperimentData>,
 }
 
+#[cfg(test)]
+impl Dataset {
+    /// A dataset held in memory (no folder) of `experiments` under the default motor table
+    /// and the standard atmosphere: for tests that synthesise their recordings.
+    pub(crate) fn in_memory(experiments: Vec<ExperimentData>) -> Self {
+        Self {
+            dir: std::path::PathBuf::from("mem"),
+            name: "mem".into(),
+            synthetic: true,
+            description: None,
+            motor: MotorSection::default(),
+            p_atm_pa: crate::units::constants::P_ATM_PA,
+            temperature_k: crate::units::constants::T0_K,
+            experiments,
+        }
+    }
+}
+
 impl Dataset {
     /// The rig's nominal motor: defaults, overridden by what `[motor]` gives (its volumes,
     /// or its geometry through paper eqs. 1–7).

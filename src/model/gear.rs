@@ -27,6 +27,8 @@
 //! 10:1). Its spread enters the fit as a nuisance gain on the page's torques and powers
 //! (`objective::likelihood`), so the fit's intervals, and `predict`'s bands, hold it.
 
+use crate::units::Quantity;
+
 /// The largest reduction of one planetary stage: a ratio G takes ⌈log₁₀ G⌉ stages.
 pub const STAGE_RATIO_MAX: f64 = 10.0;
 
@@ -115,6 +117,29 @@ impl Gear {
     /// Motor power P_out/η of output power `p_out_w`, W.
     pub fn motor_power(&self, p_out_w: f64) -> f64 {
         p_out_w / self.efficiency
+    }
+
+    /// A value of quantity `q` at the motor shaft moved to the output shaft: speeds,
+    /// torques and powers by [`Gear::output_speed`], [`Gear::output_torque`] and
+    /// [`Gear::output_power`]; every other quantity (air, pressures) is the same on both.
+    pub fn to_output_shaft(&self, q: Quantity, motor_si: f64) -> f64 {
+        match q {
+            Quantity::Speed => self.output_speed(motor_si),
+            Quantity::Torque => self.output_torque(motor_si),
+            Quantity::Power => self.output_power(motor_si),
+            _ => motor_si,
+        }
+    }
+
+    /// A value of quantity `q` at the output shaft moved to the motor shaft (the inverse of
+    /// [`Gear::to_output_shaft`]).
+    pub fn to_motor_shaft(&self, q: Quantity, output_si: f64) -> f64 {
+        match q {
+            Quantity::Speed => self.motor_speed(output_si),
+            Quantity::Torque => self.motor_torque(output_si),
+            Quantity::Power => self.motor_power(output_si),
+            _ => output_si,
+        }
     }
 
     /// One line for people: "gearbox 4:1, efficiency 0.9025 (prior, 2 stages, 95 % 0.82–0.99)".

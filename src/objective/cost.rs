@@ -471,19 +471,9 @@ mod tests {
     use crate::model::effects::EffectSet;
     use crate::model::params::MotorParams;
     use crate::numerics::DefaultSolver;
-    use std::path::PathBuf;
 
     fn dataset(experiments: Vec<crate::data::dataset::ExperimentData>) -> Dataset {
-        Dataset {
-            dir: PathBuf::from("mem"),
-            name: "mem".into(),
-            synthetic: true,
-            description: None,
-            motor: crate::data::dataset::MotorSection::default(),
-            p_atm_pa: crate::units::constants::P_ATM_PA,
-            temperature_k: crate::units::constants::T0_K,
-            experiments,
-        }
+        Dataset::in_memory(experiments)
     }
 
     /// A short plan so that the tests stay fast.

@@ -27,7 +27,7 @@ use crate::objective::cost::{CostError, CostOptions};
 use crate::predict::{PredictOptions, ROW_FIGURES};
 use crate::report::fit as report;
 use crate::report::plot::PlotError;
-use crate::units::{Quantity, Unit};
+use crate::units::Unit;
 use std::path::{Path, PathBuf};
 
 /// Options of a fit as given (unchecked); [`FitOptions::check`] makes them [`FitSettings`].
@@ -516,7 +516,11 @@ pub fn figures_outside_bands(ds: &Dataset, file: &FitFile) -> Vec<String> {
             };
             // The bands are the shaft's the page printed (a gearbox's output); the figures
             // were read onto the motor shaft.
-            if (lo..=hi).contains(&printed_shaft(file.gear.as_ref(), f.quantity, f.si)) {
+            let printed_si = file
+                .gear
+                .as_ref()
+                .map_or(f.si, |g| g.to_output_shaft(f.quantity, f.si));
+            if (lo..=hi).contains(&printed_si) {
                 continue;
             }
             let shown = |v: f64| crate::report::explain::number(f.unit.from_si(v, ds.p_atm_pa), 4);
@@ -536,17 +540,6 @@ pub fn figures_outside_bands(ds: &Dataset, file: &FitFile) -> Vec<String> {
 
 /// Relative 1σ above which the pinning says a parameter is unseen (e^10 ≈ ×/÷ 22 000).
 const UNSEEN_RELATIVE_SD: f64 = 10.0;
-
-/// A figure held at the motor shaft (SI) back at the shaft its page printed it for: a
-/// gearbox's output shaft (`model::gear`), or the motor's own without one.
-fn printed_shaft(gear: Option<&crate::model::gear::Gear>, q: Quantity, motor_si: f64) -> f64 {
-    match (gear, q) {
-        (Some(g), Quantity::Speed) => g.output_speed(motor_si),
-        (Some(g), Quantity::Torque) => g.output_torque(motor_si),
-        (Some(g), Quantity::Power) => g.output_power(motor_si),
-        _ => motor_si,
-    }
-}
 
 /// Points of a page's model curve in the fit's plot: as many as `predict`'s default curve
 /// twice over, so that the curve is smooth between the page's points.

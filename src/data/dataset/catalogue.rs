@@ -767,18 +767,14 @@ pub(super) fn to_motor_shaft(
     figures: &mut [Figure],
     gear: &crate::model::gear::Gear,
 ) {
-    let convert = |q: Quantity, v: f64| match q {
-        Quantity::Speed => gear.motor_speed(v),
-        Quantity::Torque => gear.motor_torque(v),
-        Quantity::Power => gear.motor_power(v),
-        _ => v,
-    };
     for col in &mut rec.columns {
         let q = col.quantity;
-        col.si.iter_mut().for_each(|v| *v = convert(q, *v));
+        col.si
+            .iter_mut()
+            .for_each(|v| *v = gear.to_motor_shaft(q, *v));
     }
     for f in figures {
-        f.si = convert(f.quantity, f.si);
+        f.si = gear.to_motor_shaft(f.quantity, f.si);
     }
 }
 

@@ -719,16 +719,7 @@ mod tests {
         };
         let solver = DefaultSolver::default();
         let experiments = synthesize(&motor, &solver, &plan, &SensorNoise::none(), 1).unwrap();
-        let ds = crate::data::dataset::Dataset {
-            dir: PathBuf::from("mem"),
-            name: "mem".into(),
-            synthetic: true,
-            description: None,
-            motor: crate::data::dataset::MotorSection::default(),
-            p_atm_pa: crate::units::constants::P_ATM_PA,
-            temperature_k: crate::units::constants::T0_K,
-            experiments,
-        };
+        let ds = crate::data::dataset::Dataset::in_memory(experiments);
         let cost = CostModel::new(&ds, crate::objective::cost::CostOptions::default()).unwrap();
         let space =
             ParamSpace::new(&["c_in1"], MotorParams::default(), EffectSet::empty()).unwrap();
