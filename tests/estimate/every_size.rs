@@ -17,7 +17,9 @@
 //!
 //! Knobs: `RIG_PER_BAND` (datasets per band, default 3), `RIG_STARTS` (`fit --starts`,
 //! default 4), `RIG_BANDS` (indices of [`SIZE_BANDS_CM3`], default all), `RIG_THREADS`
-//! (fits at once, default 2), `RIG_OUT` (default target/every-size-rigs.md), `VANEFIT_BIN`.
+//! (fits at once, default 2), `RIG_OUT` (default target/every-size-rigs.md), `RIG_DIR` (keep
+//! the datasets and fits there), `VANEFIT_BIN`. Under the tables, each parameter's errors in
+//! its fits' own σ (`z_table`): whether an estimate beyond 10 % is the noise's or a bias.
 
 use crate::twin;
 
@@ -29,6 +31,32 @@ use twin::sizes::{
     band_label, displacement_in_band, perturbed_motor_sized, scaled_rig_config, RIG_RANGE_CM3,
     SIZE_BANDS_CM3,
 };
+
+/// The normal quantile of a two-sided 95 % interval.
+const Z95: f64 = 1.959_963_984_540_054;
+
+/// Standard normal Φ(z) by the complementary error function (Numerical Recipes' `erfcc`,
+/// relative error < 1.2e-7).
+fn normal_cdf(z: f64) -> f64 {
+    let x = -z / std::f64::consts::SQRT_2;
+    let a = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * a);
+    let poly = [
+        -1.265_512_23,
+        1.000_023_68,
+        0.374_091_96,
+        0.096_784_18,
+        -0.186_288_06,
+        0.278_868_07,
+        -1.135_203_98,
+        1.488_515_87,
+        -0.822_152_23,
+        0.170_872_77,
+    ];
+    let horner = poly.iter().rev().fold(0.0, |acc, c| c + t * acc);
+    let r = t * (-a * a + horner).exp();
+    0.5 * if x >= 0.0 { r } else { 2.0 - r }
+}
 
 fn vanefit_bin() -> String {
     std::env::var("VANEFIT_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_vanefit").to_string())
@@ -55,6 +83,26 @@ impl Estimate {
     }
     fn error(&self) -> f64 {
         self.value / self.truth - 1.0
+    }
+    /// σ of ln v from the 95 % interval's end on the truth's side, ln(end/v)/1.96 (`None`
+    /// where that end is open).
+    fn sd_ln(&self) -> Option<f64> {
+        let end = if self.truth >= self.value {
+            self.hi
+        } else {
+            self.lo
+        }?;
+        (end > 0.0 && self.value > 0.0).then(|| (end / self.value).ln().abs() / Z95)
+    }
+    /// z = ln(v/truth)/σ: the error in the fit's own standard deviations.
+    fn z(&self) -> Option<f64> {
+        self.sd_ln().map(|sd| (self.value / self.truth).ln() / sd)
+    }
+    /// The probability that an estimate with this interval's σ (ln-normal around the truth)
+    /// errs by more than 10 % either way: Φ(ln 0.9/σ) + Φ(−ln 1.1/σ).
+    fn p_beyond_10pct(&self) -> Option<f64> {
+        self.sd_ln()
+            .map(|sd| normal_cdf(0.9f64.ln() / sd) + normal_cdf(-(1.1f64.ln()) / sd))
     }
     /// Within 1e-3 relative of a search bound.
     fn on_bound(&self) -> bool {
@@ -258,6 +306,39 @@ fn band_line(label: &str, fits: &[Fitted], failed: usize, reference_s: f64) -> S
 
 const HEAD: &str = "| size band | datasets fitted | failed | closed 95 % intervals holding the truth | intervals holding it, an open end unbounded | estimates without a closed interval | worst estimate error | estimates on a bound | noise ratio median / max | median fit s | fit time / 3.8 cm³'s |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
+/// Per parameter over all fits: the errors in the fits' own σ (z = ln(v/truth)/σ, σ from
+/// the interval's end on the truth's side), how many lie beyond ±1.96, and how many
+/// estimates the fits' own σ expect to err by more than 10 % (Σ P(|error| > 10 %)): where
+/// that is near or above 1, an estimate beyond 10 % is the noise's, not a bias.
+fn z_table(fits: &[&Fitted]) -> String {
+    let mut by: std::collections::BTreeMap<&str, Vec<&Estimate>> = Default::default();
+    for e in fits.iter().flat_map(|f| &f.estimates) {
+        by.entry(e.name.as_str()).or_default().push(e);
+    }
+    let mut s = String::from("\n| parameter | estimates with a σ | mean z | sd of z | \\|z\\| > 1.96 | largest \\|z\\| | median σ of ln v | largest σ of ln v | expected > 10 % off (Σ P) | > 10 % off |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut total = (0.0, 0usize);
+    for (name, es) in &by {
+        let z: Vec<f64> = es.iter().filter_map(|e| e.z()).collect();
+        let sd: Vec<f64> = es.iter().filter_map(|e| e.sd_ln()).collect();
+        let n = z.len() as f64;
+        let mean = z.iter().sum::<f64>() / n;
+        let var = z.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        let expected: f64 = es.iter().filter_map(|e| e.p_beyond_10pct()).sum();
+        let off = es.iter().filter(|e| e.error().abs() > 0.1).count();
+        total = (total.0 + expected, total.1 + off);
+        s += &format!(
+            "| {name} | {} | {mean:+.2} | {:.2} | {} | {:.2} | {:.2} % | {:.2} % | {expected:.2} | {off} |\n",
+            z.len(),
+            var.sqrt(),
+            z.iter().filter(|v| v.abs() > Z95).count(),
+            z.iter().fold(0.0f64, |a, v| a.max(v.abs())),
+            100.0 * median(sd.clone()),
+            100.0 * sd.iter().copied().fold(0.0, f64::max),
+        );
+    }
+    s + &format!("| all | | | | | | | | {:.2} | {} |\n", total.0, total.1)
+}
+
 /// A size band of [`SIZE_BANDS_CM3`] cut to the rigs' range [`RIG_RANGE_CM3`], cm³.
 fn rig_band(b: usize) -> (f64, f64) {
     (
@@ -282,7 +363,8 @@ fn dataset_line(band: &str, f: &Fitted) -> String {
         .iter()
         .max_by(|a, b| a.error().abs().total_cmp(&b.error().abs()))
         .map_or("–".into(), |e| {
-            format!("{} {:+.1} %", e.name, 100.0 * e.error())
+            let z = e.z().map_or(String::new(), |z| format!(" (z {z:+.2})"));
+            format!("{} {:+.1} %{z}", e.name, 100.0 * e.error())
         });
     format!(
         "| {band} | {} | {:.2} | {:.2} | {} | {worst} | {} | {:.1} |",
@@ -301,7 +383,9 @@ fn run_jobs(
     starts: &str,
     threads: usize,
 ) -> Vec<(Option<usize>, Result<Fitted, String>)> {
+    // RIG_DIR keeps the datasets and fits there (else a temporary folder).
     let tmp = tempfile::tempdir().unwrap();
+    let root = std::env::var_os("RIG_DIR").map_or(tmp.path().to_path_buf(), Into::into);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -309,7 +393,7 @@ fn run_jobs(
     pool.install(|| {
         jobs.par_iter()
             .map(|&(b, seed, v)| {
-                let dir = tmp.path().join(format!("{b:?}-{seed}"));
+                let dir = root.join(format!("{b:?}-{seed}"));
                 let r = fit_case(seed, v, starts, &dir);
                 let brief = r.as_ref().map(|f| (f.noise_ratio, f.wall_s));
                 eprintln!("band {b:?} seed {seed} {:.2} cm³: {brief:?}", v * 1e6);
@@ -372,6 +456,11 @@ fn every_size_rig_table() {
         }
     }
     md += &per_dataset;
+    let fits: Vec<&Fitted> = results
+        .iter()
+        .filter_map(|(_, r)| r.as_ref().ok())
+        .collect();
+    md += &z_table(&fits);
     for (k, e) in failures.iter().enumerate() {
         md += &format!("{}- {e}\n", if k == 0 { "\nFailed:\n\n" } else { "" });
     }
@@ -409,4 +498,30 @@ fn the_rig_scales_with_the_motor() {
     let m0 = twin::perturbed_motor(7);
     assert!(close(m.c_12, m0.c_12 * l * l) && close(m.inertia, m0.inertia * l.powi(5)));
     assert!(close(m.visc, m0.visc * l.powi(4)) && close(m.t_coulomb, m0.t_coulomb * l.powi(3)));
+}
+
+/// An error in its fit's own σ: an estimate 10 % low whose interval reaches
+/// v·e^{1.96·0.05} above it has z = ln 0.9/0.05, and the chance that an estimate of that σ
+/// errs by more than 10 % is Φ(ln 0.9/σ) + Φ(−ln 1.1/σ) (closed forms, Φ(1.96) = 0.975).
+#[test]
+fn errors_are_measured_in_the_fits_own_sigma() {
+    assert!((normal_cdf(Z95) - 0.975).abs() < 1e-6);
+    assert!((normal_cdf(0.0) - 0.5).abs() < 1e-7);
+    let sd = 0.05;
+    let e = Estimate {
+        name: "c_12".into(),
+        truth: 1.0,
+        value: 0.9,
+        lo: Some(0.9 * (-Z95 * 0.2_f64).exp()),
+        hi: Some(0.9 * (Z95 * sd).exp()),
+        bounds: None,
+        closed: true,
+    };
+    assert!((e.sd_ln().unwrap() - sd).abs() < 1e-12);
+    assert!((e.z().unwrap() - 0.9f64.ln() / sd).abs() < 1e-9);
+    let p = normal_cdf(0.9f64.ln() / sd) + normal_cdf(-(1.1f64.ln()) / sd);
+    assert!((e.p_beyond_10pct().unwrap() - p).abs() < 1e-12);
+    // An open end on the truth's side gives no σ.
+    let open = Estimate { hi: None, ..e };
+    assert!(open.z().is_none());
 }

@@ -20,8 +20,12 @@
 //! [`SIZE_BANDS_CM3`], comma-separated; default all), `SIZE_STYLES` (style names; default
 //! all), `SIZE_STARTS` (`fit --starts`; default vanefit's), `SIZE_THREADS` (pages run at
 //! once, default 2), `SIZE_OUT` (the markdown file; default target/every-size-pages.md),
-//! `SIZE_DIR` (keep the pages, fits and predictions there),
-//! `VANEFIT_BIN` (the binary; default the one cargo builds).
+//! `SIZE_DIR` (keep the pages, fits and predictions there, each page with the twin's
+//! figures beside it in truth.csv), `SIZE_ONLY` ("style:seed,…": only those pages),
+//! `SIZE_PREDICT_ARGS` (options added to predict; "{page}" is the page's folder),
+//! `SIZE_TOLERANCE` (every page states that reading tolerance, `tolerance`),
+//! `VANEFIT_BIN` (the binary; default the one cargo builds). Each page's line on stderr names
+//! its worst figure at 5–7 bar g (pressure, error, band).
 
 use crate::page_coverage::{banded, table, Check, BAR_G, COLUMNS};
 use crate::twin;
@@ -93,6 +97,7 @@ fn try_evaluate(
     let page_dir = dir.join("page");
     print_styled_page(&page_dir, &motor, &page).map_err(|e| format!("twin: {e}"))?;
     let truth = styled_truth(&motor, &page, &BAR_G).map_err(|e| format!("twin: {e}"))?;
+    state_tolerance(&page_dir)?;
     let fit = dir.join("fit.json");
     let (fit_s, page_s) = (fit.to_str().unwrap(), page_dir.to_str().unwrap());
     let starts = std::env::var("SIZE_STARTS").ok();
@@ -115,7 +120,12 @@ fn try_evaluate(
     };
     let unevaluable = fit_out.contains("chi2 inf") || fit_out.contains("J 10000000000");
     let pred = dir.join("predict");
-    let args = [
+    // SIZE_PREDICT_ARGS adds options to predict; "{page}" stands for the page's folder
+    // (e.g. "--bands samples --data {page}").
+    let extra = std::env::var("SIZE_PREDICT_ARGS")
+        .unwrap_or_default()
+        .replace("{page}", page_s);
+    let mut args = vec![
         "predict",
         fit_s,
         "--pressures",
@@ -125,11 +135,13 @@ fn try_evaluate(
         "--out",
         pred.to_str().unwrap(),
     ];
+    args.extend(extra.split_whitespace());
     run(&args, dir).map_err(|(_, e)| e)?;
     let cat = table(&pred.join("catalogue.csv"))?;
     if cat.len() != BAR_G.len() {
         return Err(format!("{} catalogue rows", cat.len()));
     }
+    write_truth(&dir.join("truth.csv"), &truth)?;
     let mut checks = Vec::new();
     for (row, t) in cat.iter().zip(&truth) {
         let mut f = [Check {
@@ -152,6 +164,38 @@ fn try_evaluate(
         unevaluable,
         crate::common::fit_wall_s(&fit, &fit_out),
     ))
+}
+
+/// SIZE_TOLERANCE states every catalogue experiment's reading tolerance (`tolerance`, 1σ as
+/// a share of full scale; vanefit's default 0.02) in the page of `page_dir`: how exact the
+/// user says the page is. Nothing without it.
+fn state_tolerance(page_dir: &Path) -> Result<(), String> {
+    let Ok(tol) = std::env::var("SIZE_TOLERANCE") else {
+        return Ok(());
+    };
+    let toml_path = page_dir.join("rig.toml");
+    let toml = std::fs::read_to_string(&toml_path).map_err(|e| e.to_string())?;
+    let toml = toml.replace(
+        "kind = \"catalogue\"\n",
+        &format!("kind = \"catalogue\"\ntolerance = {tol}\n"),
+    );
+    std::fs::write(&toml_path, toml).map_err(|e| e.to_string())
+}
+
+/// The twin's figures beside a page (at [`BAR_G`], in the units of predict's columns
+/// [`COLUMNS`]), kept with the page for later comparisons.
+fn write_truth(path: &Path, truth: &[[f64; 7]]) -> Result<(), String> {
+    let mut s = String::from("p_supply_bar_g");
+    for (col, _) in COLUMNS {
+        s += &format!(",{col}");
+    }
+    for (bar, t) in BAR_G.iter().zip(truth) {
+        s += &format!("\n{bar}");
+        for (k, (_, per_si)) in COLUMNS.iter().enumerate() {
+            s += &format!(",{}", t[k] * per_si);
+        }
+    }
+    std::fs::write(path, s + "\n").map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// What the pages of one size band and style gave.
@@ -334,12 +378,25 @@ fn every_size_page_table() {
     let threads = env_list("SIZE_THREADS")
         .and_then(|v| v.first().copied())
         .unwrap_or(2);
+    // SIZE_ONLY "style:seed,…" keeps only those pages of the table.
+    let only: Option<Vec<(String, u64)>> = std::env::var("SIZE_ONLY").ok().map(|v| {
+        v.split(',')
+            .filter_map(|x| {
+                let (k, s) = x.split_once(':')?;
+                Some((k.trim().to_string(), s.trim().parse().ok()?))
+            })
+            .collect()
+    });
     let jobs: Vec<(PageKind, usize, u64)> = kinds
         .iter()
         .flat_map(|k| {
             bands
                 .iter()
                 .flat_map(move |b| (0..n).map(move |i| (*k, *b, 10_000 * (*b as u64 + 1) + i)))
+        })
+        .filter(|(k, _, seed)| {
+            only.as_ref()
+                .is_none_or(|o| o.iter().any(|(name, s)| name == k.name() && s == seed))
         })
         .collect();
     // SIZE_DIR keeps the pages, fits and predictions there (else a temporary folder).
@@ -361,8 +418,10 @@ fn every_size_page_table() {
             .collect()
     });
     let mut cells: BTreeMap<(PageKind, usize), Cell> = BTreeMap::new();
-    for ((kind, b), _) in jobs.iter().map(|(k, b, s)| ((*k, *b), s)) {
-        cells.entry((kind, b)).or_default();
+    for kind in &kinds {
+        for b in &bands {
+            cells.entry((*kind, *b)).or_default();
+        }
     }
     for ((kind, b, _), o) in &outcomes {
         cells.get_mut(&(*kind, *b)).unwrap().add(o);
@@ -380,14 +439,40 @@ fn every_size_page_table() {
     println!("{md}\n(written to {out})");
 }
 
+/// The page's largest point error at the pressures of [`BAR_G`] that pass `at`: its figure
+/// (the column of [`COLUMNS`]), pressure, error and band half-width, to find the motor and
+/// figure behind a table's worst error.
+fn worst_point(c: &[[Check; 7]], at: impl Fn(f64) -> bool) -> String {
+    let mut worst: Option<(usize, usize, Check)> = None;
+    for (p, figs) in c.iter().enumerate().filter(|(p, _)| at(BAR_G[*p])) {
+        for (k, f) in figs.iter().enumerate() {
+            if worst.is_none_or(|(_, _, w)| f.error().abs() > w.error().abs()) {
+                worst = Some((p, k, *f));
+            }
+        }
+    }
+    worst.map_or("–".into(), |(p, k, f)| {
+        format!(
+            "{:+.1} % ({} at {} bar g, band ±{:.1} %, {})",
+            100.0 * f.error(),
+            COLUMNS[k].0,
+            BAR_G[p],
+            100.0 * f.half_width(),
+            if f.holds() { "held" } else { "missed" }
+        )
+    })
+}
+
 fn summary(o: &Outcome) -> String {
     match o {
         Outcome::Judged(c, bad, _) => {
             let held = c.iter().flatten().filter(|x| x.holds()).count();
             format!(
-                "{held}/{} bands hold{}",
+                "{held}/{} bands hold{}; worst at 5–7 bar g {}; median half-width {:.1} %",
                 7 * c.len(),
-                if *bad { ", cost not evaluable" } else { "" }
+                if *bad { ", cost not evaluable" } else { "" },
+                worst_point(c, |b| b >= 5.0),
+                100.0 * median(c.iter().flatten().map(Check::half_width).collect()).unwrap_or(0.0)
             )
         }
         Outcome::Refused(e) => format!("refused: {e}"),

@@ -276,3 +276,285 @@ fn page_pairs_table_over_random_motors() {
     let failed = results.iter().filter(|(_, r)| r.is_err()).count();
     assert!(failed * 10 <= n as usize, "{failed} of {n} motors failed");
 }
+
+/// The motors and styled pages of the "Every size and page style" table
+/// (`tests/predict/every_size.rs`): style, size band and seed from the environment.
+fn styled_jobs() -> Vec<StyledJob> {
+    use twin::sizes::SIZE_BANDS_CM3;
+    use twin::styles::PageKind;
+    let list = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
+    // PAIR_PAGES "style:seed[:k@bar_g[+k@bar_g…]],…" picks pages (the band is seed / 10000 − 1)
+    // and the figures (k of FIGURES, at a pressure) a figure_path steers; else PAIR_STYLES
+    // (default the four styles with an unmet target), PAIR_BANDS (default all) and
+    // PAIR_PER_BAND (default 8) as the page table's SIZE_STYLES, SIZE_BANDS, SIZE_PAGES.
+    let kind_of = |n: &str| PageKind::ALL.into_iter().find(|k| k.name() == n.trim());
+    if let Some(v) = list("PAIR_PAGES") {
+        return v
+            .split(',')
+            .map(|x| {
+                let mut parts = x.split(':');
+                let k = parts.next().unwrap();
+                let seed: u64 = parts.next().expect("style:seed").trim().parse().unwrap();
+                let steer = parts.next().map_or(Vec::new(), |t| {
+                    t.split('+')
+                        .map(|f| {
+                            let (k, b) = f.split_once('@').expect("k@bar_g");
+                            (k.trim().parse().unwrap(), b.trim().parse().unwrap())
+                        })
+                        .collect()
+                });
+                let band = seed as usize / 10_000 - 1;
+                (kind_of(k).expect("a style"), band, seed, steer)
+            })
+            .collect();
+    }
+    let kinds: Vec<PageKind> = list("PAIR_STYLES")
+        .unwrap_or("full,table_row,geared,no_displacement".into())
+        .split(',')
+        .filter_map(kind_of)
+        .collect();
+    let bands: Vec<usize> = list("PAIR_BANDS").map_or((0..SIZE_BANDS_CM3.len()).collect(), |v| {
+        v.split(',').map(|b| b.trim().parse().unwrap()).collect()
+    });
+    let per: u64 = list("PAIR_PER_BAND").map_or(8, |v| v.trim().parse().unwrap());
+    let mut jobs = Vec::new();
+    for k in &kinds {
+        for b in &bands {
+            jobs.extend((0..per).map(|i| (*k, *b, 10_000 * (*b as u64 + 1) + i, Vec::new())));
+        }
+    }
+    jobs
+}
+
+/// A page of the size table: its style, size band, seed, and the figures (k of [`FIGURES`]
+/// at bar g) a [`twin::pair::figure_path`] steers.
+type StyledJob = (twin::styles::PageKind, usize, u64, Vec<(usize, f64)>);
+
+/// One styled page's path: per figure and pressure of [`BAR_G`] the spread over the path,
+/// and whether the reference printer prints the widest pair at 5–7 bar g the same.
+type StyledRun = (Vec<[f64; 7]>, usize, bool, f64, Vec<[(f64, f64); 7]>);
+
+fn styled_path(
+    (kind, band, seed, steer): &StyledJob,
+    dir: &std::path::Path,
+) -> Result<StyledRun, String> {
+    let (kind, band, seed) = (*kind, *band, *seed);
+    use twin::sizes::{random_motor_in_band, SIZE_BANDS_CM3};
+    use twin::styles::{print_styled_page, styled_page};
+    let motor = random_motor_in_band(seed, SIZE_BANDS_CM3[band], &SPREAD);
+    let page = styled_page(seed, kind);
+    print_styled_page(dir, &motor, &page)?;
+    eprintln!(
+        "{} {seed}: {:.2} cm³, z {}, ε {:.3}, n {:.3}, b {:.3}, T_c {:.3e}, d {:.3e}",
+        kind.name(),
+        motor.v_disp * 1e6,
+        motor.z,
+        motor.eps,
+        motor.n_poly,
+        motor.b_crit,
+        motor.t_coulomb,
+        motor.visc
+    );
+    // PAIR_WALK: the parameters walked ("all", or names of twin::pair::WALKABLE; default
+    // t_coulomb); every motor of every path prints the page, so the spread is over them all.
+    let walk = std::env::var("PAIR_WALK").unwrap_or("t_coulomb".into());
+    let mut path = Vec::new();
+    for (j, name) in twin::pair::WALKABLE.iter().enumerate() {
+        if walk == "all" || walk.split(',').any(|w| w.trim() == *name) {
+            let p = twin::pair::walk_path(&motor, page.gear, &page.style, dir, &[], &BAR_G, j)?;
+            path.extend(p);
+        }
+    }
+    for &target in steer {
+        let p = twin::pair::figure_path(&motor, page.gear, &page.style, dir, &BAR_G, target)?;
+        path.extend(p);
+    }
+    let tc = {
+        let t: Vec<f64> = path.iter().map(|p| p.motor.t_coulomb).collect();
+        t.iter().copied().fold(0.0, f64::max) / t.iter().copied().fold(f64::INFINITY, f64::min)
+    };
+    if path.is_empty() {
+        return Err("no path: PAIR_WALK names no parameter and no figure is steered".into());
+    }
+    let spreads: Vec<[f64; 7]> = (0..BAR_G.len())
+        .map(|p| std::array::from_fn(|k| spread(&path, p, k).0))
+        .collect();
+    // Per pressure and figure, the path's range relative to the page's own motor (s = 0).
+    let own = path.iter().find(|pt| pt.s == 0.0).ok_or("no s = 0")?;
+    let ranges: Vec<[(f64, f64); 7]> = (0..BAR_G.len())
+        .map(|p| {
+            std::array::from_fn(|k| {
+                let (_, lo, hi) = spread(&path, p, k);
+                let f =
+                    |i: usize| row_values(&path[i].rows[p])[k] / row_values(&own.rows[p])[k] - 1.0;
+                (f(lo), f(hi))
+            })
+        })
+        .collect();
+    let (mut best, mut pair) = (0.0, (0, 0));
+    for p in 2..BAR_G.len() {
+        for k in 0..7 {
+            let (d, lo, hi) = spread(&path, p, k);
+            if d > best {
+                (best, pair) = (d, (lo, hi));
+            }
+        }
+    }
+    let same = twin::pair::verify_same_styled_page(
+        &path[pair.0].motor,
+        &path[pair.1].motor,
+        &page,
+        &dir.join("v"),
+    )?;
+    Ok((spreads, path.len(), same, tc, ranges))
+}
+
+/// One page's row of [`styled_page_pairs_table`], with the error its widest pair at 5–7 bar g
+/// forces and the median over its 35 figures of D/(2 + D) (the half-width a band needs to
+/// hold both motors of each figure's pair).
+fn styled_line(label: &str, run: &StyledRun) -> (f64, f64, String) {
+    let (spreads, n, same, tc, ranges) = run;
+    let worst_at = |p: usize| {
+        let (k, d) = spreads[p]
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f64), |a, (k, d)| if *d > a.1 { (k, *d) } else { a });
+        (k, d)
+    };
+    let (p57, (k57, d57)) = (2..BAR_G.len())
+        .map(|p| (p, worst_at(p)))
+        .fold((2, (0, 0.0)), |a, b| if b.1 .1 > a.1 .1 { b } else { a });
+    let per_p: Vec<String> = (2..BAR_G.len())
+        .map(|p| {
+            let (k, d) = worst_at(p);
+            format!("{:.1} % ({})", 100.0 * forced_error(d), FIGURES[k])
+        })
+        .collect();
+    let (k3, d3) = worst_at(0);
+    // The half-width a band needs to hold both motors of a figure's pair, D/(2 + D),
+    // over the page's 35 figures: its median.
+    let mut all: Vec<f64> = spreads.iter().flatten().map(|d| forced_error(*d)).collect();
+    all.sort_by(f64::total_cmp);
+    let med = all[all.len() / 2];
+    let (lo, hi) = ranges[p57][k57];
+    let line = format!(
+        "| {label} | {n} | {tc:.2} | {same} | {} @ {}: {:.1} % ({:+.1} to {:+.1} % of the page's motor), {:.1} % | {} | {:.1} % ({}) | {:.1} % |",
+        FIGURES[k57],
+        BAR_G[p57],
+        100.0 * d57,
+        100.0 * lo,
+        100.0 * hi,
+        100.0 * forced_error(d57),
+        per_p.join(" / "),
+        100.0 * forced_error(d3),
+        FIGURES[k3],
+        100.0 * med,
+    );
+    (forced_error(d57), med, line)
+}
+
+/// What the styled pages of the size table cannot tell at 5–7 bar g (docs/validation.md,
+/// "Every size and page style"): per page, the widest same-page pair's spread and the error
+/// D/(2 + D) it forces on any point predictor, per figure at 5, 6 and 7 bar g.
+#[test]
+#[ignore = "long: the styled pages of the size table; run with --ignored --nocapture"]
+fn styled_page_pairs_table() {
+    let jobs = styled_jobs();
+    let tmp = tempfile::tempdir().unwrap();
+    let root = std::env::var_os("PAIR_DIR").map_or(tmp.path().to_path_buf(), Into::into);
+    let t0 = std::time::Instant::now();
+    let results: Vec<_> = jobs
+        .par_iter()
+        .map(|job| {
+            let (kind, seed) = (job.0, job.2);
+            let dir = root.join(format!("{}-{seed}", kind.name()));
+            ((kind, seed), styled_path(job, &dir))
+        })
+        .collect();
+    println!(
+        "{} pages: {:.0} s wall\n",
+        jobs.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    println!("| page | path motors | T_c range × | same page (reference printer) | widest at 5–7 bar g: figure @ bar g, spread D, forced D/(2 + D) | forced at 5 / 6 / 7 bar g (worst figure) | forced at 3 bar g | median forced, 35 figures at 3–7 bar g |\n|---|---|---|---|---|---|---|---|");
+    let (mut forced_57, mut medians) = (Vec::new(), Vec::new());
+    for ((kind, seed), r) in &results {
+        match r {
+            Ok(run) => {
+                let (forced, med, line) = styled_line(&format!("{} {seed}", kind.name()), run);
+                println!("{line}");
+                if run.2 {
+                    forced_57.push(forced);
+                    medians.push(med);
+                }
+            }
+            Err(e) => println!("| {} {seed} | failed: {e} | | | | | | |", kind.name()),
+        }
+    }
+    forced_57.sort_by(f64::total_cmp);
+    println!(
+        "\npages whose same-page pair forces > 10 % at 5–7 bar g: {} of {} (verified); worst forced {:.1} %",
+        forced_57.iter().filter(|f| **f > 0.1).count(),
+        forced_57.len(),
+        100.0 * forced_57.last().copied().unwrap_or(0.0)
+    );
+    medians.sort_by(f64::total_cmp);
+    println!(
+        "median over the pages of the median D/(2 + D) (the half-width a band needs to hold both motors of each pair): {:.1} %",
+        100.0 * medians.get(medians.len() / 2).copied().unwrap_or(0.0)
+    );
+}
+
+/// A geared page is read at the output shaft: its own motor prints it digit for digit
+/// through the gearbox (speeds ω/G, torques η·G·T, power η·P), and not without it.
+#[test]
+fn a_geared_page_is_matched_at_the_output_shaft() {
+    use twin::sizes::{random_motor_in_band, SIZE_BANDS_CM3};
+    use twin::styles::{print_styled_page, styled_page, PageKind};
+    let tmp = tempfile::tempdir().unwrap();
+    let seed = 30_007;
+    let motor = random_motor_in_band(seed, SIZE_BANDS_CM3[2], &SPREAD);
+    let page = styled_page(seed, PageKind::Geared);
+    print_styled_page(tmp.path(), &motor, &page).unwrap();
+    let r = |gear| twin::pair::page_residual(&motor, gear, &page.style, tmp.path()).unwrap();
+    let (geared, plain) = (r(page.gear), r(None));
+    // Within its rounding interval: ≤ 1/0.9, the figures at max power being held to 0.9 of
+    // theirs (twin::pair's AT_MAX_POWER_SHARE).
+    assert!(geared < 1.0 / 0.9, "through the gearbox: {geared}");
+    assert!(plain > 10.0, "at the motor's shaft: {plain}");
+}
+
+/// A table row (free speed, max power with its speed and torque, air at max power; no
+/// stall torque, curves or displacement) is printed digit for digit by two motors of the
+/// twin's population whose stall torque at 5 bar g differs by more than 22.2 %: any point
+/// prediction made from that row is off by more than 10 % at 5 bar g on one of them
+/// (docs/validation.md, "Why the unmet targets are unmet").
+#[test]
+fn a_table_row_is_printed_alike_by_motors_that_differ_at_5_bar_g() {
+    use twin::sizes::{random_motor_in_band, SIZE_BANDS_CM3};
+    use twin::styles::{print_styled_page, styled_page, PageKind};
+    let tmp = tempfile::tempdir().unwrap();
+    let seed = 10_000;
+    let motor = random_motor_in_band(seed, SIZE_BANDS_CM3[0], &SPREAD);
+    let page = styled_page(seed, PageKind::TableRow);
+    print_styled_page(tmp.path(), &motor, &page).unwrap();
+    // Walk the inlet-side leak c_1e (index 3 of WALKABLE), the rest re-solved.
+    assert_eq!(twin::pair::WALKABLE[3], "c_1e");
+    let path =
+        twin::pair::walk_path(&motor, None, &page.style, tmp.path(), &[], &BAR_G, 3).unwrap();
+    let k_stall = FIGURES.iter().position(|f| *f == "stall_torque").unwrap();
+    let (d, lo, hi) = spread(&path, 2, k_stall);
+    println!(
+        "stall torque at 5 bar g: spread {:.1} %, forced error {:.1} %",
+        100.0 * d,
+        100.0 * forced_error(d)
+    );
+    assert!(d > 0.2 / 0.9, "spread {d}");
+    assert!(twin::pair::verify_same_styled_page(
+        &path[lo].motor,
+        &path[hi].motor,
+        &page,
+        &tmp.path().join("v")
+    )
+    .unwrap());
+}

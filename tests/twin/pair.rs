@@ -10,6 +10,10 @@
 //! stops where no such motor is found, or where a parameter leaves the twin's own population
 //! (more than [`Z_MAX`] spreads from its size-scaled centre, n or b outside their ranges):
 //! every motor on the path is one [`super::page::random_motor`] could draw.
+//! [`walk_path`] walks any other of those parameters ([`WALKABLE`]) the same way, and
+//! [`figure_path`] steers a figure at another pressure itself, re-solving all twelve. A styled
+//! page ([`super::styles`]) is read as printed: a table row without curves, a geared page at
+//! its output shaft ([`friction_path_geared`]; [`verify_same_styled_page`] prints it again).
 //!
 //! Along the path the figures at other pressures move: if two motors print the same page and
 //! a figure of theirs differs by D (f_b = (1 + D)·f_a), a predictor that sees only the page
@@ -29,6 +33,7 @@ use super::motor::{self, TwinMotor, P_ATM_PA};
 use super::page::{print_page, PageStyle, FIGURES, SPREAD, V_REF_M3};
 use super::rig::{self, Boundary, Port2};
 use super::steady::steady_state;
+use super::styles::Gear;
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 
@@ -367,10 +372,19 @@ pub fn page_items(dir: &Path, style: &PageStyle, w_free: f64) -> Result<Vec<Item
 /// Items for figures of `m` at other supply pressures, `(figure k, bar g)`, printed in SI to
 /// 3 significant digits: a second measurement added to a page.
 pub fn extra_items(m: &TwinMotor, extra: &[(usize, f64)]) -> Result<Vec<Item>, String> {
+    extra_items_at(m, None, extra)
+}
+
+/// [`extra_items`] at the output shaft of `gear` (the motor's shaft with `None`).
+fn extra_items_at(
+    m: &TwinMotor,
+    gear: Option<Gear>,
+    extra: &[(usize, f64)],
+) -> Result<Vec<Item>, String> {
     extra
         .iter()
         .map(|&(k, bar_g)| {
-            let v = super::page::row_values(&fast_row(m, bar_g, 500.0)?)[k];
+            let v = super::page::row_values(&at_shaft(gear, &fast_row(m, bar_g, 500.0)?))[k];
             let text = super::page::significant(v, 3);
             let (v, h) = (text.parse::<f64>().unwrap(), half_unit(&text));
             Ok(Item {
@@ -383,16 +397,25 @@ pub fn extra_items(m: &TwinMotor, extra: &[(usize, f64)]) -> Result<Vec<Item>, S
         .collect()
 }
 
-/// Values of the page's items for motor `m` at `bar_g`, in page units, and its row.
+/// A motor-shaft row at the output shaft of `gear` ([`Gear::output_row`]; itself with `None`).
+fn at_shaft(gear: Option<Gear>, row: &TwinRow) -> TwinRow {
+    gear.map_or(*row, |g| g.output_row(row))
+}
+
+/// Values of the page's items for motor `m` at `bar_g`, in page units, at the output shaft of
+/// `gear` (a geared page: speeds ω/G, torques η·G·T, power η·P), and its motor-shaft row.
 fn page_values(
     m: &TwinMotor,
+    gear: Option<Gear>,
     bar_g: f64,
     items: &[Item],
     w_guess: f64,
 ) -> Result<(Vec<f64>, TwinRow), String> {
     let bench = Bench::new(m, P_ATM_PA + bar_g * 1e5);
     let row = bench.row(w_guess)?;
-    let figs = super::page::row_values(&row);
+    let out = at_shaft(gear, &row);
+    let figs = super::page::row_values(&out);
+    let (g, eta) = gear.map_or((1.0, 1.0), |g| (g.ratio, g.efficiency));
     let mut warm = [bench.bc.p_port1_pa, P_ATM_PA, P_ATM_PA];
     let mut cache: Vec<(f64, Point)> = Vec::new();
     let mut values = Vec::with_capacity(items.len());
@@ -403,23 +426,28 @@ fn page_values(
             Printed::Extra(k, b) => match other.iter().find(|(x, _)| *x == b) {
                 Some((_, f)) => f[k],
                 None => {
-                    let f = super::page::row_values(&fast_row(m, b, row.free_speed_rad_s)?);
+                    let r = fast_row(m, b, row.free_speed_rad_s)?;
+                    let f = super::page::row_values(&at_shaft(gear, &r));
                     other.push((b, f));
                     f[k]
                 }
             },
-            Printed::Grid => row.free_speed_rad_s,
+            Printed::Grid => out.free_speed_rad_s,
             Printed::Cell(w, j) => {
                 let pt = match cache.iter().find(|(x, _)| *x == w) {
                     Some((_, pt)) => *pt,
                     None => {
-                        let pt = bench.at(w, warm)?;
+                        let pt = bench.at(w * g, warm)?;
                         warm = pt.p;
                         cache.push((w, pt));
                         pt
                     }
                 };
-                [pt.torque_nm, pt.torque_nm * w, pt.flow_kg_s][j]
+                [
+                    eta * g * pt.torque_nm,
+                    eta * pt.torque_nm * w * g,
+                    pt.flow_kg_s,
+                ][j]
             }
         };
         values.push(si * it.per_si);
@@ -485,6 +513,50 @@ fn to_x(m: &TwinMotor) -> [f64; NP] {
         logit(m.n_poly, SPREAD.n_poly),
         logit(m.b_crit, SPREAD.b_crit),
     ]
+}
+
+/// The parameters a path may walk: [`FREE`], then `t_coulomb` (index [`NP`]).
+pub const WALKABLE: [&str; NP + 1] = [
+    "c_in1",
+    "c_out2",
+    "c_ext",
+    "c_1e",
+    "c_2e",
+    "c_12",
+    "v_dead",
+    "visc",
+    "eps",
+    "n_poly",
+    "b_crit",
+    "t_coulomb",
+];
+
+/// The population spread of each coordinate of [`WALKABLE`] (ln for the positive ones, the
+/// logit's unit for n and b): the scale of the pull toward the page's motor.
+const SIGMA: [f64; NP + 1] = [
+    0.35, 0.35, 0.35, 0.35, 0.35, 0.35, 0.4, 0.5, 0.5, 1.0, 1.0, 0.5,
+];
+
+/// Every coordinate of [`WALKABLE`]: [`to_x`] and ln T_c.
+fn all_coords(m: &TwinMotor) -> [f64; NP + 1] {
+    let x = to_x(m);
+    std::array::from_fn(|i| if i < NP { x[i] } else { m.t_coulomb.ln() })
+}
+
+/// `y` without its coordinate `j`: the re-solved ones of a path that walks `j`.
+fn rest(j: usize, y: &[f64; NP + 1]) -> [f64; NP] {
+    std::array::from_fn(|i| if i < j { y[i] } else { y[i + 1] })
+}
+
+/// The motor whose coordinate `j` is `v` and whose others are `x` (in [`WALKABLE`] order
+/// without `j`).
+fn motor_at(base: &TwinMotor, j: usize, x: &[f64], v: f64) -> TwinMotor {
+    let y: [f64; NP + 1] = std::array::from_fn(|i| match i.cmp(&j) {
+        std::cmp::Ordering::Less => x[i],
+        std::cmp::Ordering::Equal => v,
+        std::cmp::Ordering::Greater => x[i - 1],
+    });
+    from_x(base, &y[..NP], y[NP])
 }
 
 fn from_x(base: &TwinMotor, x: &[f64], ln_tc: f64) -> TwinMotor {
@@ -564,36 +636,52 @@ fn sharp(r: f64) -> f64 {
 }
 
 /// Least-squares residual vector at x for fixed ln T_c.
+#[allow(clippy::too_many_arguments)]
 fn objective(
     base: &TwinMotor,
+    gear: Option<Gear>,
     items: &[Item],
     supply_bar_g: f64,
     x: &[f64],
     x0: &[f64; NP],
-    ln_tc: f64,
+    walk: (usize, f64),
     w_guess: f64,
 ) -> Option<(Vec<f64>, f64)> {
-    let m = from_x(base, x, ln_tc);
-    let (values, _) = page_values(&m, supply_bar_g, items, w_guess).ok()?;
+    let m = motor_at(base, walk.0, x, walk.1);
+    let (values, _) = page_values(&m, gear, supply_bar_g, items, w_guess).ok()?;
     let r = residuals(items, &values);
     let worst = r.iter().fold(0.0f64, |a, r| a.max(r.abs()));
-    let sigma = [0.35, 0.35, 0.35, 0.35, 0.35, 0.35, 0.4, 0.5, 0.5, 1.0, 1.0];
+    let sigma = rest(walk.0, &SIGMA);
     let mut out: Vec<f64> = r.into_iter().map(sharp).collect();
     out.extend((0..NP).map(|i| PULL * (x[i] - x0[i]) / sigma[i]));
     Some((out, worst))
 }
 
 /// Levenberg–Marquardt on [`objective`] from `x`; returns the best x and its worst residual.
+#[allow(clippy::too_many_arguments)]
 fn solve(
     base: &TwinMotor,
+    gear: Option<Gear>,
     items: &[Item],
     supply_bar_g: f64,
     x: [f64; NP],
     x0: &[f64; NP],
-    ln_tc: f64,
+    walk: (usize, f64),
     w_guess: f64,
 ) -> Option<([f64; NP], f64)> {
-    let f = |x: &[f64]| objective(base, items, supply_bar_g, x, x0, ln_tc, w_guess);
+    levenberg_marquardt(
+        |x: &[f64]| objective(base, gear, items, supply_bar_g, x, x0, walk, w_guess),
+        x,
+    )
+}
+
+/// Levenberg–Marquardt on the residuals `f` (with the worst printed-value residual beside
+/// them) from `x`, until that worst residual is below 0.5 or no step lowers the sum of
+/// squares; returns the last x and its worst residual.
+fn levenberg_marquardt<const N: usize>(
+    f: impl Fn(&[f64]) -> Option<(Vec<f64>, f64)>,
+    x: [f64; N],
+) -> Option<([f64; N], f64)> {
     let (mut r, mut worst) = f(&x)?;
     let mut x = x;
     let mut mu = 1e-3;
@@ -603,8 +691,8 @@ fn solve(
             break;
         }
         let n = r.len();
-        let mut jac = DMatrix::zeros(n, NP);
-        for j in 0..NP {
+        let mut jac = DMatrix::zeros(n, N);
+        for j in 0..N {
             let mut xp = x;
             xp[j] += 1e-6;
             let (rp, _) = f(&xp)?;
@@ -618,14 +706,14 @@ fn solve(
         let mut improved = false;
         for _ in 0..8 {
             let mut a = h.clone();
-            for i in 0..NP {
+            for i in 0..N {
                 a[(i, i)] += mu * (h[(i, i)] + 1e-12);
             }
             let Some(dx) = a.lu().solve(&g) else {
                 mu *= 10.0;
                 continue;
             };
-            let xn: [f64; NP] = std::array::from_fn(|i| x[i] - dx[i].clamp(-0.3, 0.3));
+            let xn: [f64; N] = std::array::from_fn(|i| x[i] - dx[i].clamp(-0.3, 0.3));
             if let Some((rn, wn)) = f(&xn) {
                 if cost(&rn) < cost(&r) {
                     (x, r, worst) = (xn, rn, wn);
@@ -654,17 +742,47 @@ pub fn friction_path(
     extra: &[(usize, f64)],
     bar_g: &[f64],
 ) -> Result<Vec<PathPoint>, String> {
+    friction_path_geared(m, None, style, page_dir, extra, bar_g)
+}
+
+/// [`friction_path`] of a page printed at the output shaft of `gear` (a geared motor's page,
+/// [`super::styles`]; the gearbox held along the path). The rows of the path stay the motor
+/// shaft's: a spread, a ratio, is the same at either shaft.
+pub fn friction_path_geared(
+    m: &TwinMotor,
+    gear: Option<Gear>,
+    style: &PageStyle,
+    page_dir: &Path,
+    extra: &[(usize, f64)],
+    bar_g: &[f64],
+) -> Result<Vec<PathPoint>, String> {
+    walk_path(m, gear, style, page_dir, extra, bar_g, NP)
+}
+
+/// [`friction_path_geared`] walking parameter `j` of [`WALKABLE`] (its coordinate: ln of a
+/// positive parameter, ln(ε − 1), the logit of n or b over their ranges) instead of T_c,
+/// every other one re-solved; `s` of each point is its offset in that coordinate.
+pub fn walk_path(
+    m: &TwinMotor,
+    gear: Option<Gear>,
+    style: &PageStyle,
+    page_dir: &Path,
+    extra: &[(usize, f64)],
+    bar_g: &[f64],
+    j: usize,
+) -> Result<Vec<PathPoint>, String> {
     let supply = style.supply.1;
     let row0 = fast_row(m, supply, 500.0)?;
-    let mut items = page_items(page_dir, style, row0.free_speed_rad_s)?;
-    items.extend(extra_items(m, extra)?);
-    let x0 = to_x(m);
-    let ln_tc0 = m.t_coulomb.ln();
+    let w_free_out = at_shaft(gear, &row0).free_speed_rad_s;
+    let mut items = page_items(page_dir, style, w_free_out)?;
+    items.extend(extra_items_at(m, gear, extra)?);
+    let y0 = all_coords(m);
+    let (x0, v0) = (rest(j, &y0), y0[j]);
     let rows_at = |mm: &TwinMotor, w_guess: f64| -> Result<Vec<TwinRow>, String> {
         bar_g.iter().map(|b| fast_row(mm, *b, w_guess)).collect()
     };
-    let (v0, _) = page_values(m, supply, &items, row0.free_speed_rad_s)?;
-    let worst0 = residuals(&items, &v0)
+    let (values0, _) = page_values(m, gear, supply, &items, row0.free_speed_rad_s)?;
+    let worst0 = residuals(&items, &values0)
         .iter()
         .fold(0.0f64, |a, r| a.max(r.abs()));
     let mut path = vec![PathPoint {
@@ -683,15 +801,16 @@ pub fn friction_path(
             let guess: [f64; NP] = std::array::from_fn(|i| x[i] + slope[i] * (s_try - s));
             let found = solve(
                 m,
+                gear,
                 &items,
                 supply,
                 guess,
                 &x0,
-                ln_tc0 + s_try,
+                (j, v0 + s_try),
                 row0.free_speed_rad_s,
             );
             let ok = found.and_then(|(xn, worst)| {
-                let mm = from_x(m, &xn, ln_tc0 + s_try);
+                let mm = motor_at(m, j, &xn, v0 + s_try);
                 if std::env::var_os("PAIR_DEBUG").is_some() {
                     eprintln!(
                         "s {s_try:+.4} worst {worst:.3} z {:.2} {:?}",
@@ -713,6 +832,109 @@ pub fn friction_path(
                     slope = std::array::from_fn(|i| (xn[i] - x[i]) / (s_try - s));
                     (s, x) = (s_try, xn);
                     step = (2.0 * step).min(STEP);
+                }
+                None => step *= 0.5,
+            }
+        }
+    }
+    path.sort_by(|a, b| a.s.total_cmp(&b.s));
+    Ok(path)
+}
+
+/// The largest residual, in rounding half-intervals, of the page printed in `page_dir` in
+/// `style` (at the output shaft of `gear`) against motor `m`'s own numbers: below 1 where
+/// `m` prints that page digit for digit.
+pub fn page_residual(
+    m: &TwinMotor,
+    gear: Option<Gear>,
+    style: &PageStyle,
+    page_dir: &Path,
+) -> Result<f64, String> {
+    let row0 = fast_row(m, style.supply.1, 500.0)?;
+    let items = page_items(page_dir, style, at_shaft(gear, &row0).free_speed_rad_s)?;
+    let (values, _) = page_values(m, gear, style.supply.1, &items, row0.free_speed_rad_s)?;
+    Ok(residuals(&items, &values)
+        .iter()
+        .fold(0.0f64, |a, r| a.max(r.abs())))
+}
+
+/// Tolerance of the figure a [`figure_path`] steers, in ln: the target is met within it.
+const TARGET_TOL: f64 = 0.004;
+
+/// Motors printing the same page as `m` whose figure `target.0` of [`FIGURES`] at
+/// `target.1` bar g is steered up and down: a continuation in s = ln(f/f₀) in steps of
+/// 0.02, every coordinate of [`WALKABLE`] re-solved at each step so that the page stays
+/// printed digit for digit and ln f = ln f₀ + s within [`TARGET_TOL`]; it stops where no
+/// motor of the twin's population does both. The widest pair the page allows in that
+/// figure, as far as a local search finds it (a walk of one parameter, [`walk_path`], only
+/// sees the figure move as that parameter does). Rows at `bar_g` as in [`friction_path`].
+pub fn figure_path(
+    m: &TwinMotor,
+    gear: Option<Gear>,
+    style: &PageStyle,
+    page_dir: &Path,
+    bar_g: &[f64],
+    target: (usize, f64),
+) -> Result<Vec<PathPoint>, String> {
+    let supply = style.supply.1;
+    let row0 = fast_row(m, supply, 500.0)?;
+    let w0 = row0.free_speed_rad_s;
+    let items = page_items(page_dir, style, at_shaft(gear, &row0).free_speed_rad_s)?;
+    let y0 = all_coords(m);
+    let f0 = super::page::row_values(&fast_row(m, target.1, w0)?)[target.0].ln();
+    let rows_at = |mm: &TwinMotor| -> Result<Vec<TwinRow>, String> {
+        bar_g.iter().map(|b| fast_row(mm, *b, w0)).collect()
+    };
+    let motor_of = |y: &[f64]| from_x(m, &y[..NP], y[NP]);
+    // The page's residuals, the figure's (in TARGET_TOL), and the pull toward the page's
+    // motor; the worst of the first two.
+    let objective = |y: &[f64], s: f64| -> Option<(Vec<f64>, f64)> {
+        let mm = motor_of(y);
+        let (values, _) = page_values(&mm, gear, supply, &items, w0).ok()?;
+        let mut r = residuals(&items, &values);
+        let f = super::page::row_values(&fast_row(&mm, target.1, w0).ok()?)[target.0];
+        r.push((f.ln() - f0 - s) / TARGET_TOL);
+        let worst = r.iter().fold(0.0f64, |a, r| a.max(r.abs()));
+        let mut out: Vec<f64> = r.into_iter().map(sharp).collect();
+        out.extend((0..=NP).map(|i| PULL * (y[i] - y0[i]) / SIGMA[i]));
+        Some((out, worst))
+    };
+    let (values0, _) = page_values(m, gear, supply, &items, w0)?;
+    let worst0 = residuals(&items, &values0)
+        .iter()
+        .fold(0.0f64, |a, r| a.max(r.abs()));
+    let mut path = vec![PathPoint {
+        s: 0.0,
+        motor: m.clone(),
+        worst_residual: worst0,
+        rows: rows_at(m)?,
+    }];
+    let step0 = 0.02;
+    for dir in [1.0, -1.0] {
+        let (mut s, mut y): (f64, _) = (0.0, y0);
+        let mut slope = [0.0; NP + 1];
+        let mut step = step0;
+        while s.abs() < 0.7 && step >= step0 / 16.0 {
+            let s_try = s + dir * step;
+            let guess: [f64; NP + 1] = std::array::from_fn(|i| y[i] + slope[i] * (s_try - s));
+            let ok = levenberg_marquardt(|y: &[f64]| objective(y, s_try), guess).and_then(
+                |(yn, worst)| {
+                    let mm = motor_of(&yn);
+                    (worst < FEASIBLE && population_distance(&mm) <= Z_MAX)
+                        .then_some((yn, worst, mm))
+                },
+            );
+            match ok {
+                Some((yn, worst, mm)) => {
+                    path.push(PathPoint {
+                        s: s_try,
+                        rows: rows_at(&mm)?,
+                        motor: mm,
+                        worst_residual: worst,
+                    });
+                    slope = std::array::from_fn(|i| (yn[i] - y[i]) / (s_try - s));
+                    (s, y) = (s_try, yn);
+                    step = (2.0 * step).min(step0);
                 }
                 None => step *= 0.5,
             }
@@ -745,6 +967,24 @@ pub fn spread(path: &[PathPoint], p: usize, k: usize) -> (f64, usize, usize) {
 /// differs by `d` (f_b = (1 + d)·f_a): d/(2 + d).
 pub fn forced_error(d: f64) -> f64 {
     d / (2.0 + d)
+}
+
+/// Prints the styled pages of `a` and `b` ([`super::styles::print_styled_page`], the twin's
+/// reference printer) into `dir`/a and `dir`/b and returns whether every file is byte for
+/// byte the same.
+pub fn verify_same_styled_page(
+    a: &TwinMotor,
+    b: &TwinMotor,
+    page: &super::styles::StyledPage,
+    dir: &Path,
+) -> Result<bool, String> {
+    let (da, db) = (dir.join("a"), dir.join("b"));
+    super::styles::print_styled_page(&da, a, page)?;
+    super::styles::print_styled_page(&db, b, page)?;
+    let read = |d: &Path, f: &str| std::fs::read(d.join(f)).ok();
+    Ok(["rig.toml", "curves.csv"]
+        .iter()
+        .all(|f| read(&da, f) == read(&db, f)))
 }
 
 /// Prints the pages of `a` and `b` in `style` with the twin's reference printer
