@@ -476,7 +476,7 @@ fn styled_page_pairs_table() {
         jobs.len(),
         t0.elapsed().as_secs_f64()
     );
-    println!("| page | path motors | T_c range × | same page (reference printer) | widest at 5–7 bar g: figure @ bar g, spread D, forced D/(2 + D) | forced at 5 / 6 / 7 bar g (worst figure) | forced at 3 bar g | median forced, 35 figures at 3–7 bar g |\n|---|---|---|---|---|---|---|---|");
+    println!("| page | path motors | T_c range × | same page (reference printer) | widest at 5–7 bar g: figure @ bar g, spread D (the path's range relative to the page's motor), forced D/(2 + D) | forced at 5 / 6 / 7 bar g (worst figure) | forced at 3 bar g | median forced, 35 figures at 3–7 bar g |\n|---|---|---|---|---|---|---|---|");
     let (mut forced_57, mut medians) = (Vec::new(), Vec::new());
     for ((kind, seed), r) in &results {
         match r {
