@@ -35,7 +35,7 @@ pub use fit::{
 };
 pub use option::{Opt, OptionError};
 pub use predict::{
-    fit_atmosphere_pa, predict, predict_observed, pressure_unit, pressure_units, source_name,
+    fit_atmosphere_pa, predict, predict_located, predict_observed, pressure_unit, pressure_units, source_name,
     write_prediction, PredictOptions, PredictSettings, PredictTaskError,
 };
 pub use simulate::{

@@ -118,6 +118,8 @@ fn try_evaluate(
     let args = [
         "predict",
         fit_s,
+        "--bands",
+        "delta",
         "--pressures",
         "3,4,5,6,7",
         "--unit",
