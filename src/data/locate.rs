@@ -194,6 +194,7 @@ mod tests {
         let t = tempfile::tempdir().unwrap();
         dataset(t.path(), "measurements/other");
         dataset(t.path(), "measurements/m1");
+        std::fs::create_dir_all(t.path().join("fits")).unwrap();
         let fit_path = t.path().join("fits/f.json");
         for (rel, why) in [("../measurements/gone", "no such folder"), ("../measurements/other", "holds dataset other, not m1")] {
             let l = locate_dataset(Some(&fit_path), &fit("m1", Some(rel)));
@@ -209,6 +210,7 @@ mod tests {
     fn an_older_fit_file_is_found_by_name_beside_its_folder() {
         let t = tempfile::tempdir().unwrap();
         let ds = dataset(t.path(), "measurements/m1");
+        std::fs::create_dir_all(t.path().join("fits")).unwrap();
         let fit_path = t.path().join("fits/f.json");
         match locate_dataset(Some(&fit_path), &fit("m1", None)) {
             Located::Found(p, FoundBy::Name) => {
