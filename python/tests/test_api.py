@@ -344,13 +344,13 @@ def test_predict_control_and_synth_tables(cli_fit, tmp_path, capfd, private_tmp)
     before = _tempdir_entries()
     assert before == set()
     fit = vanefit.Fit.read(cli_fit)
-    p = vanefit.predict(fit, pressures=[4, 6.3])
+    p = vanefit.predict(fit, pressures=[4, 6.3], bands="delta")
     assert isinstance(p, vanefit.Prediction)
     cat = p.catalogue
     assert len(cat) == 2 and cat["free_speed_rpm"].iloc[1] > cat["free_speed_rpm"].iloc[0]
     assert len(p.factors) == 2 and len(p.curves) > 2 and p.notes and p.unit == "bar_g"
     # With out=, the command's files, and the tables are the files' own.
-    q = vanefit.predict(cli_fit, pressures=[4, 6.3], out=tmp_path / "pred")
+    q = vanefit.predict(cli_fit, pressures=[4, 6.3], out=tmp_path / "pred", bands="delta")
     for name in ("catalogue", "factors", "curves"):
         assert (tmp_path / "pred" / f"{name}.csv").read_text() == q.csv(name) == p.csv(name)
     assert (tmp_path / "pred" / "predict.md").is_file()

@@ -578,10 +578,17 @@ pub fn band_notes(pr: &Prediction) -> Vec<String> {
         }
         _ => "give the fit's dataset (--data) to band from posterior samples",
     };
-    if let Some(w) = &b.delta_unreliable {
-        out.push(format!(
-            "The delta method is NOT to be trusted here ({w}): the bands above may be far off; {fix}."
-        ));
+    match (&b.delta_unreliable, &b.sampling) {
+        // Samples were had: the fit file's reasons qualify the fallback.
+        (Some(w), Some(_)) => out.push(format!(
+            "The fit file says the posterior is not close to Gaussian here ({w}), where \
+             delta-method bands may be off: {fix}."
+        )),
+        (Some(w), None) => out.push(format!(
+            "The delta method is NOT to be trusted here ({w}): the bands above may be far \
+             off; {fix}."
+        )),
+        (None, _) => {}
     }
     if b.sampling.is_some() {
         out.push(format!(
