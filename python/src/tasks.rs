@@ -143,9 +143,9 @@ pub fn predict<'py>(
     let pr = py.detach(|| task::predict_located(fit_path, &file, &settings, &tell));
     observer.raise_callback_error()?;
     let pr = pr.map_err(|e| match e {
-            task::PredictTaskError::Option(o) => option_err(&o),
-            other => VanefitError::new_err(other.to_string()),
-        })?;
+        task::PredictTaskError::Option(o) => option_err(&o),
+        other => VanefitError::new_err(other.to_string()),
+    })?;
     let source = task::source_name(&fit, &file);
     let mut written = Vec::new();
     if let Some(dir) = &out {

@@ -180,7 +180,9 @@ pub(crate) fn run(args: &PredictArgs) -> Result<(), Failure> {
     .map_err(Failure::predict)?;
     let named = !(fit.dataset.is_empty() || fit.estimated.is_empty());
     if let (Some(PosteriorData::Missing(why)), true) = (&prediction.bands.data, named) {
-        eprintln!("WARNING: {why}; the bands are delta-method bands (give the dataset with --data)");
+        eprintln!(
+            "WARNING: {why}; the bands are delta-method bands (give the dataset with --data)"
+        );
     }
     let source = source_name(&args.fit, &fit);
     let written =

@@ -57,7 +57,11 @@ impl Located {
                 let looked: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
                 let mut text = format!(
                     "the dataset {name} was not found (looked at {})",
-                    if looked.is_empty() { "nothing: the fit file names no dataset".into() } else { looked.join(", ") }
+                    if looked.is_empty() {
+                        "nothing: the fit file names no dataset".into()
+                    } else {
+                        looked.join(", ")
+                    }
                 );
                 if let Some(why) = recorded {
                     text.push_str(&format!(": {why}"));
@@ -88,9 +92,13 @@ fn holds(dir: &Path, name: &str) -> Result<(), String> {
 /// from, by the rule of the module documentation. A relative `dataset_path` of a fit
 /// without a path is taken from the current folder.
 pub fn locate_dataset(fit_path: Option<&Path>, fit: &FitFile) -> Located {
-    let fit_dir = fit_path
-        .and_then(Path::parent)
-        .map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
+    let fit_dir = fit_path.and_then(Path::parent).map(|p| {
+        if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        }
+    });
     let name = fit.dataset.as_str();
     if let Some(rel) = &fit.dataset_path {
         let dir = fit_dir.map_or_else(|| PathBuf::from(rel), |d| d.join(rel));
@@ -144,7 +152,11 @@ pub fn relative_dataset_path(dataset_dir: &Path, fit_path: &Path) -> Option<Stri
             .iter()
             .map(|c| c.as_os_str().to_string_lossy().into_owned()),
     );
-    Some(if parts.is_empty() { ".".into() } else { parts.join("/") })
+    Some(if parts.is_empty() {
+        ".".into()
+    } else {
+        parts.join("/")
+    })
 }
 
 #[cfg(test)]
@@ -182,7 +194,10 @@ mod tests {
         let moved = t.path().join("b/fits/deep/f.json");
         match locate_dataset(Some(&moved), &fit("m1", Some(&rel))) {
             Located::Found(p, FoundBy::RecordedPath) => {
-                assert_eq!(p.canonicalize().unwrap(), t.path().join("b/measurements/m1").canonicalize().unwrap())
+                assert_eq!(
+                    p.canonicalize().unwrap(),
+                    t.path().join("b/measurements/m1").canonicalize().unwrap()
+                )
             }
             other => panic!("{other:?}"),
         }
@@ -196,12 +211,25 @@ mod tests {
         dataset(t.path(), "measurements/m1");
         std::fs::create_dir_all(t.path().join("fits")).unwrap();
         let fit_path = t.path().join("fits/f.json");
-        for (rel, why) in [("../measurements/gone", "no such folder"), ("../measurements/other", "holds dataset other, not m1")] {
+        for (rel, why) in [
+            ("../measurements/gone", "no such folder"),
+            ("../measurements/other", "holds dataset other, not m1"),
+        ] {
             let l = locate_dataset(Some(&fit_path), &fit("m1", Some(rel)));
-            let Located::Missing { recorded: Some(r), tried } = &l else { panic!("{l:?}") };
+            let Located::Missing {
+                recorded: Some(r),
+                tried,
+            } = &l
+            else {
+                panic!("{l:?}")
+            };
             assert!(r.contains(why) && r.contains(rel), "{r}");
             assert_eq!(tried.len(), 1);
-            assert!(l.describe("m1").contains("was not found"), "{}", l.describe("m1"));
+            assert!(
+                l.describe("m1").contains("was not found"),
+                "{}",
+                l.describe("m1")
+            );
         }
     }
 
@@ -219,7 +247,13 @@ mod tests {
             other => panic!("{other:?}"),
         }
         let l = locate_dataset(Some(&fit_path), &fit("nope", None));
-        let Located::Missing { tried, recorded: None } = &l else { panic!("{l:?}") };
+        let Located::Missing {
+            tried,
+            recorded: None,
+        } = &l
+        else {
+            panic!("{l:?}")
+        };
         assert_eq!(tried.len(), 2);
     }
 }

@@ -24,9 +24,9 @@ pub(crate) mod uncertainty;
 
 pub use options::{Nozzle, NozzlePort, PredictOptions, DEFAULT_CURVE_POINTS};
 pub use samples::{
-    delta_unreliable, BandChoice, BandMethod, BandReason, BandRequest, BandsMade,
-    PosteriorData, PosteriorDraws, PosteriorSource, PosteriorSummary, SamplingOptions,
-    DEFAULT_BURN_IN, DEFAULT_DRAWS, DEFAULT_STEPS,
+    delta_unreliable, BandChoice, BandMethod, BandReason, BandRequest, BandsMade, PosteriorData,
+    PosteriorDraws, PosteriorSource, PosteriorSummary, SamplingOptions, DEFAULT_BURN_IN,
+    DEFAULT_DRAWS, DEFAULT_STEPS,
 };
 
 pub use uncertainty::{BandBasis, ParamUncertainty};
@@ -417,7 +417,14 @@ fn choose_bands(
         data: request.data.cloned(),
     };
     let sample = |source: PosteriorSource| {
-        samples::sample_bands(fit, unc, source, request.sampling, figures, request.progress)
+        samples::sample_bands(
+            fit,
+            unc,
+            source,
+            request.sampling,
+            figures,
+            request.progress,
+        )
     };
     match (request.choice, request.posterior) {
         (BandChoice::Samples, None) => return Err(PredictError::NoPosterior),

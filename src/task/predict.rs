@@ -9,11 +9,11 @@
 use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
+use crate::data::locate::{locate_dataset, Located};
 use crate::estimate::fit::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use crate::estimate::sample::posterior::LogPrior;
 use crate::model::params::ParamId;
 use crate::predict::Prediction;
-use crate::data::locate::{locate_dataset, Located};
 use crate::predict::{
     BandChoice, BandRequest, Nozzle, NozzlePort, PosteriorData, PosteriorSource, PredictError,
     SamplingOptions,

@@ -88,16 +88,18 @@ fn without_data_predict_samples_the_dataset_the_fit_file_records() {
         root.join(CATALOGUE).canonicalize().unwrap()
     );
     let out = dir.path().join("samples");
-    let (code, stdout, stderr) = predict_run(&[
-        fit.to_str().unwrap(),
-        "--bands",
-        "samples",
-        "--out",
-        out.to_str().unwrap(),
-    ]
-    .into_iter()
-    .chain(SHORT)
-    .collect::<Vec<_>>());
+    let (code, stdout, stderr) = predict_run(
+        &[
+            fit.to_str().unwrap(),
+            "--bands",
+            "samples",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .into_iter()
+        .chain(SHORT)
+        .collect::<Vec<_>>(),
+    );
     assert_eq!(code, Some(0), "{stderr}");
     assert!(
         stdout.contains("posterior sampled on the dataset ar034-synthetic-catalogue at")
@@ -114,7 +116,10 @@ fn without_data_predict_samples_the_dataset_the_fit_file_records() {
     assert!(p["q025"].as_f64().unwrap() < p["q975"].as_f64().unwrap());
     // 200 steps do not converge: `samples` uses them anyway, and says so.
     let reason = json["reason"].as_str().unwrap();
-    assert!(reason.starts_with("bands from 60 posterior samples (R̂ ≤"), "{reason}");
+    assert!(
+        reason.starts_with("bands from 60 posterior samples (R̂ ≤"),
+        "{reason}"
+    );
     let md = std::fs::read_to_string(out.join("predict.md")).unwrap();
     assert!(md.contains("did NOT converge"), "{md}");
 
@@ -123,12 +128,21 @@ fn without_data_predict_samples_the_dataset_the_fit_file_records() {
     older.as_object_mut().unwrap().remove("dataset_path");
     let fits = dir.path().join("tree/fits");
     std::fs::create_dir_all(&fits).unwrap();
-    std::os::unix::fs::symlink(root.join("measurements"), dir.path().join("tree/measurements"))
-        .unwrap();
+    std::os::unix::fs::symlink(
+        root.join("measurements"),
+        dir.path().join("tree/measurements"),
+    )
+    .unwrap();
     let old = fits.join("old.json");
     std::fs::write(&old, serde_json::to_string_pretty(&older).unwrap()).unwrap();
     let out = dir.path().join("old");
-    let args = [old.to_str().unwrap(), "--bands", "samples", "--out", out.to_str().unwrap()];
+    let args = [
+        old.to_str().unwrap(),
+        "--bands",
+        "samples",
+        "--out",
+        out.to_str().unwrap(),
+    ];
     let (code, stdout, stderr) = predict_run(&args.into_iter().chain(SHORT).collect::<Vec<_>>());
     assert_eq!(code, Some(0), "{stderr}");
     assert!(stdout.contains("found by its name"), "{stdout}");
@@ -166,19 +180,30 @@ fn auto_falls_back_to_the_delta_method_with_the_reason_when_the_samples_do_not_c
     );
     assert!(stdout.contains(reason), "{stdout}");
     let md = std::fs::read_to_string(out.join("predict.md")).unwrap();
-    assert!(md.contains("Delta-method bands: the samples did not converge"), "{md}");
+    assert!(
+        md.contains("Delta-method bands: the samples did not converge"),
+        "{md}"
+    );
     assert!(md.contains("Not used for the bands"), "{md}");
     // The fit file's own reasons against the delta method are still said.
     if let Some(w) = json["delta_unreliable"].as_str() {
-        assert!(md.contains(&format!("not close to Gaussian here ({w})")), "{md}");
+        assert!(
+            md.contains(&format!("not close to Gaussian here ({w})")),
+            "{md}"
+        );
         assert!(!md.contains("NOT to be trusted"), "{md}");
     }
     assert!(!md.contains("POSTERIOR SAMPLES"), "{md}");
 
     // `delta` is instant: no sampling, and the reason is that it was asked.
     let out = dir.path().join("delta");
-    let (code, _, stderr) =
-        predict_run(&[fit.to_str().unwrap(), "--bands", "delta", "--out", out.to_str().unwrap()]);
+    let (code, _, stderr) = predict_run(&[
+        fit.to_str().unwrap(),
+        "--bands",
+        "delta",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(code, Some(0), "{stderr}");
     assert!(!stderr.contains("sampling"), "{stderr}");
     let json = bands_json(&out);
@@ -196,7 +221,10 @@ fn a_dataset_that_is_not_found_gives_a_warning_and_delta_bands() {
     let other = root.join("measurements/ar034-synthetic");
     // A path that does not exist, and one that holds another dataset.
     for (k, (path, why)) in [
-        ("../nowhere/ar034-synthetic-catalogue".to_string(), "no such folder"),
+        (
+            "../nowhere/ar034-synthetic-catalogue".to_string(),
+            "no such folder",
+        ),
         (
             other.to_str().unwrap().to_string(),
             "holds dataset ar034-synthetic, not ar034-synthetic-catalogue",
@@ -218,7 +246,10 @@ fn a_dataset_that_is_not_found_gives_a_warning_and_delta_bands() {
                 && stderr.contains(&path),
             "{stderr}"
         );
-        assert!(!stderr.contains("panicked") && !stderr.contains("sampling:"), "{stderr}");
+        assert!(
+            !stderr.contains("panicked") && !stderr.contains("sampling:"),
+            "{stderr}"
+        );
         let json = bands_json(&out);
         assert_eq!(json["method"], "delta");
         assert_eq!(json["dataset"]["found"], false);
@@ -238,7 +269,10 @@ fn a_dataset_that_is_not_found_gives_a_warning_and_delta_bands() {
             dir.path().join("bad").to_str().unwrap(),
         ]);
         assert_eq!(code, Some(1), "{stderr}");
-        assert!(stderr.contains("--data") && stderr.contains(why), "{stderr}");
+        assert!(
+            stderr.contains("--data") && stderr.contains(why),
+            "{stderr}"
+        );
     }
 }
 
