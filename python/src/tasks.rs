@@ -86,7 +86,7 @@ fn band_choice(bands: &str) -> PyResult<vanefit::predict::BandChoice> {
 /// `progress(stage, done, total)` is called at each tenth of the sampling and of the
 /// propagation of the samples.
 #[pyfunction]
-#[pyo3(signature = (fit, fit_text, pressures, unit, reference, inlet_nozzle, outlet_nozzle, speed_grid_rpm, curve_points, fixed_spread, out, data=None, bands="auto".to_string(), steps=None, burn_in=None, draws=None, seed=None, walkers=None, progress=None))]
+#[pyo3(signature = (fit, fit_text, pressures, unit, reference, inlet_nozzle, outlet_nozzle, speed_grid_rpm, curve_points, fixed_spread, out, data=None, bands=None, steps=None, burn_in=None, draws=None, seed=None, walkers=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn predict<'py>(
     py: Python<'py>,
@@ -102,7 +102,7 @@ pub fn predict<'py>(
     fixed_spread: Option<f64>,
     out: Option<PathBuf>,
     data: Option<PathBuf>,
-    bands: String,
+    bands: Option<String>,
     steps: Option<usize>,
     burn_in: Option<usize>,
     draws: Option<usize>,
@@ -125,7 +125,7 @@ pub fn predict<'py>(
         speed_grid_rpm,
         curve_points,
         fixed_spread,
-        bands: band_choice(&bands)?,
+        bands: band_choice(bands.as_deref().unwrap_or("auto"))?,
         data,
         sampling: SamplingOptions {
             walkers,

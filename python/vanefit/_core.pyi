@@ -140,7 +140,7 @@ def predict(
     fixed_spread: Optional[float],
     out: Optional[_Path],
     data: Optional[_Path] = None,
-    bands: str = "auto",
+    bands: Optional[str] = None,
     steps: Optional[int] = None,
     burn_in: Optional[int] = None,
     draws: Optional[int] = None,

@@ -591,9 +591,10 @@ pub fn band_notes(pr: &Prediction) -> Vec<String> {
         (None, _) => {}
     }
     if b.sampling.is_some() {
-        out.push(format!(
+        out.push(
             "The samples that did not converge are summarised under \"Posterior samples\"."
-        ));
+                .to_string(),
+        );
     }
     out
 }

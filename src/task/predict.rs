@@ -456,18 +456,18 @@ pub fn predict_located(
     predict_on(fit, settings, data, progress)
 }
 
+/// A dataset read for the posterior and where it was found, or why there is none.
+type DatasetAtHand = Result<(Dataset, PosteriorData), PosteriorData>;
+
 /// The dataset at `dir`, named by the settings: read (an error if it cannot be).
-fn given_dataset(dir: &Path) -> Result<Result<(Dataset, PosteriorData), PosteriorData>, DataError> {
+fn given_dataset(dir: &Path) -> Result<DatasetAtHand, DataError> {
     let ds = Dataset::load(dir)?;
     let at = PosteriorData::At(format!("dataset {} at {} (given)", ds.name, dir.display()));
     Ok(Ok((ds, at)))
 }
 
 /// The dataset of `fit` found by `data::locate` and read, or why not.
-fn located_dataset(
-    fit_path: Option<&Path>,
-    fit: &FitFile,
-) -> Result<(Dataset, PosteriorData), PosteriorData> {
+fn located_dataset(fit_path: Option<&Path>, fit: &FitFile) -> DatasetAtHand {
     let located = locate_dataset(fit_path, fit);
     let name = &fit.dataset;
     match &located {
@@ -488,7 +488,7 @@ fn located_dataset(
 fn predict_on(
     fit: &FitFile,
     settings: &PredictSettings,
-    data: Option<Result<(Dataset, PosteriorData), PosteriorData>>,
+    data: Option<DatasetAtHand>,
     progress: &(dyn Fn(&str, usize, usize) + Sync),
 ) -> Result<Prediction, PredictTaskError> {
     let o = &settings.options;
