@@ -111,7 +111,6 @@ pub fn predict<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(String, Option<SamplesOut<'py>>)> {
     use vanefit::predict::SamplingOptions;
-    use vanefit::report::predict as report;
     use vanefit::task;
     use vanefit::task::PredictOptions;
     let file = load_fit(&fit, fit_text.as_deref())?;
@@ -154,26 +153,37 @@ pub fn predict<'py>(
             .detach(|| task::write_prediction(&pr, &settings, &source, dir))
             .map_err(|e| VanefitError::new_err(e.to_string()))?;
     }
-    let display = settings.display();
     let samples = pr
         .bands
         .sampling
         .as_ref()
         .map(|s| samples_out(py, s))
         .transpose()?;
-    let json = serde_json::json!({
-        "catalogue": report::catalogue_csv(&pr, display),
-        "factors": report::factors_csv(&pr, display),
-        "curves": report::curves_csv(&pr, display),
-        "notes": report::notes(&pr, display),
-        "report": report::markdown(&pr, display, &source),
-        "bands": report::sampling_json(&pr),
+    Ok((prediction_json(&pr, &settings, &source, &written), samples))
+}
+
+/// The JSON `predict` hands to Python: the tables as CSV text, the notes, the report,
+/// `bands.json`, the sampled parameters' names, the unit and the files written.
+fn prediction_json(
+    pr: &vanefit::predict::Prediction,
+    settings: &vanefit::task::PredictSettings,
+    source: &str,
+    written: &[PathBuf],
+) -> String {
+    use vanefit::report::predict as report;
+    let display = settings.display();
+    serde_json::json!({
+        "catalogue": report::catalogue_csv(pr, display),
+        "factors": report::factors_csv(pr, display),
+        "curves": report::curves_csv(pr, display),
+        "notes": report::notes(pr, display),
+        "report": report::markdown(pr, display, source),
+        "bands": report::sampling_json(pr),
         "sampled": pr.bands.sampling.as_ref().map(|s| &s.names),
         "unit": display.unit.suffix(),
         "written": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     })
-    .to_string();
-    Ok((json, samples))
+    .to_string()
 }
 
 /// The dataset folder the fit was made from, by the rule `vanefit predict` follows

@@ -70,6 +70,9 @@ def test_fit_from_python_equals_the_cli_fit(ds, cli_fit, tmp_path):
     doc = py.document
     for k in ("parameters", "cost", "statistics", "covariance", "starts", "seed", "conditions"):
         assert doc[k] == cli[k], k
+    # Both record the dataset's folder relative to their own (what predict samples on).
+    for path, d in ((out, doc), (cli_fit, cli)):
+        assert (path.parent / d["dataset_path"]).resolve() == DATASET.resolve()
     # What Python wrote is the fit's own text, and it reads back as the same fit.
     assert out.read_text() == py.to_json()
     assert vanefit.Fit.read(out).document == doc

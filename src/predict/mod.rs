@@ -396,6 +396,9 @@ pub fn predict_with(
     })
 }
 
+/// Each figure's 95 % band, [lo, hi], in the order of the flattened figures.
+type Bands = Vec<[f64; 2]>;
+
 /// The bands of the figures (`shown`: their values at the estimate) as `request` asks,
 /// and which method made them and why (`predict::samples`, "When the bands come from
 /// samples"): `delta` always by the delta method; `samples` always from samples (an error
@@ -407,7 +410,7 @@ fn choose_bands(
     shown: &[f64],
     figures: &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync),
     request: &BandRequest,
-) -> Result<(Option<Vec<[f64; 2]>>, BandsMade), PredictError> {
+) -> Result<(Option<Bands>, BandsMade), PredictError> {
     let mut made = BandsMade {
         method: BandMethod::Delta,
         choice: request.choice,

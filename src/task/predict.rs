@@ -442,11 +442,14 @@ pub fn predict_located(
     let data = match (&settings.data, settings.bands) {
         (_, BandChoice::Delta) => None,
         (Some(dir), _) => Some(given_dataset(dir)?),
-        (None, _) if fit.estimated.is_empty() => Some(Err(PosteriorData::Missing(
-            "the fit estimated no parameter: there is no posterior to sample".into(),
-        ))),
         (None, choice) => {
-            let found = located_dataset(fit_path, fit);
+            let found = if fit.estimated.is_empty() {
+                Err(PosteriorData::Missing(
+                    "the fit estimated no parameter: there is no posterior to sample".into(),
+                ))
+            } else {
+                located_dataset(fit_path, fit)
+            };
             if let (BandChoice::Samples, Err(PosteriorData::Missing(why))) = (choice, &found) {
                 return Err(OptionError::of(Opt::PredictData, format!(": {why}")).into());
             }
