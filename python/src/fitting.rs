@@ -101,8 +101,10 @@ pub fn fit(
     let run = py.detach(|| vanefit::task::fit(&dataset, &settings, results, &observer));
     // The callback's exception (or the KeyboardInterrupt) first: it is why a run stopped.
     observer.raise_callback_error()?;
-    let run = run.map_err(fit_err)?;
+    let mut run = run.map_err(fit_err)?;
     if let Some(o) = &out {
+        // As `vanefit fit` writes it: with the dataset's folder relative to the file's.
+        run.file.dataset_path = vanefit::data::locate::relative_dataset_path(&dataset, o);
         run.file
             .write(o)
             .map_err(|e| VanefitError::new_err(format!("{}: {e}", o.display())))?;

@@ -141,3 +141,43 @@ impl DiagnoseObserver for PyDiagnoseProgress {
         self.callback.call(|_| (elapsed_s, text));
     }
 }
+
+/// Calls `progress(stage, done, total)` while a prediction samples its posterior
+/// (`"sampling"`: steps of the walkers) and propagates the samples (`"propagating"`), at
+/// each tenth of a stage: the work runs on rayon's threads, and a call per step would hold
+/// them at the GIL.
+pub struct PyPredictProgress {
+    callback: Callback,
+    last: Mutex<(String, usize)>,
+}
+
+impl PyPredictProgress {
+    /// An observer calling `progress` (none: silent).
+    pub fn new(progress: Option<Py<PyAny>>) -> Self {
+        Self {
+            callback: Callback::new(progress),
+            last: Mutex::new((String::new(), 0)),
+        }
+    }
+
+    /// Tells the callable of `done` of `total` in stage `what` when a new tenth is reached.
+    pub fn tell(&self, what: &str, done: usize, total: usize) {
+        let tenth = (10 * done) / total.max(1);
+        {
+            let mut last = match self.last.lock() {
+                Ok(g) => g,
+                Err(p) => p.into_inner(),
+            };
+            if last.0 == what && tenth <= last.1 {
+                return;
+            }
+            *last = (what.to_string(), tenth);
+        }
+        self.callback.call(|_| (what.to_string(), done, total));
+    }
+
+    /// The callback's first exception, raised once the prediction returned.
+    pub fn raise_callback_error(&self) -> PyResult<()> {
+        self.callback.raise()
+    }
+}

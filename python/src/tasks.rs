@@ -6,6 +6,7 @@
 use crate::errors::{data_err, param_err, DataError, ParameterError, VanefitError};
 use crate::fitting::option_err;
 use pyo3::prelude::*;
+use pyo3::types::PyByteArray;
 use std::path::{Path, PathBuf};
 use vanefit::data::Dataset;
 use vanefit::data::FitFile;
@@ -19,15 +20,76 @@ pub fn load_fit(path: &Path, text: Option<&str>) -> PyResult<FitFile> {
     }
 }
 
+/// The kept posterior samples of a prediction for Python: the SI values
+/// (walker × step × parameter) and ln p (walker × step) as little-endian f64 bytes, the
+/// shape (walkers, steps, parameters) and the acceptance per walker.
+pub type SamplesOut<'py> = (
+    Bound<'py, PyByteArray>,
+    Bound<'py, PyByteArray>,
+    (usize, usize, usize),
+    Vec<f64>,
+);
+
+/// `values` as little-endian f64 bytes.
+fn f64_bytes<'py>(
+    py: Python<'py>,
+    values: impl Iterator<Item = f64>,
+    n: usize,
+) -> PyResult<Bound<'py, PyByteArray>> {
+    PyByteArray::new_with(py, 8 * n, |bytes| {
+        for (chunk, v) in bytes.chunks_exact_mut(8).zip(values) {
+            chunk.copy_from_slice(&v.to_le_bytes());
+        }
+        Ok(())
+    })
+}
+
+/// The kept samples of `s` for Python ([`SamplesOut`]).
+fn samples_out<'py>(
+    py: Python<'py>,
+    s: &vanefit::predict::PosteriorSummary,
+) -> PyResult<SamplesOut<'py>> {
+    let k = &s.kept;
+    let walkers = k.values.len();
+    let steps = k.values.first().map_or(0, Vec::len);
+    let d = s.names.len();
+    let values = k.values.iter().flatten().flatten().copied();
+    let lp = k.log_density.iter().flatten().copied();
+    Ok((
+        f64_bytes(py, values, walkers * steps * d)?,
+        f64_bytes(py, lp, walkers * steps)?,
+        (walkers, steps, d),
+        k.acceptance.clone(),
+    ))
+}
+
+/// `bands` as the library's choice: `auto`, `delta` or `samples`.
+fn band_choice(bands: &str) -> PyResult<vanefit::predict::BandChoice> {
+    use vanefit::predict::BandChoice;
+    match bands {
+        "auto" => Ok(BandChoice::Auto),
+        "delta" => Ok(BandChoice::Delta),
+        "samples" => Ok(BandChoice::Samples),
+        other => Err(param_err(format!(
+            "bands {other:?}: use \"auto\", \"delta\" or \"samples\""
+        ))),
+    }
+}
+
 /// What the fitted motor does at other supply pressures or behind a nozzle, as `vanefit
 /// predict`: JSON with the tables (`catalogue`, `factors`, `curves`: CSV text with the
-/// command's columns and numbers), `notes`, `report` (the markdown of `predict.md`) and
-/// `written` (the files, when `out` is given).
+/// command's columns and numbers), `notes`, `report` (the markdown of `predict.md`),
+/// `bands` (`bands.json`: the method, why, the posterior summary) and `written` (the
+/// files, when `out` is given); and the kept posterior samples ([`SamplesOut`], `None`
+/// when none were drawn). The dataset is `data`, else the one the fit file records
+/// (`vanefit::data::locate`; `fit` = `<fit>`: a fit held in memory, looked up by name).
+/// `progress(stage, done, total)` is called at each tenth of the sampling and of the
+/// propagation of the samples.
 #[pyfunction]
-#[pyo3(signature = (fit, fit_text, pressures, unit, reference, inlet_nozzle, outlet_nozzle, speed_grid_rpm, curve_points, fixed_spread, out))]
+#[pyo3(signature = (fit, fit_text, pressures, unit, reference, inlet_nozzle, outlet_nozzle, speed_grid_rpm, curve_points, fixed_spread, out, data=None, bands=None, steps=None, burn_in=None, draws=None, seed=None, walkers=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
-pub fn predict(
-    py: Python<'_>,
+pub fn predict<'py>(
+    py: Python<'py>,
     fit: PathBuf,
     fit_text: Option<String>,
     pressures: Option<Vec<f64>>,
@@ -39,11 +101,20 @@ pub fn predict(
     curve_points: usize,
     fixed_spread: Option<f64>,
     out: Option<PathBuf>,
-) -> PyResult<String> {
-    use vanefit::report::predict as report;
+    data: Option<PathBuf>,
+    bands: Option<String>,
+    steps: Option<usize>,
+    burn_in: Option<usize>,
+    draws: Option<usize>,
+    seed: Option<u64>,
+    walkers: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(String, Option<SamplesOut<'py>>)> {
+    use vanefit::predict::SamplingOptions;
     use vanefit::task;
     use vanefit::task::PredictOptions;
     let file = load_fit(&fit, fit_text.as_deref())?;
+    let d = SamplingOptions::default();
     let settings = PredictOptions {
         unit: task::pressure_unit(task::Opt::PredictUnit, &unit).map_err(|e| option_err(&e))?,
         pressures,
@@ -53,13 +124,27 @@ pub fn predict(
         speed_grid_rpm,
         curve_points,
         fixed_spread,
-        ..PredictOptions::default()
+        bands: band_choice(bands.as_deref().unwrap_or("auto"))?,
+        data,
+        sampling: SamplingOptions {
+            walkers,
+            steps: steps.unwrap_or(d.steps),
+            burn_in: burn_in.unwrap_or(d.burn_in),
+            draws: draws.unwrap_or(d.draws),
+            seed: seed.unwrap_or(d.seed),
+        },
     }
     .check(task::fit_atmosphere_pa(&file))
     .map_err(|e| option_err(&e))?;
-    let pr = py
-        .detach(|| task::predict(&file, &settings))
-        .map_err(|e| VanefitError::new_err(e.to_string()))?;
+    let fit_path = (fit.as_os_str() != "<fit>").then_some(fit.as_path());
+    let observer = crate::observe::PyPredictProgress::new(progress);
+    let tell = |what: &str, done: usize, total: usize| observer.tell(what, done, total);
+    let pr = py.detach(|| task::predict_located(fit_path, &file, &settings, &tell));
+    observer.raise_callback_error()?;
+    let pr = pr.map_err(|e| match e {
+        task::PredictTaskError::Option(o) => option_err(&o),
+        other => VanefitError::new_err(other.to_string()),
+    })?;
     let source = task::source_name(&fit, &file);
     let mut written = Vec::new();
     if let Some(dir) = &out {
@@ -68,17 +153,55 @@ pub fn predict(
             .detach(|| task::write_prediction(&pr, &settings, &source, dir))
             .map_err(|e| VanefitError::new_err(e.to_string()))?;
     }
+    let samples = pr
+        .bands
+        .sampling
+        .as_ref()
+        .map(|s| samples_out(py, s))
+        .transpose()?;
+    Ok((prediction_json(&pr, &settings, &source, &written), samples))
+}
+
+/// The JSON `predict` hands to Python: the tables as CSV text, the notes, the report,
+/// `bands.json`, the sampled parameters' names, the unit and the files written.
+fn prediction_json(
+    pr: &vanefit::predict::Prediction,
+    settings: &vanefit::task::PredictSettings,
+    source: &str,
+    written: &[PathBuf],
+) -> String {
+    use vanefit::report::predict as report;
     let display = settings.display();
-    Ok(serde_json::json!({
-        "catalogue": report::catalogue_csv(&pr, display),
-        "factors": report::factors_csv(&pr, display),
-        "curves": report::curves_csv(&pr, display),
-        "notes": report::notes(&pr, display),
-        "report": report::markdown(&pr, display, &source),
+    serde_json::json!({
+        "catalogue": report::catalogue_csv(pr, display),
+        "factors": report::factors_csv(pr, display),
+        "curves": report::curves_csv(pr, display),
+        "notes": report::notes(pr, display),
+        "report": report::markdown(pr, display, source),
+        "bands": report::sampling_json(pr),
+        "sampled": pr.bands.sampling.as_ref().map(|s| &s.names),
         "unit": display.unit.suffix(),
         "written": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     })
-    .to_string())
+    .to_string()
+}
+
+/// The dataset folder the fit was made from, by the rule `vanefit predict` follows
+/// (`vanefit::data::locate`: the fit file's `dataset_path`, else `measurements/<dataset>`
+/// beside its folder or in the current one; `fit` = `<fit>`: a fit held in memory):
+/// (the folder or `None`, where it was found or looked for, in words).
+#[pyfunction]
+#[pyo3(signature = (fit, fit_text))]
+pub fn find_dataset(fit: PathBuf, fit_text: Option<String>) -> PyResult<(Option<String>, String)> {
+    use vanefit::data::locate::{locate_dataset, Located};
+    let file = load_fit(&fit, fit_text.as_deref())?;
+    let fit_path = (fit.as_os_str() != "<fit>").then_some(fit.as_path());
+    let located = locate_dataset(fit_path, &file);
+    let said = located.describe(&file.dataset);
+    Ok(match located {
+        Located::Found(dir, _) => (Some(dir.display().to_string()), said),
+        _ => (None, said),
+    })
 }
 
 /// Writes the fitted motor as an FMU to the file `out` (as `vanefit export-fmu`): the fit

@@ -70,6 +70,9 @@ def test_fit_from_python_equals_the_cli_fit(ds, cli_fit, tmp_path):
     doc = py.document
     for k in ("parameters", "cost", "statistics", "covariance", "starts", "seed", "conditions"):
         assert doc[k] == cli[k], k
+    # Both record the dataset's folder relative to their own (what predict samples on).
+    for path, d in ((out, doc), (cli_fit, cli)):
+        assert (path.parent / d["dataset_path"]).resolve() == DATASET.resolve()
     # What Python wrote is the fit's own text, and it reads back as the same fit.
     assert out.read_text() == py.to_json()
     assert vanefit.Fit.read(out).document == doc
@@ -344,13 +347,13 @@ def test_predict_control_and_synth_tables(cli_fit, tmp_path, capfd, private_tmp)
     before = _tempdir_entries()
     assert before == set()
     fit = vanefit.Fit.read(cli_fit)
-    p = vanefit.predict(fit, pressures=[4, 6.3])
+    p = vanefit.predict(fit, pressures=[4, 6.3], bands="delta")
     assert isinstance(p, vanefit.Prediction)
     cat = p.catalogue
     assert len(cat) == 2 and cat["free_speed_rpm"].iloc[1] > cat["free_speed_rpm"].iloc[0]
     assert len(p.factors) == 2 and len(p.curves) > 2 and p.notes and p.unit == "bar_g"
     # With out=, the command's files, and the tables are the files' own.
-    q = vanefit.predict(cli_fit, pressures=[4, 6.3], out=tmp_path / "pred")
+    q = vanefit.predict(cli_fit, pressures=[4, 6.3], out=tmp_path / "pred", bands="delta")
     for name in ("catalogue", "factors", "curves"):
         assert (tmp_path / "pred" / f"{name}.csv").read_text() == q.csv(name) == p.csv(name)
     assert (tmp_path / "pred" / "predict.md").is_file()

@@ -36,6 +36,7 @@ from ._api import (  # noqa: F401
     FitStatistics,
     Diagnosis,
     Prediction,
+    Samples,
     StudyResult,
     Likelihood,
     chain_diagnostics,

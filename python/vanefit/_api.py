@@ -14,8 +14,8 @@ import numpy as np
 
 from . import _core
 from ._core import DataError, ParameterError, VanefitError, __version__
-from .progress import Progress, fit_progress, diagnose_progress
-from .results import Diagnosis, Fit, FitStatistics, Prediction, StudyResult
+from .progress import Progress, fit_progress, diagnose_progress, predict_progress
+from .results import Diagnosis, Fit, FitStatistics, Prediction, Samples, StudyResult
 
 __all__ = [
     "Dataset",
@@ -23,6 +23,7 @@ __all__ = [
     "FitStatistics",
     "Diagnosis",
     "Prediction",
+    "Samples",
     "StudyResult",
     "Likelihood",
     "chain_diagnostics",
@@ -333,16 +334,20 @@ class Likelihood:
     ) -> Dict[str, np.ndarray]:
         """Runs vanefit's affine-invariant ensemble sampler (the stretch move, as emcee) on
         :meth:`log_posterior` from ``starts`` (walkers × parameters, sampling coordinates).
-        Returns ``chain`` (steps × walkers × parameters, emcee's ``get_chain()`` layout),
-        ``log_prob`` (steps × walkers) and ``acceptance`` (per walker). The same seed gives
-        the same chains whatever the thread count."""
+        Returns a :class:`Samples` dict: ``chain`` (steps × walkers × parameters, emcee's
+        ``get_chain()`` layout, sampling coordinates), ``log_prob`` (steps × walkers),
+        ``acceptance`` (per walker) and ``names``; ``.to_arviz()`` gives them as an
+        ``arviz.InferenceData``. The same seed gives the same chains whatever the thread
+        count."""
         x0 = [[float(v) for v in row] for row in np.asarray(starts, dtype=float)]
         chains, lp, acc = self._core.sample(x0, int(steps), int(burn_in), int(seed))
-        return {
-            "chain": np.transpose(np.asarray(chains), (1, 0, 2)),
-            "log_prob": np.asarray(lp).T,
-            "acceptance": np.asarray(acc),
-        }
+        return Samples(
+            chain=np.transpose(np.asarray(chains), (1, 0, 2)),
+            log_prob=np.asarray(lp).T,
+            acceptance=np.asarray(acc),
+            names=self.names,
+            units="coords",
+        )
 
 
 def chain_diagnostics(chains: Any) -> Dict[str, np.ndarray]:
@@ -360,19 +365,14 @@ def likelihood(ds: Dataset, fit: Union[Fit, PathLike], priors: bool = True) -> L
     return Likelihood(ds, fit, priors)
 
 
-def _find_dataset(fit_path: Optional[str], name: str) -> str:
-    """``measurements/<name>`` beside the fit file's folder, then in the current folder."""
-    tried = []
-    if fit_path and fit_path != "<fit>":
-        tried.append(Path(fit_path).resolve().parent.parent / "measurements" / name)
-    tried.append(Path("measurements") / name)
-    for p in tried:
-        if (p / "rig.toml").is_file():
-            return os.fspath(p)
-    raise DataError(
-        f"{fit_path or 'the fit'}: dataset {name!r} not found at "
-        f"{', '.join(map(str, tried))}; name it with dataset="
-    )
+def _find_dataset(fit_path: str, text: Optional[str]) -> str:
+    """The fit's dataset folder by the rule ``vanefit predict`` follows (the fit file's
+    ``dataset_path``, else ``measurements/<name>`` beside the fit file's folder or in the
+    current folder); :class:`DataError` saying where it looked when it is not found."""
+    found, said = _core.find_dataset(fit_path, text)
+    if found is None:
+        raise DataError(f"{fit_path}: {said}; name it with dataset=")
+    return found
 
 
 def export_petab(
@@ -391,8 +391,7 @@ def export_petab(
     if isinstance(dataset, Dataset):
         dataset = dataset.path
     if dataset is None:
-        name = (Fit(text) if text is not None else Fit.read(path)).dataset
-        dataset = _find_dataset(path, name)
+        dataset = _find_dataset(path, text)
     if text is not None and path == "<fit>":
         # A fit held in memory goes into the export beside its tables, so that
         # vanefit_export.json names a file that vanefit.petab can rebuild it from.
@@ -463,6 +462,13 @@ def predict(
     curve_points: int = 41,
     fixed_spread: Optional[float] = None,
     out: Optional[PathLike] = None,
+    data: Optional[Union[Dataset, PathLike]] = None,
+    bands: str = "auto",
+    steps: Optional[int] = None,
+    burn_in: Optional[int] = None,
+    draws: Optional[int] = None,
+    seed: Optional[int] = None,
+    progress: Progress = None,
 ) -> Prediction:
     """The fitted motor at other supply pressures (in ``unit``: ``bar_g``, ``pa``, ``mpa``,
     ...; default 3, 4, 5, 6, 7 bar g) or behind a nozzle (sonic conductance, m³/(s·Pa)), as
@@ -470,20 +476,55 @@ def predict(
     ``factors`` and ``curves`` (the command's columns and numbers, 95 % bands as
     ``_lo``/``_hi``), its ``notes`` and ``report``. ``fit``: a :class:`Fit` or a fit file's
     path. ``reference``: the correction factors' reference pressure (default 6.3 bar g).
-    ``out``: also write the command's files (CSV, ``predict.md``, SVG figures) there."""
+    ``out``: also write the command's files (CSV, ``predict.md``, SVG figures) there.
+
+    ``bands``: ``"auto"`` (default: posterior samples of the fit's dataset when they
+    converged, R̂ < 1.01 and ESS ≥ 400, else the delta method), ``"delta"`` (instant) or
+    ``"samples"`` (the samples, converged or not). ``data``: the fit's dataset (a
+    :class:`Dataset` or its folder); by default the one the fit file records
+    (``dataset_path``), else ``measurements/<name>`` beside the fit file's folder or in the
+    current folder. ``steps``, ``burn_in``, ``draws``, ``seed``: the sampler's (defaults
+    as ``vanefit predict``). Which method made the bands and why: ``.method``, ``.bands``;
+    the samples' summary ``.posterior`` and, when samples were drawn, ``.samples`` and
+    ``.to_arviz()`` (SI values). ``progress``: ``True`` for a tqdm bar, or a callable
+    ``progress(stage, done, total)`` at each tenth of the sampling."""
     path, text = _fit_source(fit)
-    return Prediction(json.loads(_core.predict(
-        path, text,
-        None if pressures is None else [float(p) for p in pressures],
-        str(unit),
-        None if reference is None else float(reference),
-        None if inlet_nozzle is None else float(inlet_nozzle),
-        None if outlet_nozzle is None else float(outlet_nozzle),
-        float(speed_grid_rpm),
-        int(curve_points),
-        None if fixed_spread is None else float(fixed_spread),
-        None if out is None else os.fspath(out),
-    )))
+    if isinstance(data, Dataset):
+        data = data.path
+    with predict_progress(progress) as callback:
+        doc, kept = _core.predict(
+            path, text,
+            None if pressures is None else [float(p) for p in pressures],
+            str(unit),
+            None if reference is None else float(reference),
+            None if inlet_nozzle is None else float(inlet_nozzle),
+            None if outlet_nozzle is None else float(outlet_nozzle),
+            float(speed_grid_rpm),
+            int(curve_points),
+            None if fixed_spread is None else float(fixed_spread),
+            None if out is None else os.fspath(out),
+            None if data is None else os.fspath(data),
+            str(bands),
+            None if steps is None else int(steps),
+            None if burn_in is None else int(burn_in),
+            None if draws is None else int(draws),
+            None if seed is None else int(seed),
+            None,
+            callback,
+        )
+    doc = json.loads(doc)
+    samples = None
+    if kept is not None:
+        values, lp, (walkers, steps_kept, d), acceptance = kept
+        chain = np.frombuffer(values, dtype="<f8").reshape(walkers, steps_kept, d)
+        samples = Samples(
+            chain=np.transpose(chain, (1, 0, 2)),
+            log_prob=np.frombuffer(lp, dtype="<f8").reshape(walkers, steps_kept).T,
+            acceptance=np.asarray(acceptance),
+            names=list(doc["sampled"]),
+            units="SI",
+        )
+    return Prediction(doc, samples)
 
 
 _MOTOR = {"effects": None, "brake_nm_s_rad": None}

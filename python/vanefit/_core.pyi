@@ -25,6 +25,7 @@ __all__ = [
     "fit",
     "diagnose",
     "predict",
+    "find_dataset",
     "export_petab",
     "export_fmu",
     "synth",
@@ -138,7 +139,16 @@ def predict(
     curve_points: int,
     fixed_spread: Optional[float],
     out: Optional[_Path],
-) -> str: ...
+    data: Optional[_Path] = None,
+    bands: Optional[str] = None,
+    steps: Optional[int] = None,
+    burn_in: Optional[int] = None,
+    draws: Optional[int] = None,
+    seed: Optional[int] = None,
+    walkers: Optional[int] = None,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> Tuple[str, Optional[Tuple[bytearray, bytearray, Tuple[int, int, int], List[float]]]]: ...
+def find_dataset(fit: _Path, fit_text: Optional[str]) -> Tuple[Optional[str], str]: ...
 def export_petab(fit: _Path, fit_text: Optional[str], dataset: _Path, out: _Path) -> str: ...
 def export_fmu(fit: _Path, fit_text: Optional[str], out: _Path, binary: Optional[_Path]) -> str: ...
 def synth(

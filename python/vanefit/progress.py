@@ -6,7 +6,9 @@ the work runs on vanefit's threads (the GIL is taken only for the call):
 
 * fit: ``progress(done, total, best_cost)`` — when the run begins (``done`` = starts
   already finished, e.g. read back on resume; ``best_cost`` = inf) and after every start;
-* diagnose: ``progress(elapsed_s, message)`` at every phase.
+* diagnose: ``progress(elapsed_s, message)`` at every phase;
+* predict: ``progress(stage, done, total)`` at each tenth of the posterior sampling
+  (``"sampling"``, steps) and of the propagation of its samples (``"propagating"``).
 
 An exception raised by the callable stops a fit at its next round of starts and is raised
 by :func:`vanefit.fit`.
@@ -21,7 +23,7 @@ from typing import Any, Callable, Iterator, Optional, Union
 #: What ``progress=`` accepts.
 Progress = Union[None, bool, Callable[..., Any]]
 
-__all__ = ["Progress", "fit_progress", "diagnose_progress"]
+__all__ = ["Progress", "fit_progress", "diagnose_progress", "predict_progress"]
 
 
 def _tqdm_class():
@@ -106,3 +108,23 @@ def diagnose_progress(
         return update
 
     return _progress(progress, "diagnose", "step", updater)
+
+
+def predict_progress(
+    progress: Progress,
+) -> contextlib.AbstractContextManager[Optional[Callable[[str, int, int], Any]]]:
+    """The callback of a prediction for ``progress=``; for ``True`` a tqdm bar over each
+    stage of the posterior sampling (``sampling``, then ``propagating``)."""
+
+    def updater(bar: Any) -> Callable[[str, int, int], None]:
+        def update(stage: str, done: int, total: int) -> None:
+            if bar.desc != stage:
+                bar.set_description_str(stage, refresh=False)
+            if bar.total != total:
+                bar.total = total
+            bar.n = done
+            bar.refresh()
+
+        return update
+
+    return _progress(progress, "predict", "step", updater)

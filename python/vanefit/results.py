@@ -40,6 +40,7 @@ __all__ = [
     "FitStatistics",
     "Diagnosis",
     "Prediction",
+    "Samples",
     "StudyResult",
 ]
 
@@ -426,13 +427,78 @@ def _read_csv(text: str) -> "pd.DataFrame":
     return _pd().read_csv(io.StringIO(text))
 
 
+class Samples(dict):
+    """Posterior samples of a fit, as a dict: ``chain`` (steps × walkers × parameters,
+    emcee's ``get_chain()`` layout), ``log_prob`` (steps × walkers), ``acceptance`` (per
+    walker) and ``names`` (the parameters), with :meth:`to_arviz`. ``units``: ``"SI"`` when
+    ``chain`` holds SI values (a prediction's samples), ``"coords"`` when it holds the
+    sampler's coordinates (ln θ of a log-scale parameter; :meth:`vanefit.Likelihood.sample`)."""
+
+    def to_arviz(self) -> Any:
+        """The samples as an ``arviz.InferenceData``: group ``posterior`` with one variable
+        per parameter (its name), dims ``chain`` × ``draw`` (each walker is a chain; the
+        values as in ``chain``: SI, or the sampler's coordinates), and ``sample_stats``
+        with ``lp`` (ln p of each sample) and ``acceptance_rate`` (each walker's over its
+        kept steps, repeated over the draws). arviz's ``rhat``/``ess`` of it are those
+        vanefit reports for the same chains."""
+        import arviz as az
+
+        chain = np.asarray(self["chain"])  # steps × walkers × d
+        per_walker = np.transpose(chain, (1, 0, 2))  # walkers × steps × d
+        posterior = {n: per_walker[:, :, i] for i, n in enumerate(self["names"])}
+        lp = np.asarray(self["log_prob"]).T
+        acc = np.repeat(np.asarray(self["acceptance"], dtype=float)[:, None], lp.shape[1], 1)
+        return az.from_dict(
+            posterior=posterior,
+            sample_stats={"lp": lp, "acceptance_rate": acc},
+            attrs={"units": self.get("units", "SI"), "sampler": "vanefit ensemble"},
+        )
+
+
 class Prediction:
     """A prediction: the tables ``vanefit predict`` writes (``catalogue.csv``,
     ``factors.csv``, ``curves.csv``, same columns and numbers) as DataFrames, its notes and
-    its report (``predict.md``)."""
+    its report (``predict.md``); which method made the bands and why (:attr:`bands`,
+    :attr:`method`), the posterior summary (:attr:`posterior`) and the samples
+    (:attr:`samples`, :meth:`to_arviz`) when any were drawn."""
 
-    def __init__(self, doc: Mapping[str, Any]):
+    def __init__(self, doc: Mapping[str, Any], samples: Optional["Samples"] = None):
         self._doc = dict(doc)
+        self._samples = samples
+
+    @property
+    def bands(self) -> Dict[str, Any]:
+        """``bands.json``: ``method`` (``"samples"`` or ``"delta"``), ``asked``
+        (``"auto"``, ``"delta"``, ``"samples"``), ``reason`` (which method and why, one
+        sentence), ``dataset`` (``found`` and ``where``, or ``None`` when none was needed),
+        ``delta_unreliable`` (what in the fit file speaks against the delta method) and
+        ``sampling`` (the posterior summary, or ``None``)."""
+        return dict(self._doc["bands"])
+
+    @property
+    def method(self) -> str:
+        """The method that made the bands: ``"samples"`` or ``"delta"``."""
+        return self._doc["bands"]["method"]
+
+    @property
+    def posterior(self) -> Optional[Dict[str, Any]]:
+        """The posterior samples' summary (walkers, steps, acceptance, ``converged``,
+        ``rhat_max``, ``ess_min`` and per parameter its quantiles, R̂ and ESS), whether or
+        not they made the bands; ``None`` when none were drawn."""
+        return self._doc["bands"]["sampling"]
+
+    @property
+    def samples(self) -> Optional["Samples"]:
+        """The kept posterior samples (SI values), or ``None`` when none were drawn."""
+        return self._samples
+
+    def to_arviz(self) -> Any:
+        """The posterior samples as an ``arviz.InferenceData`` (:meth:`Samples.to_arviz`;
+        values in SI units); :class:`ValueError` when none were drawn (``bands="delta"``,
+        or no dataset)."""
+        if self._samples is None:
+            raise ValueError(f"no posterior samples: {self._doc['bands']['reason']}")
+        return self._samples.to_arviz()
 
     @property
     def catalogue(self) -> "pd.DataFrame":

@@ -12,10 +12,10 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 use vanefit::data::FitFile;
-use vanefit::predict::{BandChoice, SamplingOptions};
+use vanefit::predict::{BandChoice, PosteriorData, SamplingOptions};
 use vanefit::report::predict::{notes, tables_markdown};
 use vanefit::task::{
-    fit_atmosphere_pa, predict_observed, pressure_unit, source_name, write_prediction,
+    fit_atmosphere_pa, predict_located, pressure_unit, source_name, write_prediction,
     PredictOptions,
 };
 
@@ -77,14 +77,15 @@ pub(crate) struct PredictArgs {
     #[arg(long)]
     pub(crate) fixed_spread: Option<f64>,
     /// How the 95 % bands are made: `delta` (linearised about the estimate with the fit's
-    /// covariance), `samples` (percentiles of the figures of posterior samples; needs
-    /// --data) or `auto`: samples when --data is given and the fit says the delta method
-    /// fails (a parameter not identifiable or without interval, or an interval lopsided
-    /// by more than 1.5:1 in its logarithm), else delta.
+    /// covariance; instant), `samples` (percentiles of the figures of posterior samples of
+    /// the fit's dataset, converged or not) or `auto`: samples when the dataset is at hand
+    /// and they converged (every R̂ < 1.01, ESS ≥ 400), else delta; the output says which
+    /// and why.
     #[arg(long, default_value = "auto", value_parser = ["auto", "delta", "samples"])]
     pub(crate) bands: String,
-    /// The dataset folder the fit was made from: lets the bands come from posterior
-    /// samples of its likelihood.
+    /// The dataset folder the fit was made from, for the posterior samples (default: the
+    /// fit file's dataset_path, or for older fit files measurements/<dataset> beside the
+    /// fit file's folder or in the current folder).
     #[arg(long)]
     pub(crate) data: Option<PathBuf>,
     /// Walkers of the posterior sampler (even; default max(16, 4 × estimated parameters)).
@@ -173,15 +174,25 @@ pub(crate) fn run(args: &PredictArgs) -> Result<(), Failure> {
         eprintln!("WARNING: {warning}");
     }
     let bar = Progress::default();
-    let prediction = predict_observed(&fit, &settings, &|what, done, total| {
+    let prediction = predict_located(Some(&args.fit), &fit, &settings, &|what, done, total| {
         bar.tell(what, done, total)
     })
     .map_err(Failure::predict)?;
+    let named = !(fit.dataset.is_empty() || fit.estimated.is_empty());
+    if let (Some(PosteriorData::Missing(why)), true) = (&prediction.bands.data, named) {
+        eprintln!(
+            "WARNING: {why}; the bands are delta-method bands (give the dataset with --data)"
+        );
+    }
     let source = source_name(&args.fit, &fit);
     let written =
         write_prediction(&prediction, &settings, &source, &args.out).map_err(Failure::predict)?;
     let display = settings.display();
-    say!("prediction from {source}\n");
+    say!("prediction from {source}");
+    if let Some(PosteriorData::At(at)) = &prediction.bands.data {
+        say!("posterior sampled on the {at}");
+    }
+    say!("{}\n", prediction.bands.statement());
     say!("{}", tables_markdown(&prediction, display));
     for n in notes(&prediction, display) {
         say!("- {n}");

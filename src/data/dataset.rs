@@ -612,7 +612,7 @@ impl Dataset {
 
 /// The dataset's name: its folder's name, also where the folder is given as `.` or `..`
 /// (the name of the folder it stands for).
-fn dataset_name(dir: &Path) -> String {
+pub(crate) fn dataset_name(dir: &Path) -> String {
     let named = |p: &Path| p.file_name().map(|n| n.to_string_lossy().into_owned());
     named(dir)
         .or_else(|| dir.canonicalize().ok().as_deref().and_then(named))

@@ -229,6 +229,10 @@ impl FitConditions {
 pub struct FitFile {
     /// Name of the dataset that was fitted.
     pub dataset: String,
+    /// Where that dataset's folder is, relative to the fit file's folder, `/`-separated
+    /// (`dataset_path` in the file; `None`: not recorded, as in files written before it
+    /// existed). `predict` samples the fit's posterior on it ([`crate::data::locate`]).
+    pub dataset_path: Option<String>,
     /// Catalog effects switched on.
     pub effects: EffectSet,
     /// Every parameter's value (estimated or fixed), SI.
@@ -315,6 +319,7 @@ impl FitFile {
     pub fn from_params(dataset: &str, params: MotorParams, effects: EffectSet) -> Self {
         Self {
             dataset: dataset.to_string(),
+            dataset_path: None,
             effects,
             params,
             estimated: Vec::new(),
@@ -339,6 +344,9 @@ impl FitFile {
         let mut doc = Map::new();
         doc.insert("format".into(), FORMAT.into());
         doc.insert("dataset".into(), self.dataset.clone().into());
+        if let Some(p) = &self.dataset_path {
+            doc.insert("dataset_path".into(), p.clone().into());
+        }
         let mut model = serde_json::json!({ "effects": self.effects.ids() });
         if !self.extra.is_empty() {
             model["discovered"] = Value::Array(self.extra.iter().map(term_to_json).collect());
@@ -477,6 +485,7 @@ impl FitFile {
                 .and_then(Value::as_str)
                 .unwrap_or_default()
                 .to_string(),
+            dataset_path: r.dataset_path(obj)?,
             effects,
             params,
             estimated,
@@ -653,6 +662,18 @@ impl Reader<'_> {
             serde_json::from_value::<UncertaintyMethod>(id).map(drop)
         })?;
         Ok(serde_json::from_value(v.clone()).ok())
+    }
+
+    /// `dataset_path` (absent or null: not recorded): a non-empty string.
+    fn dataset_path(&self, obj: &Map<String, Value>) -> Result<Option<String>, FitFileError> {
+        match obj.get("dataset_path") {
+            None | Some(Value::Null) => Ok(None),
+            Some(Value::String(p)) if !p.trim().is_empty() => Ok(Some(p.clone())),
+            Some(v) => Err(self.fail(
+                self.line_of("\"dataset_path\""),
+                format!("dataset_path {v} is not a folder's path (a non-empty string)"),
+            )),
+        }
     }
 
     /// `conditions` (absent or null: unknown).

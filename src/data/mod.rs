@@ -3,6 +3,7 @@
 
 pub(crate) mod dataset;
 pub(crate) mod fitfile;
+pub mod locate;
 pub(crate) mod motor;
 pub(crate) mod statistics;
 pub(crate) mod synth;

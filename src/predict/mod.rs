@@ -24,8 +24,9 @@ pub(crate) mod uncertainty;
 
 pub use options::{Nozzle, NozzlePort, PredictOptions, DEFAULT_CURVE_POINTS};
 pub use samples::{
-    delta_unreliable, BandChoice, BandMethod, BandRequest, BandsMade, PosteriorSource,
-    PosteriorSummary, SamplingOptions, DEFAULT_BURN_IN, DEFAULT_DRAWS, DEFAULT_STEPS,
+    delta_unreliable, BandChoice, BandMethod, BandReason, BandRequest, BandsMade, PosteriorData,
+    PosteriorDraws, PosteriorSource, PosteriorSummary, SamplingOptions, DEFAULT_BURN_IN,
+    DEFAULT_DRAWS, DEFAULT_STEPS,
 };
 
 pub use uncertainty::{BandBasis, ParamUncertainty};
@@ -314,6 +315,7 @@ pub fn predict(fit: &FitFile, options: &PredictOptions) -> Result<Prediction, Pr
     let request = BandRequest {
         choice: BandChoice::Delta,
         posterior: None,
+        data: None,
         sampling: &sampling,
         progress: &|_, _, _| {},
     };
@@ -332,41 +334,12 @@ pub fn predict_with(
     let shown = centre.flat(false);
     let figures =
         |m: &Motor| Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true));
-    let unreliable = samples::delta_unreliable(fit);
-    let use_samples = match request.choice {
-        BandChoice::Delta => false,
-        BandChoice::Samples => true,
-        BandChoice::Auto => unreliable.is_some() && request.posterior.is_some(),
-    };
-    let resting = if use_samples {
-        Vec::new()
-    } else {
+    let figures_sync = &figures as &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync);
+    let (bands, made) = choose_bands(fit, &unc, &shown, figures_sync, request)?;
+    let resting = if made.method == BandMethod::Delta {
         resting_on_prior(fit, &unc, &centre, options, &figures)?
-    };
-    let (bands, sampling) = match (use_samples, request.posterior) {
-        (false, _) => (unc.delta_bands(fit, &shown, &figures)?, None),
-        (true, None) => return Err(PredictError::NoPosterior),
-        (true, Some(source)) => {
-            let (b, summary) = samples::sample_bands(
-                fit,
-                &unc,
-                source,
-                request.sampling,
-                &figures,
-                request.progress,
-            )?;
-            (Some(b), Some(summary))
-        }
-    };
-    let made = BandsMade {
-        method: if sampling.is_some() {
-            BandMethod::Samples
-        } else {
-            BandMethod::Delta
-        },
-        choice: request.choice,
-        delta_unreliable: unreliable,
-        sampling,
+    } else {
+        Vec::new()
     };
     let band = |i: usize| Banded {
         value: shown[i],
@@ -421,6 +394,71 @@ pub fn predict_with(
         resting,
         gear: fit.gear,
     })
+}
+
+/// Each figure's 95 % band, [lo, hi], in the order of the flattened figures.
+type Bands = Vec<[f64; 2]>;
+
+/// The bands of the figures (`shown`: their values at the estimate) as `request` asks,
+/// and which method made them and why (`predict::samples`, "When the bands come from
+/// samples"): `delta` always by the delta method; `samples` always from samples (an error
+/// without the posterior); `auto` from samples when the posterior is at hand and they
+/// converged, else by the delta method, whatever went wrong with the samples.
+fn choose_bands(
+    fit: &FitFile,
+    unc: &ParamUncertainty,
+    shown: &[f64],
+    figures: &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync),
+    request: &BandRequest,
+) -> Result<(Option<Bands>, BandsMade), PredictError> {
+    let mut made = BandsMade {
+        method: BandMethod::Delta,
+        choice: request.choice,
+        reason: BandReason::Asked,
+        delta_unreliable: samples::delta_unreliable(fit),
+        sampling: None,
+        data: request.data.cloned(),
+    };
+    let sample = |source: PosteriorSource| {
+        samples::sample_bands(
+            fit,
+            unc,
+            source,
+            request.sampling,
+            figures,
+            request.progress,
+        )
+    };
+    match (request.choice, request.posterior) {
+        (BandChoice::Samples, None) => return Err(PredictError::NoPosterior),
+        (BandChoice::Samples, Some(source)) => {
+            let (b, summary) = sample(source)?;
+            made.method = BandMethod::Samples;
+            made.sampling = Some(summary);
+            return Ok((Some(b), made));
+        }
+        (BandChoice::Auto, None) => {
+            made.reason = BandReason::NoData(match &request.data {
+                Some(PosteriorData::Missing(why)) => why.clone(),
+                _ => "the fit's dataset was not given".into(),
+            });
+        }
+        (BandChoice::Auto, Some(source)) => match sample(source) {
+            Ok((b, summary)) if summary.converged() => {
+                made.method = BandMethod::Samples;
+                made.reason = BandReason::Converged;
+                made.sampling = Some(summary);
+                return Ok((Some(b), made));
+            }
+            Ok((_, summary)) => {
+                made.reason = BandReason::NotConverged;
+                made.sampling = Some(summary);
+            }
+            Err(e) => made.reason = BandReason::SamplingFailed(e.to_string()),
+        },
+        _ => {}
+    }
+    Ok((unc.delta_bands(fit, shown, figures)?, made))
 }
 
 /// The catalogue figures (each pressure's [`ROW_FIGURES`]) whose delta-method variance

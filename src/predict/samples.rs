@@ -10,18 +10,21 @@
 //! (`--fixed-spread`) and not sampled are drawn independently for each propagated sample,
 //! ln θ ~ N(ln θ̂, (ln F/1.96)²), as the delta method takes them.
 //!
-//! # When the bands come from samples (`auto`)
+//! # When the bands come from samples (`auto`, the default)
 //!
-//! The delta method linearises each figure about the estimate with the fit's covariance; it
-//! is trusted unless the fit file itself says the posterior is not close to Gaussian:
+//! With the fit's dataset at hand (given, or found from the fit file: `data::locate`),
+//! `auto` samples the posterior and makes the bands from the samples when they converged
+//! ([`PosteriorSummary::converged`]: every R̂ < 1.01 and ESS ≥ 400); otherwise, or without
+//! the dataset, from the delta method, and says why ([`BandsMade::statement`]).
+//!
+//! The delta method linearises each figure about the estimate with the fit's covariance;
+//! the notes say it is not to be trusted where the fit file itself says the posterior is not
+//! close to Gaussian ([`delta_unreliable`]):
 //!
 //! * an estimated parameter is not identifiable (its profile does not close, or another
 //!   optimum fits as well), or has no 95 % interval;
 //! * a profile interval is lopsided: its two sides in ln θ differ by more than a factor
 //!   [`LOPSIDED`] (a Gaussian posterior in ln θ gives equal sides).
-//!
-//! Sampling needs the dataset the fit was made from (to evaluate the likelihood); without
-//! it the bands stay delta bands and the notes say the delta method is not to be trusted.
 
 use super::uncertainty::ParamUncertainty;
 use super::PredictError;
@@ -57,8 +60,8 @@ pub enum BandChoice {
     Delta,
     /// Posterior samples always (needs the dataset).
     Samples,
-    /// Samples where the fit says the delta method fails (see the module documentation),
-    /// else the delta method.
+    /// Posterior samples when the dataset is at hand and they converged, else the delta
+    /// method (see the module documentation).
     Auto,
 }
 
@@ -134,6 +137,16 @@ pub struct PosteriorSource<'a> {
     pub prior: Option<&'a dyn LogPrior>,
 }
 
+/// Where the dataset the posterior stands on was found, or why there is none: said with
+/// the bands.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PosteriorData {
+    /// The dataset is at hand: where it was found, in words ("dataset x at y (...)").
+    At(String),
+    /// It is not: why, in words ("the dataset x was not found (looked at ...)").
+    Missing(String),
+}
+
 /// What the bands of a prediction should stand on.
 #[derive(Clone, Copy)]
 pub struct BandRequest<'a> {
@@ -141,6 +154,9 @@ pub struct BandRequest<'a> {
     pub choice: BandChoice,
     /// The posterior, when the dataset is at hand.
     pub posterior: Option<PosteriorSource<'a>>,
+    /// Where the dataset was found, or why it is not at hand (`None`: not said; without a
+    /// posterior that reads "the fit's dataset was not given").
+    pub data: Option<&'a PosteriorData>,
     /// How to sample.
     pub sampling: &'a SamplingOptions,
     /// Progress of long work: (what, done, total).
@@ -172,6 +188,34 @@ pub struct PosteriorSummary {
     pub failed_draws: usize,
     /// Parameters drawn from the stated spread for each sample (not sampled).
     pub spread: Vec<String>,
+    /// The kept samples themselves (for arviz: `vanefit.Prediction.to_arviz()`).
+    pub kept: PosteriorDraws,
+}
+
+/// The kept samples of the walkers, SI.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PosteriorDraws {
+    /// `values[walker][step][i]`: sampled parameter i (`PosteriorSummary::names`), SI.
+    pub values: Vec<Vec<Vec<f64>>>,
+    /// ln p of each sample (the sampler's log-density, 0 at the estimate), same layout.
+    pub log_density: Vec<Vec<f64>>,
+    /// Fraction of proposals accepted per walker over the kept steps.
+    pub acceptance: Vec<f64>,
+}
+
+impl PosteriorDraws {
+    /// The chains of `post`'s sampler in SI values.
+    fn of(post: &FitPosterior, chains: &crate::estimate::sample::Chains) -> Self {
+        Self {
+            values: chains
+                .draws
+                .iter()
+                .map(|w| w.iter().map(|x| post.to_values(x)).collect())
+                .collect(),
+            log_density: chains.log_density.clone(),
+            acceptance: chains.acceptance.clone(),
+        }
+    }
 }
 
 impl PosteriorSummary {
@@ -184,6 +228,36 @@ impl PosteriorSummary {
     }
 }
 
+impl PosteriorSummary {
+    /// The largest R̂ and the smallest effective sample size (bulk or tail) over the
+    /// sampled parameters.
+    pub fn worst(&self) -> (f64, f64) {
+        let rhat = self.diagnostics.iter().map(|d| d.rhat).fold(0.0, f64::max);
+        let ess = self
+            .diagnostics
+            .iter()
+            .map(|d| d.ess_bulk.min(d.ess_tail))
+            .fold(f64::INFINITY, f64::min);
+        (rhat, ess)
+    }
+}
+
+/// Why the bands were made by the method that made them.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum BandReason {
+    /// The method was asked for (`--bands delta` or `--bands samples`).
+    Asked,
+    /// `auto`: the samples converged.
+    Converged,
+    /// `auto`: the samples did not converge (their summary is in `sampling`).
+    NotConverged,
+    /// `auto`: the dataset is not at hand (why, in words).
+    NoData(String),
+    /// `auto`: the sampler or the samples' figures failed (why, in words).
+    SamplingFailed(String),
+}
+
 /// Which method made a prediction's bands, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BandsMade {
@@ -191,10 +265,57 @@ pub struct BandsMade {
     pub method: BandMethod,
     /// The method asked.
     pub choice: BandChoice,
+    /// Why this method.
+    pub reason: BandReason,
     /// Why the delta method is not to be trusted for this fit (`None`: nothing says so).
     pub delta_unreliable: Option<String>,
-    /// The samples, when they made the bands.
+    /// The samples, when any were drawn: they made the bands, or `auto` found that they
+    /// did not converge (`reason`).
     pub sampling: Option<PosteriorSummary>,
+    /// Where the dataset the samples stand on was found, or why it was not.
+    pub data: Option<PosteriorData>,
+}
+
+impl BandsMade {
+    /// The samples, when they made the bands.
+    pub fn used_samples(&self) -> Option<&PosteriorSummary> {
+        self.sampling
+            .as_ref()
+            .filter(|_| self.method == BandMethod::Samples)
+    }
+
+    /// Which method made the bands and why, in one sentence without a full stop: "bands
+    /// from 400 posterior samples (R̂ ≤ 1.004, ESS ≥ 612)", "delta-method bands: the samples
+    /// did not converge (largest R̂ 1.69, smallest ESS 63)", "delta-method bands: the
+    /// dataset x was not found (looked at ...)".
+    pub fn statement(&self) -> String {
+        let asked = self.choice.name();
+        match (&self.reason, self.sampling.as_ref()) {
+            (BandReason::NotConverged, Some(s)) => {
+                let (rhat, ess) = s.worst();
+                format!(
+                    "delta-method bands: the samples did not converge (largest R̂ {rhat:.3}, smallest ESS {ess:.0}; converged means R̂ < 1.01 and ESS ≥ 400)"
+                )
+            }
+            (BandReason::NoData(why), _) => format!("delta-method bands: {why}"),
+            (BandReason::SamplingFailed(why), _) => {
+                format!("delta-method bands: sampling the posterior failed ({why})")
+            }
+            (_, Some(s)) if self.method == BandMethod::Samples => {
+                let (rhat, ess) = s.worst();
+                let verdict = if s.converged() {
+                    "converged"
+                } else {
+                    "NOT converged"
+                };
+                format!(
+                    "bands from {} posterior samples (R̂ ≤ {rhat:.3}, ESS ≥ {ess:.0}: {verdict}; --bands {asked})",
+                    s.draws - s.failed_draws
+                )
+            }
+            _ => format!("delta-method bands (--bands {asked})"),
+        }
+    }
 }
 
 /// Why the delta method is not to be trusted for `fit` (see the module documentation), or
@@ -338,6 +459,7 @@ pub(super) fn sample_bands(
             draws: total,
             failed_draws: failed,
             spread: spread.into_iter().map(|(_, n)| n).collect(),
+            kept: PosteriorDraws::of(&post, &chains),
         },
     ))
 }

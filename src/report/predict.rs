@@ -10,7 +10,9 @@
 //! when the fit gives no band); `extrapolated` is `true` for a pressure outside those the
 //! fitted data covered (empty when the fit does not say which).
 
-use crate::predict::{BandChoice, BandMethod, Banded, Prediction, PressurePrediction};
+use crate::predict::{
+    BandChoice, BandMethod, BandReason, Banded, PosteriorData, Prediction, PressurePrediction,
+};
 use crate::report::plot::{PlotError, COLOURS};
 use crate::units::Unit;
 use plotters::prelude::*;
@@ -438,7 +440,7 @@ fn figure_notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> {
 /// sampled nor in the covariance, those held fixed, discovered terms' coefficients.
 fn uncovered_notes(pr: &Prediction) -> Vec<String> {
     let mut notes = Vec::new();
-    let sampled: &[String] = pr.bands.sampling.as_ref().map_or(&[], |s| &s.names);
+    let sampled: &[String] = pr.bands.used_samples().map_or(&[], |s| &s.names);
     for (name, why) in &pr.uncertainty.uncovered {
         if !sampled.contains(name) {
             notes.push(format!("The band does not cover {name}: {why}."));
@@ -562,27 +564,47 @@ pub fn resting_notes(pr: &Prediction, display: &PressureDisplay) -> Vec<String> 
 /// method), why, and how well the samples converged.
 pub fn band_notes(pr: &Prediction) -> Vec<String> {
     let b = &pr.bands;
-    match (&b.sampling, &b.delta_unreliable) {
-        (Some(s), _) => sampled_band_notes(pr, s),
-        (None, Some(w)) => vec![
-            format!("{}.", pr.uncertainty.basis.describe()),
-            match b.choice {
-                BandChoice::Delta => format!(
-                    "The delta method is NOT to be trusted here ({w}); --bands samples (with \
-                     the fit's dataset, --data) bands from posterior samples instead."
-                ),
-                _ => format!(
-                    "The delta method is NOT to be trusted here ({w}), but the fit's dataset \
-                     was not given (--data): the bands above may be far off."
-                ),
-            },
-        ],
-        (None, None) => vec![format!(
-            "{} (--bands {}).",
-            pr.uncertainty.basis.describe(),
-            b.choice.name()
-        )],
+    if let Some(s) = b.used_samples() {
+        return sampled_band_notes(pr, s);
     }
+    let mut out = vec![
+        format!("{}.", capitalised(&b.statement())),
+        format!("{}.", pr.uncertainty.basis.describe()),
+    ];
+    let fix = match (&b.reason, b.choice) {
+        (_, BandChoice::Delta) => "--bands auto or samples bands from posterior samples instead",
+        (BandReason::NotConverged, _) => {
+            "more steps (--steps) may let the samples converge; --bands samples uses them anyway"
+        }
+        _ => "give the fit's dataset (--data) to band from posterior samples",
+    };
+    match (&b.delta_unreliable, &b.sampling) {
+        // Samples were had: the fit file's reasons qualify the fallback.
+        (Some(w), Some(_)) => out.push(format!(
+            "The fit file says the posterior is not close to Gaussian here ({w}), where \
+             delta-method bands may be off: {fix}."
+        )),
+        (Some(w), None) => out.push(format!(
+            "The delta method is NOT to be trusted here ({w}): the bands above may be far \
+             off; {fix}."
+        )),
+        (None, _) => {}
+    }
+    if b.sampling.is_some() {
+        out.push(
+            "The samples that did not converge are summarised under \"Posterior samples\"."
+                .to_string(),
+        );
+    }
+    out
+}
+
+/// `text` with its first letter in upper case.
+fn capitalised(text: &str) -> String {
+    let mut c = text.chars();
+    c.next()
+        .map(|f| f.to_uppercase().chain(c).collect())
+        .unwrap_or_default()
 }
 
 /// The notes on bands made from the posterior samples `s`: why samples, how they were
@@ -590,12 +612,14 @@ pub fn band_notes(pr: &Prediction) -> Vec<String> {
 fn sampled_band_notes(pr: &Prediction, s: &crate::predict::PosteriorSummary) -> Vec<String> {
     let b = &pr.bands;
     let why = match &b.delta_unreliable {
-        Some(w) if b.choice == BandChoice::Auto => {
-            format!(" (--bands auto: the delta method is not to be trusted here: {w})")
-        }
+        Some(w) => format!(
+            " (--bands {}; the delta method is not to be trusted here: {w})",
+            b.choice.name()
+        ),
         _ => format!(" (--bands {})", b.choice.name()),
     };
     let mut out = vec![
+        format!("{}.", capitalised(&b.statement())),
         format!(
             "EVERY band is made from POSTERIOR SAMPLES{why}: the 2.5 and 97.5 percentiles \
              of each figure over {} samples of {} ({} walkers × {} steps after {} burn-in, \
@@ -639,12 +663,7 @@ fn sampled_band_notes(pr: &Prediction, s: &crate::predict::PosteriorSummary) -> 
 /// Whether the samples converged by the usual rules, with their largest R̂ and smallest
 /// effective sample size.
 fn convergence_note(s: &crate::predict::PosteriorSummary) -> String {
-    let worst_rhat = s.diagnostics.iter().map(|d| d.rhat).fold(0.0, f64::max);
-    let least_ess = s
-        .diagnostics
-        .iter()
-        .map(|d| d.ess_bulk.min(d.ess_tail))
-        .fold(f64::INFINITY, f64::min);
+    let (worst_rhat, least_ess) = s.worst();
     if s.converged() {
         format!(
             "The samples converged: largest R̂ {worst_rhat:.3} (< 1.01), smallest \
@@ -678,8 +697,15 @@ pub fn sampling_markdown(pr: &Prediction) -> String {
     let Some(s) = &pr.bands.sampling else {
         return String::new();
     };
-    let mut t = String::from(
-        "## Posterior samples\n\n| parameter | 2.5 % | median | 97.5 % | R̂ | ESS bulk | ESS tail |\n\
+    let mut t = String::from("## Posterior samples\n\n");
+    if pr.bands.used_samples().is_none() {
+        t.push_str(
+            "Not used for the bands: they did not converge (every R̂ < 1.01 and ESS ≥ 400 \
+             is needed).\n\n",
+        );
+    }
+    t.push_str(
+        "| parameter | 2.5 % | median | 97.5 % | R̂ | ESS bulk | ESS tail |\n\
          |---|---:|---:|---:|---:|---:|---:|\n",
     );
     for ((n, q), d) in s.names.iter().zip(&s.quantiles).zip(&s.diagnostics) {
@@ -712,8 +738,10 @@ pub fn sampling_json(pr: &Prediction) -> serde_json::Value {
                 )
             })
             .collect();
+        let (rhat_max, ess_min) = s.worst();
         serde_json::json!({
             "walkers": s.walkers, "steps": s.steps, "burn_in": s.burn_in, "seed": s.seed,
+            "rhat_max": rhat_max, "ess_min": ess_min,
             "acceptance": s.acceptance, "draws": s.draws, "failed_draws": s.failed_draws,
             "converged": s.converged(), "spread": s.spread, "parameters": params,
         })
@@ -721,6 +749,12 @@ pub fn sampling_json(pr: &Prediction) -> serde_json::Value {
     serde_json::json!({
         "method": match b.method { BandMethod::Delta => "delta", BandMethod::Samples => "samples" },
         "asked": b.choice.name(),
+        "reason": b.statement(),
+        "dataset": match &b.data {
+            Some(PosteriorData::At(at)) => serde_json::json!({ "found": true, "where": at }),
+            Some(PosteriorData::Missing(why)) => serde_json::json!({ "found": false, "where": why }),
+            None => serde_json::Value::Null,
+        },
         "delta_unreliable": b.delta_unreliable,
         "sampling": sampling,
     })

@@ -598,7 +598,13 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
         let path = path.to_path_buf();
         move |source| FitError::Write { path, source }
     };
-    run.file.write(out).map_err(write_error(out))?;
+    // The dataset's folder relative to the fit file's, so that `predict` finds it
+    // (`data::locate`) wherever the checkout is moved.
+    let file = FitFile {
+        dataset_path: crate::data::locate::relative_dataset_path(&run.dataset.dir, out),
+        ..run.file.clone()
+    };
+    file.write(out).map_err(write_error(out))?;
     let mut written = FitWritten::default();
     if plots {
         written.plots = report::plots(

@@ -35,8 +35,8 @@ pub use fit::{
 };
 pub use option::{Opt, OptionError};
 pub use predict::{
-    fit_atmosphere_pa, predict, predict_observed, pressure_unit, pressure_units, source_name,
-    write_prediction, PredictOptions, PredictSettings, PredictTaskError,
+    fit_atmosphere_pa, predict, predict_located, predict_observed, pressure_unit, pressure_units,
+    source_name, write_prediction, PredictOptions, PredictSettings, PredictTaskError,
 };
 pub use simulate::{
     motor_for, simulated_tables, write_table, SimulateError, SimulatedColumn, SimulatedTable,

@@ -9,12 +9,14 @@
 use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
+use crate::data::locate::{locate_dataset, Located};
 use crate::estimate::fit::fit_likelihood::{FitLikelihood, FitLikelihoodError};
 use crate::estimate::sample::posterior::LogPrior;
 use crate::model::params::ParamId;
 use crate::predict::Prediction;
 use crate::predict::{
-    BandChoice, BandRequest, Nozzle, NozzlePort, PosteriorSource, PredictError, SamplingOptions,
+    BandChoice, BandRequest, Nozzle, NozzlePort, PosteriorData, PosteriorSource, PredictError,
+    SamplingOptions,
 };
 use crate::report::predict::{write, PredictReportError, PressureDisplay};
 use crate::sim::operating_point::OperatingPointError;
@@ -184,12 +186,6 @@ impl PredictOptions {
 
     /// Samples asked need the dataset; the sampler's counts must be usable.
     fn check_sampling(&self) -> Result<(), OptionError> {
-        if self.bands == BandChoice::Samples && self.data.is_none() {
-            return Err(OptionError::of(
-                Opt::PredictData,
-                ": bands from posterior samples need the dataset the fit was made from",
-            ));
-        }
         let s = &self.sampling;
         if let Some(w) = s.walkers.filter(|w| *w < 4 || w % 2 == 1) {
             return Err(OptionError::of(
@@ -411,20 +407,111 @@ pub fn predict(fit: &FitFile, settings: &PredictSettings) -> Result<Prediction, 
 }
 
 /// [`predict`], telling `progress` (what, done, total) how long work goes (sampling the
-/// posterior and propagating its samples).
+/// posterior and propagating its samples). The dataset is the one the settings name
+/// (`--data`), else none: [`predict_located`] also finds it from the fit file.
 pub fn predict_observed(
     fit: &FitFile,
     settings: &PredictSettings,
     progress: &(dyn Fn(&str, usize, usize) + Sync),
 ) -> Result<Prediction, PredictTaskError> {
-    let o = &settings.options;
-    // The dataset is read (and the likelihood rebuilt) only where samples may be used.
-    let likelihood = match (&settings.data, settings.bands) {
-        (Some(dir), BandChoice::Samples | BandChoice::Auto) => {
-            let ds = Dataset::load(dir)?;
-            Some(FitLikelihood::from_fit(&ds, fit)?)
+    let data = match (&settings.data, settings.bands) {
+        (Some(dir), BandChoice::Samples | BandChoice::Auto) => Some(given_dataset(dir)?),
+        (None, BandChoice::Samples) => {
+            return Err(OptionError::of(
+                Opt::PredictData,
+                ": bands from posterior samples need the dataset the fit was made from",
+            )
+            .into())
         }
         _ => None,
+    };
+    predict_on(fit, settings, data, progress)
+}
+
+/// [`predict_observed`], the dataset found from the fit file (`fit_path`: where it was
+/// read from; `None` for a fit held in memory) by `data::locate` when the settings name
+/// none and the bands may come from samples. A dataset that is not found or cannot be
+/// read is no error: `auto` then makes delta-method bands and says why
+/// (`Prediction::bands`), `samples` is refused naming `data`.
+pub fn predict_located(
+    fit_path: Option<&Path>,
+    fit: &FitFile,
+    settings: &PredictSettings,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Prediction, PredictTaskError> {
+    let data = match (&settings.data, settings.bands) {
+        (_, BandChoice::Delta) => None,
+        (Some(dir), _) => Some(given_dataset(dir)?),
+        (None, choice) => {
+            let found = if fit.estimated.is_empty() {
+                Err(PosteriorData::Missing(
+                    "the fit estimated no parameter: there is no posterior to sample".into(),
+                ))
+            } else {
+                located_dataset(fit_path, fit)
+            };
+            if let (BandChoice::Samples, Err(PosteriorData::Missing(why))) = (choice, &found) {
+                return Err(OptionError::of(Opt::PredictData, format!(": {why}")).into());
+            }
+            Some(found)
+        }
+    };
+    predict_on(fit, settings, data, progress)
+}
+
+/// A dataset read for the posterior and where it was found, or why there is none.
+type DatasetAtHand = Result<(Dataset, PosteriorData), PosteriorData>;
+
+/// The dataset at `dir`, named by the settings: read (an error if it cannot be).
+fn given_dataset(dir: &Path) -> Result<DatasetAtHand, DataError> {
+    let ds = Dataset::load(dir)?;
+    let at = PosteriorData::At(format!("dataset {} at {} (given)", ds.name, dir.display()));
+    Ok(Ok((ds, at)))
+}
+
+/// The dataset of `fit` found by `data::locate` and read, or why not.
+fn located_dataset(fit_path: Option<&Path>, fit: &FitFile) -> DatasetAtHand {
+    let located = locate_dataset(fit_path, fit);
+    let name = &fit.dataset;
+    match &located {
+        Located::Found(dir, _) => Dataset::load(dir)
+            .map(|ds| (ds, PosteriorData::At(located.describe(name))))
+            .map_err(|e| {
+                PosteriorData::Missing(format!(
+                    "the dataset {name} at {} could not be read: {e}",
+                    dir.display()
+                ))
+            }),
+        _ => Err(PosteriorData::Missing(located.describe(name))),
+    }
+}
+
+/// The prediction with the dataset `data` (read, or why it is not at hand; `None`: none
+/// was asked for).
+fn predict_on(
+    fit: &FitFile,
+    settings: &PredictSettings,
+    data: Option<DatasetAtHand>,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Prediction, PredictTaskError> {
+    let o = &settings.options;
+    // A dataset found from the fit file that the fit's likelihood cannot be rebuilt on is
+    // as good as not found for `auto`; one given (`data`) is an error.
+    let lenient = settings.data.is_none() && settings.bands == BandChoice::Auto;
+    let (likelihood, said) = match data {
+        Some(Ok((ds, at))) => match FitLikelihood::from_fit(&ds, fit) {
+            Ok(l) => (Some(l), Some(at)),
+            Err(e) if lenient => {
+                let PosteriorData::At(at) = at else {
+                    return Err(e.into());
+                };
+                let why = format!("the fit's likelihood cannot be rebuilt on the {at}: {e}");
+                (None, Some(PosteriorData::Missing(why)))
+            }
+            Err(e) => return Err(e.into()),
+        },
+        Some(Err(missing)) => (None, Some(missing)),
+        None => (None, None),
     };
     // The fit's motor prior (fit files of fits made with priors list it per parameter): the
     // posterior the samples come from is the one the fit's estimate is the mode of.
@@ -437,6 +524,7 @@ pub fn predict_observed(
             likelihood: l,
             prior: prior.as_ref().map(|p| p as &dyn LogPrior),
         }),
+        data: said.as_ref(),
         sampling: &settings.sampling,
         progress,
     };

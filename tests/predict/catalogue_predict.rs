@@ -72,6 +72,8 @@ fn round_trip(dir: &Path, params: Option<&Path>) -> (f64, f64) {
         vanefit(&[
             "predict",
             file.to_str().unwrap(),
+            "--bands",
+            "delta",
             "--pressures",
             "3,4,5,6,7",
             "--unit",
@@ -162,6 +164,8 @@ fn fixed_defaults_that_are_not_the_truth_leave_a_stated_error() {
     vanefit(&[
         "predict",
         fit.to_str().unwrap(),
+        "--bands",
+        "delta",
         "--fixed-spread",
         "1.5",
         "--out",

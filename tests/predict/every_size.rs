@@ -128,6 +128,8 @@ fn try_evaluate(
     let mut args = vec![
         "predict",
         fit_s,
+        "--bands",
+        "delta",
         "--pressures",
         "3,4,5,6,7",
         "--unit",

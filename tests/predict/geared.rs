@@ -117,6 +117,8 @@ fn predict(fit: &Path, dir: &Path, name: &str) -> (String, Vec<BTreeMap<String, 
     let stdout = vanefit(&[
         "predict",
         fit.to_str().unwrap(),
+        "--bands",
+        "delta",
         "--pressures",
         "5,6.3",
         "--out",

@@ -233,6 +233,10 @@ fn evaluate_styled(
     // "{page}" in PAGE_PREDICT_ARGS stands for the page's folder (e.g. "--bands samples
     // --data {page}").
     let extra = extra.replace("{page}", page_s);
+    // The delta method unless the extra options ask otherwise (sampling takes seconds).
+    if !extra.contains("--bands") {
+        args.extend(["--bands", "delta"]);
+    }
     args.extend(extra.split_whitespace());
     vanefit(&args).map_err(|(_, e)| Failure::Failed(e))?;
     let (cat, fac) = (

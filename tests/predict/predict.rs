@@ -66,6 +66,8 @@ fn cli_writes_the_files_with_their_columns_and_the_physics_holds() {
     let run = vanefit(&[
         "predict",
         fit.to_str().unwrap(),
+        "--bands",
+        "delta",
         "--pressures",
         "3,4,5,6,6.3,7,8",
         "--out",
@@ -173,6 +175,8 @@ fn an_inlet_nozzle_lowers_the_power_at_every_pressure() {
         let mut args = vec![
             "predict",
             fit.to_str().unwrap(),
+            "--bands",
+            "delta",
             "--out",
             out.to_str().unwrap(),
         ];
@@ -255,6 +259,8 @@ fn other_units_give_the_same_prediction() {
         let r = vanefit(&[
             "predict",
             fit.to_str().unwrap(),
+            "--bands",
+            "delta",
             "--unit",
             unit,
             "--pressures",
@@ -394,6 +400,8 @@ fn a_pressure_far_beyond_the_fit_is_warned_about_loudly() {
     let run = vanefit(&[
         "predict",
         fit.to_str().unwrap(),
+        "--bands",
+        "delta",
         "--pressures",
         &format!("6,{inside},{far}"),
         "--out",

@@ -1,7 +1,8 @@
-//! Bands from posterior samples (`predict --bands`): on a catalogue fit whose c_out2 is not
-//! identifiable `auto` samples and says so, `delta` warns instead, a seed gives the same
-//! bands whatever the thread count, and where the posterior is close to Gaussian the
-//! samples' bands agree with the delta method's.
+//! Bands from posterior samples (`predict --bands`): without `--data` the dataset the fit
+//! file records is sampled; `auto` falls back to the delta method, saying why, when the
+//! samples do not converge or the dataset is not found; a seed gives the same bands
+//! whatever the thread count, and where the posterior is close to Gaussian the samples'
+//! bands agree with the delta method's.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -46,62 +47,233 @@ fn sampled(fit: &FitFile, choice: BandChoice, sampling: &SamplingOptions) -> Pre
             likelihood: &likelihood,
             prior: None,
         }),
+        data: None,
         sampling,
         progress: &|_, _, _| {},
     };
     predict_with(fit, &options, &request).unwrap()
 }
 
-#[test]
-fn auto_samples_where_the_fit_is_not_identifiable_and_says_which_method_made_the_bands() {
-    let dir = tempfile::tempdir().unwrap();
-    let fit = catalogue_fit(dir.path(), &[]);
-    let f = fit.to_str().unwrap();
-    let out = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
-    let short = ["--steps", "200", "--burn-in", "100", "--draws", "60"];
-    let mut args = vec!["predict", f, "--data", CATALOGUE, "--out"];
-    let o1 = out("auto");
-    args.push(&o1);
-    args.extend(short);
-    vanefit(&args);
-    let md = std::fs::read_to_string(dir.path().join("auto/predict.md")).unwrap();
-    assert!(md.contains("POSTERIOR SAMPLES"), "{md}");
-    // Why depends on the fit (with the motor prior c_out2 is pinned, but intervals are
-    // lopsided); that a reason is given does not.
-    assert!(
-        md.contains("the delta method is not to be trusted here:"),
-        "{md}"
-    );
-    assert!(
-        md.contains("## Posterior samples") && md.contains("R̂"),
-        "{md}"
-    );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("auto/bands.json")).unwrap())
-            .unwrap();
-    assert_eq!(json["method"], "samples");
-    let p = &json["sampling"]["parameters"]["c_out2"];
-    assert!(p["rhat"].as_f64().unwrap() >= 1.0 && p["ess_bulk"].as_f64().unwrap() > 1.0);
-    assert!(p["q025"].as_f64().unwrap() < p["q975"].as_f64().unwrap());
-
-    let o2 = out("delta");
-    vanefit(&["predict", f, "--bands", "delta", "--out", &o2]);
-    let md = std::fs::read_to_string(dir.path().join("delta/predict.md")).unwrap();
-    assert!(md.contains("delta method is NOT to be trusted"), "{md}");
-    assert!(!md.contains("POSTERIOR SAMPLES"));
-    let o3 = out("nodata");
-    vanefit(&["predict", f, "--out", &o3]);
-    let md = std::fs::read_to_string(dir.path().join("nodata/predict.md")).unwrap();
-    assert!(md.contains("dataset was not given (--data)"), "{md}");
-
-    // Samples without the dataset are refused, naming the option.
-    let bad = Command::new(env!("CARGO_BIN_EXE_vanefit"))
-        .args(["predict", f, "--bands", "samples", "--out", &out("bad")])
+/// `predict` run in the package root: (exit status, stdout, stderr).
+fn predict_run(args: &[&str]) -> (Option<i32>, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .arg("predict")
+        .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .unwrap();
-    assert_eq!(bad.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("--data"));
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+    (o.status.code(), text(&o.stdout), text(&o.stderr))
+}
+
+/// `bands.json` of a prediction written into `dir`.
+fn bands_json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("bands.json")).unwrap()).unwrap()
+}
+
+/// A short run of the sampler (seconds), as options of `predict`.
+const SHORT: [&str; 6] = ["--steps", "200", "--burn-in", "100", "--draws", "60"];
+
+#[test]
+fn without_data_predict_samples_the_dataset_the_fit_file_records() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = catalogue_fit(dir.path(), &[]);
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    // Recorded relative to the fit file's folder: it leads back to the dataset.
+    let rel = doc["dataset_path"].as_str().expect("dataset_path recorded");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert_eq!(
+        dir.path().join(rel).canonicalize().unwrap(),
+        root.join(CATALOGUE).canonicalize().unwrap()
+    );
+    let out = dir.path().join("samples");
+    let (code, stdout, stderr) = predict_run(
+        &[
+            fit.to_str().unwrap(),
+            "--bands",
+            "samples",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .into_iter()
+        .chain(SHORT)
+        .collect::<Vec<_>>(),
+    );
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stdout.contains("posterior sampled on the dataset ar034-synthetic-catalogue at")
+            && stdout.contains("(the fit file's dataset_path)"),
+        "{stdout}"
+    );
+    // Progress of the sampling on stderr.
+    assert!(stderr.contains("sampling: "), "{stderr}");
+    let json = bands_json(&out);
+    assert_eq!(json["method"], "samples");
+    assert_eq!(json["dataset"]["found"], true);
+    let p = &json["sampling"]["parameters"]["c_out2"];
+    assert!(p["rhat"].as_f64().unwrap() >= 1.0 && p["ess_bulk"].as_f64().unwrap() > 1.0);
+    assert!(p["q025"].as_f64().unwrap() < p["q975"].as_f64().unwrap());
+    // 200 steps do not converge: `samples` uses them anyway, and says so.
+    let reason = json["reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("bands from 60 posterior samples (R̂ ≤"),
+        "{reason}"
+    );
+    let md = std::fs::read_to_string(out.join("predict.md")).unwrap();
+    assert!(md.contains("did NOT converge"), "{md}");
+
+    // An older fit file (no dataset_path) in a folder beside `measurements/`: by its name.
+    let mut older = doc.clone();
+    older.as_object_mut().unwrap().remove("dataset_path");
+    let fits = dir.path().join("tree/fits");
+    std::fs::create_dir_all(&fits).unwrap();
+    std::os::unix::fs::symlink(
+        root.join("measurements"),
+        dir.path().join("tree/measurements"),
+    )
+    .unwrap();
+    let old = fits.join("old.json");
+    std::fs::write(&old, serde_json::to_string_pretty(&older).unwrap()).unwrap();
+    let out = dir.path().join("old");
+    let args = [
+        old.to_str().unwrap(),
+        "--bands",
+        "samples",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let (code, stdout, stderr) = predict_run(&args.into_iter().chain(SHORT).collect::<Vec<_>>());
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stdout.contains("found by its name"), "{stdout}");
+    assert_eq!(bands_json(&out)["method"], "samples");
+}
+
+#[test]
+fn auto_falls_back_to_the_delta_method_with_the_reason_when_the_samples_do_not_converge() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = catalogue_fit(dir.path(), &[]);
+    let out = dir.path().join("auto");
+    // 20 steps of 16+ walkers cannot reach R̂ < 1.01 and an ESS of 400.
+    let (code, stdout, stderr) = predict_run(&[
+        fit.to_str().unwrap(),
+        "--steps",
+        "20",
+        "--burn-in",
+        "10",
+        "--draws",
+        "40",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let json = bands_json(&out);
+    assert_eq!(json["method"], "delta");
+    assert_eq!(json["asked"], "auto");
+    assert_eq!(json["sampling"]["converged"], false);
+    let rhat = json["sampling"]["rhat_max"].as_f64().unwrap();
+    let reason = json["reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("delta-method bands: the samples did not converge (largest R̂")
+            && reason.contains(&format!("{rhat:.3}")),
+        "{reason}"
+    );
+    assert!(stdout.contains(reason), "{stdout}");
+    let md = std::fs::read_to_string(out.join("predict.md")).unwrap();
+    assert!(
+        md.contains("Delta-method bands: the samples did not converge"),
+        "{md}"
+    );
+    assert!(md.contains("Not used for the bands"), "{md}");
+    // The fit file's own reasons against the delta method are still said.
+    if let Some(w) = json["delta_unreliable"].as_str() {
+        assert!(
+            md.contains(&format!("not close to Gaussian here ({w})")),
+            "{md}"
+        );
+        assert!(!md.contains("NOT to be trusted"), "{md}");
+    }
+    assert!(!md.contains("POSTERIOR SAMPLES"), "{md}");
+
+    // `delta` is instant: no sampling, and the reason is that it was asked.
+    let out = dir.path().join("delta");
+    let (code, _, stderr) = predict_run(&[
+        fit.to_str().unwrap(),
+        "--bands",
+        "delta",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(!stderr.contains("sampling"), "{stderr}");
+    let json = bands_json(&out);
+    assert_eq!(json["reason"], "delta-method bands (--bands delta)");
+    assert!(json["sampling"].is_null());
+}
+
+#[test]
+fn a_dataset_that_is_not_found_gives_a_warning_and_delta_bands() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = catalogue_fit(dir.path(), &[]);
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let other = root.join("measurements/ar034-synthetic");
+    // A path that does not exist, and one that holds another dataset.
+    for (k, (path, why)) in [
+        (
+            "../nowhere/ar034-synthetic-catalogue".to_string(),
+            "no such folder",
+        ),
+        (
+            other.to_str().unwrap().to_string(),
+            "holds dataset ar034-synthetic, not ar034-synthetic-catalogue",
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        doc["dataset_path"] = path.clone().into();
+        let moved = dir.path().join(format!("moved{k}.json"));
+        std::fs::write(&moved, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
+        let out = dir.path().join(format!("p{k}"));
+        let (code, _, stderr) =
+            predict_run(&[moved.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        assert_eq!(code, Some(0), "{stderr}");
+        assert!(
+            stderr.contains("WARNING: the dataset ar034-synthetic-catalogue was not found")
+                && stderr.contains(why)
+                && stderr.contains(&path),
+            "{stderr}"
+        );
+        assert!(
+            !stderr.contains("panicked") && !stderr.contains("sampling:"),
+            "{stderr}"
+        );
+        let json = bands_json(&out);
+        assert_eq!(json["method"], "delta");
+        assert_eq!(json["dataset"]["found"], false);
+        assert!(
+            json["reason"]
+                .as_str()
+                .unwrap()
+                .starts_with("delta-method bands: the dataset ar034-synthetic-catalogue was not found (looked at"),
+            "{json}"
+        );
+        // `samples` cannot do without it: refused naming --data, status 1.
+        let (code, _, stderr) = predict_run(&[
+            moved.to_str().unwrap(),
+            "--bands",
+            "samples",
+            "--out",
+            dir.path().join("bad").to_str().unwrap(),
+        ]);
+        assert_eq!(code, Some(1), "{stderr}");
+        assert!(
+            stderr.contains("--data") && stderr.contains(why),
+            "{stderr}"
+        );
+    }
 }
 
 #[test]
@@ -142,7 +314,7 @@ fn where_the_posterior_is_close_to_gaussian_samples_and_delta_agree() {
         draws: 400,
         ..SamplingOptions::default()
     };
-    let auto = sampled(&fit, BandChoice::Auto, &s);
+    let auto = sampled(&fit, BandChoice::Delta, &s);
     assert_eq!(auto.bands.method, BandMethod::Delta);
     let samples = sampled(&fit, BandChoice::Samples, &s);
     let mut ratios = Vec::new();

@@ -51,7 +51,8 @@ fn predicted_catalogue_rows_agree_with_the_twin() {
         fit_file(m, &fit);
         let out = dir.path().join(format!("p{k}"));
         let run = Command::new(env!("CARGO_BIN_EXE_vanefit"))
-            .args(["predict", fit.to_str().unwrap(), "--pressures", "3,5,6.3,7"])
+            .args(["predict", fit.to_str().unwrap(), "--bands", "delta"])
+            .args(["--pressures", "3,5,6.3,7"])
             .args(["--unit", "bar_g", "--out", out.to_str().unwrap()])
             .output()
             .unwrap();

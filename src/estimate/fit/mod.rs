@@ -590,6 +590,7 @@ pub fn fit_file(dataset: &str, setup: &FitSetup, out: &FitOutcome, seed: u64) ->
     let displacement_estimated = setup.space.estimates(ParamId::V_DISP);
     FitFile {
         dataset: dataset.to_string(),
+        dataset_path: None,
         effects: setup.space.effects.clone(),
         params: out.params.clone(),
         estimated: setup.space.names(),
