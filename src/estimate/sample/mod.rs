@@ -33,10 +33,18 @@
 //! evaluated per walker, so the chains for a seed do not depend on how many threads rayon
 //! runs the walkers on.
 
+pub(crate) mod chains;
+pub(crate) mod checkpoint;
 pub(crate) mod diagnostics;
+pub(crate) mod laplace;
 pub(crate) mod posterior;
 
+pub use chains::{
+    run_chains, ChainSettings, INDEPENDENCE_SHARE, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
+};
+pub use checkpoint::{Checkpoint, CheckpointError};
 pub use diagnostics::{ess, ess_bulk, ess_tail, rhat_rank, summarise, ParamDiagnostics};
+pub use laplace::{Laplace, TProposal};
 
 pub use posterior::{FitPosterior, LogPrior};
 
@@ -83,8 +91,23 @@ pub enum SampleError {
         need: usize,
     },
     /// No steps to keep.
-    #[error("the ensemble needs at least 4 kept steps, not {0}")]
+    #[error("the sampler needs at least 4 kept steps, not {0}")]
     Steps(usize),
+    /// Fewer than two chains (R̂ compares chains).
+    #[error("the sampler needs at least 2 chains, not {0}")]
+    Chains(usize),
+    /// Blocks of no steps.
+    #[error("the sampler's blocks need at least one step")]
+    Block,
+    /// The Laplace approximation cannot be made.
+    #[error("the posterior's curvature at the estimate: {0}")]
+    Curvature(&'static str),
+    /// A checkpoint cannot be read, written or used.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// The run stopped after this many blocks, as its checkpoint's hook asked.
+    #[error("stopped after block {0}, as asked")]
+    Halted(usize),
     /// A start is not where the density is positive.
     #[error(
         "walker {0} starts where the density is zero (outside the bounds or a failed simulation)"
