@@ -48,7 +48,8 @@ pub use profile::uncertainty::{
 pub use sample::diagnostics::ParamDiagnostics;
 pub use sample::posterior::LogPrior;
 pub use sample::{
-    ess, ess_bulk, ess_tail, rhat_rank, run_chains, run_ensemble, run_ensemble_with, summarise,
+    ess, ess_bulk, ess_tail, rhat_rank, run_chains, run_ensemble, run_ensemble_resumable,
+    run_ensemble_with, summarise,
     ChainSettings, Chains, Checkpoint, CheckpointError, EnsembleSettings, FitPosterior, Laplace,
     LogDensity, Moves, SampleError, TProposal, INDEPENDENCE_SHARE, PROPOSAL_NU, PROPOSAL_SCALE,
     RW_TARGET,

@@ -28,7 +28,8 @@ use super::PredictError;
 use crate::data::fitfile::FitFile;
 use crate::estimate::fit::fit_likelihood::FitLikelihood;
 use crate::estimate::sample::{
-    run_chains, summarise, ChainSettings, Checkpoint, FitPosterior, LogPrior, ParamDiagnostics,
+    run_ensemble_resumable, summarise, Checkpoint, EnsembleSettings, FitPosterior, LogDensity,
+    LogPrior, Moves, ParamDiagnostics,
 };
 use crate::model::motor::Motor;
 use crate::model::params::ParamSet;
@@ -36,6 +37,14 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+
+/// Share of the walkers' proposals that are differential-evolution moves, the rest stretch
+/// moves ([`Moves::Mixed`]). A page's posterior is its prior in most directions, cut by a
+/// few thin, curved constraints the printed figures make: there the stretch move alone
+/// mixed so slowly that 4000 steps left R̂ at 1.3–2.0 and the bands at the pressures
+/// farthest from the page too narrow (docs/validation.md, "Sampled bands on a page");
+/// with this mixture the same steps give 2–3 times the effective sample size.
+pub const DE_SHARE: f64 = 0.8;
 
 /// Ratio of a profile interval's two sides in ln θ above which `auto` samples.
 pub const LOPSIDED: f64 = 1.5;
@@ -77,7 +86,7 @@ pub enum BandMethod {
 /// How to sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SamplingOptions {
-    /// Independent chains (`--walkers`; `None`: [`DEFAULT_CHAINS`]).
+    /// Walkers (`None`: max(16, 4·d) for d estimated parameters).
     pub walkers: Option<usize>,
     /// Kept steps per walker.
     pub steps: usize,
@@ -85,9 +94,9 @@ pub struct SamplingOptions {
     pub burn_in: usize,
     /// Kept samples propagated through the figures.
     pub draws: usize,
-    /// Seed of the chains' streams and of the spread parameters' draws.
+    /// Seed of the walkers' streams and of the spread parameters' draws.
     pub seed: u64,
-    /// Steps per chain between checkpoints.
+    /// Steps per walker between checkpoints.
     pub block: usize,
     /// Where the chains are checkpointed after every block and resumed from (`None`: not
     /// checkpointed). A checkpoint made with other settings is an error; the file is
@@ -95,14 +104,12 @@ pub struct SamplingOptions {
     pub checkpoint: Option<std::path::PathBuf>,
 }
 
-/// Independent chains unless others are asked.
-pub const DEFAULT_CHAINS: usize = 8;
-/// Kept steps per chain unless others are asked.
-pub const DEFAULT_STEPS: usize = 6000;
-/// Burn-in steps per chain unless others are asked.
-pub const DEFAULT_BURN_IN: usize = 1500;
-/// Steps per chain between checkpoints.
-pub const DEFAULT_BLOCK: usize = 1500;
+/// Kept steps per walker unless others are asked.
+pub const DEFAULT_STEPS: usize = 4000;
+/// Burn-in steps unless others are asked.
+pub const DEFAULT_BURN_IN: usize = 1000;
+/// Steps per walker between checkpoints.
+pub const DEFAULT_BLOCK: usize = 1000;
 /// Samples propagated through the figures unless another number is asked.
 pub const DEFAULT_DRAWS: usize = 400;
 
@@ -121,17 +128,12 @@ impl Default for SamplingOptions {
 }
 
 impl SamplingOptions {
-    /// The walkers of an ensemble sampler for `d` parameters: as asked, else max(16, 4·d)
-    /// rounded up to even.
+    /// The walkers for `d` parameters: as asked, else max(16, 4·d) rounded up to even.
     pub fn walkers_for(&self, d: usize) -> usize {
         self.walkers
             .unwrap_or_else(|| (4 * d).max(16).div_ceil(2) * 2)
     }
 
-    /// The chains of the sampler: as asked (`walkers`), else [`DEFAULT_CHAINS`].
-    pub fn chains_for(&self, _d: usize) -> usize {
-        self.walkers.unwrap_or(DEFAULT_CHAINS)
-    }
 }
 
 /// The posterior the samples are drawn from: the fit's likelihood and an optional prior.
@@ -233,6 +235,47 @@ pub fn delta_unreliable(fit: &FitFile) -> Option<String> {
     (!why.is_empty()).then(|| why.join("; "))
 }
 
+/// Starts of the walkers: a ball about the estimate, half the delta method's σ wide where
+/// known (2 % in ln θ otherwise), each redrawn (narrower each time) until its density is
+/// positive.
+fn starts(
+    post: &FitPosterior,
+    unc: &ParamUncertainty,
+    estimate: &[f64],
+    walkers: usize,
+    seed: u64,
+) -> Vec<Vec<f64>> {
+    let centre = post.to_coords(estimate);
+    let width: Vec<f64> = post
+        .names()
+        .iter()
+        .map(|n| {
+            let sd = unc.names.iter().position(|m| m == n).map(|j| unc.sd[j]);
+            sd.filter(|s| *s > 0.0).map_or(0.02, |s| 0.5 * s)
+        })
+        .collect();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5157_4152_5453);
+    (0..walkers)
+        .map(|_| {
+            for attempt in 0..60 {
+                let shrink = 0.5_f64.powi(attempt / 10);
+                let x: Vec<f64> = centre
+                    .iter()
+                    .zip(&width)
+                    .map(|(c, w)| {
+                        let z: f64 = StandardNormal.sample(&mut rng);
+                        c + shrink * w * z
+                    })
+                    .collect();
+                if post.log_density(&x).is_finite() {
+                    return x;
+                }
+            }
+            centre.clone()
+        })
+        .collect()
+}
+
 /// The fit's motor with the parameters `names` at SI `values`.
 fn motor_with(fit: &FitFile, names: &[String], values: &[f64]) -> Result<Motor, PredictError> {
     let mut set = ParamSet::from(fit.params.clone());
@@ -264,18 +307,27 @@ pub(super) fn sample_bands(
         post = post.with_prior(p);
     }
     let names = post.names();
-    let walkers = sampling.chains_for(names.len());
-    let settings = ChainSettings {
-        chains: walkers,
+    let estimate = source.likelihood.estimate();
+    let walkers = sampling.walkers_for(names.len());
+    let settings = EnsembleSettings {
+        walkers,
         steps: sampling.steps,
         burn_in: sampling.burn_in,
-        block: sampling.block,
         seed: sampling.seed,
     };
-    let q = post.proposal()?;
+    let x0 = starts(&post, unc, &estimate, walkers, sampling.seed);
     let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+    let moves = Moves::Mixed { de: DE_SHARE };
     let checkpoint = sampling.checkpoint.as_ref().map(Checkpoint::at);
-    let chains = run_chains(&post, &q, &settings, checkpoint.as_ref(), &step_progress)?;
+    let chains = run_ensemble_resumable(
+        &post,
+        &x0,
+        &settings,
+        moves,
+        sampling.block,
+        checkpoint.as_ref(),
+        &step_progress,
+    )?;
     let diagnostics = summarise(&chains.draws);
     let values: Vec<Vec<f64>> = chains
         .thinned(sampling.draws)

@@ -598,9 +598,9 @@ fn sampled_band_notes(pr: &Prediction, s: &crate::predict::PosteriorSummary) -> 
     let mut out = vec![
         format!(
             "EVERY band is made from POSTERIOR SAMPLES{why}: the 2.5 and 97.5 percentiles \
-             of each figure over {} samples of {} ({} chains × {} steps after {} burn-in, \
-             Metropolis–Hastings from the fit's Laplace approximation and whitened random \
-             walks, seed {}, acceptance {:.2}); the value is the \
+             of each figure over {} samples of {} ({} walkers × {} steps after {} burn-in, \
+             affine-invariant ensemble of differential-evolution and stretch moves, seed {}, \
+             acceptance {:.2}); the value is the \
              figure at the estimate.",
             s.draws - s.failed_draws,
             s.names.join(", "),

@@ -160,3 +160,52 @@ fn where_the_posterior_is_close_to_gaussian_samples_and_delta_agree() {
     );
     assert!(ratios.iter().all(|r| (0.5..2.0).contains(r)), "{ratios:?}");
 }
+
+#[test]
+fn a_killed_predict_resumes_from_its_checkpoint_to_the_same_files() {
+    // Killed when its first checkpoint appears (an event the run writes, not a wall time),
+    // run again with the same options: the same catalogue, factors and bands as a run that
+    // was not killed. A checkpoint of other settings is refused, naming the file.
+    let dir = tempfile::tempdir().unwrap();
+    let fit = catalogue_fit(dir.path(), &[]);
+    let out = |name: &str| dir.path().join(name);
+    let args = |o: &Path, seed: &str| -> Vec<String> {
+        let mut a: Vec<String> = ["predict", fit.to_str().unwrap(), "--bands", "samples"]
+            .map(String::from)
+            .to_vec();
+        a.extend(["--data", CATALOGUE, "--curve-points", "3", "--steps", "8000"].map(String::from));
+        a.extend(["--seed", seed, "--out", o.to_str().unwrap()].map(String::from));
+        a
+    };
+    vanefit(&args(&out("whole"), "1").iter().map(String::as_str).collect::<Vec<_>>());
+    let checkpoint = out("killed").join("samples.checkpoint");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(args(&out("killed"), "1"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    while !checkpoint.exists() {
+        assert!(child.try_wait().unwrap().is_none(), "predict ended before its first checkpoint");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(checkpoint.exists(), "the run was killed before it ended");
+    let other = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(args(&out("killed"), "2"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(other.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert!(err.contains("samples.checkpoint") && err.contains("seed"), "{err}");
+    vanefit(&args(&out("killed"), "1").iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!checkpoint.exists());
+    for file in ["catalogue.csv", "factors.csv", "bands.json"] {
+        let a = std::fs::read(out("whole").join(file)).unwrap();
+        let b = std::fs::read(out("killed").join(file)).unwrap();
+        assert!(a == b, "{file} differs after the resume");
+    }
+}

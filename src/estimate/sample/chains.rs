@@ -33,7 +33,7 @@
 //! from streams fixed by (seed, chain, block), so the chains for a seed depend neither on
 //! how many threads rayon runs them on nor on where a run was stopped and resumed.
 
-use super::checkpoint::{Checkpoint, ChainState, Saved};
+use super::checkpoint::{chains_key, ChainState, Checkpoint, Saved};
 use super::laplace::TProposal;
 use super::{Chains, LogDensity, SampleError};
 use nalgebra::DVector;
@@ -79,7 +79,7 @@ impl ChainSettings {
 }
 
 /// The stream of block `block` of chain `chain` (see the module documentation).
-fn stream(seed: u64, chain: usize, block: usize) -> Xoshiro256PlusPlus {
+pub(crate) fn stream(seed: u64, chain: usize, block: usize) -> Xoshiro256PlusPlus {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     for _ in 0..chain {
         rng.long_jump();
@@ -144,8 +144,8 @@ fn step(
     }
     if t < burn_in {
         if !independent {
-            s.rw_tried += 1;
-            tune(&mut s.log_eps, s.rw_tried, accept, RW_TARGET);
+            s.tried += 1;
+            tune(&mut s.log_eps, s.tried, accept, RW_TARGET);
         }
     } else {
         s.accepted += u64::from(accept);
@@ -200,8 +200,9 @@ pub fn run_chains(
             dim: d,
         });
     }
+    let key = chains_key(settings, q);
     let saved = match checkpoint {
-        Some(c) => c.load(settings, q)?,
+        Some(c) => c.load(&key)?,
         None => None,
     };
     let (mut states, first_block) = match saved {
@@ -220,7 +221,7 @@ pub fn run_chains(
             .enumerate()
             .for_each(|(c, s)| run_block(density, q, s, settings, c, b));
         if let Some(c) = checkpoint {
-            c.save(settings, q, &states, b + 1)?;
+            c.save(&key, &states, b + 1)?;
         }
         progress(((b + 1) * settings.block).min(settings.total()), settings.total());
     }

@@ -1,4 +1,5 @@
-//! Checkpoints of [`super::chains::run_chains`]: the chains' state after each block, so that
+//! Checkpoints of [`super::chains::run_chains`] and [`super::run_ensemble_resumable`]: the
+//! chains' (walkers') state after each block, so that
 //! a run that was killed resumes where its last block ended and ends with the same chains
 //! as a run that was not (every block draws from streams fixed by seed, chain and block).
 //!
@@ -10,10 +11,11 @@
 //!     kept draws and ln p of chain 0, chain 1, …: f64 little-endian
 //! ```
 //!
-//! The header holds the settings (chains, steps, burn-in, block, seed), a fingerprint of the
-//! proposal (its mode, covariance factor, ν and scale, bit for bit: the fit and its
-//! dataset), the dimension, the blocks done and each chain's state (position, ln p, ln ε,
-//! random-walk proposals tuned on, accepted kept steps, kept draws). Each chain's kept
+//! The header holds the sampler (`chains` or `ensemble`), the settings (chains or walkers,
+//! steps, burn-in, block, seed), a fingerprint of what fixes the posterior and the starts
+//! (bit for bit: a chains run's proposal, its mode, covariance factor, ν and scale; an
+//! ensemble's starts and DE share: the fit, its dataset and the seed), the dimension, the blocks done and each chain's state (position, ln p, ln ε,
+//! proposals counted, accepted kept steps, kept draws). Each chain's kept
 //! draws follow as `kept·d` numbers and its ln p as `kept` numbers. JSON numbers are written
 //! to round-trip exactly. The file is written through a temporary file and a rename, so a
 //! run killed while writing leaves the previous checkpoint whole.
@@ -77,8 +79,9 @@ pub(crate) struct ChainState {
     pub lp: f64,
     /// ln ε of the random-walk move.
     pub log_eps: f64,
-    /// Random-walk proposals made during the burn-in (the tuning's step count).
-    pub rw_tried: u64,
+    /// Proposals counted: a chain's random-walk proposals during the burn-in (the tuning's
+    /// step count), an ensemble walker's differential-evolution proposals.
+    pub tried: u64,
     /// Accepted proposals among the kept steps.
     pub accepted: u64,
     /// Kept draws.
@@ -94,7 +97,7 @@ impl ChainState {
             x,
             lp,
             log_eps,
-            rw_tried: 0,
+            tried: 0,
             accepted: 0,
             draws: Vec::new(),
             lps: Vec::new(),
@@ -124,13 +127,14 @@ struct StateRecord {
     x: Vec<f64>,
     lp: f64,
     log_eps: f64,
-    rw_tried: u64,
+    tried: u64,
     accepted: u64,
     kept: usize,
 }
 
 #[derive(Serialize, Deserialize)]
 struct Header {
+    sampler: String,
     settings: Settings,
     posterior: String,
     dim: usize,
@@ -148,17 +152,43 @@ pub struct Checkpoint {
     pub halt_after: Option<usize>,
 }
 
-/// FNV-1a over the bits of the proposal: its mode, L, ν and scale.
-fn fingerprint(q: &TProposal) -> String {
+/// What a checkpoint must match: the sampler, its settings and a fingerprint of the
+/// posterior it samples.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Key {
+    /// `chains` or `ensemble`.
+    pub sampler: &'static str,
+    /// The settings (an ensemble's walkers as chains).
+    pub settings: ChainSettings,
+    /// [`fingerprint`] of what fixes the posterior and the starts.
+    pub fingerprint: String,
+    /// Dimension d.
+    pub dim: usize,
+}
+
+/// FNV-1a over the bits of `numbers` (for a chains run: the proposal's mode, L, ν and
+/// scale; for an ensemble: its starts and DE share), as 16 hex digits.
+pub(crate) fn fingerprint<'a>(numbers: impl Iterator<Item = &'a f64>) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let numbers = q.laplace.mode.iter().chain(q.laplace.chol.iter());
-    for v in numbers.chain([q.nu, q.scale].iter()) {
+    for v in numbers {
         for b in v.to_bits().to_le_bytes() {
             h ^= u64::from(b);
             h = h.wrapping_mul(0x0000_0100_0000_01b3);
         }
     }
     format!("{h:016x}")
+}
+
+/// The key of a chains run with the proposal `q`.
+pub(crate) fn chains_key(settings: &ChainSettings, q: &TProposal) -> Key {
+    let l = &q.laplace;
+    let nums = [q.nu, q.scale];
+    Key {
+        sampler: "chains",
+        settings: settings.clone(),
+        fingerprint: fingerprint(l.mode.iter().chain(l.chol.iter()).chain(nums.iter())),
+        dim: l.dim(),
+    }
 }
 
 fn settings_of(s: &ChainSettings) -> Settings {
@@ -198,15 +228,15 @@ impl Checkpoint {
     /// stops the run.
     pub(crate) fn save(
         &self,
-        settings: &ChainSettings,
-        q: &TProposal,
+        key: &Key,
         states: &[ChainState],
         blocks_done: usize,
     ) -> Result<(), super::SampleError> {
         let header = Header {
-            settings: settings_of(settings),
-            posterior: fingerprint(q),
-            dim: q.laplace.dim(),
+            sampler: key.sampler.to_string(),
+            settings: settings_of(&key.settings),
+            posterior: key.fingerprint.clone(),
+            dim: key.dim,
             blocks_done,
             states: states
                 .iter()
@@ -214,7 +244,7 @@ impl Checkpoint {
                     x: s.x.clone(),
                     lp: s.lp,
                     log_eps: s.log_eps,
-                    rw_tried: s.rw_tried,
+                    tried: s.tried,
                     accepted: s.accepted,
                     kept: s.draws.len(),
                 })
@@ -235,18 +265,14 @@ impl Checkpoint {
     }
 
     /// The saved state, if the file exists; an error if it was made otherwise.
-    pub(crate) fn load(
-        &self,
-        settings: &ChainSettings,
-        q: &TProposal,
-    ) -> Result<Option<Saved>, CheckpointError> {
+    pub(crate) fn load(&self, key: &Key) -> Result<Option<Saved>, CheckpointError> {
         let bytes = match std::fs::read(&self.path) {
             Ok(b) => b,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(self.io(&e)),
         };
         let (header, payload) = self.split(&bytes)?;
-        self.check(&header, settings, q)?;
+        self.check(&header, key)?;
         let d = header.dim;
         let need: usize = header.states.iter().map(|s| s.kept * (d + 1)).sum();
         if payload.len() != 8 * need {
@@ -271,7 +297,7 @@ impl Checkpoint {
                     x: r.x,
                     lp: r.lp,
                     log_eps: r.log_eps,
-                    rw_tried: r.rw_tried,
+                    tried: r.tried,
                     accepted: r.accepted,
                     draws,
                     lps,
@@ -304,12 +330,8 @@ impl Checkpoint {
     }
 
     /// That `header` was made with `settings` for the proposal `q`.
-    fn check(
-        &self,
-        header: &Header,
-        settings: &ChainSettings,
-        q: &TProposal,
-    ) -> Result<(), CheckpointError> {
+    fn check(&self, header: &Header, key: &Key) -> Result<(), CheckpointError> {
+        let settings = &key.settings;
         let now = settings_of(settings);
         let s = &header.settings;
         let differ = |what: &'static str, saved: String, now: String| CheckpointError::Settings {
@@ -325,17 +347,24 @@ impl Checkpoint {
             ("block", s.block as u64, now.block as u64),
             ("seed", s.seed, now.seed),
         ];
+        if header.sampler != key.sampler {
+            return Err(differ(
+                "the sampler",
+                header.sampler.clone(),
+                key.sampler.to_string(),
+            ));
+        }
         for (what, a, b) in pairs {
             if a != b {
                 return Err(differ(what, a.to_string(), b.to_string()));
             }
         }
-        let fp = fingerprint(q);
-        if header.posterior != fp || header.dim != q.laplace.dim() {
+        let fp = &key.fingerprint;
+        if &header.posterior != fp || header.dim != key.dim {
             return Err(differ(
                 "the posterior",
                 format!("{} ({} parameters)", header.posterior, header.dim),
-                format!("{fp} ({} parameters): another fit or dataset", q.laplace.dim()),
+                format!("{fp} ({} parameters): another fit or dataset", key.dim),
             ));
         }
         if header.states.len() != s.chains
