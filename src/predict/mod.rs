@@ -25,7 +25,7 @@ pub(crate) mod uncertainty;
 pub use options::{Nozzle, NozzlePort, PredictOptions, DEFAULT_CURVE_POINTS};
 pub use samples::{
     delta_unreliable, BandChoice, BandMethod, BandRequest, BandsMade, PosteriorSource,
-    PosteriorSummary, SamplingOptions, DEFAULT_BURN_IN, DEFAULT_DRAWS, DEFAULT_STEPS,
+    PosteriorSummary, Sampler, SamplingOptions, DEFAULT_BURN_IN, DEFAULT_DRAWS, DEFAULT_STEPS,
 };
 
 pub use uncertainty::{BandBasis, ParamUncertainty};

@@ -28,8 +28,8 @@ use super::PredictError;
 use crate::data::fitfile::FitFile;
 use crate::estimate::fit::fit_likelihood::FitLikelihood;
 use crate::estimate::sample::{
-    run_ensemble_resumable, summarise, Checkpoint, EnsembleSettings, FitPosterior, LogDensity,
-    LogPrior, Moves, ParamDiagnostics,
+    run_chains, run_ensemble_resumable, summarise, ChainSettings, Checkpoint, EnsembleSettings,
+    FitPosterior, ImportanceCheck, LogDensity, LogPrior, Moves, ParamDiagnostics,
 };
 use crate::model::motor::Motor;
 use crate::model::params::ParamSet;
@@ -183,7 +183,39 @@ pub struct PosteriorSummary {
     pub failed_draws: usize,
     /// Parameters drawn from the stated spread for each sample (not sampled).
     pub spread: Vec<String>,
+    /// The sampler that drew them, and why.
+    pub sampler: Sampler,
 }
+
+/// Which sampler drew the posterior. The posterior's Laplace approximation is checked by
+/// importance sampling from its t proposal ([`IMPORTANCE_DRAWS`] draws,
+/// [`ImportanceCheck`]): where every draw has a positive density and the weights' Pareto
+/// k̂ < 0.7 (a rig fit: k̂ 0.12) the Laplace-guided chains draw it
+/// ([`crate::estimate::run_chains`]); otherwise (a catalogue page: k̂ 2–10, a fifth of the
+/// draws outside the support) the affine-invariant ensemble does, whose walkers follow thin,
+/// curved constraints that the Gaussian misses (docs/validation.md, "Sampled bands on a
+/// page").
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum Sampler {
+    /// Metropolis–Hastings chains from the Laplace approximation (independence moves from
+    /// its t proposal and whitened random walks).
+    Laplace {
+        /// The importance weights' k̂.
+        k_hat: f64,
+    },
+    /// The affine-invariant ensemble of differential-evolution and stretch moves.
+    Ensemble {
+        /// The importance weights' k̂ (∞ where a draw fell outside the support), `None`
+        /// where the Laplace approximation could not be made.
+        k_hat: Option<f64>,
+    },
+}
+
+/// Draws of the Laplace approximation's t proposal that decide the sampler.
+pub const IMPORTANCE_DRAWS: usize = 400;
+/// Chains of the Laplace-guided sampler unless `--walkers` asks for others.
+pub const DEFAULT_CHAINS: usize = 8;
 
 impl PosteriorSummary {
     /// Converged by Vehtari et al.'s rules: every R̂ < 1.01 and every ESS ≥ 400.
@@ -307,27 +339,7 @@ pub(super) fn sample_bands(
         post = post.with_prior(p);
     }
     let names = post.names();
-    let estimate = source.likelihood.estimate();
-    let walkers = sampling.walkers_for(names.len());
-    let settings = EnsembleSettings {
-        walkers,
-        steps: sampling.steps,
-        burn_in: sampling.burn_in,
-        seed: sampling.seed,
-    };
-    let x0 = starts(&post, unc, &estimate, walkers, sampling.seed);
-    let step_progress = |done: usize, total: usize| progress("sampling", done, total);
-    let moves = Moves::Mixed { de: DE_SHARE };
-    let checkpoint = sampling.checkpoint.as_ref().map(Checkpoint::at);
-    let chains = run_ensemble_resumable(
-        &post,
-        &x0,
-        &settings,
-        moves,
-        sampling.block,
-        checkpoint.as_ref(),
-        &step_progress,
-    )?;
+    let (chains, sampler) = draw(&post, unc, &source, sampling, progress)?;
     let diagnostics = summarise(&chains.draws);
     let values: Vec<Vec<f64>> = chains
         .thinned(sampling.draws)
@@ -350,7 +362,7 @@ pub(super) fn sample_bands(
             names,
             diagnostics,
             quantiles,
-            walkers,
+            walkers: chains.walkers(),
             steps: sampling.steps,
             burn_in: sampling.burn_in,
             seed: sampling.seed,
@@ -358,8 +370,57 @@ pub(super) fn sample_bands(
             draws: total,
             failed_draws: failed,
             spread: spread.into_iter().map(|(_, n)| n).collect(),
+            sampler,
         },
     ))
+}
+
+/// Draws from the posterior `post` with the sampler its shape calls for (see
+/// [`Sampler`]), resuming from the checkpoint when one is asked and there.
+fn draw(
+    post: &FitPosterior,
+    unc: &ParamUncertainty,
+    source: &PosteriorSource,
+    sampling: &SamplingOptions,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<(crate::estimate::sample::Chains, Sampler), PredictError> {
+    let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+    let checkpoint = sampling.checkpoint.as_ref().map(Checkpoint::at);
+    // The Laplace approximation and how far the posterior is from it (400 simulations).
+    let proposal = post.proposal().ok();
+    let check = proposal
+        .as_ref()
+        .map(|q| ImportanceCheck::of(post, q, IMPORTANCE_DRAWS, sampling.seed ^ 0x1a91_ace0));
+    if let (Some(q), Some(c)) = (&proposal, check.filter(ImportanceCheck::close)) {
+        let settings = ChainSettings {
+            chains: sampling.walkers.unwrap_or(DEFAULT_CHAINS),
+            steps: sampling.steps,
+            burn_in: sampling.burn_in,
+            block: sampling.block,
+            seed: sampling.seed,
+        };
+        let chains = run_chains(post, q, &settings, checkpoint.as_ref(), &step_progress)?;
+        return Ok((chains, Sampler::Laplace { k_hat: c.k_hat }));
+    }
+    let estimate = source.likelihood.estimate();
+    let walkers = sampling.walkers_for(post.dim());
+    let settings = EnsembleSettings {
+        walkers,
+        steps: sampling.steps,
+        burn_in: sampling.burn_in,
+        seed: sampling.seed,
+    };
+    let x0 = starts(post, unc, &estimate, walkers, sampling.seed);
+    let chains = run_ensemble_resumable(
+        post,
+        &x0,
+        &settings,
+        Moves::Mixed { de: DE_SHARE },
+        sampling.block,
+        checkpoint.as_ref(),
+        &step_progress,
+    )?;
+    Ok((chains, Sampler::Ensemble { k_hat: check.map(|c| c.k_hat) }))
 }
 
 /// The 2.5, 50 and 97.5 % quantiles of each of the `n` sampled parameters over every kept

@@ -20,7 +20,8 @@
 //! [`SIZE_BANDS_CM3`], comma-separated; default all), `SIZE_STYLES` (style names; default
 //! all), `SIZE_STARTS` (`fit --starts`; default vanefit's), `SIZE_THREADS` (pages run at
 //! once, default 2), `SIZE_OUT` (the markdown file; default target/every-size-pages.md),
-//! `SIZE_DIR` (keep the pages, fits and predictions there),
+//! `SIZE_DIR` (keep the pages, fits and predictions there), `SIZE_PREDICT_ARGS` (more
+//! `predict` options, `{page}` for the page's folder: `--bands samples --data {page}`),
 //! `VANEFIT_BIN` (the binary; default the one cargo builds).
 
 use crate::page_coverage::{banded, table, Check, BAR_G, COLUMNS};
@@ -115,7 +116,7 @@ fn try_evaluate(
     };
     let unevaluable = fit_out.contains("chi2 inf") || fit_out.contains("J 10000000000");
     let pred = dir.join("predict");
-    let args = [
+    let mut args = vec![
         "predict",
         fit_s,
         "--pressures",
@@ -125,6 +126,12 @@ fn try_evaluate(
         "--out",
         pred.to_str().unwrap(),
     ];
+    // SIZE_PREDICT_ARGS adds predict options, "{page}" standing for the page's folder (e.g.
+    // "--bands samples --data {page}").
+    let extra = std::env::var("SIZE_PREDICT_ARGS")
+        .unwrap_or_default()
+        .replace("{page}", page_s);
+    args.extend(extra.split_whitespace());
     run(&args, dir).map_err(|(_, e)| e)?;
     let cat = table(&pred.join("catalogue.csv"))?;
     if cat.len() != BAR_G.len() {

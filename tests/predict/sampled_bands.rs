@@ -209,3 +209,36 @@ fn a_killed_predict_resumes_from_its_checkpoint_to_the_same_files() {
         assert!(a == b, "{file} differs after the resume");
     }
 }
+
+#[test]
+fn a_rig_fit_s_posterior_is_drawn_by_the_laplace_chains_and_matches_its_profile_intervals() {
+    // The rig fit's posterior is close to its Laplace approximation (importance weights'
+    // k̂ well below 0.7), so the Laplace-guided chains draw it; their 95 % intervals must
+    // agree with the fit's profile intervals (a Gaussian likelihood in ln θ: the same
+    // interval), found without any sampling.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    let fit = "fits/ar034-synthetic.json";
+    vanefit(&[
+        "predict", fit, "--bands", "samples", "--data", "measurements/ar034-synthetic",
+        "--steps", "600", "--burn-in", "300", "--curve-points", "3", "--out",
+        out.to_str().unwrap(),
+    ]);
+    let bands: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bands.json")).unwrap()).unwrap();
+    let s = &bands["sampling"];
+    assert_eq!(s["sampler"], "laplace_chains", "{s}");
+    assert!(s["laplace_k_hat"].as_f64().unwrap() < 0.7, "{s}");
+    let file = FitFile::read(Path::new(fit)).unwrap();
+    for (name, [lo, hi]) in &file.ci95 {
+        let p = &s["parameters"][name];
+        let (q_lo, q_hi) = (p["q025"].as_f64().unwrap(), p["q975"].as_f64().unwrap());
+        let width = (hi / lo).ln();
+        let sampled = (q_hi / q_lo).ln();
+        assert!(
+            (sampled / width - 1.0).abs() < 0.15,
+            "{name}: profile [{lo:.4e}, {hi:.4e}], samples [{q_lo:.4e}, {q_hi:.4e}]"
+        );
+        assert!(p["rhat"].as_f64().unwrap() < 1.02, "{name}: {p}");
+    }
+}

@@ -43,7 +43,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
 /// Probability of an independence move (else a whitened random-walk move).
-pub const INDEPENDENCE_SHARE: f64 = 0.2;
+pub const INDEPENDENCE_SHARE: f64 = 0.5;
 /// Degrees of freedom ν of the t proposal.
 pub const PROPOSAL_NU: f64 = 5.0;
 /// Scale c of the t proposal on the Laplace approximation's L.

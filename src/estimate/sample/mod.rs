@@ -45,7 +45,7 @@ pub use chains::{
 };
 pub use checkpoint::{Checkpoint, CheckpointError};
 pub use diagnostics::{ess, ess_bulk, ess_tail, rhat_rank, summarise, ParamDiagnostics};
-pub use laplace::{Laplace, TProposal};
+pub use laplace::{ImportanceCheck, Laplace, TProposal, K_HAT_LIMIT};
 
 pub use posterior::{FitPosterior, LogPrior};
 
