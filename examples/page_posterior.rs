@@ -258,7 +258,17 @@ fn per_chain_means(chains: &Chains, names: &[String]) {
     let means: Vec<String> = chains
         .draws
         .iter()
-        .map(|c| format!("{:.3}", c.iter().map(|x| x[worst]).sum::<f64>() / c.len() as f64))
+        .map(|c| {
+            format!(
+                "{:.3}",
+                c.iter().map(|x| x[worst]).sum::<f64>() / c.len() as f64
+            )
+        })
         .collect();
-    println!("per-chain means of {} (R̂ {:.3}): {}", names[worst], diag[worst].rhat, means.join(" "));
+    println!(
+        "per-chain means of {} (R̂ {:.3}): {}",
+        names[worst],
+        diag[worst].rhat,
+        means.join(" ")
+    );
 }

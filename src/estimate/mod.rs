@@ -49,11 +49,9 @@ pub use sample::diagnostics::ParamDiagnostics;
 pub use sample::posterior::LogPrior;
 pub use sample::{
     ess, ess_bulk, ess_tail, rhat_rank, run_chains, run_ensemble, run_ensemble_resumable,
-    run_ensemble_with, summarise,
-    ChainSettings, Chains, Checkpoint, CheckpointError, EnsembleSettings, FitPosterior,
-    ImportanceCheck, Laplace, K_HAT_LIMIT,
-    LogDensity, Moves, SampleError, TProposal, INDEPENDENCE_SHARE, PROPOSAL_NU, PROPOSAL_SCALE,
-    RW_TARGET,
+    run_ensemble_with, summarise, ChainSettings, Chains, Checkpoint, CheckpointError,
+    EnsembleSettings, FitPosterior, ImportanceCheck, Laplace, LogDensity, Moves, SampleError,
+    TProposal, INDEPENDENCE_SHARE, K_HAT_LIMIT, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
 };
 
 pub use engine::Engine;

@@ -133,7 +133,6 @@ impl SamplingOptions {
         self.walkers
             .unwrap_or_else(|| (4 * d).max(16).div_ceil(2) * 2)
     }
-
 }
 
 /// The posterior the samples are drawn from: the fit's likelihood and an optional prior.
@@ -420,7 +419,12 @@ fn draw(
         checkpoint.as_ref(),
         &step_progress,
     )?;
-    Ok((chains, Sampler::Ensemble { k_hat: check.map(|c| c.k_hat) }))
+    Ok((
+        chains,
+        Sampler::Ensemble {
+            k_hat: check.map(|c| c.k_hat),
+        },
+    ))
 }
 
 /// The 2.5, 50 and 97.5 % quantiles of each of the `n` sampled parameters over every kept

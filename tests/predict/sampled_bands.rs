@@ -173,11 +173,26 @@ fn a_killed_predict_resumes_from_its_checkpoint_to_the_same_files() {
         let mut a: Vec<String> = ["predict", fit.to_str().unwrap(), "--bands", "samples"]
             .map(String::from)
             .to_vec();
-        a.extend(["--data", CATALOGUE, "--curve-points", "3", "--steps", "8000"].map(String::from));
+        a.extend(
+            [
+                "--data",
+                CATALOGUE,
+                "--curve-points",
+                "3",
+                "--steps",
+                "8000",
+            ]
+            .map(String::from),
+        );
         a.extend(["--seed", seed, "--out", o.to_str().unwrap()].map(String::from));
         a
     };
-    vanefit(&args(&out("whole"), "1").iter().map(String::as_str).collect::<Vec<_>>());
+    vanefit(
+        &args(&out("whole"), "1")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
     let checkpoint = out("killed").join("samples.checkpoint");
     let mut child = Command::new(env!("CARGO_BIN_EXE_vanefit"))
         .args(args(&out("killed"), "1"))
@@ -187,7 +202,10 @@ fn a_killed_predict_resumes_from_its_checkpoint_to_the_same_files() {
         .spawn()
         .unwrap();
     while !checkpoint.exists() {
-        assert!(child.try_wait().unwrap().is_none(), "predict ended before its first checkpoint");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "predict ended before its first checkpoint"
+        );
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
     child.kill().unwrap();
@@ -200,8 +218,16 @@ fn a_killed_predict_resumes_from_its_checkpoint_to_the_same_files() {
         .unwrap();
     assert_eq!(other.status.code(), Some(1));
     let err = String::from_utf8_lossy(&other.stderr);
-    assert!(err.contains("samples.checkpoint") && err.contains("seed"), "{err}");
-    vanefit(&args(&out("killed"), "1").iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        err.contains("samples.checkpoint") && err.contains("seed"),
+        "{err}"
+    );
+    vanefit(
+        &args(&out("killed"), "1")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
     assert!(!checkpoint.exists());
     for file in ["catalogue.csv", "factors.csv", "bands.json"] {
         let a = std::fs::read(out("whole").join(file)).unwrap();
@@ -220,8 +246,19 @@ fn a_rig_fit_s_posterior_is_drawn_by_the_laplace_chains_and_matches_its_profile_
     let out = dir.path().join("p");
     let fit = "fits/ar034-synthetic.json";
     vanefit(&[
-        "predict", fit, "--bands", "samples", "--data", "measurements/ar034-synthetic",
-        "--steps", "600", "--burn-in", "300", "--curve-points", "3", "--out",
+        "predict",
+        fit,
+        "--bands",
+        "samples",
+        "--data",
+        "measurements/ar034-synthetic",
+        "--steps",
+        "600",
+        "--burn-in",
+        "300",
+        "--curve-points",
+        "3",
+        "--out",
         out.to_str().unwrap(),
     ]);
     let bands: serde_json::Value =

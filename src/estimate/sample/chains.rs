@@ -206,7 +206,10 @@ pub fn run_chains(
         None => None,
     };
     let (mut states, first_block) = match saved {
-        Some(Saved { states, blocks_done }) => (states, blocks_done),
+        Some(Saved {
+            states,
+            blocks_done,
+        }) => (states, blocks_done),
         None => {
             let states = (0..settings.chains)
                 .into_par_iter()
@@ -223,7 +226,10 @@ pub fn run_chains(
         if let Some(c) = checkpoint {
             c.save(&key, &states, b + 1)?;
         }
-        progress(((b + 1) * settings.block).min(settings.total()), settings.total());
+        progress(
+            ((b + 1) * settings.block).min(settings.total()),
+            settings.total(),
+        );
     }
     if let Some(c) = checkpoint {
         c.remove()?;
@@ -307,8 +313,16 @@ mod tests {
             let v = flat.iter().map(|x| (x[i] - m).powi(2)).sum::<f64>() / n;
             let mcse = (cov[(i, i)] / diag[i].ess_bulk).sqrt();
             assert!((m - g.mu[i]).abs() < 4.0 * mcse, "mean {i}: {m} ± {mcse}");
-            assert!((v / cov[(i, i)] - 1.0).abs() < 0.1, "variance {i}: {v} vs {}", cov[(i, i)]);
-            assert!(diag[i].rhat < 1.01 && diag[i].ess_bulk > 1000.0, "{:?}", diag[i]);
+            assert!(
+                (v / cov[(i, i)] - 1.0).abs() < 0.1,
+                "variance {i}: {v} vs {}",
+                cov[(i, i)]
+            );
+            assert!(
+                diag[i].rhat < 1.01 && diag[i].ess_bulk > 1000.0,
+                "{:?}",
+                diag[i]
+            );
         }
     }
 
@@ -345,11 +359,19 @@ mod tests {
             let stopped = run_chains(&g, &q, &settings(7), Some(&halted), &|_, _| {});
             assert_eq!(stopped, Err(SampleError::Halted(k)));
             assert!(path.exists());
-            let resumed =
-                run_chains(&g, &q, &settings(7), Some(&Checkpoint::at(&path)), &|_, _| {})
-                    .unwrap();
+            let resumed = run_chains(
+                &g,
+                &q,
+                &settings(7),
+                Some(&Checkpoint::at(&path)),
+                &|_, _| {},
+            )
+            .unwrap();
             assert_eq!(resumed, whole, "stopped after block {k}");
-            assert!(!path.exists(), "the checkpoint is removed when the run ends");
+            assert!(
+                !path.exists(),
+                "the checkpoint is removed when the run ends"
+            );
         }
     }
 
@@ -366,7 +388,9 @@ mod tests {
         let _ = run_chains(&g, &q, &settings(7), Some(&halted), &|_, _| {});
         let at = Checkpoint::at(&path);
         let e = run_chains(&g, &q, &settings(8), Some(&at), &|_, _| {}).unwrap_err();
-        let SampleError::Checkpoint(CheckpointError::Settings { what, saved, now, .. }) = &e
+        let SampleError::Checkpoint(CheckpointError::Settings {
+            what, saved, now, ..
+        }) = &e
         else {
             panic!("{e:?}")
         };
@@ -381,10 +405,16 @@ mod tests {
         let bytes = std::fs::read(&path).unwrap();
         std::fs::write(&path, &bytes[..bytes.len() - 3]).unwrap();
         let e = run_chains(&g, &q, &settings(7), Some(&at), &|_, _| {}).unwrap_err();
-        assert!(matches!(e, SampleError::Checkpoint(CheckpointError::Format { .. })), "{e}");
+        assert!(
+            matches!(e, SampleError::Checkpoint(CheckpointError::Format { .. })),
+            "{e}"
+        );
         std::fs::write(&path, "a,b\n1,2\n").unwrap();
         let e = run_chains(&g, &q, &settings(7), Some(&at), &|_, _| {}).unwrap_err();
         assert!(e.to_string().contains(&path.display().to_string()), "{e}");
-        assert!(path.exists(), "a checkpoint that does not fit is never overwritten");
+        assert!(
+            path.exists(),
+            "a checkpoint that does not fit is never overwritten"
+        );
     }
 }

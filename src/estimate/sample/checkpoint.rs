@@ -321,7 +321,10 @@ impl Checkpoint {
         let first = line(0).ok_or_else(|| self.format("no first line"))?;
         let magic = std::str::from_utf8(&bytes[..first]).unwrap_or("");
         if magic != format!("{MAGIC} {FORMAT_VERSION}") {
-            return Err(self.format(format!("its first line is '{}'", magic.chars().take(60).collect::<String>())));
+            return Err(self.format(format!(
+                "its first line is '{}'",
+                magic.chars().take(60).collect::<String>()
+            )));
         }
         let second = line(first + 1).ok_or_else(|| self.format("no header line"))?;
         let header: Header = serde_json::from_slice(&bytes[first + 1..second])

@@ -58,12 +58,16 @@ impl Laplace {
         }
         let cov = h
             .cholesky()
-            .ok_or(SampleError::Curvature("the curvature is not positive definite"))?
+            .ok_or(SampleError::Curvature(
+                "the curvature is not positive definite",
+            ))?
             .inverse();
         let cov = 0.5 * (&cov + cov.transpose());
         let chol = cov
             .cholesky()
-            .ok_or(SampleError::Curvature("the covariance is not positive definite"))?
+            .ok_or(SampleError::Curvature(
+                "the covariance is not positive definite",
+            ))?
             .l();
         Ok(Self { mode, chol })
     }
@@ -75,9 +79,7 @@ impl Laplace {
 
     /// σ of each coordinate, √Σᵢᵢ.
     pub fn sd(&self) -> Vec<f64> {
-        (0..self.dim())
-            .map(|i| self.chol.row(i).norm())
-            .collect()
+        (0..self.dim()).map(|i| self.chol.row(i).norm()).collect()
     }
 
     /// x̂ + L·w: the point of whitened coordinates w.
@@ -166,7 +168,8 @@ impl ImportanceCheck {
         log_w.sort_by(|a, b| b.total_cmp(a));
         let top = log_w.first().copied().unwrap_or(0.0);
         let w: Vec<f64> = log_w.iter().map(|v| (v - top).exp()).collect();
-        let ess = w.iter().sum::<f64>().powi(2) / w.iter().map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
+        let ess = w.iter().sum::<f64>().powi(2)
+            / w.iter().map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
         let m = inside / 5;
         let k_hat = if inside < draws || m < 2 {
             f64::INFINITY
@@ -218,8 +221,12 @@ pub(crate) fn gauss_newton(
     let mut cols: Vec<Vec<f64>> = Vec::with_capacity(d);
     for (i, h) in steps.iter().enumerate() {
         let (up, down) = (
-            at(i, *h).ok_or(SampleError::Curvature("a simulation beside the estimate failed"))?,
-            at(i, -*h).ok_or(SampleError::Curvature("a simulation beside the estimate failed"))?,
+            at(i, *h).ok_or(SampleError::Curvature(
+                "a simulation beside the estimate failed",
+            ))?,
+            at(i, -*h).ok_or(SampleError::Curvature(
+                "a simulation beside the estimate failed",
+            ))?,
         );
         if up.len() != down.len() {
             return Err(SampleError::Curvature("the residuals changed length"));
@@ -293,15 +300,35 @@ mod tests {
     fn the_curvature_of_a_quadratic_is_found_exactly() {
         // f = −½ xᵀAx: −∇²f = A; residuals r = Bx with BᵀB = A give the same.
         let a = [[3.0, 0.5], [0.5, 1.0]];
-        let f = |x: &[f64]| -0.5 * (0..2).map(|i| (0..2).map(|j| x[i] * a[i][j] * x[j]).sum::<f64>()).sum::<f64>();
+        let f = |x: &[f64]| {
+            -0.5 * (0..2)
+                .map(|i| (0..2).map(|j| x[i] * a[i][j] * x[j]).sum::<f64>())
+                .sum::<f64>()
+        };
         let h = neg_hessian(&f, &[0.2, -0.1], &[1e-3, 1e-3]);
         for i in 0..2 {
             for j in 0..2 {
                 assert!((h[(i, j)] - a[i][j]).abs() < 1e-6, "{h}");
             }
         }
-        let b = DMatrix::from_row_slice(2, 2, &[3.0_f64.sqrt(), 0.5 / 3.0_f64.sqrt(), 0.0, (1.0 - 0.25 / 3.0_f64).sqrt()]);
-        let r = |x: &[f64]| Some((&b * DVector::from_column_slice(x)).iter().copied().collect());
+        let b = DMatrix::from_row_slice(
+            2,
+            2,
+            &[
+                3.0_f64.sqrt(),
+                0.5 / 3.0_f64.sqrt(),
+                0.0,
+                (1.0 - 0.25 / 3.0_f64).sqrt(),
+            ],
+        );
+        let r = |x: &[f64]| {
+            Some(
+                (&b * DVector::from_column_slice(x))
+                    .iter()
+                    .copied()
+                    .collect(),
+            )
+        };
         let g = gauss_newton(&r, &[0.2, -0.1], &[1e-4, 1e-4], 2.0).unwrap();
         for i in 0..2 {
             for j in 0..2 {
@@ -315,7 +342,9 @@ mod tests {
         // Weights w = u^(−k) with u uniform are Pareto with tail index k; with w ≡ 1 k̂ = 0.
         let n = 20_000;
         for k in [0.3, 1.0] {
-            let log_w = (0..n).map(|i| -k * ((i as f64 + 0.5) / n as f64).ln()).collect();
+            let log_w = (0..n)
+                .map(|i| -k * ((i as f64 + 0.5) / n as f64).ln())
+                .collect();
             let c = ImportanceCheck::of_log_weights(log_w);
             assert!((c.k_hat - k).abs() < 0.02 * k.max(1.0), "{k}: {c:?}");
         }
@@ -349,12 +378,16 @@ mod tests {
                     .map(|x| (x[i] - l.mode[i]) * (x[j] - l.mode[j]))
                     .sum::<f64>()
                     / n as f64;
-                assert!((c - cov[(i, j)]).abs() < 0.05 * cov[(i, i)].max(cov[(j, j)]), "{c} {}", cov[(i, j)]);
+                assert!(
+                    (c - cov[(i, j)]).abs() < 0.05 * cov[(i, i)].max(cov[(j, j)]),
+                    "{c} {}",
+                    cov[(i, j)]
+                );
             }
         }
         // ln q falls with the Mahalanobis distance as the t density does.
         let far = l.unwhiten(&DVector::from_vec(vec![3.0, 0.0]));
-        let expect = -0.5 * 10.0 * (9.0 / (1.5 * 1.5 * 8.0) as f64).ln_1p();
+        let expect = -0.5 * 10.0 * (9.0_f64 / (1.5 * 1.5 * 8.0)).ln_1p();
         assert!((q.log_q(&far) - expect).abs() < 1e-9);
         assert_eq!(q.log_q(&l.mode), 0.0);
     }

@@ -144,7 +144,9 @@ impl FitPosterior<'_> {
             let f = |y: &[f64]| p.log_prior(&self.to_values(y));
             let hp = neg_hessian(&f, &x, &steps);
             if hp.iter().any(|v| !v.is_finite()) {
-                return Err(SampleError::Curvature("the prior is not smooth at the estimate"));
+                return Err(SampleError::Curvature(
+                    "the prior is not smooth at the estimate",
+                ));
             }
             h += hp;
         }
