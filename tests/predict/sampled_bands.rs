@@ -180,7 +180,7 @@ fn a_killed_predict_resumes_from_its_checkpoint_to_the_same_files() {
                 "--curve-points",
                 "3",
                 "--steps",
-                "8000",
+                "4000",
             ]
             .map(String::from),
         );
