@@ -156,6 +156,9 @@ impl PredictArgs {
                 burn_in: self.burn_in,
                 draws: self.draws,
                 seed: self.seed,
+                // The chains are checkpointed beside the outputs (docs/cli.md, "predict").
+                checkpoint: Some(self.out.join("samples.checkpoint")),
+                ..SamplingOptions::default()
             },
         })
     }

@@ -48,8 +48,10 @@ pub use profile::uncertainty::{
 pub use sample::diagnostics::ParamDiagnostics;
 pub use sample::posterior::LogPrior;
 pub use sample::{
-    ess, ess_bulk, ess_tail, rhat_rank, run_ensemble, run_ensemble_with, summarise, Chains,
-    EnsembleSettings, FitPosterior, LogDensity, Moves, SampleError,
+    ess, ess_bulk, ess_tail, rhat_rank, run_chains, run_ensemble, run_ensemble_resumable,
+    run_ensemble_with, summarise, ChainSettings, Chains, Checkpoint, CheckpointError,
+    EnsembleSettings, FitPosterior, ImportanceCheck, Laplace, LogDensity, Moves, SampleError,
+    TProposal, INDEPENDENCE_SHARE, K_HAT_LIMIT, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
 };
 
 pub use engine::Engine;

@@ -25,7 +25,7 @@ pub(crate) mod uncertainty;
 pub use options::{Nozzle, NozzlePort, PredictOptions, DEFAULT_CURVE_POINTS};
 pub use samples::{
     delta_unreliable, BandChoice, BandMethod, BandReason, BandRequest, BandsMade, PosteriorData,
-    PosteriorDraws, PosteriorSource, PosteriorSummary, SamplingOptions, DEFAULT_BURN_IN,
+    PosteriorDraws, PosteriorSource, PosteriorSummary, Sampler, SamplingOptions, DEFAULT_BURN_IN,
     DEFAULT_DRAWS, DEFAULT_STEPS,
 };
 

@@ -31,8 +31,8 @@ use super::PredictError;
 use crate::data::fitfile::FitFile;
 use crate::estimate::fit::fit_likelihood::FitLikelihood;
 use crate::estimate::sample::{
-    run_ensemble_with, summarise, EnsembleSettings, FitPosterior, LogDensity, LogPrior, Moves,
-    ParamDiagnostics,
+    run_chains, run_ensemble_resumable, summarise, ChainSettings, Checkpoint, EnsembleSettings,
+    FitPosterior, ImportanceCheck, LogDensity, LogPrior, Moves, ParamDiagnostics,
 };
 use crate::model::motor::Motor;
 use crate::model::params::ParamSet;
@@ -99,12 +99,20 @@ pub struct SamplingOptions {
     pub draws: usize,
     /// Seed of the walkers' streams and of the spread parameters' draws.
     pub seed: u64,
+    /// Steps per walker between checkpoints.
+    pub block: usize,
+    /// Where the chains are checkpointed after every block and resumed from (`None`: not
+    /// checkpointed). A checkpoint made with other settings is an error; the file is
+    /// removed when the run ends.
+    pub checkpoint: Option<std::path::PathBuf>,
 }
 
 /// Kept steps per walker unless others are asked.
 pub const DEFAULT_STEPS: usize = 4000;
 /// Burn-in steps unless others are asked.
 pub const DEFAULT_BURN_IN: usize = 1000;
+/// Steps per walker between checkpoints.
+pub const DEFAULT_BLOCK: usize = 1000;
 /// Samples propagated through the figures unless another number is asked.
 pub const DEFAULT_DRAWS: usize = 400;
 
@@ -116,6 +124,8 @@ impl Default for SamplingOptions {
             burn_in: DEFAULT_BURN_IN,
             draws: DEFAULT_DRAWS,
             seed: 1,
+            block: DEFAULT_BLOCK,
+            checkpoint: None,
         }
     }
 }
@@ -190,6 +200,8 @@ pub struct PosteriorSummary {
     pub spread: Vec<String>,
     /// The kept samples themselves (for arviz: `vanefit.Prediction.to_arviz()`).
     pub kept: PosteriorDraws,
+    /// The sampler that drew them, and why.
+    pub sampler: Sampler,
 }
 
 /// The kept samples of the walkers, SI.
@@ -217,6 +229,36 @@ impl PosteriorDraws {
         }
     }
 }
+
+/// Which sampler drew the posterior. The posterior's Laplace approximation is checked by
+/// importance sampling from its t proposal ([`IMPORTANCE_DRAWS`] draws,
+/// [`ImportanceCheck`]): where every draw has a positive density and the weights' Pareto
+/// k̂ < 0.7 (a rig fit: k̂ 0.12) the Laplace-guided chains draw it
+/// ([`crate::estimate::run_chains`]); otherwise (a catalogue page: k̂ 2–10, a fifth of the
+/// draws outside the support) the affine-invariant ensemble does, whose walkers follow thin,
+/// curved constraints that the Gaussian misses (docs/validation.md, "Sampled bands on a
+/// page").
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum Sampler {
+    /// Metropolis–Hastings chains from the Laplace approximation (independence moves from
+    /// its t proposal and whitened random walks).
+    Laplace {
+        /// The importance weights' k̂.
+        k_hat: f64,
+    },
+    /// The affine-invariant ensemble of differential-evolution and stretch moves.
+    Ensemble {
+        /// The importance weights' k̂ (∞ where a draw fell outside the support), `None`
+        /// where the Laplace approximation could not be made.
+        k_hat: Option<f64>,
+    },
+}
+
+/// Draws of the Laplace approximation's t proposal that decide the sampler.
+pub const IMPORTANCE_DRAWS: usize = 400;
+/// Chains of the Laplace-guided sampler unless `--walkers` asks for others.
+pub const DEFAULT_CHAINS: usize = 8;
 
 impl PosteriorSummary {
     /// Converged by Vehtari et al.'s rules: every R̂ < 1.01 and every ESS ≥ 400.
@@ -417,18 +459,7 @@ pub(super) fn sample_bands(
         post = post.with_prior(p);
     }
     let names = post.names();
-    let estimate = source.likelihood.estimate();
-    let walkers = sampling.walkers_for(names.len());
-    let settings = EnsembleSettings {
-        walkers,
-        steps: sampling.steps,
-        burn_in: sampling.burn_in,
-        seed: sampling.seed,
-    };
-    let x0 = starts(&post, unc, &estimate, walkers, sampling.seed);
-    let step_progress = |done: usize, total: usize| progress("sampling", done, total);
-    let moves = Moves::Mixed { de: DE_SHARE };
-    let chains = run_ensemble_with(&post, &x0, &settings, moves, &step_progress)?;
+    let (chains, sampler) = draw(&post, unc, &source, sampling, progress)?;
     let diagnostics = summarise(&chains.draws);
     let values: Vec<Vec<f64>> = chains
         .thinned(sampling.draws)
@@ -451,7 +482,7 @@ pub(super) fn sample_bands(
             names,
             diagnostics,
             quantiles,
-            walkers,
+            walkers: chains.walkers(),
             steps: sampling.steps,
             burn_in: sampling.burn_in,
             seed: sampling.seed,
@@ -460,6 +491,60 @@ pub(super) fn sample_bands(
             failed_draws: failed,
             spread: spread.into_iter().map(|(_, n)| n).collect(),
             kept: PosteriorDraws::of(&post, &chains),
+            sampler,
+        },
+    ))
+}
+
+/// Draws from the posterior `post` with the sampler its shape calls for (see
+/// [`Sampler`]), resuming from the checkpoint when one is asked and there.
+fn draw(
+    post: &FitPosterior,
+    unc: &ParamUncertainty,
+    source: &PosteriorSource,
+    sampling: &SamplingOptions,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<(crate::estimate::sample::Chains, Sampler), PredictError> {
+    let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+    let checkpoint = sampling.checkpoint.as_ref().map(Checkpoint::at);
+    // The Laplace approximation and how far the posterior is from it (400 simulations).
+    let proposal = post.proposal().ok();
+    let check = proposal
+        .as_ref()
+        .map(|q| ImportanceCheck::of(post, q, IMPORTANCE_DRAWS, sampling.seed ^ 0x1a91_ace0));
+    if let (Some(q), Some(c)) = (&proposal, check.filter(ImportanceCheck::close)) {
+        let settings = ChainSettings {
+            chains: sampling.walkers.unwrap_or(DEFAULT_CHAINS),
+            steps: sampling.steps,
+            burn_in: sampling.burn_in,
+            block: sampling.block,
+            seed: sampling.seed,
+        };
+        let chains = run_chains(post, q, &settings, checkpoint.as_ref(), &step_progress)?;
+        return Ok((chains, Sampler::Laplace { k_hat: c.k_hat }));
+    }
+    let estimate = source.likelihood.estimate();
+    let walkers = sampling.walkers_for(post.dim());
+    let settings = EnsembleSettings {
+        walkers,
+        steps: sampling.steps,
+        burn_in: sampling.burn_in,
+        seed: sampling.seed,
+    };
+    let x0 = starts(post, unc, &estimate, walkers, sampling.seed);
+    let chains = run_ensemble_resumable(
+        post,
+        &x0,
+        &settings,
+        Moves::Mixed { de: DE_SHARE },
+        sampling.block,
+        checkpoint.as_ref(),
+        &step_progress,
+    )?;
+    Ok((
+        chains,
+        Sampler::Ensemble {
+            k_hat: check.map(|c| c.k_hat),
         },
     ))
 }

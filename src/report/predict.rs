@@ -622,15 +622,15 @@ fn sampled_band_notes(pr: &Prediction, s: &crate::predict::PosteriorSummary) -> 
         format!("{}.", capitalised(&b.statement())),
         format!(
             "EVERY band is made from POSTERIOR SAMPLES{why}: the 2.5 and 97.5 percentiles \
-             of each figure over {} samples of {} ({} walkers × {} steps after {} burn-in, \
-             affine-invariant ensemble of differential-evolution and stretch moves, seed {}, \
-             acceptance {:.2}); the value is the \
-             figure at the estimate.",
+             of each figure over {} samples of {} ({} {} × {} steps after {} burn-in, \
+             {}, seed {}, acceptance {:.2}); the value is the figure at the estimate.",
             s.draws - s.failed_draws,
             s.names.join(", "),
             s.walkers,
+            sampler_words(s.sampler).0,
             s.steps,
             s.burn_in,
+            sampler_words(s.sampler).1,
             s.seed,
             s.acceptance
         ),
@@ -658,6 +658,37 @@ fn sampled_band_notes(pr: &Prediction, s: &crate::predict::PosteriorSummary) -> 
         ));
     }
     out
+}
+
+/// What drew the samples: (its units, "walkers" or "chains"; its description and why).
+fn sampler_words(s: crate::predict::Sampler) -> (&'static str, String) {
+    use crate::predict::Sampler;
+    match s {
+        Sampler::Laplace { k_hat } => (
+            "chains",
+            format!(
+                "Metropolis–Hastings from the fit's Laplace approximation and whitened random \
+                 walks, as the posterior is close to that approximation: importance weights' \
+                 k̂ {k_hat:.2} < 0.7"
+            ),
+        ),
+        Sampler::Ensemble { k_hat } => (
+            "walkers",
+            format!(
+                "affine-invariant ensemble of differential-evolution and stretch moves{}",
+                match k_hat {
+                    Some(k) if k.is_finite() => format!(
+                        ", as the posterior is far from the fit's Laplace approximation \
+                         (importance weights' k̂ {k:.2} ≥ 0.7)"
+                    ),
+                    Some(_) => ", as the posterior is far from the fit's Laplace \
+                         approximation (some of its draws lie outside the support)"
+                        .to_string(),
+                    None => String::new(),
+                }
+            ),
+        ),
+    }
 }
 
 /// Whether the samples converged by the usual rules, with their largest R̂ and smallest
@@ -742,6 +773,14 @@ pub fn sampling_json(pr: &Prediction) -> serde_json::Value {
         serde_json::json!({
             "walkers": s.walkers, "steps": s.steps, "burn_in": s.burn_in, "seed": s.seed,
             "rhat_max": rhat_max, "ess_min": ess_min,
+            "sampler": match s.sampler {
+                crate::predict::Sampler::Laplace { .. } => "laplace_chains",
+                crate::predict::Sampler::Ensemble { .. } => "ensemble",
+            },
+            "laplace_k_hat": match s.sampler {
+                crate::predict::Sampler::Laplace { k_hat } => Some(k_hat),
+                crate::predict::Sampler::Ensemble { k_hat } => k_hat.filter(|k| k.is_finite()),
+            },
             "acceptance": s.acceptance, "draws": s.draws, "failed_draws": s.failed_draws,
             "converged": s.converged(), "spread": s.spread, "parameters": params,
         })

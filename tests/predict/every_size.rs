@@ -125,11 +125,11 @@ fn try_evaluate(
     let extra = std::env::var("SIZE_PREDICT_ARGS")
         .unwrap_or_default()
         .replace("{page}", page_s);
+    // Delta bands unless SIZE_PREDICT_ARGS asks for others (clap takes `--bands` once).
+    let bands = if extra.contains("--bands") { vec![] } else { vec!["--bands", "delta"] };
     let mut args = vec![
         "predict",
         fit_s,
-        "--bands",
-        "delta",
         "--pressures",
         "3,4,5,6,7",
         "--unit",
@@ -137,6 +137,7 @@ fn try_evaluate(
         "--out",
         pred.to_str().unwrap(),
     ];
+    args.extend(bands);
     args.extend(extra.split_whitespace());
     run(&args, dir).map_err(|(_, e)| e)?;
     let cat = table(&pred.join("catalogue.csv"))?;

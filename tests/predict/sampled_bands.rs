@@ -332,3 +332,122 @@ fn where_the_posterior_is_close_to_gaussian_samples_and_delta_agree() {
     );
     assert!(ratios.iter().all(|r| (0.5..2.0).contains(r)), "{ratios:?}");
 }
+
+#[test]
+fn a_killed_predict_resumes_from_its_checkpoint_to_the_same_files() {
+    // Killed when its first checkpoint appears (an event the run writes, not a wall time),
+    // run again with the same options: the same catalogue, factors and bands as a run that
+    // was not killed. A checkpoint of other settings is refused, naming the file.
+    let dir = tempfile::tempdir().unwrap();
+    let fit = catalogue_fit(dir.path(), &[]);
+    let out = |name: &str| dir.path().join(name);
+    let args = |o: &Path, seed: &str| -> Vec<String> {
+        let mut a: Vec<String> = ["predict", fit.to_str().unwrap(), "--bands", "samples"]
+            .map(String::from)
+            .to_vec();
+        a.extend(
+            [
+                "--data",
+                CATALOGUE,
+                "--curve-points",
+                "3",
+                "--steps",
+                "4000",
+            ]
+            .map(String::from),
+        );
+        a.extend(["--seed", seed, "--out", o.to_str().unwrap()].map(String::from));
+        a
+    };
+    vanefit(
+        &args(&out("whole"), "1")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    let checkpoint = out("killed").join("samples.checkpoint");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(args(&out("killed"), "1"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    while !checkpoint.exists() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "predict ended before its first checkpoint"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(checkpoint.exists(), "the run was killed before it ended");
+    let other = Command::new(env!("CARGO_BIN_EXE_vanefit"))
+        .args(args(&out("killed"), "2"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(other.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert!(
+        err.contains("samples.checkpoint") && err.contains("seed"),
+        "{err}"
+    );
+    vanefit(
+        &args(&out("killed"), "1")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert!(!checkpoint.exists());
+    for file in ["catalogue.csv", "factors.csv", "bands.json"] {
+        let a = std::fs::read(out("whole").join(file)).unwrap();
+        let b = std::fs::read(out("killed").join(file)).unwrap();
+        assert!(a == b, "{file} differs after the resume");
+    }
+}
+
+#[test]
+fn a_rig_fit_s_posterior_is_drawn_by_the_laplace_chains_and_matches_its_profile_intervals() {
+    // The rig fit's posterior is close to its Laplace approximation (importance weights'
+    // k̂ well below 0.7), so the Laplace-guided chains draw it; their 95 % intervals must
+    // agree with the fit's profile intervals (a Gaussian likelihood in ln θ: the same
+    // interval), found without any sampling.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    let fit = "fits/ar034-synthetic.json";
+    vanefit(&[
+        "predict",
+        fit,
+        "--bands",
+        "samples",
+        "--data",
+        "measurements/ar034-synthetic",
+        "--steps",
+        "600",
+        "--burn-in",
+        "300",
+        "--curve-points",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let bands: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bands.json")).unwrap()).unwrap();
+    let s = &bands["sampling"];
+    assert_eq!(s["sampler"], "laplace_chains", "{s}");
+    assert!(s["laplace_k_hat"].as_f64().unwrap() < 0.7, "{s}");
+    let file = FitFile::read(Path::new(fit)).unwrap();
+    for (name, [lo, hi]) in &file.ci95 {
+        let p = &s["parameters"][name];
+        let (q_lo, q_hi) = (p["q025"].as_f64().unwrap(), p["q975"].as_f64().unwrap());
+        let width = (hi / lo).ln();
+        let sampled = (q_hi / q_lo).ln();
+        assert!(
+            (sampled / width - 1.0).abs() < 0.15,
+            "{name}: profile [{lo:.4e}, {hi:.4e}], samples [{q_lo:.4e}, {q_hi:.4e}]"
+        );
+        assert!(p["rhat"].as_f64().unwrap() < 1.02, "{name}: {p}");
+    }
+}

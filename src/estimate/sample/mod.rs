@@ -27,19 +27,29 @@
 //!
 //! # Determinism
 //!
-//! Walker k draws from its own Xoshiro256++ stream: the stream of the seed advanced by k
-//! jumps of 2¹²⁸ draws (`jump`), so that no two walkers share draws. Every random number a
+//! Walker k's block b draws from its own Xoshiro256++ stream: the seed's stream advanced by
+//! k long jumps of 2¹⁹² draws and b + 1 jumps of 2¹²⁸ (`long_jump`, `jump`), so that no two
+//! walkers or blocks share draws and a run resumed from a checkpoint continues alike. Every random number a
 //! walker uses comes from its own stream in a fixed order, and the log-densities are
 //! evaluated per walker, so the chains for a seed do not depend on how many threads rayon
 //! runs the walkers on.
 
+pub(crate) mod chains;
+pub(crate) mod checkpoint;
 pub(crate) mod diagnostics;
+pub(crate) mod laplace;
 pub(crate) mod posterior;
 
+pub use chains::{
+    run_chains, ChainSettings, INDEPENDENCE_SHARE, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
+};
+pub use checkpoint::{Checkpoint, CheckpointError};
 pub use diagnostics::{ess, ess_bulk, ess_tail, rhat_rank, summarise, ParamDiagnostics};
+pub use laplace::{ImportanceCheck, Laplace, TProposal, K_HAT_LIMIT};
 
 pub use posterior::{FitPosterior, LogPrior};
 
+use checkpoint::{fingerprint, ChainState, Key, Saved};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -83,8 +93,23 @@ pub enum SampleError {
         need: usize,
     },
     /// No steps to keep.
-    #[error("the ensemble needs at least 4 kept steps, not {0}")]
+    #[error("the sampler needs at least 4 kept steps, not {0}")]
     Steps(usize),
+    /// Fewer than two chains (R̂ compares chains).
+    #[error("the sampler needs at least 2 chains, not {0}")]
+    Chains(usize),
+    /// Blocks of no steps.
+    #[error("the sampler's blocks need at least one step")]
+    Block,
+    /// The Laplace approximation cannot be made.
+    #[error("the posterior's curvature at the estimate: {0}")]
+    Curvature(&'static str),
+    /// A checkpoint cannot be read, written or used.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// The run stopped after this many blocks, as its checkpoint's hook asked.
+    #[error("stopped after block {0}, as asked")]
+    Halted(usize),
     /// A start is not where the density is positive.
     #[error(
         "walker {0} starts where the density is zero (outside the bounds or a failed simulation)"
@@ -164,26 +189,11 @@ impl Chains {
     }
 }
 
-/// One walker's state and its random stream.
+/// One walker's state (its `tried` counts its DE proposals: every 10th takes γ = 1) and
+/// its random stream.
 struct Walker {
-    x: Vec<f64>,
-    lp: f64,
+    s: ChainState,
     rng: Xoshiro256PlusPlus,
-    accepted: usize,
-    /// DE proposals made so far (every 10th takes γ = 1).
-    de_count: usize,
-}
-
-/// The random streams of `k` walkers: the seed's stream advanced by 0, 1, ..., k−1 jumps.
-fn streams(seed: u64, k: usize) -> Vec<Xoshiro256PlusPlus> {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    (0..k)
-        .map(|_| {
-            let this = rng.clone();
-            rng.jump();
-            this
-        })
-        .collect()
 }
 
 /// z from g(z) ∝ 1/√z on [1/a, a], by inversion: z = ((a − 1)·u + 1)²/a.
@@ -223,15 +233,16 @@ pub enum Moves {
 fn de_proposal(w: &mut Walker, fixed: &[Walker], d: usize) -> Vec<f64> {
     let a = w.rng.random_range(0..fixed.len());
     let b = (a + w.rng.random_range(1..fixed.len())) % fixed.len();
-    w.de_count += 1;
-    let gamma = if w.de_count % 10 == 0 {
+    w.s.tried += 1;
+    let gamma = if w.s.tried % 10 == 0 {
         1.0
     } else {
         let z: f64 = rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut w.rng);
         2.38 / (2.0 * d as f64).sqrt() * (1.0 + 0.1 * z)
     };
-    w.x.iter()
-        .zip(fixed[a].x.iter().zip(&fixed[b].x))
+    w.s.x
+        .iter()
+        .zip(fixed[a].s.x.iter().zip(&fixed[b].s.x))
         .map(|(x, (p, q))| x + gamma * (p - q))
         .collect()
 }
@@ -241,10 +252,10 @@ fn de_proposal(w: &mut Walker, fixed: &[Walker], d: usize) -> Vec<f64> {
 fn stretch_proposal(w: &mut Walker, fixed: &[Walker], d: usize) -> (Vec<f64>, f64) {
     let j = w.rng.random_range(0..fixed.len());
     let z = stretch(w.rng.random::<f64>());
-    let partner = &fixed[j].x;
+    let partner = &fixed[j].s.x;
     let y = partner
         .iter()
-        .zip(&w.x)
+        .zip(&w.s.x)
         .map(|(p, x)| p + z * (x - p))
         .collect();
     (y, (d as f64 - 1.0) * z.ln())
@@ -276,12 +287,12 @@ fn half_step(
         };
         let u: f64 = w.rng.random();
         let lp = density.log_density(&y);
-        let log_ratio = log_jacobian + lp - w.lp;
+        let log_ratio = log_jacobian + lp - w.s.lp;
         if lp.is_finite() && u.ln() < log_ratio {
-            w.x = y;
-            w.lp = lp;
+            w.s.x = y;
+            w.s.lp = lp;
             if count {
-                w.accepted += 1;
+                w.s.accepted += 1;
             }
         }
     });
@@ -307,7 +318,16 @@ pub fn run_ensemble_with(
     moves: Moves,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Chains, SampleError> {
-    let d = density.dim();
+    let whole = settings.burn_in + settings.steps;
+    run_ensemble_resumable(density, starts, settings, moves, whole, None, progress)
+}
+
+/// Checks the walkers, the steps and the starts of an ensemble run.
+fn check_ensemble(
+    d: usize,
+    starts: &[Vec<f64>],
+    settings: &EnsembleSettings,
+) -> Result<(), SampleError> {
     let k = settings.walkers;
     let need = 2 * (d + 1);
     if k < need || k % 2 == 1 {
@@ -324,45 +344,195 @@ pub fn run_ensemble_with(
             dim: d,
         });
     }
-    let lps: Vec<f64> = starts.par_iter().map(|x| density.log_density(x)).collect();
-    if let Some(i) = lps.iter().position(|lp| !lp.is_finite()) {
-        return Err(SampleError::BadStart(i));
-    }
-    let mut walkers: Vec<Walker> = starts
-        .iter()
-        .zip(lps)
-        .zip(streams(settings.seed, k))
-        .map(|((x, lp), rng)| Walker {
-            x: x.clone(),
-            lp,
-            rng,
-            accepted: 0,
-            de_count: 0,
+    Ok(())
+}
+
+/// [`run_ensemble_with`] in blocks of `block` steps; with a `checkpoint`, resumed from its
+/// file when there is one and written after every block (removed when the run ends). Walker
+/// k's block b draws from the stream of (seed, k, b) ([`chains`]' determinism), so a
+/// resumed run ends with the same chains as one that was not stopped, whatever the threads.
+pub fn run_ensemble_resumable(
+    density: &dyn LogDensity,
+    starts: &[Vec<f64>],
+    settings: &EnsembleSettings,
+    moves: Moves,
+    block: usize,
+    checkpoint: Option<&Checkpoint>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Chains, SampleError> {
+    let d = density.dim();
+    check_ensemble(d, starts, settings)?;
+    let blocks = ChainSettings {
+        chains: settings.walkers,
+        steps: settings.steps,
+        burn_in: settings.burn_in,
+        block: block.max(1),
+        seed: settings.seed,
+    };
+    let de = match moves {
+        Moves::Stretch => 0.0,
+        Moves::Mixed { de } => de,
+    };
+    let key = Key {
+        sampler: "ensemble",
+        settings: blocks.clone(),
+        fingerprint: fingerprint(starts.iter().flatten().chain(std::iter::once(&de))),
+        dim: d,
+    };
+    let saved = match checkpoint {
+        Some(c) => c.load(&key)?,
+        None => None,
+    };
+    let (states, first) = match saved {
+        Some(Saved {
+            states,
+            blocks_done,
+        }) => (states, blocks_done),
+        None => (ensemble_starts(density, starts)?, 0),
+    };
+    let mut walkers: Vec<Walker> = states
+        .into_iter()
+        .map(|s| Walker {
+            s,
+            rng: Xoshiro256PlusPlus::seed_from_u64(0),
         })
         .collect();
-    let total = settings.burn_in + settings.steps;
-    let mut draws = vec![Vec::with_capacity(settings.steps); k];
-    let mut log_density = vec![Vec::with_capacity(settings.steps); k];
-    for step in 0..total {
-        let keep = step >= settings.burn_in;
-        half_step(density, &mut walkers, true, keep, moves);
-        half_step(density, &mut walkers, false, keep, moves);
-        if keep {
-            for (i, w) in walkers.iter().enumerate() {
-                draws[i].push(w.x.clone());
-                log_density[i].push(w.lp);
-            }
+    let total = blocks.total();
+    for b in first..blocks.blocks() {
+        for (k, w) in walkers.iter_mut().enumerate() {
+            w.rng = chains::stream(settings.seed, k, b + 1);
         }
-        progress(step + 1, total);
+        for step in b * blocks.block..((b + 1) * blocks.block).min(total) {
+            let keep = step >= settings.burn_in;
+            half_step(density, &mut walkers, true, keep, moves);
+            half_step(density, &mut walkers, false, keep, moves);
+            if keep {
+                for w in &mut walkers {
+                    w.s.draws.push(w.s.x.clone());
+                    w.s.lps.push(w.s.lp);
+                }
+            }
+            progress(step + 1, total);
+        }
+        if let Some(c) = checkpoint {
+            let states: Vec<ChainState> = walkers.iter().map(|w| w.s.clone()).collect();
+            c.save(&key, &states, b + 1)?;
+        }
+    }
+    if let Some(c) = checkpoint {
+        c.remove()?;
     }
     let acceptance = walkers
         .iter()
-        .map(|w| w.accepted as f64 / settings.steps as f64)
+        .map(|w| w.s.accepted as f64 / settings.steps as f64)
         .collect();
+    let (draws, log_density) = walkers.into_iter().map(|w| (w.s.draws, w.s.lps)).unzip();
     Ok(Chains {
         dim: d,
         draws,
         log_density,
         acceptance,
     })
+}
+
+/// The walkers at `starts`, each where the density is positive.
+fn ensemble_starts(
+    density: &dyn LogDensity,
+    starts: &[Vec<f64>],
+) -> Result<Vec<ChainState>, SampleError> {
+    let lps: Vec<f64> = starts.par_iter().map(|x| density.log_density(x)).collect();
+    if let Some(i) = lps.iter().position(|lp| !lp.is_finite()) {
+        return Err(SampleError::BadStart(i));
+    }
+    Ok(starts
+        .iter()
+        .zip(lps)
+        .map(|(x, lp)| ChainState::new(x.clone(), lp, 0.0))
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A thin, tilted Gaussian in 3 dimensions.
+    struct Thin;
+
+    impl LogDensity for Thin {
+        fn dim(&self) -> usize {
+            3
+        }
+        fn log_density(&self, x: &[f64]) -> f64 {
+            let u = (x[0] + x[1]) / 0.05;
+            -0.5 * (u * u + x[0] * x[0] + x[2] * x[2])
+        }
+    }
+
+    fn starts() -> Vec<Vec<f64>> {
+        (0..8)
+            .map(|k| {
+                let t = k as f64 / 8.0 - 0.5;
+                vec![t * 0.1, -t * 0.1 + 0.001 * t * t, 0.3 * t]
+            })
+            .collect()
+    }
+
+    fn settings() -> EnsembleSettings {
+        EnsembleSettings {
+            walkers: 8,
+            steps: 400,
+            burn_in: 100,
+            seed: 11,
+        }
+    }
+
+    #[test]
+    fn an_ensemble_stopped_after_a_block_resumes_to_the_same_chains() {
+        let moves = Moves::Mixed { de: 0.8 };
+        let whole = run_ensemble_with(&Thin, &starts(), &settings(), moves, &|_, _| {}).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("samples.checkpoint");
+        let in_blocks = |c: Option<&Checkpoint>| {
+            run_ensemble_resumable(&Thin, &starts(), &settings(), moves, 120, c, &|_, _| {})
+        };
+        // Blocks change nothing by themselves (each starts its own streams; the whole run
+        // is one block).
+        let blocked = in_blocks(None).unwrap();
+        assert_eq!(blocked.draws.len(), whole.draws.len());
+        for k in [1, 3] {
+            let halted = Checkpoint {
+                path: path.clone(),
+                halt_after: Some(k),
+            };
+            assert_eq!(in_blocks(Some(&halted)), Err(SampleError::Halted(k)));
+            let resumed = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap()
+                .install(|| in_blocks(Some(&Checkpoint::at(&path))).unwrap());
+            assert_eq!(resumed, blocked, "stopped after block {k}");
+            assert!(!path.exists());
+        }
+        // A chains run's checkpoint is not an ensemble's.
+        let halted = Checkpoint {
+            path: path.clone(),
+            halt_after: Some(1),
+        };
+        let _ = in_blocks(Some(&halted));
+        let other = EnsembleSettings {
+            steps: 401,
+            ..settings()
+        };
+        let e = run_ensemble_resumable(
+            &Thin,
+            &starts(),
+            &other,
+            moves,
+            120,
+            Some(&Checkpoint::at(&path)),
+            &|_, _| {},
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("steps 400"), "{e}");
+    }
 }

@@ -17,7 +17,8 @@
 //! cutting the posterior off there truncated the tails of what a page leaves to the prior
 //! (three twin pages' sampled bands held 92 of 105 figures so, 105 with the wider range).
 
-use super::LogDensity;
+use super::laplace::{fd_step, gauss_newton, neg_hessian, Laplace, TProposal};
+use super::{LogDensity, SampleError};
 use crate::estimate::fit::fit_likelihood::FitLikelihood;
 use crate::estimate::profile::uncertainty::CHI2_95;
 
@@ -115,6 +116,52 @@ impl<'a> FitPosterior<'a> {
             Ok(c) if c.is_finite() => -0.5 * (c - self.likelihood.chi2_min()) / self.scale2,
             _ => f64::NEG_INFINITY,
         }
+    }
+}
+
+impl FitPosterior<'_> {
+    /// The Laplace approximation about the fit's estimate in the sampling coordinates
+    /// ([`super::laplace`]): the Gauss–Newton precision of the likelihood's residuals
+    /// (JᵀJ/s²) plus the prior's (−∇² ln π, central differences), regularised by the
+    /// supports' widths.
+    pub fn laplace(&self) -> Result<Laplace, SampleError> {
+        let x = self.to_coords(&self.likelihood.estimate());
+        if !self.log_density(&x).is_finite() {
+            return Err(SampleError::Curvature(
+                "the density is zero at the estimate",
+            ));
+        }
+        let bounds = self.coord_bounds();
+        let steps: Vec<f64> = x
+            .iter()
+            .zip(&self.log_scale)
+            .zip(&bounds)
+            .map(|((v, log), b)| fd_step(*v, *log, *b))
+            .collect();
+        let residuals = |y: &[f64]| self.likelihood.residuals(&self.to_values(y)).ok();
+        let mut h = gauss_newton(&residuals, &x, &steps, self.scale2)?;
+        if let Some(p) = self.prior {
+            let f = |y: &[f64]| p.log_prior(&self.to_values(y));
+            let hp = neg_hessian(&f, &x, &steps);
+            if hp.iter().any(|v| !v.is_finite()) {
+                return Err(SampleError::Curvature(
+                    "the prior is not smooth at the estimate",
+                ));
+            }
+            h += hp;
+        }
+        let widths: Vec<f64> = bounds.iter().map(|(lo, hi)| hi - lo).collect();
+        Laplace::from_precision(x, &h, &widths)
+    }
+
+    /// The t proposal of [`Self::laplace`] with the sampler's ν and scale
+    /// ([`super::PROPOSAL_NU`], [`super::PROPOSAL_SCALE`]).
+    pub fn proposal(&self) -> Result<TProposal, SampleError> {
+        Ok(TProposal {
+            laplace: self.laplace()?,
+            nu: super::PROPOSAL_NU,
+            scale: super::PROPOSAL_SCALE,
+        })
     }
 }
 
