@@ -12,7 +12,7 @@ use vanefit::model::EffectSet;
 use vanefit::report::explain;
 use vanefit::report::fit as report;
 use vanefit::task::{
-    displacement_start_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
+    displacement_start_line, fit, pinning_lines, write_fit_to, FitObserver, FitOptions, FitPaths,
     ParamRange, Pinning,
 };
 
@@ -307,6 +307,7 @@ fn progress() -> Progress {
 pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     // Before the search: an unwritable or busy output fails now, not after the starts.
     let _lock = vanefit::io::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
+    let paths = FitPaths::beside(&args.out);
     let settings = args.options()?.check().map_err(Failure::option)?;
     // A page's reading errors are said before the search, not found in its residuals.
     if let Ok(ds) = vanefit::data::Dataset::load(&args.dataset) {
@@ -318,13 +319,13 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     let fitted = fit(
         &args.dataset,
         &settings,
-        Some(side_path(&args.out, "starts.jsonl")),
+        Some(paths.starts.clone()),
         &progress,
     );
     progress.clear();
     let fitted = fitted.map_err(Failure::fit)?;
-    let written = write_fit(&fitted, &args.out, !args.no_plots)?;
-    print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
+    let written = write_fit_to(&fitted, &paths, !args.no_plots)?;
+    print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &paths.fit);
     for w in &fitted.figure_warnings {
         say!("{w}");
     }

@@ -8,7 +8,6 @@ use crate::estimate::fit::{FitOutcome, FitSetup};
 use crate::estimate::problem::dimension::BoundSide;
 use crate::estimate::problem::space::ParamSpace;
 use crate::estimate::profile::uncertainty::Interval;
-use crate::io::side_path;
 use crate::model::params::{conductance_dm3_s_bar, spec, Domain, MotorParams, ParamSpec, PARAMS};
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
@@ -393,28 +392,38 @@ pub struct PageCurve {
     pub points: Vec<crate::predict::CurvePoint>,
 }
 
-/// Every plot of a fit, written next to its fit file `out` (`<stem>.waterfall.svg`,
-/// `.parameters.svg`, `.profiles.svg`, one overlay per experiment): the paths written.
-/// `page_curves`: the model over each catalogue page's whole speed range.
+/// Where a fit's plots go, next to its fit file (`<stem>.waterfall.svg`, `.parameters.svg`,
+/// `.profiles.svg`, and `<stem>.<recording>.svg` per experiment).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotPaths {
+    /// Sorted final costs of every start.
+    pub waterfall: PathBuf,
+    /// The estimated parameters across starts.
+    pub parameters: PathBuf,
+    /// The likelihood profiles.
+    pub profiles: PathBuf,
+    /// The overlays' common prefix (the fit file without its extension).
+    pub overlay_prefix: PathBuf,
+}
+
+/// Every plot of a fit, written to `paths`: the paths written. `page_curves`: the model
+/// over each catalogue page's whole speed range.
 pub(crate) fn plots(
     dataset: &Dataset,
     cost: &CostModel,
     space: &ParamSpace,
     outcome: &FitOutcome,
     page_curves: &[PageCurve],
-    out: &Path,
+    paths: &PlotPaths,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let results = &outcome.run.results;
-    let waterfall_svg = side_path(out, "waterfall.svg");
-    waterfall(results, &waterfall_svg)?;
-    let across = side_path(out, "parameters.svg");
-    parameters_across_starts(results, space, &outcome.params, &across)?;
-    let mut written = vec![waterfall_svg, across];
-    let profiles_svg = side_path(out, "profiles.svg");
+    waterfall(results, &paths.waterfall)?;
+    parameters_across_starts(results, space, &outcome.params, &paths.parameters)?;
+    let mut written = vec![paths.waterfall.clone(), paths.parameters.clone()];
     written.extend(profiles(
         &outcome.intervals,
         outcome.threshold,
-        &profiles_svg,
+        &paths.profiles,
     )?);
     let fit = outcome
         .channels
@@ -425,7 +434,7 @@ pub(crate) fn plots(
         cost,
         &[("fit", fit)],
         page_curves,
-        &out.with_extension(""),
+        &paths.overlay_prefix,
     )?);
     Ok(written)
 }

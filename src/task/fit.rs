@@ -590,27 +590,67 @@ pub struct FitWritten {
     pub report: PathBuf,
 }
 
+/// Every file a fit leaves, resolved once from its fit file's path: the fit file, the
+/// starts' record and the report beside it (`fit.json` → `fit.starts.jsonl`,
+/// `fit.report.md`), and the plots.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitPaths {
+    /// The fit file.
+    pub fit: PathBuf,
+    /// The record of every start (`--resume` continues from it).
+    pub starts: PathBuf,
+    /// The report for people.
+    pub report: PathBuf,
+    /// The plots.
+    pub plots: report::PlotPaths,
+}
+
+impl FitPaths {
+    /// The files of a fit whose fit file is `out`.
+    pub fn beside(out: &Path) -> Self {
+        Self {
+            fit: out.to_path_buf(),
+            starts: side_path(out, "starts.jsonl"),
+            report: side_path(out, "report.md"),
+            plots: report::PlotPaths {
+                waterfall: side_path(out, "waterfall.svg"),
+                parameters: side_path(out, "parameters.svg"),
+                profiles: side_path(out, "profiles.svg"),
+                overlay_prefix: out.with_extension(""),
+            },
+        }
+    }
+}
+
 /// Writes what `vanefit fit` leaves of a finished fit: the fit file at `out`, the plots
-/// (unless `plots` is false) and the report next to it. Split from the fit so that a batch
-/// unit writes exactly what the command writes.
+/// (unless `plots` is false) and the report next to it ([`FitPaths::beside`]). Split from
+/// the fit so that a batch unit writes exactly what the command writes.
 pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitError> {
+    write_fit_to(run, &FitPaths::beside(out), plots)
+}
+
+/// [`write_fit`] to paths resolved before the fit.
+pub fn write_fit_to(run: &Fit, paths: &FitPaths, plots: bool) -> Result<FitWritten, FitError> {
     let write_error = |path: &Path| {
         let path = path.to_path_buf();
         move |source| FitError::Write { path, source }
     };
+    let out = &paths.fit;
     run.file.write(out).map_err(write_error(out))?;
     let mut written = FitWritten::default();
     if plots {
+        // Predicted here, not by the report, which formats what it is given.
+        let curves = page_curves(run);
         written.plots = report::plots(
             &run.dataset,
             &run.data.cost,
             &run.setup.space,
             &run.outcome,
-            &page_curves(run),
-            out,
+            &curves,
+            &paths.plots,
         )?;
     }
-    let md = side_path(out, "report.md");
+    let md = paths.report.clone();
     let text = report::markdown(
         &run.dataset,
         &run.setup,
