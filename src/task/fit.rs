@@ -1,7 +1,7 @@
 //! `fit` as a task: [`FitOptions`] → [`FitOptions::check`] → [`FitSettings`], the fit itself
-//! ([`fit`], `fit_dataset`) giving a [`Fit`], and the files a fit leaves ([`write_fit`]:
-//! fit file, plots, report), called by the command line for one dataset and by `batch` for
-//! a fleet, so both give the same fit for a seed.
+//! ([`fit`], `fit_dataset`) giving a [`Fit`], and the files a fit leaves ([`FitPaths`],
+//! [`write_fit`]: fit file, plots, report); [`fit_to`] does all of it for the command line,
+//! `batch` the same steps for a fleet, so both give the same fit for a seed.
 
 use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset, Kind, FIGURES};
@@ -338,6 +338,11 @@ pub fn page_displacement_of(ds: &Dataset) -> Result<Option<DisplacementEstimate>
 /// can also stop the run) and, for a dataset of catalogue pages only, what the catalogue
 /// pins down before the starts begin. Every method has a default that does nothing.
 pub trait FitObserver: RunObserver {
+    /// The dataset is read, before anything is fitted ([`fit_to`]).
+    fn read(&self, ds: &Dataset) {
+        let _ = ds;
+    }
+
     /// The catalogue's pinning at the nominal motor (`limit_pct`: the relative 1σ, %, below
     /// which a parameter counts as pinned and is estimated).
     fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
@@ -406,6 +411,28 @@ pub fn fit<O: FitObserver>(
     let engine = Engine::with_threads(settings.threads())?;
     let ds = Dataset::load(dataset)?;
     fit_dataset(&engine, ds, settings, results_file, observer)
+}
+
+/// `vanefit fit` below the command line, each step once and in turn: every file the fit
+/// leaves is resolved from `out` ([`FitPaths::beside`]), the dataset is read and shown to
+/// `observer` ([`FitObserver::read`]: the command line prints a page's reading warnings
+/// before the search), fitted on a thread pool of its own with its starts recorded beside
+/// `out` ([`fit`]), and the one result is written ([`write_fit_to`]: the fit file, the
+/// plots unless `plots` is false, the report).
+pub fn fit_to<O: FitObserver>(
+    dataset: &Path,
+    settings: &FitSettings,
+    out: &Path,
+    plots: bool,
+    observer: &O,
+) -> Result<(Fit, FitWritten), FitError> {
+    let paths = FitPaths::beside(out);
+    let ds = Dataset::load(dataset)?;
+    observer.read(&ds);
+    let engine = Engine::with_threads(settings.threads())?;
+    let fitted = fit_dataset(&engine, ds, settings, Some(paths.starts.clone()), observer)?;
+    let written = write_fit_to(&fitted, &paths, plots)?;
+    Ok((fitted, written))
 }
 
 /// [`fit`] of a loaded dataset on a thread pool the caller owns (`threads` is not looked
