@@ -1,4 +1,4 @@
-//! Phase 8, the extended model's 95 % intervals: every estimated parameter of the chosen
+//! Phase 7, the extended model's 95 % intervals: every estimated parameter of the chosen
 //! model, the coefficients of its discovered terms included, by the method of `vanefit fit`
 //! (`crate::estimate::profile::uncertainty`) on the likelihood every diagnosis fit
 //! maximises. The rise of χ² that ends an interval is 3.841·s², s = max(1, r) with r the
@@ -22,15 +22,10 @@ use crate::estimate::problem::objective::Problem;
 use crate::estimate::problem::space::ParamSpace;
 use crate::estimate::profile::uncertainty::{
     curvature_covariance, curvature_intervals, profile_intervals, Interval, CHI2_95,
+    CURVATURE_STEP, PROFILE_ITERS,
 };
 use crate::model::params::estimated_names as names_for;
 use crate::numerics::DefaultSolver;
-
-/// Iteration cap of each profile point's inner fit (Nelder–Mead only; a likelihood's
-/// profile points are fitted by Levenberg–Marquardt), as `vanefit fit` caps them.
-const PROFILE_ITERS: u64 = 300;
-/// Step of the curvature's central differences in the search coordinates, as `vanefit fit`.
-const CURVATURE_STEP: f64 = 1e-3;
 
 /// The 95 % intervals of `model`'s estimated parameters in the order of its estimated names,
 /// then one per discovered term; none when `model` is the baseline (nothing selected).

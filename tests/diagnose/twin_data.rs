@@ -134,6 +134,15 @@ fn twin_run(name: &str, opts: &DiagnoseOptions) -> (Diagnosis, f64, Result<(), S
 fn twin_stiction_is_breakaway_friction() {
     let (d, _, ok) = twin_run("stiction", &DiagnoseOptions::quick(1));
     ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+    // The reduced effort's intervals come from the curvature, one per estimated parameter,
+    // each holding its estimate.
+    assert_eq!(d.extended_intervals.len(), d.extended.fitted.k);
+    for e in &d.extended_intervals {
+        let i = &e.interval;
+        assert_eq!(i.method, vanefit::estimate::Method::Curvature, "{}", i.name);
+        let (lo, hi) = (i.lo.unwrap(), i.hi.unwrap());
+        assert!(lo < i.value && i.value < hi, "{}: {lo:e} {:e} {hi:e}", i.name, i.value);
+    }
 }
 
 /// Rig case on twin data: the Δp² leak V1 -> Ve is that leak path.

@@ -27,6 +27,12 @@ use serde::Serialize;
 
 /// χ²₁ quantile at 95%.
 pub const CHI2_95: f64 = 3.841_458_820_694_124;
+/// Step in θ of the curvature's central differences ([`curvature_covariance`]), for
+/// `vanefit fit` and the diagnosis's extended model alike.
+pub(crate) const CURVATURE_STEP: f64 = 1e-3;
+/// Iteration cap of a profile point's Nelder–Mead refit (a likelihood's points are refitted
+/// by Levenberg–Marquardt instead), for `vanefit fit` and the diagnosis alike.
+pub(crate) const PROFILE_ITERS: u64 = 300;
 /// Where, as fractions of the way from the estimate to an interval's end, a profile is
 /// evaluated once more for its path.
 const PATH_FRACTIONS: [f64; 3] = [0.3, 0.7, 1.4];
