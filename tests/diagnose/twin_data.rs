@@ -141,7 +141,12 @@ fn twin_stiction_is_breakaway_friction() {
         let i = &e.interval;
         assert_eq!(i.method, vanefit::estimate::Method::Curvature, "{}", i.name);
         let (lo, hi) = (i.lo.unwrap(), i.hi.unwrap());
-        assert!(lo < i.value && i.value < hi, "{}: {lo:e} {:e} {hi:e}", i.name, i.value);
+        assert!(
+            lo < i.value && i.value < hi,
+            "{}: {lo:e} {:e} {hi:e}",
+            i.name,
+            i.value
+        );
     }
 }
 
