@@ -8,9 +8,8 @@ use super::progress::BatchProgress;
 use super::status::{State, UnitStatus};
 use super::{BatchError, BatchRecord};
 use crate::estimate::Engine;
-use crate::io::side_path;
 use crate::task::diagnose::{diagnose_to, DiagnoseTaskError};
-use crate::task::fit::{fit_dataset, write_fit, FitError};
+use crate::task::fit::{fit_dataset, write_fit_to, FitError, FitPaths};
 use crate::task::predict::{predict_to, PredictTaskError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -261,13 +260,12 @@ fn execute(
             // A fit interrupted before resumes from the starts it finished.
             options.resume = true;
             let settings = options.check().map_err(FitError::from)?;
-            let out = folder.join("fit.json");
-            let starts = side_path(&out, "starts.jsonl");
+            let paths = FitPaths::beside(&folder.join("fit.json"));
             let ds = crate::data::dataset::Dataset::load(&unit.path).map_err(FitError::from)?;
-            let fitted = fit_dataset(engine, ds, &settings, Some(starts), &observer);
+            let fitted = fit_dataset(engine, ds, &settings, Some(paths.starts.clone()), &observer);
             write_notes(&folder, &observer.take_notes(), progress, &unit.label())?;
             let fitted = fitted?;
-            write_fit(&fitted, &out, manifest.fit_plots)?;
+            write_fit_to(&fitted, &paths, manifest.fit_plots)?;
             Ok(match &fitted.outcome.goodness {
                 Some(g) => format!(
                     "cost J {:.4}, noise ratio {:.3} (limit {:.3})",

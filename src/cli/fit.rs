@@ -12,8 +12,7 @@ use vanefit::model::EffectSet;
 use vanefit::report::explain;
 use vanefit::report::fit as report;
 use vanefit::task::{
-    displacement_start_line, fit, pinning_lines, side_path, write_fit, FitObserver, FitOptions,
-    ParamRange, Pinning,
+    displacement_start_line, fit_to, pinning_lines, FitObserver, FitOptions, ParamRange, Pinning,
 };
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -256,6 +255,12 @@ impl RunObserver for Progress {
 }
 
 impl FitObserver for Progress {
+    /// A page's reading errors are said before the search, not found in its residuals.
+    fn read(&self, ds: &Dataset) {
+        for ex in &ds.experiments {
+            crate::cli::print_page_warnings(ds, ex);
+        }
+    }
     fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
         for line in pinning_lines(limit_pct, rows) {
             say!("{line}");
@@ -308,22 +313,16 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     // Before the search: an unwritable or busy output fails now, not after the starts.
     let _lock = vanefit::io::prepare_file(&args.out).map_err(|e| Failure(format!("--out {e}")))?;
     let settings = args.options()?.check().map_err(Failure::option)?;
-    // A page's reading errors are said before the search, not found in its residuals.
-    if let Ok(ds) = vanefit::data::Dataset::load(&args.dataset) {
-        for ex in &ds.experiments {
-            crate::cli::print_page_warnings(&ds, ex);
-        }
-    }
     let progress = progress();
-    let fitted = fit(
+    let done = fit_to(
         &args.dataset,
         &settings,
-        Some(side_path(&args.out, "starts.jsonl")),
+        &args.out,
+        !args.no_plots,
         &progress,
     );
     progress.clear();
-    let fitted = fitted.map_err(Failure::fit)?;
-    let written = write_fit(&fitted, &args.out, !args.no_plots)?;
+    let (fitted, written) = done.map_err(Failure::fit)?;
     print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
     for w in &fitted.figure_warnings {
         say!("{w}");

@@ -113,9 +113,9 @@ pub struct FitJob {
 
 /// The search coordinates of a model with discovered terms: θ of the space, then each
 /// term's coefficient over its starting value (so every coordinate starts near 1).
-struct TermSpace<'a> {
-    space: &'a ParamSpace,
-    terms: &'a [ExtraTerm],
+pub(super) struct TermSpace<'a> {
+    pub(super) space: &'a ParamSpace,
+    pub(super) terms: &'a [ExtraTerm],
 }
 
 impl Coordinates for TermSpace<'_> {
@@ -131,6 +131,22 @@ impl Coordinates for TermSpace<'_> {
             })
             .collect();
         Some(Motor::new(p, self.space.effects.clone()).with_extra(&terms))
+    }
+
+    /// A term's coordinate is called "coefficient" (which term: by its place after θ).
+    fn coordinate_name(&self, j: usize) -> String {
+        match j.checked_sub(self.space.len()) {
+            None => self.space.coordinate_name(j),
+            Some(_) => "coefficient".into(),
+        }
+    }
+
+    /// A term's coordinate times its starting coefficient.
+    fn coordinate_value(&self, j: usize, x_j: f64) -> f64 {
+        match j.checked_sub(self.space.len()) {
+            None => self.space.coordinate_value(j, x_j),
+            Some(i) => x_j * self.terms[i].coefficient,
+        }
     }
 }
 
@@ -164,7 +180,7 @@ struct Found {
 /// fit does the same with J): Nelder–Mead brings a start into its basin, the Gauss–Newton
 /// steps cross the curved valley to its floor in a few iterations, where Nelder–Mead
 /// crawled for hundreds (docs/diagnosis.md, "Fits").
-struct HandOver<'a>(Likelihood<'a>);
+pub(super) struct HandOver<'a>(pub(super) Likelihood<'a>);
 
 impl Objective for HandOver<'_> {
     fn evaluate(&self, motor: &Motor) -> Evaluation {

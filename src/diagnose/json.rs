@@ -2,7 +2,7 @@
 //! "Diagnosis") and the extended model's fit file.
 
 use super::analysis::Location;
-use super::{discover, Diagnosis, ModelKind, FORMAT};
+use super::{discover, Diagnosis, ExtendedInterval, ModelKind, FORMAT};
 use crate::data::fitfile::FitFile;
 use crate::model::params::estimated_names as names_for;
 use serde_json::{json, Value};
@@ -60,6 +60,12 @@ pub fn to_json(d: &Diagnosis) -> Value {
             Value::Object(o)
         })
         .collect();
+    let mut extended =
+        json!({ "cost": d.extended.fitted.cost, "noise_ratio": round(d.extended.noise_ratio) });
+    if !d.extended_intervals.is_empty() {
+        let intervals: Vec<Value> = d.extended_intervals.iter().map(interval).collect();
+        extended["intervals"] = Value::Array(intervals);
+    }
     json!({
         "format": FORMAT,
         "mismatch": d.mismatch,
@@ -67,8 +73,26 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "locations": d.locations.iter().map(loc).collect::<Vec<_>>(),
         "candidates": candidates,
         "selected": selected,
-        "extended": { "cost": d.extended.fitted.cost, "noise_ratio": round(d.extended.noise_ratio) },
+        "extended": extended,
     })
+}
+
+/// One of `extended.intervals`: the parameter (or a discovered term's `coefficient` with the
+/// term's `formula`), its estimate and the 95 % interval's ends, SI (`null`: open on that
+/// side), and how it was obtained.
+fn interval(e: &ExtendedInterval) -> Value {
+    let i = &e.interval;
+    let mut o = json!({
+        "parameter": i.name,
+        "value": i.value,
+        "lo": i.lo,
+        "hi": i.hi,
+        "method": i.method,
+    });
+    if let Some(t) = &e.term {
+        o["formula"] = json!(discover::formula(t));
+    }
+    o
 }
 
 /// Four decimals: enough for ratios and ΔBIC, and stable in diffs.

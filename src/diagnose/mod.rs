@@ -61,6 +61,11 @@
 //!    refitted warm from the chosen optimum and the part is dropped unless removing it costs
 //!    more than 10. `mismatch` is true when something is selected, or when the baseline's
 //!    noise ratio exceeds what noise alone explains ([`noise_ratio_limit`]).
+//! 7. **Intervals** (`intervals.rs`). When something is selected, every estimated parameter
+//!    of the extended model, discovered terms' coefficients included, gets a 95 % interval
+//!    as `vanefit fit` computes it: profile likelihood (the command line's effort) or the
+//!    curvature at the optimum (the reduced effort), ending where χ² rises by 3.841·s²,
+//!    s = max(1, noise ratio).
 //!
 //! # Code
 //!
@@ -68,9 +73,9 @@
 //! (dataset, cost, likelihood target, options, observer, phase clock): `baseline.rs` (1),
 //! `candidates.rs` (the single refits with the null refit, which may still improve the
 //! baseline, so they run before locating; then the pairs), `locate.rs` (2),
-//! `uncatalogued.rs` (5), `select.rs` (backward elimination, then the extended model) and
-//! `concealment.rs` (3). The types are in `types.rs`, the outputs in `json.rs` and
-//! `summary.rs`. Progress goes to a [`DiagnoseObserver`]: the library prints nothing.
+//! `uncatalogued.rs` (5), `select.rs` (backward elimination, then the extended model),
+//! `concealment.rs` (3) and `intervals.rs` (7). The types are in `types.rs`, the outputs in
+//! `json.rs` and `summary.rs`. Progress goes to a [`DiagnoseObserver`]: the library prints nothing.
 
 mod alternatives;
 mod baseline;
@@ -78,6 +83,7 @@ mod candidates;
 mod concealment;
 mod context;
 mod error;
+mod intervals;
 pub use analysis::{ChannelData, Location};
 pub use fitting::{run_job, FitJob, Fitted, RefitError};
 
@@ -107,8 +113,8 @@ pub use observe::{ChowTest, DiagnoseObserver, Progress, Proposal, Silent};
 pub(crate) use summary::num;
 pub use summary::summary;
 pub use types::{
-    AlsoConsistent, Candidate, Concealment, DiagnoseOptions, Diagnosis, ExperimentCheck, ModelKind,
-    Selected, Skipped,
+    AlsoConsistent, Candidate, Concealment, DiagnoseOptions, Diagnosis, ExperimentCheck,
+    ExtendedInterval, ModelKind, Selected, Skipped,
 };
 
 use crate::data::dataset::Dataset;
@@ -163,6 +169,10 @@ pub(crate) fn diagnose_observed(
     cx.end_phase("concealment and held-out prediction");
     let extended = select::extend(&cx, chosen, &models.all, &baseline_c)?;
     cx.end_phase("selection");
+    let extended_intervals = intervals::of_extended(&cx, &extended.model)?;
+    if !extended_intervals.is_empty() {
+        cx.end_phase("intervals of the extended model");
+    }
     let (also_consistent, separating_experiment) = if extended.selected.is_empty() {
         (Vec::new(), None)
     } else {
@@ -183,6 +193,7 @@ pub(crate) fn diagnose_observed(
         extended: extended.model,
         extended_channels: extended.channels,
         extended_locations: extended.locations,
+        extended_intervals,
         also_consistent,
         separating_experiment,
         concealment,

@@ -85,6 +85,13 @@ pub enum Progress<'a> {
     ConcealmentStart,
     /// The concealment test's result.
     ConcealmentResult(ChowTest),
+    /// The 95 % intervals of the extended model's estimated parameters are computed.
+    IntervalsStart {
+        /// Estimated parameters (discovered terms' coefficients included).
+        parameters: usize,
+        /// By profile likelihood (else from the curvature).
+        profile: bool,
+    },
     /// The diagnosis is complete.
     Done {
         /// Wall time, s.
@@ -155,6 +162,18 @@ impl fmt::Display for Progress<'_> {
                 "concealment: each experiment fitted alone and predicted from the others"
             ),
             Progress::ConcealmentResult(t) => t.fmt(f),
+            Progress::IntervalsStart {
+                parameters,
+                profile,
+            } => write!(
+                f,
+                "95 % intervals of the extended model's {parameters} parameters ({})",
+                if profile {
+                    "profile likelihood"
+                } else {
+                    "curvature"
+                }
+            ),
             Progress::Done { wall_s } => write!(f, "done in {wall_s:.1} s"),
         }
     }

@@ -4,6 +4,7 @@ use super::analysis::{ChannelData, Location};
 use super::fitting::Fitted;
 use super::{discover, CONCEALMENT_ALPHA};
 use crate::data::dataset::Kind;
+use crate::estimate::Interval;
 use crate::model::effects::{Category, Effect};
 use crate::model::motor::ExtraTerm;
 use crate::model::params::MotorParams;
@@ -40,6 +41,9 @@ pub struct DiagnoseOptions {
     pub held_out_top: usize,
     /// Look for uncatalogued terms.
     pub discover: bool,
+    /// The extended model's 95 % intervals by profile likelihood (else from the curvature
+    /// at the optimum, much cheaper).
+    pub profile_intervals: bool,
 }
 
 impl DiagnoseOptions {
@@ -56,11 +60,13 @@ impl DiagnoseOptions {
             concealment: true,
             held_out_top: 3,
             discover: true,
+            profile_intervals: true,
         }
     }
 
-    /// Reduced effort for tests: one baseline start, pairs only when
-    /// needed, held-out prediction of the selected model only.
+    /// Reduced effort for tests: one baseline start, pairs only when needed, held-out
+    /// prediction of the selected model only, the extended model's intervals from the
+    /// curvature.
     pub fn quick(seed: u64) -> Self {
         Self {
             starts: 1,
@@ -69,6 +75,7 @@ impl DiagnoseOptions {
             effect_starts: 3,
             pairs_always: false,
             held_out_top: 0,
+            profile_intervals: false,
             ..Self::full(1, seed)
         }
     }
@@ -180,6 +187,17 @@ pub struct AlsoConsistent {
     pub categories: Vec<Category>,
 }
 
+/// A 95 % interval of one estimated parameter of the extended model (docs/diagnosis.md,
+/// "Intervals of the extended model").
+#[derive(Debug, Clone)]
+pub struct ExtendedInterval {
+    /// The interval, SI: its `name` is the parameter's id, or "coefficient" for a discovered
+    /// term's coefficient (in the term's unit, `discover::coefficient_unit`).
+    pub interval: Interval,
+    /// The discovered term whose coefficient it is (`None`: a named parameter).
+    pub term: Option<ExtraTerm>,
+}
+
 /// A catalog effect that was not tried, and why.
 #[derive(Debug, Clone)]
 pub struct Skipped {
@@ -216,6 +234,9 @@ pub struct Diagnosis {
     pub extended_channels: Vec<ChannelData>,
     /// Locations left after the extension.
     pub extended_locations: Vec<Location>,
+    /// 95 % intervals of the extended model's estimated parameters, discovered terms'
+    /// coefficients included (empty when nothing is selected: the baseline has none).
+    pub extended_intervals: Vec<ExtendedInterval>,
     /// Other models within [`super::ALSO_CONSISTENT_DELTA_BIC`] of the chosen one, best
     /// first: the data cannot separate them from it.
     pub also_consistent: Vec<AlsoConsistent>,

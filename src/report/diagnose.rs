@@ -8,9 +8,10 @@
 
 use crate::diagnose::analysis::ChannelData;
 use crate::diagnose::{discover, num, summary, Candidate, Concealment, Diagnosis, ModelKind};
+use crate::estimate::Method;
 use crate::model::effects::Effect;
 use crate::model::params::{conductance_dm3_s_bar, description, is_conductance, spec};
-use crate::report::explain;
+use crate::report::explain::{self, number};
 use crate::report::plot::{Chart, Figure, Legend, PlotError, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -533,37 +534,57 @@ fn selected(md: &mut String, d: &Diagnosis) {
                     .join(", ")
             }
         );
-        let _ = writeln!(md, "{}\n", extended_without_intervals(d));
+        extended_intervals(md, d);
     }
 }
 
-/// What the extended model's values are not: they carry no intervals (the diagnosis fits
-/// every candidate model to compare them, and profiling each would multiply its time), and
-/// how to get them: a fit with the selected catalog effects switched on, which profiles
-/// like any fit (discovered terms outside the catalog are not refitted that way).
-fn extended_without_intervals(d: &Diagnosis) -> String {
-    let effects = d.extended.fitted.effects.ids();
-    let refit = if effects.is_empty() {
-        "the discovered terms are outside the catalog, so no `vanefit fit` refits them; their \
-         values are point estimates"
-            .to_string()
-    } else {
-        format!(
-            "for 95 % intervals, refit with the effects switched on: `vanefit fit <dataset> \
-             --effects {} --out <fit.json>`{}",
-            effects.join(","),
-            if d.extended.fitted.extra.is_empty() {
-                ""
-            } else {
-                " (without the discovered terms, which no fit of the catalog carries)"
-            }
-        )
+/// The extended model's 95 % intervals (`Diagnosis::extended_intervals`): a table of every
+/// estimated parameter, discovered terms' coefficients included, and how they were read.
+fn extended_intervals(md: &mut String, d: &Diagnosis) {
+    let Some(first) = d.extended_intervals.first() else {
+        return;
     };
-    format!(
-        "The extended model's values (`extended.json`) are the best fit of the model and carry \
-         no intervals: the diagnosis fits every candidate model to compare them, and profiling \
-         each would multiply its time; {refit}."
-    )
+    let method = match first.interval.method {
+        Method::Profile => "profile likelihood: each parameter held, the others refitted",
+        _ => "the curvature of χ² at the optimum",
+    };
+    let _ = writeln!(
+        md,
+        "### The extended model's 95 % intervals\n\n\
+         By {method}, on the likelihood every fit of the diagnosis maximises; an interval ends \
+         where χ² rises by 3.84·s², s = max(1, noise ratio) = {:.3} (wider where the model \
+         misses the noise); \"open\": the data do not bound that side. The values are those \
+         of `extended.json`; `diagnosis.json` has the intervals (`extended.intervals`).\n\n\
+         | parameter | estimate | 95 % interval | unit |\n|---|---|---|---|",
+        d.extended.noise_ratio.max(1.0)
+    );
+    for e in &d.extended_intervals {
+        let i = &e.interval;
+        let (label, unit) = match &e.term {
+            Some(t) => (
+                format!("coefficient of `{}`", discover::formula(t)),
+                discover::coefficient_unit(t),
+            ),
+            None => (
+                md_label(&i.name),
+                spec(&i.name).map_or(String::new(), |s| s.unit.to_string()),
+            ),
+        };
+        // Four digits: an interval is often narrower than the third digit of its estimate.
+        let cell = |v: f64| match is_conductance(&i.name) {
+            true => format!("{} ({})", number(v, 4), number(conductance_dm3_s_bar(v), 4)),
+            false => number(v, 4),
+        };
+        let end = |v: Option<f64>| v.map_or("open".to_string(), cell);
+        let _ = writeln!(
+            md,
+            "| {label} | {} | [{}, {}] | {unit} |",
+            cell(i.value),
+            end(i.lo),
+            end(i.hi)
+        );
+    }
+    let _ = writeln!(md);
 }
 
 /// Writes `diagnosis.json`, `extended.json` (the extended model's fit file), `report.md`

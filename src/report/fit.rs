@@ -8,7 +8,6 @@ use crate::estimate::fit::{FitOutcome, FitSetup};
 use crate::estimate::problem::dimension::BoundSide;
 use crate::estimate::problem::space::ParamSpace;
 use crate::estimate::profile::uncertainty::Interval;
-use crate::io::side_path;
 use crate::model::params::{conductance_dm3_s_bar, spec, Domain, MotorParams, ParamSpec, PARAMS};
 use crate::objective::cost::{ChannelResiduals, CostModel};
 use crate::objective::reference::{Abscissa, ChannelReference};
@@ -393,28 +392,38 @@ pub struct PageCurve {
     pub points: Vec<crate::predict::CurvePoint>,
 }
 
-/// Every plot of a fit, written next to its fit file `out` (`<stem>.waterfall.svg`,
-/// `.parameters.svg`, `.profiles.svg`, one overlay per experiment): the paths written.
-/// `page_curves`: the model over each catalogue page's whole speed range.
+/// Where a fit's plots go, next to its fit file (`<stem>.waterfall.svg`, `.parameters.svg`,
+/// `.profiles.svg`, and `<stem>.<recording>.svg` per experiment).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotPaths {
+    /// Sorted final costs of every start.
+    pub waterfall: PathBuf,
+    /// The estimated parameters across starts.
+    pub parameters: PathBuf,
+    /// The likelihood profiles.
+    pub profiles: PathBuf,
+    /// The overlays' common prefix (the fit file without its extension).
+    pub overlay_prefix: PathBuf,
+}
+
+/// Every plot of a fit, written to `paths`: the paths written. `page_curves`: the model
+/// over each catalogue page's whole speed range.
 pub(crate) fn plots(
     dataset: &Dataset,
     cost: &CostModel,
     space: &ParamSpace,
     outcome: &FitOutcome,
     page_curves: &[PageCurve],
-    out: &Path,
+    paths: &PlotPaths,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let results = &outcome.run.results;
-    let waterfall_svg = side_path(out, "waterfall.svg");
-    waterfall(results, &waterfall_svg)?;
-    let across = side_path(out, "parameters.svg");
-    parameters_across_starts(results, space, &outcome.params, &across)?;
-    let mut written = vec![waterfall_svg, across];
-    let profiles_svg = side_path(out, "profiles.svg");
+    waterfall(results, &paths.waterfall)?;
+    parameters_across_starts(results, space, &outcome.params, &paths.parameters)?;
+    let mut written = vec![paths.waterfall.clone(), paths.parameters.clone()];
     written.extend(profiles(
         &outcome.intervals,
         outcome.threshold,
-        &profiles_svg,
+        &paths.profiles,
     )?);
     let fit = outcome
         .channels
@@ -425,7 +434,7 @@ pub(crate) fn plots(
         cost,
         &[("fit", fit)],
         page_curves,
-        &out.with_extension(""),
+        &paths.overlay_prefix,
     )?);
     Ok(written)
 }
@@ -577,10 +586,11 @@ pub(crate) fn overlays(
                 .zip(y_meas)
                 .map(|(x, y)| (ax.display(*x, p_atm), reference.display(*y, p_atm)))
                 .collect();
+            let labels = Labels::of(reference);
             let mut chart = Chart::new(
-                &format!("{} — {}", ex.file, quantity_words(&reference.column)),
-                &axis_label(ax),
-                &column_label(&reference.column),
+                &format!("{} — {}", ex.file, labels.words),
+                &labels.x,
+                &labels.y,
             )
             .with(Series::points("data", data));
             if ax.log10 {
@@ -600,7 +610,7 @@ pub(crate) fn overlays(
             residuals.push(residual_panel(
                 runs,
                 &ex.file,
-                reference,
+                (reference, &labels),
                 (&x_meas, y_meas),
                 p_atm,
             ));
@@ -719,20 +729,20 @@ fn with_simulations(
 /// The residual panel of the channel `reference` of experiment `file`: the recorded value
 /// minus each model's simulation at every compared row (not the reference polynomial, which
 /// only describes the data), in the channel's unit, against the recorded abscissa, with a
-/// zero line. `data` holds the recording's abscissa (as [`Abscissa::measured`]) and channel
-/// values, SI, indexed by row.
+/// zero line, titled by the channel's `labels`. `data` holds the recording's abscissa (as
+/// [`Abscissa::measured`]) and channel values, SI, indexed by row.
 fn residual_panel(
     runs: &[(&str, &[ChannelResiduals])],
     file: &str,
-    reference: &ChannelReference,
+    (reference, labels): (&ChannelReference, &Labels),
     (x_meas, y_meas): (&[f64], &[f64]),
     p_atm: f64,
 ) -> Chart {
     let ax = &reference.abscissa;
     let mut chart = Chart::new(
-        &format!("{file} — {} residual", quantity_words(&reference.column)),
-        &axis_label(ax),
-        &format!("data − fit, {}", column_label(&reference.column)),
+        &format!("{file} — {} residual", labels.words),
+        &labels.x,
+        &format!("data − fit, {}", labels.y),
     );
     if ax.log10 {
         chart = chart.log_x();
@@ -764,6 +774,28 @@ fn residual_panel(
         chart = chart.with(Series::line("", vec![(x_lo, 0.0), (x_hi, 0.0)]));
     }
     chart
+}
+
+/// A channel's titles, read once from its column names for its overlay and residual
+/// panels: the quantity in words, its axis title and the abscissa's.
+struct Labels {
+    /// The channel's quantity in words ([`quantity_words`]).
+    words: String,
+    /// The abscissa's axis title ([`axis_label`]).
+    x: String,
+    /// The channel's axis title ([`column_label`]).
+    y: String,
+}
+
+impl Labels {
+    /// The titles of the channel `reference`.
+    fn of(reference: &ChannelReference) -> Self {
+        Self {
+            words: quantity_words(&reference.column),
+            x: axis_label(&reference.abscissa),
+            y: column_label(&reference.column),
+        }
+    }
 }
 
 /// The abscissa's axis title: its quantity and unit in words.
@@ -1013,7 +1045,13 @@ mod tests {
         let reference = torque_reference(&x, &y);
         let fit = vec![channel_residuals(&reference, vec![0, 2], vec![0.25, 0.26])];
         let runs = [("fit", fit.as_slice())];
-        let chart = residual_panel(&runs, "page.csv", &reference, (&x, &y), 101_325.0);
+        let chart = residual_panel(
+            &runs,
+            "page.csv",
+            (&reference, &Labels::of(&reference)),
+            (&x, &y),
+            101_325.0,
+        );
         assert_eq!(chart.y_label, "data − fit, torque [N·m]");
         assert_eq!(chart.series[0].name, "data − fit");
         let got = &chart.series[0].points;

@@ -20,7 +20,8 @@ pub enum Effort {
     #[default]
     Full,
     /// Reduced (tests, quick fleet scans): one baseline start, pairs only when needed,
-    /// held-out prediction of the selected model only.
+    /// held-out prediction of the selected model only, the extended model's intervals from
+    /// the curvature instead of profiles.
     Quick,
 }
 

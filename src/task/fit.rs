@@ -1,7 +1,7 @@
 //! `fit` as a task: [`FitOptions`] → [`FitOptions::check`] → [`FitSettings`], the fit itself
-//! ([`fit`], `fit_dataset`) giving a [`Fit`], and the files a fit leaves ([`write_fit`]:
-//! fit file, plots, report), called by the command line for one dataset and by `batch` for
-//! a fleet, so both give the same fit for a seed.
+//! ([`fit`], `fit_dataset`) giving a [`Fit`], and the files a fit leaves ([`FitPaths`],
+//! [`write_fit`]: fit file, plots, report); [`fit_to`] does all of it for the command line,
+//! `batch` the same steps for a fleet, so both give the same fit for a seed.
 
 use super::{Opt, OptionError};
 use crate::data::dataset::{DataError, Dataset, Kind, FIGURES};
@@ -338,6 +338,11 @@ pub fn page_displacement_of(ds: &Dataset) -> Result<Option<DisplacementEstimate>
 /// can also stop the run) and, for a dataset of catalogue pages only, what the catalogue
 /// pins down before the starts begin. Every method has a default that does nothing.
 pub trait FitObserver: RunObserver {
+    /// The dataset is read, before anything is fitted ([`fit_to`]).
+    fn read(&self, ds: &Dataset) {
+        let _ = ds;
+    }
+
     /// The catalogue's pinning at the nominal motor (`limit_pct`: the relative 1σ, %, below
     /// which a parameter counts as pinned and is estimated).
     fn pinning(&self, limit_pct: f64, rows: &[Pinning]) {
@@ -406,6 +411,28 @@ pub fn fit<O: FitObserver>(
     let engine = Engine::with_threads(settings.threads())?;
     let ds = Dataset::load(dataset)?;
     fit_dataset(&engine, ds, settings, results_file, observer)
+}
+
+/// `vanefit fit` below the command line, each step once and in turn: every file the fit
+/// leaves is resolved from `out` ([`FitPaths::beside`]), the dataset is read and shown to
+/// `observer` ([`FitObserver::read`]: the command line prints a page's reading warnings
+/// before the search), fitted on a thread pool of its own with its starts recorded beside
+/// `out` ([`fit`]), and the one result is written ([`write_fit_to`]: the fit file, the
+/// plots unless `plots` is false, the report).
+pub fn fit_to<O: FitObserver>(
+    dataset: &Path,
+    settings: &FitSettings,
+    out: &Path,
+    plots: bool,
+    observer: &O,
+) -> Result<(Fit, FitWritten), FitError> {
+    let paths = FitPaths::beside(out);
+    let ds = Dataset::load(dataset)?;
+    observer.read(&ds);
+    let engine = Engine::with_threads(settings.threads())?;
+    let fitted = fit_dataset(&engine, ds, settings, Some(paths.starts.clone()), observer)?;
+    let written = write_fit_to(&fitted, &paths, plots)?;
+    Ok((fitted, written))
 }
 
 /// [`fit`] of a loaded dataset on a thread pool the caller owns (`threads` is not looked
@@ -590,14 +617,52 @@ pub struct FitWritten {
     pub report: PathBuf,
 }
 
+/// Every file a fit leaves, resolved once from its fit file's path: the fit file, the
+/// starts' record and the report beside it (`fit.json` → `fit.starts.jsonl`,
+/// `fit.report.md`), and the plots.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitPaths {
+    /// The fit file.
+    pub fit: PathBuf,
+    /// The record of every start (`--resume` continues from it).
+    pub starts: PathBuf,
+    /// The report for people.
+    pub report: PathBuf,
+    /// The plots.
+    pub plots: report::PlotPaths,
+}
+
+impl FitPaths {
+    /// The files of a fit whose fit file is `out`.
+    pub fn beside(out: &Path) -> Self {
+        Self {
+            fit: out.to_path_buf(),
+            starts: side_path(out, "starts.jsonl"),
+            report: side_path(out, "report.md"),
+            plots: report::PlotPaths {
+                waterfall: side_path(out, "waterfall.svg"),
+                parameters: side_path(out, "parameters.svg"),
+                profiles: side_path(out, "profiles.svg"),
+                overlay_prefix: out.with_extension(""),
+            },
+        }
+    }
+}
+
 /// Writes what `vanefit fit` leaves of a finished fit: the fit file at `out`, the plots
-/// (unless `plots` is false) and the report next to it. Split from the fit so that a batch
-/// unit writes exactly what the command writes.
+/// (unless `plots` is false) and the report next to it ([`FitPaths::beside`]). Split from
+/// the fit so that a batch unit writes exactly what the command writes.
 pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitError> {
+    write_fit_to(run, &FitPaths::beside(out), plots)
+}
+
+/// [`write_fit`] to paths resolved before the fit.
+pub fn write_fit_to(run: &Fit, paths: &FitPaths, plots: bool) -> Result<FitWritten, FitError> {
     let write_error = |path: &Path| {
         let path = path.to_path_buf();
         move |source| FitError::Write { path, source }
     };
+    let out = &paths.fit;
     // The dataset's folder relative to the fit file's, so that `predict` finds it
     // (`data::locate`) wherever the checkout is moved.
     let file = FitFile {
@@ -607,16 +672,18 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
     file.write(out).map_err(write_error(out))?;
     let mut written = FitWritten::default();
     if plots {
+        // Predicted here, not by the report, which formats what it is given.
+        let curves = page_curves(run);
         written.plots = report::plots(
             &run.dataset,
             &run.data.cost,
             &run.setup.space,
             &run.outcome,
-            &page_curves(run),
-            out,
+            &curves,
+            &paths.plots,
         )?;
     }
-    let md = side_path(out, "report.md");
+    let md = paths.report.clone();
     let text = report::markdown(
         &run.dataset,
         &run.setup,

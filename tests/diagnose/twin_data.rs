@@ -134,6 +134,20 @@ fn twin_run(name: &str, opts: &DiagnoseOptions) -> (Diagnosis, f64, Result<(), S
 fn twin_stiction_is_breakaway_friction() {
     let (d, _, ok) = twin_run("stiction", &DiagnoseOptions::quick(1));
     ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+    // The reduced effort's intervals come from the curvature, one per estimated parameter,
+    // each holding its estimate.
+    assert_eq!(d.extended_intervals.len(), d.extended.fitted.k);
+    for e in &d.extended_intervals {
+        let i = &e.interval;
+        assert_eq!(i.method, vanefit::estimate::Method::Curvature, "{}", i.name);
+        let (lo, hi) = (i.lo.unwrap(), i.hi.unwrap());
+        assert!(
+            lo < i.value && i.value < hi,
+            "{}: {lo:e} {:e} {hi:e}",
+            i.name,
+            i.value
+        );
+    }
 }
 
 /// Rig case on twin data: the Δp² leak V1 -> Ve is that leak path.
@@ -141,6 +155,72 @@ fn twin_stiction_is_breakaway_friction() {
 fn twin_quadratic_leak_is_a_leak_path() {
     let (d, _, ok) = twin_run("dp2 leak v1-ve", &DiagnoseOptions::quick(1));
     ok.unwrap_or_else(|e| panic!("{e}\n{}", summary(&d)));
+}
+
+/// The extended fit's 95 % intervals (issue 45): on twin data with a Δp² leak V1 → Ve that
+/// the base model does not have, every estimated parameter of the extended model (the
+/// discovered term's coefficient included) has a profile interval that holds its estimate,
+/// the coefficient's is closed and holds the twin's true coefficient, and `diagnosis.json`
+/// states the same intervals.
+#[test]
+fn twin_extended_fit_intervals_hold_the_true_coefficient() {
+    let c = twin_case("dp2 leak v1-ve");
+    let ds = twin_dataset(&c.motor, &twin_rig_config(), 11);
+    let opts = DiagnoseOptions {
+        profile_intervals: true,
+        ..DiagnoseOptions::quick(1)
+    };
+    let d = diagnose(&ds, &opts).unwrap();
+    let f = &d.extended.fitted;
+    assert_eq!(f.extra.len(), 1, "{}", summary(&d));
+    assert_eq!(
+        d.extended_intervals.len(),
+        f.k,
+        "{:?}",
+        d.extended_intervals
+    );
+    for e in &d.extended_intervals {
+        let i = &e.interval;
+        assert_eq!(i.method, vanefit::estimate::Method::Profile);
+        let holds = i.lo.is_none_or(|lo| lo <= i.value) && i.hi.is_none_or(|hi| i.value <= hi);
+        assert!(
+            holds,
+            "{} = {:e} outside [{:?}, {:?}]",
+            i.name, i.value, i.lo, i.hi
+        );
+        let fitted = match &e.term {
+            Some(t) => t.coefficient,
+            None => f.params.get(&i.name).unwrap(),
+        };
+        assert!(
+            (i.value - fitted).abs() <= 1e-12 * fitted.abs(),
+            "{}",
+            i.name
+        );
+    }
+    let coefficient = d
+        .extended_intervals
+        .iter()
+        .find(|e| e.term.is_some())
+        .unwrap();
+    let (lo, hi) = (coefficient.interval.lo, coefficient.interval.hi);
+    let truth = c.truth[0].1;
+    let (lo, hi) = (lo.expect("closed below"), hi.expect("closed above"));
+    eprintln!(
+        "coefficient {:e} [{lo:e}, {hi:e}], true {truth:e}",
+        coefficient.interval.value
+    );
+    assert!(
+        lo <= truth && truth <= hi,
+        "true {truth:e} outside [{lo:e}, {hi:e}]"
+    );
+    let json = vanefit::diagnose::to_json(&d);
+    let listed = json["extended"]["intervals"].as_array().unwrap();
+    assert_eq!(listed.len(), d.extended_intervals.len());
+    let term = listed.iter().find(|v| v.get("formula").is_some()).unwrap();
+    assert_eq!(term["parameter"], "coefficient");
+    assert_eq!(term["lo"].as_f64(), Some(lo));
+    assert_eq!(term["hi"].as_f64(), Some(hi));
 }
 
 /// Rig case on twin data: the pair is found as the pair (full effort: `#[ignore]`d, it is

@@ -75,8 +75,15 @@ impl GoodnessOfFit {
 
     /// The rise of χ² that ends a 95% profile interval: 3.841·s².
     pub fn threshold(&self) -> f64 {
-        crate::estimate::profile::uncertainty::CHI2_95 * self.interval_scale.powi(2)
+        interval_threshold(self.interval_scale)
     }
+}
+
+/// The rise of χ² that ends a 95% profile interval of a model whose noise ratio is `r`
+/// ([1]): 3.841·s², s = max(1, r) (Birge's ratio; the diagnosis's extended model uses it
+/// too).
+pub fn interval_threshold(noise_ratio: f64) -> f64 {
+    crate::estimate::profile::uncertainty::CHI2_95 * noise_ratio.max(1.0).powi(2)
 }
 
 /// The channel with the largest χ²_c/n_c: its "file column" and √(χ²_c/n_c) (`None`

@@ -512,13 +512,14 @@ fn intervals(
         return (Vec::new(), None);
     }
     let threshold = goodness.threshold();
-    let cov = uncertainty::curvature_covariance(ml, theta, 1e-3, goodness.interval_scale.powi(2));
+    let scale2 = goodness.interval_scale.powi(2);
+    let cov = uncertainty::curvature_covariance(ml, theta, uncertainty::CURVATURE_STEP, scale2);
     let mut out = match setup.uncertainty {
         UncertaintyMethod::Curvature => uncertainty::curvature_intervals(ml, theta, cov.as_ref()),
         _ => {
             observer.phase("profiles", 2 * theta.len());
             let sides = uncertainty::ProfileSides {
-                max_iters: 300,
+                max_iters: uncertainty::PROFILE_ITERS,
                 on_side: &|done| observer.phase_step(done),
             };
             uncertainty::profile_intervals_observed(

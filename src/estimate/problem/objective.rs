@@ -73,6 +73,13 @@ pub trait Coordinates: Sync {
         let _ = motor;
         Vec::new()
     }
+
+    /// What coordinate `j` is called where its interval is stated (a parameter's id).
+    fn coordinate_name(&self, j: usize) -> String;
+
+    /// The value, SI, that coordinate `j` stands for at `x_j` (what its interval is stated
+    /// in).
+    fn coordinate_value(&self, j: usize, x_j: f64) -> f64;
 }
 
 impl Coordinates for ParamSpace {
@@ -87,6 +94,14 @@ impl Coordinates for ParamSpace {
             return Vec::new();
         }
         self.prior.residuals(&self.dims, motor.params())
+    }
+
+    fn coordinate_name(&self, j: usize) -> String {
+        self.dims[j].name().to_string()
+    }
+
+    fn coordinate_value(&self, j: usize, x_j: f64) -> f64 {
+        self.dims[j].value(x_j)
     }
 }
 
@@ -206,9 +221,9 @@ impl<C: Coordinates + ?Sized> CostFunction for Problem<'_, C> {
 }
 
 /// A problem over a sub-space: some coordinates held at given values (profile likelihood).
-pub(crate) struct Profiled<'a> {
+pub(crate) struct Profiled<'a, C: Coordinates + ?Sized = ParamSpace> {
     /// The problem over every coordinate.
-    pub inner: &'a Problem<'a>,
+    pub inner: &'a Problem<'a, C>,
     /// Full θ; the free coordinates are overwritten by the optimizer's.
     pub(crate) template: Vec<f64>,
     /// Indices of the free coordinates.
@@ -217,7 +232,7 @@ pub(crate) struct Profiled<'a> {
     pub(crate) use_chi2: bool,
 }
 
-impl Profiled<'_> {
+impl<C: Coordinates + ?Sized> Profiled<'_, C> {
     /// The full θ of the free coordinates' values.
     pub fn full(&self, free_theta: &[f64]) -> Vec<f64> {
         let mut t = self.template.clone();
@@ -228,7 +243,7 @@ impl Profiled<'_> {
     }
 }
 
-impl CostFunction for Profiled<'_> {
+impl<C: Coordinates + ?Sized> CostFunction for Profiled<'_, C> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, free_theta: &Self::Param) -> Result<f64, Error> {

@@ -21,12 +21,18 @@ use crate::estimate::optimize::nelder_mead::{
     Layout, NelderMeadSettings, Restart, RestartedNelderMead,
 };
 use crate::estimate::problem::derivatives::{central_column, hessian};
-use crate::estimate::problem::objective::{Problem, Profiled};
+use crate::estimate::problem::objective::{Coordinates, Problem, Profiled};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 /// χ²₁ quantile at 95%.
 pub const CHI2_95: f64 = 3.841_458_820_694_124;
+/// Step in θ of the curvature's central differences ([`curvature_covariance`]), for
+/// `vanefit fit` and the diagnosis's extended model alike.
+pub(crate) const CURVATURE_STEP: f64 = 1e-3;
+/// Iteration cap of a profile point's Nelder–Mead refit (a likelihood's points are refitted
+/// by Levenberg–Marquardt instead), for `vanefit fit` and the diagnosis alike.
+pub(crate) const PROFILE_ITERS: u64 = 300;
 /// Where, as fractions of the way from the estimate to an interval's end, a profile is
 /// evaluated once more for its path.
 const PATH_FRACTIONS: [f64; 3] = [0.3, 0.7, 1.4];
@@ -116,7 +122,11 @@ const POLISH: NelderMeadSettings = NelderMeadSettings {
 /// Minimises the profiled χ² from `start`: by Levenberg–Marquardt where the objective has
 /// residuals (a likelihood), otherwise by Nelder–Mead in at most `max_iters` iterations;
 /// (start, ∞) if the optimizer fails.
-fn polish(problem: Profiled<'_>, start: Vec<f64>, max_iters: u64) -> (Vec<f64>, f64) {
+fn polish<C: Coordinates + ?Sized>(
+    problem: Profiled<'_, C>,
+    start: Vec<f64>,
+    max_iters: u64,
+) -> (Vec<f64>, f64) {
     let residuals = |free: &[f64]| problem.inner.residuals(&problem.full(free));
     if problem.use_chi2 && residuals(&start).is_some() {
         return levenberg_marquardt(&residuals, &start, LmSettings::default());
@@ -163,8 +173,8 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
 /// construction. The term the Gauss–Newton form drops, Σ r·∇²r, averages out where the
 /// residuals are the data's noise. `None` when the curvature is not positive definite (a
 /// flat or ill-posed direction).
-pub fn curvature_covariance(
-    problem: &Problem<'_>,
+pub fn curvature_covariance<C: Coordinates + ?Sized>(
+    problem: &Problem<'_, C>,
     theta: &[f64],
     h: f64,
     scale2: f64,
@@ -180,7 +190,11 @@ pub fn curvature_covariance(
 
 /// JᵀJ of the residual vector at θ, J by central differences of step `h`; `None` when the
 /// objective has no residuals or one of them cannot be computed.
-fn gauss_newton_curvature(problem: &Problem<'_>, theta: &[f64], h: f64) -> Option<DMatrix<f64>> {
+fn gauss_newton_curvature<C: Coordinates + ?Sized>(
+    problem: &Problem<'_, C>,
+    theta: &[f64],
+    h: f64,
+) -> Option<DMatrix<f64>> {
     let n = problem.residuals(theta)?.len();
     let k = theta.len();
     let mut jac = DMatrix::<f64>::zeros(n, k);
@@ -198,25 +212,22 @@ fn gauss_newton_curvature(problem: &Problem<'_>, theta: &[f64], h: f64) -> Optio
 
 /// Intervals from the curvature: θ̂ ± 1.96·σ_θ, mapped back through the transforms
 /// (so positive parameters get intervals that are symmetric on a log scale).
-pub fn curvature_intervals(
-    problem: &Problem<'_>,
+pub fn curvature_intervals<C: Coordinates + ?Sized>(
+    problem: &Problem<'_, C>,
     theta: &[f64],
     cov: Option<&DMatrix<f64>>,
 ) -> Vec<Interval> {
-    problem
-        .space
-        .dims
-        .iter()
-        .enumerate()
-        .map(|(j, d)| {
+    let space = problem.space;
+    (0..theta.len())
+        .map(|j| {
             let sd = cov
                 .map(|c| c[(j, j)])
                 .filter(|v| v.is_finite() && *v > 0.0)
                 .map(f64::sqrt);
-            let within = |t: f64| (t.abs() < THETA_EDGE).then(|| d.value(t));
+            let within = |t: f64| (t.abs() < THETA_EDGE).then(|| space.coordinate_value(j, t));
             Interval {
-                name: d.name().to_string(),
-                value: d.value(theta[j]),
+                name: space.coordinate_name(j),
+                value: space.coordinate_value(j, theta[j]),
                 lo: sd.and_then(|s| within(theta[j] - 1.96 * s)),
                 hi: sd.and_then(|s| within(theta[j] + 1.96 * s)),
                 method: Method::Curvature,
@@ -228,8 +239,8 @@ pub fn curvature_intervals(
 }
 
 /// Profile of χ² along coordinate j: re-optimises the others at θ_j = t.
-struct Profile<'a> {
-    problem: &'a Problem<'a>,
+struct Profile<'a, C: Coordinates + ?Sized> {
+    problem: &'a Problem<'a, C>,
     j: usize,
     others: Vec<usize>,
     max_iters: u64,
@@ -240,7 +251,7 @@ struct Profile<'a> {
     slope: Option<Vec<f64>>,
 }
 
-impl Profile<'_> {
+impl<C: Coordinates + ?Sized> Profile<'_, C> {
     /// The profile at θ_j = t: the others re-optimised from the valley predicted from the
     /// last profile point `base`.
     fn at(&self, base: &[f64], t: f64) -> (Vec<f64>, f64) {
@@ -346,9 +357,9 @@ impl Profile<'_> {
 /// Profile-likelihood intervals for every estimated parameter (in parallel), starting from
 /// the χ² optimum `theta_hat`, ending where χ² rises by `threshold`, and using the curvature
 /// covariance (if any) to size steps.
-pub fn profile_intervals(
+pub fn profile_intervals<C: Coordinates + ?Sized>(
     engine: &Engine,
-    problem: &Problem<'_>,
+    problem: &Problem<'_, C>,
     theta_hat: &[f64],
     chi2_min: f64,
     threshold: f64,
@@ -372,9 +383,9 @@ pub(crate) struct ProfileSides<'a> {
 }
 
 /// [`profile_intervals`], reporting each finished side to `sides.on_side`.
-pub(crate) fn profile_intervals_observed(
+pub(crate) fn profile_intervals_observed<C: Coordinates + ?Sized>(
     engine: &Engine,
-    problem: &Problem<'_>,
+    problem: &Problem<'_, C>,
     theta_hat: &[f64],
     chi2_min: f64,
     threshold: f64,
@@ -403,27 +414,26 @@ pub(crate) fn profile_intervals_observed(
             threshold,
             slope,
         };
-        let d = &problem.space.dims[j];
+        let value = |t: f64| problem.space.coordinate_value(j, t);
         let (end, path) = profile.crossing(theta_hat, chi2_min, dir, step);
         let points: Vec<ProfilePoint> = path
             .into_iter()
             .filter(|(_, delta)| delta.is_finite())
             .map(|(t, delta)| ProfilePoint {
-                value: d.value(t),
+                value: value(t),
                 delta_chi2: delta,
             })
             .collect();
         (run.on_side)(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
-        (end.map(|t| d.value(t)), points)
+        (end.map(value), points)
     });
     (0..k)
         .map(|j| {
-            let d = &problem.space.dims[j];
-            let value = d.value(theta_hat[j]);
+            let value = problem.space.coordinate_value(j, theta_hat[j]);
             let (lo, below) = &ends[2 * j];
             let (hi, above) = &ends[2 * j + 1];
             Interval {
-                name: d.name().to_string(),
+                name: problem.space.coordinate_name(j),
                 value,
                 lo: *lo,
                 hi: *hi,
