@@ -45,6 +45,10 @@ pub(crate) struct PlanArgs {
     /// uncertain within this factor (95 %).
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) fixed_spread: Option<f64>,
+    /// The kinds of candidate weighed, comma-separated (default all): key_figures,
+    /// stall_torque, air_flow, datasheet, pressure_ramp, outlet_throttle, load_step.
+    #[arg(long)]
+    pub(crate) candidates: Option<String>,
     /// Candidates detailed (bands before and after, rig settings).
     #[arg(long, default_value_t = DEFAULT_TOP)]
     pub(crate) top: usize,
@@ -63,6 +67,20 @@ fn speed_list(list: &str) -> Result<Vec<f64>, Failure> {
             _ => Err(Failure(format!(
                 "--speeds '{list}': '{s}' is not a speed ≥ 0 in rpm (e.g. --speeds 500,1000)"
             ))),
+        })
+        .collect()
+}
+
+/// `--candidates`: kind names, each known.
+fn kind_list(list: &str) -> Result<Vec<CandidateKind>, Failure> {
+    let names: Vec<&str> = CandidateKind::ALL.iter().map(|k| k.name()).collect();
+    list.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|n| {
+            CandidateKind::from_name(n).ok_or_else(|| {
+                Failure(format!("--candidates '{list}': no candidate '{n}' (one of {})", names.join(", ")))
+            })
         })
         .collect()
 }
@@ -101,6 +119,7 @@ impl PlanArgs {
         o.costs_h = self.costs.as_deref().map(cost_list).transpose()?.unwrap_or_default();
         o.fixed_spread = self.fixed_spread;
         o.top = self.top;
+        o.kinds = self.candidates.as_deref().map(kind_list).transpose()?;
         o.check().map_err(|e| self.refused(e, unit, p_atm_pa))?;
         Ok((o, PressureDisplay { unit, p_atm_pa }))
     }
@@ -118,6 +137,7 @@ impl PlanArgs {
             PlanError::BadSpeed(_) => Failure("--speeds: give at least one speed ≥ 0 in rpm".into()),
             PlanError::BadSpread(f) => Failure(format!("--fixed-spread {f}: not a factor > 1")),
             PlanError::BadTop => Failure(format!("--top {}: detail at least 1 candidate", self.top)),
+            PlanError::NoKinds => Failure("--candidates: name at least one kind".into()),
             e => Failure(e.to_string()),
         }
     }

@@ -75,7 +75,7 @@ pub(super) enum Design {
     KeyFigures { p_supply_pa: f64 },
     /// The stall torque.
     Stall { p_supply_pa: f64 },
-    /// Air at stall and at free speed.
+    /// Air at free speed.
     Air { p_supply_pa: f64 },
     /// Torque and air at each imposed speed.
     Sweep { p_supply_pa: f64, speeds: Vec<f64> },
@@ -108,11 +108,7 @@ impl Candidate {
             Design::KeyFigures { p_supply_pa } => row(*p_supply_pa).map_or(nan, |r| key(&r).to_vec()),
             Design::Stall { p_supply_pa } => row(*p_supply_pa).map_or(nan, |r| vec![r.stall_torque_nm]),
             Design::Air { p_supply_pa } => {
-                let c = Conditions::supplied(*p_supply_pa, p_atm_pa);
-                match (at_speeds(motor, &c, &[0.0]), row(*p_supply_pa)) {
-                    (Ok(s), Ok(r)) => vec![s[0].flow1_kg_s, r.air_at_free_speed_kg_s],
-                    _ => nan,
-                }
+                row(*p_supply_pa).map_or(nan, |r| vec![r.air_at_free_speed_kg_s])
             }
             Design::Sweep { p_supply_pa, speeds } => {
                 let c = Conditions::supplied(*p_supply_pa, p_atm_pa);
@@ -208,8 +204,8 @@ pub(super) fn candidates(
         out.push(make(CandidateKind::KeyFigures, Some(p), rig, sigma, Design::KeyFigures { p_supply_pa: p }));
         let rig = at_pressure(p, 1, REPEATS, "stall torque, brake locked");
         out.push(make(CandidateKind::StallTorque, Some(p), rig, vec![noise.torque_nm / rep], Design::Stall { p_supply_pa: p }));
-        let rig = at_pressure(p, 2, REPEATS, "air into port 1 at stall and at free speed");
-        out.push(make(CandidateKind::AirFlow, Some(p), rig, vec![noise.flow_kg_s / rep; 2], Design::Air { p_supply_pa: p }));
+        let rig = at_pressure(p, 1, REPEATS, "air into port 1 at free speed, shaft free");
+        out.push(make(CandidateKind::AirFlow, Some(p), rig, vec![noise.flow_kg_s / rep], Design::Air { p_supply_pa: p }));
         let w0 = row.free_speed_rad_s;
         let speeds = spaced(SWEEP_SPAN[0] * w0, SWEEP_SPAN[1] * w0, SWEEP_POINTS, false);
         let mut rig = at_pressure(p, SWEEP_POINTS, 1, "shaft torque and air into port 1 at each imposed speed");
@@ -220,7 +216,7 @@ pub(super) fn candidates(
         out.push(load_step(motor, options, p, row, &noise, &make));
     }
     out.push(ramp(motor, options, rows, &noise, &make));
-    out.retain(|c| !c.sigma.is_empty() && c.sigma.iter().all(|s| *s > 0.0));
+    out.retain(|c| options.weighs(c.kind) && !c.sigma.is_empty() && c.sigma.iter().all(|s| *s > 0.0));
     out
 }
 

@@ -58,6 +58,9 @@ pub enum PlanError {
     /// No candidate is to be detailed.
     #[error("at least one candidate must be detailed")]
     BadTop,
+    /// No candidate kind is to be weighed.
+    #[error("at least one kind of candidate must be weighed")]
+    NoKinds,
     /// The fit states no uncertainty to shrink.
     #[error("the fit file has neither a covariance nor intervals: there is no band to shrink (a stated --fixed-spread gives one)")]
     NoUncertainty,

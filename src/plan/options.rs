@@ -13,7 +13,7 @@ pub enum CandidateKind {
     KeyFigures,
     /// The stall torque at one supply pressure (brake locked), repeated readings.
     StallTorque,
-    /// The air flow into port 1 at stall and at free speed at one supply pressure.
+    /// The air flow into port 1 at free speed at one supply pressure (shaft free).
     AirFlow,
     /// A datasheet sweep: torque and air at imposed speeds from near stall to near free
     /// speed at one supply pressure.
@@ -94,6 +94,8 @@ pub struct PlanOptions {
     pub fixed_spread: Option<f64>,
     /// Candidates detailed in the outputs.
     pub top: usize,
+    /// The kinds weighed (`None`: every kind).
+    pub kinds: Option<Vec<CandidateKind>>,
 }
 
 impl PlanOptions {
@@ -107,6 +109,7 @@ impl PlanOptions {
             costs_h: Vec::new(),
             fixed_spread: None,
             top: DEFAULT_TOP,
+            kinds: None,
         }
     }
 
@@ -143,7 +146,15 @@ impl PlanOptions {
         if self.top == 0 {
             return Err(PlanError::BadTop);
         }
+        if self.kinds.as_ref().is_some_and(|k| k.is_empty()) {
+            return Err(PlanError::NoKinds);
+        }
         Ok(())
+    }
+
+    /// Whether candidates of `kind` are weighed.
+    pub fn weighs(&self, kind: CandidateKind) -> bool {
+        self.kinds.as_ref().is_none_or(|k| k.contains(&kind))
     }
 
     /// The rig time of `kind`, hours: the user's, else the default.
