@@ -2,8 +2,8 @@
 //! noise of each recorded value, and the settings a technician runs. Each candidate is a
 //! vector of observables z(motor), simulated with the steady solver at settings fixed at
 //! the fitted motor (so that a perturbed motor is observed at the same settings), and the
-//! noise σ of each: a page's reading tolerance (`data::dataset::catalogue`, 2 % of the
-//! figure) for key figures, the rig's sensor noise for its size otherwise
+//! noise σ of each: a page's reading tolerance (`data::dataset::catalogue`, 2 % of each
+//! channel's full scale, as a page's fit weighs its key figures) for key figures, the rig's sensor noise for its size otherwise
 //! (`SensorNoise::typical_for`, divided by √readings where a value is averaged).
 //!
 //! Every observation is a steady state: a ramp slow enough to be quasi-steady, and a load
@@ -71,11 +71,13 @@ pub(super) struct FreePoint {
 /// What a candidate simulates.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) enum Design {
-    /// Free speed, maximum power, stall torque, air at maximum power (a page's key figures).
-    KeyFigures { p_supply_pa: f64 },
+    /// A page's key figures as the fit reads them: points of its curves at the fitted
+    /// motor's speeds 0, of maximum power and free: the stall torque, the power and air at
+    /// maximum power, the torque (0) and air at free speed.
+    KeyFigures { p_supply_pa: f64, speeds: [f64; 3] },
     /// The stall torque.
     Stall { p_supply_pa: f64 },
-    /// Air at free speed.
+    /// Free speed and the air there (the shaft free).
     Air { p_supply_pa: f64 },
     /// Torque and air at each imposed speed.
     Sweep { p_supply_pa: f64, speeds: Vec<f64> },
@@ -105,11 +107,18 @@ impl Candidate {
         let nan = vec![f64::NAN; self.sigma.len()];
         let row = |p: f64| catalogue_row(motor, &Conditions::supplied(p, p_atm_pa), GRID_RAD_S);
         match &self.design {
-            Design::KeyFigures { p_supply_pa } => row(*p_supply_pa).map_or(nan, |r| key(&r).to_vec()),
-            Design::Stall { p_supply_pa } => row(*p_supply_pa).map_or(nan, |r| vec![r.stall_torque_nm]),
-            Design::Air { p_supply_pa } => {
-                row(*p_supply_pa).map_or(nan, |r| vec![r.air_at_free_speed_kg_s])
+            Design::KeyFigures { p_supply_pa, speeds } => {
+                let c = Conditions::supplied(*p_supply_pa, p_atm_pa);
+                match at_speeds(motor, &c, speeds).as_deref() {
+                    Ok([s, m, f]) => {
+                        vec![s.torque_nm, m.power_w, m.flow1_kg_s, f.torque_nm, f.flow1_kg_s]
+                    }
+                    _ => nan,
+                }
             }
+            Design::Stall { p_supply_pa } => row(*p_supply_pa).map_or(nan, |r| vec![r.stall_torque_nm]),
+            Design::Air { p_supply_pa } => row(*p_supply_pa)
+                .map_or(nan, |r| vec![r.free_speed_rad_s, r.air_at_free_speed_kg_s]),
             Design::Sweep { p_supply_pa, speeds } => {
                 let c = Conditions::supplied(*p_supply_pa, p_atm_pa);
                 at_speeds(motor, &c, speeds).map_or(nan, |pts| {
@@ -124,15 +133,13 @@ impl Candidate {
     }
 }
 
-/// The key figures of a row: free speed, maximum power, stall torque, air at maximum power
-/// (the last two of the maximum at its continuous optimum).
-fn key(r: &CatalogueRow) -> [f64; 4] {
-    [
-        r.free_speed_rad_s,
-        r.optimum.power_w,
-        r.stall_torque_nm,
-        r.optimum.flow1_kg_s,
-    ]
+/// The key figures' σ as a page's fit weighs them (docs/formats.md, "Catalogue data"):
+/// the reading tolerance times each channel's full scale, the stall torque for both
+/// torques, the maximum power, the larger air for both airs.
+fn key_sigma(r: &CatalogueRow) -> Vec<f64> {
+    let air = r.optimum.flow1_kg_s.max(r.air_at_free_speed_kg_s);
+    let full = [r.stall_torque_nm, r.optimum.power_w, air, r.stall_torque_nm, air];
+    full.iter().map(|v| DEFAULT_TOLERANCE * v.abs()).collect()
 }
 
 /// The steady state with the shaft free at `fp`, started at speed `omega`: (ω rad/s, air
@@ -198,14 +205,14 @@ pub(super) fn candidates(
         design,
     };
     for (p, row) in options.pressures_pa.iter().copied().zip(rows) {
-        let k = key(row);
-        let sigma = k.iter().map(|v| DEFAULT_TOLERANCE * v.abs()).collect();
-        let rig = at_pressure(p, 4, 1, "free speed, maximum power (speed sweep), stall torque, air at maximum power, as a page prints them");
-        out.push(make(CandidateKind::KeyFigures, Some(p), rig, sigma, Design::KeyFigures { p_supply_pa: p }));
+        let speeds = [0.0, row.optimum.speed_rad_s, row.free_speed_rad_s];
+        let rig = at_pressure(p, 3, 1, "stall torque, maximum power with its speed and air (a speed sweep), free speed and its air, as a page prints them");
+        out.push(make(CandidateKind::KeyFigures, Some(p), rig, key_sigma(row), Design::KeyFigures { p_supply_pa: p, speeds }));
         let rig = at_pressure(p, 1, REPEATS, "stall torque, brake locked");
         out.push(make(CandidateKind::StallTorque, Some(p), rig, vec![noise.torque_nm / rep], Design::Stall { p_supply_pa: p }));
-        let rig = at_pressure(p, 1, REPEATS, "air into port 1 at free speed, shaft free");
-        out.push(make(CandidateKind::AirFlow, Some(p), rig, vec![noise.flow_kg_s / rep], Design::Air { p_supply_pa: p }));
+        let rig = at_pressure(p, 1, REPEATS, "free speed and air into port 1 there, shaft free");
+        let sigma = vec![noise.speed_rad_s / rep, noise.flow_kg_s / rep];
+        out.push(make(CandidateKind::AirFlow, Some(p), rig, sigma, Design::Air { p_supply_pa: p }));
         let w0 = row.free_speed_rad_s;
         let speeds = spaced(SWEEP_SPAN[0] * w0, SWEEP_SPAN[1] * w0, SWEEP_POINTS, false);
         let mut rig = at_pressure(p, SWEEP_POINTS, 1, "shaft torque and air into port 1 at each imposed speed");

@@ -8,12 +8,13 @@ use super::PlanError;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum CandidateKind {
-    /// The four key figures of a catalogue row (free speed, maximum power, stall torque,
-    /// air at maximum power) at one supply pressure, read as a page prints them.
+    /// The key figures of a catalogue row (stall torque, maximum power with its speed and
+    /// air, free speed and its air) at one supply pressure, weighed as a page's.
     KeyFigures,
     /// The stall torque at one supply pressure (brake locked), repeated readings.
     StallTorque,
-    /// The air flow into port 1 at free speed at one supply pressure (shaft free).
+    /// The free speed and the air flow into port 1 there at one supply pressure (shaft
+    /// free).
     AirFlow,
     /// A datasheet sweep: torque and air at imposed speeds from near stall to near free
     /// speed at one supply pressure.

@@ -224,6 +224,7 @@ pub fn json(plan: &Plan) -> Value {
                 "kind": a.candidate.kind.name(),
                 "p_supply_pa": a.candidate.at_pa,
                 "cost_h": a.candidate.cost_h,
+                "sigma_si": a.candidate.sigma,
                 "v_reduction": a.v_reduction,
                 "v_per_hour": a.v_per_hour(),
                 "d_gain_nats": a.d_gain_nats,
