@@ -167,7 +167,8 @@ pub struct Plan {
     pub targets: Vec<Target>,
     /// The candidates, best V per hour first.
     pub ranked: Vec<Assessed>,
-    /// The covered parameters (ln θ), as `predict` covers them.
+    /// The parameters the update spans (ln θ): those `predict` covers, then those it leaves
+    /// out that the fit's covariance holds.
     pub parameters: Vec<String>,
     /// Their σ of ln θ now.
     pub sd_before: Vec<f64>,
@@ -190,10 +191,11 @@ pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 /// the module documentation).
 pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<Plan, PlanError> {
     options.check()?;
-    let unc = ParamUncertainty::of(fit, options.fixed_spread);
-    if unc.is_empty() {
+    let shown = ParamUncertainty::of(fit, options.fixed_spread);
+    if shown.is_empty() {
         return Err(PlanError::NoUncertainty);
     }
+    let unc = with_flat_parameters(fit, &shown);
     let motor = unc.motor_at(fit, &unc.log_values)?;
     let gear = fit.gear;
     let rows = options
@@ -206,6 +208,8 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
     progress("operating points", 0, 1);
     let g_t = unc.jacobian(fit, values.len(), &figures)?;
     progress("operating points", 1, 1);
+    let k = shown.len();
+    let shown_var = design::variances(&shown.cov, &g_t.columns(0, k).clone_owned());
     let var_before = design::variances(&unc.cov, &g_t);
     let all = candidates::candidates(&motor, options, &rows);
     let n_obs: usize = all.iter().map(|c| c.sigma.len()).sum();
@@ -217,26 +221,32 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
         Ok(z)
     };
     let g_c = unc.jacobian(fit, n_obs, &observe)?;
-    let band = |y: f64, var: f64| log_band(y, Z95 * var.sqrt());
     let targets = labels
         .iter()
         .zip(&values)
-        .zip(&var_before)
+        .zip(&shown_var)
         .map(|((l, y), v)| Target {
             p_supply_pa: l.0,
             speed_rad_s: l.1,
             figure: l.2,
             value: *y,
-            band_before: band(*y, *v),
+            band_before: log_band(*y, Z95 * v.sqrt()),
         })
         .collect();
+    let now = Now {
+        cov: &unc.cov,
+        g_targets: &g_t,
+        values: &values,
+        var_before: &var_before,
+        shown_var: &shown_var,
+    };
     let (mut ranked, mut dropped) = (Vec::new(), Vec::new());
     let mut row0 = 0;
     for c in all {
         let rows_c = row0..row0 + c.sigma.len();
         row0 = rows_c.end;
         let g = g_c.rows(rows_c.start, rows_c.len()).clone_owned();
-        match assess(c, &g, &unc.cov, &g_t, &values, &var_before) {
+        match assess(c, &g, &now) {
             Ok(a) => ranked.push(a),
             Err((c, why)) => dropped.push((label(&c), why.to_string())),
         }
@@ -248,12 +258,67 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
         ranked,
         sd_before: unc.sd.clone(),
         parameters: unc.names.clone(),
-        basis: unc.basis,
-        uncovered: unc.uncovered.clone(),
+        basis: shown.basis,
+        uncovered: shown.uncovered.clone(),
         not_gaussian: crate::predict::delta_unreliable(fit),
         dropped,
         gear,
     })
+}
+
+/// `shown` (the parameters `predict`'s bands cover) with the parameters it leaves out that
+/// the fit's covariance holds (an estimated parameter the profile found flat, such as a
+/// page's `b_crit`): σ of ln θ from the covariance's diagonal, correlated with the rest as
+/// the covariance says. A measurement's information is shared with them (it depends on
+/// them too), so the update is made over all of them, and what it does to a band is the
+/// ratio of its variance after to before in that space ([`assess`]).
+fn with_flat_parameters(fit: &FitFile, shown: &ParamUncertainty) -> ParamUncertainty {
+    let mut unc = shown.clone();
+    let Some(file) = &fit.covariance else {
+        return unc;
+    };
+    let at = |n: &str| file.parameters.iter().position(|m| m == n);
+    for (n, _) in &shown.uncovered {
+        let (Some(i), Some(v)) = (at(n), fit.params.get(n).filter(|v| *v > 0.0)) else {
+            continue;
+        };
+        let sd = file.matrix[i][i].max(0.0).sqrt();
+        if sd > 0.0 {
+            unc.names.push(n.clone());
+            unc.log_values.push(v.ln());
+            unc.sd.push(sd);
+        }
+    }
+    let k0 = shown.len();
+    let k = unc.names.len();
+    let corr = |a: usize, b: usize| match (at(&unc.names[a]), at(&unc.names[b])) {
+        (Some(i), Some(j)) => file.matrix[i][j] / (file.matrix[i][i] * file.matrix[j][j]).sqrt(),
+        _ => 0.0,
+    };
+    unc.cov = DMatrix::from_fn(k, k, |a, b| {
+        if a < k0 && b < k0 {
+            shown.cov[(a, b)]
+        } else if a == b {
+            unc.sd[a] * unc.sd[a]
+        } else {
+            unc.sd[a] * corr(a, b) * unc.sd[b]
+        }
+    });
+    unc
+}
+
+/// The state now that every candidate is weighed against.
+struct Now<'a> {
+    /// Covariance of ln θ over every parameter the update spans.
+    cov: &'a DMatrix<f64>,
+    /// The targets' gradients over them.
+    g_targets: &'a DMatrix<f64>,
+    /// The targets' values.
+    values: &'a [f64],
+    /// The targets' variances in that space.
+    var_before: &'a [f64],
+    /// The targets' variances as `predict` shows them (its parameters only).
+    shown_var: &'a [f64],
 }
 
 /// A candidate's name with where it is measured, SI ("datasheet at 500000 Pa"); the
@@ -265,35 +330,37 @@ fn label(c: &Candidate) -> String {
     }
 }
 
-/// One candidate's expected effect, or why it has none.
-fn assess(
-    c: Candidate,
-    g: &DMatrix<f64>,
-    cov: &DMatrix<f64>,
-    g_t: &DMatrix<f64>,
-    values: &[f64],
-    var_before: &[f64],
-) -> Result<Assessed, (Candidate, &'static str)> {
+/// One candidate's expected effect, or why it has none. Each band after is the band
+/// `predict` shows with its variance scaled by Var'/Var of the update's space.
+fn assess(c: Candidate, g: &DMatrix<f64>, now: &Now) -> Result<Assessed, (Candidate, &'static str)> {
     if !g.iter().all(|v| v.is_finite()) {
         return Err((c, "the motor moved within its uncertainty has no steady state at its settings"));
     }
-    let Some(e) = design::expected(cov, g, &c.sigma, g_t) else {
+    let Some(e) = design::expected(now.cov, g, &c.sigma, now.g_targets) else {
         return Err((c, "its noise is not a positive number"));
     };
-    let band_after = values
+    let ratio: Vec<f64> = now
+        .var_before
         .iter()
         .zip(&e.var_after)
-        .map(|(y, v)| log_band(*y, Z95 * v.sqrt()))
+        .map(|(b, a)| if *b > 0.0 { (a / b).clamp(0.0, 1.0) } else { 1.0 })
         .collect();
-    let shrinkage = var_before
+    let band_after = now
+        .values
         .iter()
-        .zip(&e.var_after)
-        .map(|(b, a)| design::shrinkage(*b, *a))
+        .zip(now.shown_var)
+        .zip(&ratio)
+        .map(|((y, v), r)| log_band(*y, Z95 * (v * r).sqrt()))
         .collect();
     Ok(Assessed {
         band_after,
-        shrinkage,
-        v_reduction: design::v_reduction(values, var_before, &e.var_after),
+        shrinkage: now
+            .var_before
+            .iter()
+            .zip(&e.var_after)
+            .map(|(b, a)| design::shrinkage(*b, *a))
+            .collect(),
+        v_reduction: design::v_reduction(now.values, now.var_before, &e.var_after),
         d_gain_nats: e.d_gain_nats,
         sd_after: e.cov_after.diagonal().iter().map(|v| v.max(0.0).sqrt()).collect(),
         candidate: c,

@@ -162,7 +162,7 @@ pub fn notes(plan: &Plan) -> Vec<String> {
     }
     if !plan.uncovered.is_empty() {
         let u: Vec<String> = plan.uncovered.iter().map(|(n, w)| format!("{n} ({w})")).collect();
-        out.push(format!("Not in the bands, before or after (taken as exact): {}; --fixed-spread covers them.", u.join(", ")));
+        out.push(format!("Not in the bands shown (as predict's): {}; where the fit's covariance holds them, a measurement's information is shared with them and the shrinkage counts it.", u.join(", ")));
     }
     for (c, why) in &plan.dropped {
         out.push(format!("Left out: {c}: {why}."));
