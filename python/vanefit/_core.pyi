@@ -25,6 +25,7 @@ __all__ = [
     "fit",
     "diagnose",
     "predict",
+    "plan",
     "export_petab",
     "export_fmu",
     "synth",
@@ -137,6 +138,18 @@ def predict(
     speed_grid_rpm: float,
     curve_points: int,
     fixed_spread: Optional[float],
+    out: Optional[_Path],
+) -> str: ...
+def plan(
+    fit: _Path,
+    fit_text: Optional[str],
+    pressures: Sequence[float],
+    unit: str,
+    speeds_rpm: Optional[Sequence[float]],
+    candidates: Optional[Sequence[str]],
+    costs: Optional[Sequence[Tuple[str, float]]],
+    fixed_spread: Optional[float],
+    top: int,
     out: Optional[_Path],
 ) -> str: ...
 def export_petab(fit: _Path, fit_text: Optional[str], dataset: _Path, out: _Path) -> str: ...

@@ -234,6 +234,7 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
         })
         .collect();
     let now = Now {
+        deflate: profile_inflation(fit, &unc),
         cov: &unc.cov,
         g_targets: &g_t,
         values: &values,
@@ -307,8 +308,34 @@ fn with_flat_parameters(fit: &FitFile, shown: &ParamUncertainty) -> ParamUncerta
     unc
 }
 
+/// For each parameter of `unc`: σ of ln θ by the curvature (the fit's covariance) over the
+/// σ it has in `unc` (a profile interval's, usually wider where the likelihood is not
+/// quadratic); 1 where the covariance does not hold it. The update takes that inflation to
+/// persist after the measurement (what widens a profile interval is the likelihood's shape,
+/// which more data of the same kind do not remove at first order):
+/// C' = D·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·D with C = D·C_c·D, D = diag(1/deflate), which is the plain
+/// update of C by the sensitivities G·diag(deflate). On twin pages, promising the
+/// curvature's shrinkage to profile-width bands overstated it by half.
+fn profile_inflation(fit: &FitFile, unc: &ParamUncertainty) -> Vec<f64> {
+    let file = fit.covariance.as_ref();
+    unc.names
+        .iter()
+        .zip(&unc.sd)
+        .map(|(n, sd)| {
+            let i = file.and_then(|c| c.parameters.iter().position(|m| m == n));
+            let curv = i.and_then(|i| file.map(|c| c.matrix[i][i].max(0.0).sqrt()));
+            match curv {
+                Some(c) if c > 0.0 && *sd > 0.0 => c / sd,
+                _ => 1.0,
+            }
+        })
+        .collect()
+}
+
 /// The state now that every candidate is weighed against.
 struct Now<'a> {
+    /// Each parameter's σ by the curvature over its σ here ([`profile_inflation`]).
+    deflate: Vec<f64>,
     /// Covariance of ln θ over every parameter the update spans.
     cov: &'a DMatrix<f64>,
     /// The targets' gradients over them.
@@ -336,7 +363,8 @@ fn assess(c: Candidate, g: &DMatrix<f64>, now: &Now) -> Result<Assessed, (Candid
     if !g.iter().all(|v| v.is_finite()) {
         return Err((c, "the motor moved within its uncertainty has no steady state at its settings"));
     }
-    let Some(e) = design::expected(now.cov, g, &c.sigma, now.g_targets) else {
+    let g = DMatrix::from_fn(g.nrows(), g.ncols(), |i, j| g[(i, j)] * now.deflate[j]);
+    let Some(e) = design::expected(now.cov, &g, &c.sigma, now.g_targets) else {
         return Err((c, "its noise is not a positive number"));
     };
     let ratio: Vec<f64> = now
@@ -426,4 +454,59 @@ fn targets_of(
         }
     }
     Ok((labels, values))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::fitfile::LogCovariance;
+    use crate::model::effects::EffectSet;
+    use crate::model::params::MotorParams;
+
+    /// Two estimated parameters with a covariance, one of them with a profile interval
+    /// twice the curvature's width, and a third the covariance holds that is flat.
+    fn fit_file() -> FitFile {
+        let mut f = FitFile::from_params("t", MotorParams::default(), EffectSet::empty());
+        f.estimated = vec!["c_in1".into(), "c_ext".into(), "b_crit".into()];
+        let c = f.params.get("c_in1").unwrap();
+        let r = 2.0 * Z95 * 0.1; // σ 0.2 of ln c_in1 from the profile
+        f.ci95 = vec![("c_in1".into(), [c * (-r).exp(), c * r.exp()])];
+        f.covariance = Some(LogCovariance {
+            parameters: vec!["c_in1".into(), "c_ext".into(), "b_crit".into()],
+            matrix: vec![
+                vec![0.01, 0.003, 0.004],
+                vec![0.003, 0.04, 0.0],
+                vec![0.004, 0.0, 0.09],
+            ],
+        });
+        f.verdicts = vec![crate::data::fitfile::ParamVerdict {
+            name: "b_crit".into(),
+            bounds95: [None, None],
+            identifiable: false,
+            why: None,
+        }];
+        f
+    }
+
+    /// The flat parameter joins the update with the covariance's σ and correlations; the
+    /// profile's inflation over the curvature is σ_curv/σ_profile = 0.1/0.2 for c_in1 and 1
+    /// for the rest; the update's covariance is then the curvature's: D⁻¹·C·D⁻¹ = C_c.
+    #[test]
+    fn the_update_spans_the_flat_parameters_in_the_curvature_s_units() {
+        let f = fit_file();
+        let shown = ParamUncertainty::of(&f, None);
+        assert_eq!(shown.names, vec!["c_in1", "c_ext"]);
+        let all = with_flat_parameters(&f, &shown);
+        assert_eq!(all.names, vec!["c_in1", "c_ext", "b_crit"]);
+        assert!((all.sd[2] - 0.3).abs() < 1e-12);
+        let d = profile_inflation(&f, &all);
+        assert!((d[0] - 0.5).abs() < 1e-9 && (d[1] - 1.0).abs() < 1e-12 && (d[2] - 1.0).abs() < 1e-12, "{d:?}");
+        let file = &f.covariance.as_ref().unwrap().matrix;
+        for a in 0..3 {
+            for b in 0..3 {
+                let c_c = all.cov[(a, b)] * d[a] * d[b];
+                assert!((c_c - file[a][b]).abs() < 1e-12, "({a},{b}): {c_c} vs {}", file[a][b]);
+            }
+        }
+    }
 }

@@ -112,7 +112,7 @@ fn rig_markdown(r: &RigSettings, display: &PressureDisplay) -> String {
         s += &format!("- brake torque: step from {} to {} N·m (motor shaft)\n", rounded(a, b / 10.0), rounded(b, b / 10.0));
     }
     s += &format!(
-        "- points: {}, {} reading(s) averaged at each; about {:.0} min of recording\n- record: {}\n",
+        "- points: {}, {} reading(s) averaged at each; about {:.1} min of recording\n- record: {}\n",
         r.points,
         r.readings,
         r.duration_s / 60.0,

@@ -9,9 +9,23 @@ use std::path::Path;
 const FIT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fits/ar034-synthetic.json");
 const Z95: f64 = 1.959_963_984_540_054;
 
-fn plan_json(dir: &Path) -> Value {
+/// The shipped fit without its profile intervals, written into `dir`: its bands then rest
+/// on the curvature alone, whose update has the closed forms below.
+fn curvature_fit(dir: &Path) -> String {
+    let mut f: Value = serde_json::from_str(&std::fs::read_to_string(FIT).unwrap()).unwrap();
+    for (_, p) in f["parameters"].as_object_mut().unwrap() {
+        if let Some(ci) = p.get_mut("ci95") {
+            *ci = Value::Null;
+        }
+    }
+    let path = dir.join("curvature.json");
+    std::fs::write(&path, serde_json::to_string(&f).unwrap()).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+fn plan_json(dir: &Path, fit: &str) -> Value {
     let out = dir.join("plan");
-    let o = vanefit(&["plan", FIT, "--pressures", "3,4,5", "--out", out.to_str().unwrap()]);
+    let o = vanefit(&["plan", fit, "--pressures", "3,4,5", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.join("plan.md").exists());
     serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap()
@@ -32,9 +46,10 @@ fn cell(text: &str, row: usize, name: &str) -> f64 {
 #[test]
 fn bands_now_are_predicts_and_a_direct_measurement_combines_as_independent_estimates() {
     let tmp = tempfile::tempdir().unwrap();
-    let p = plan_json(tmp.path());
+    let fit = curvature_fit(tmp.path());
+    let p = plan_json(tmp.path(), &fit);
     let pred = tmp.path().join("pred");
-    let o = vanefit(&["predict", FIT, "--pressures", "3,4,5", "--bands", "delta", "--out", pred.to_str().unwrap()]);
+    let o = vanefit(&["predict", &fit, "--pressures", "3,4,5", "--bands", "delta", "--out", pred.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let cat = std::fs::read_to_string(pred.join("catalogue.csv")).unwrap();
     let targets = p["targets"].as_array().unwrap();
