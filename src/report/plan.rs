@@ -154,7 +154,7 @@ fn detail_markdown(plan: &Plan, rank: usize, a: &Assessed, display: &PressureDis
 /// What the ranking rests on, in words.
 pub fn notes(plan: &Plan) -> Vec<String> {
     let mut out = vec![format!(
-        "Linearised about the estimate: {}; each candidate adds its Fisher information GᵀΣ⁻¹G (its simulated sensitivities, the rig's sensor noise for the motor's size or a page's 2 % reading tolerance) and the bands after are the delta method's with the updated covariance. Ranked by V (the mean relative variance removed at the operating points) per hour of rig time.",
+        "Linearised about the estimate: {}; each candidate adds its Fisher information GᵀΣ⁻¹G (its simulated sensitivities, the rig's sensor noise for the motor's size or a page's 2 % reading tolerance) and the bands after are the delta method's with the updated covariance (each profile interval's widening over the curvature taken to persist). Ranked by V (the mean relative variance removed at the operating points) per hour of rig time.",
         plan.basis.describe()
     )];
     if let Some(why) = &plan.not_gaussian {
