@@ -238,10 +238,27 @@ pub fn plan(
     let kind = |key: &str, n: &str| {
         CandidateKind::from_name(n).ok_or_else(|| param_err(format!("{key}: no candidate '{n}'")))
     };
-    let mut o = PlanOptions::new(pressures.iter().map(|p| u.to_si(*p, p_atm_pa)).collect(), p_atm_pa);
-    o.speeds_rad_s = speeds_rpm.map(|s| s.iter().map(|w| vanefit::units::Unit::Rpm.to_si(*w, 0.0)).collect());
-    o.kinds = candidates.map(|c| c.iter().map(|n| kind("candidates", n)).collect::<PyResult<_>>()).transpose()?;
-    o.costs_h = costs.unwrap_or_default().iter().map(|(n, h)| Ok((kind("costs", n)?, *h))).collect::<PyResult<_>>()?;
+    let mut o = PlanOptions::new(
+        pressures.iter().map(|p| u.to_si(*p, p_atm_pa)).collect(),
+        p_atm_pa,
+    );
+    o.speeds_rad_s = speeds_rpm.map(|s| {
+        s.iter()
+            .map(|w| vanefit::units::Unit::Rpm.to_si(*w, 0.0))
+            .collect()
+    });
+    o.kinds = candidates
+        .map(|c| {
+            c.iter()
+                .map(|n| kind("candidates", n))
+                .collect::<PyResult<_>>()
+        })
+        .transpose()?;
+    o.costs_h = costs
+        .unwrap_or_default()
+        .iter()
+        .map(|(n, h)| Ok((kind("costs", n)?, *h)))
+        .collect::<PyResult<_>>()?;
     o.fixed_spread = fixed_spread;
     o.top = top;
     let keyword = |e: PlanError| {
@@ -257,14 +274,17 @@ pub fn plan(
         param_err(format!("{key}: {e}"))
     };
     o.check().map_err(keyword)?;
-    let p = py.detach(|| vanefit::plan::plan(&file, &o, &|_, _, _| {})).map_err(keyword)?;
+    let p = py
+        .detach(|| vanefit::plan::plan(&file, &o, &|_, _, _| {}))
+        .map_err(keyword)?;
     let display = PressureDisplay { unit: u, p_atm_pa };
     let source = task::source_name(&fit, &file);
     let mut written = Vec::new();
     if let Some(dir) = &out {
         vanefit::io::check_dir(dir).map_err(|e| param_err(format!("out {e}")))?;
         std::fs::create_dir_all(dir).map_err(|e| VanefitError::new_err(e.to_string()))?;
-        written = report::write(&p, &display, &source, dir).map_err(|e| VanefitError::new_err(e.to_string()))?;
+        written = report::write(&p, &display, &source, dir)
+            .map_err(|e| VanefitError::new_err(e.to_string()))?;
     }
     Ok(serde_json::json!({
         "plan": report::json(&p),

@@ -79,7 +79,10 @@ fn kind_list(list: &str) -> Result<Vec<CandidateKind>, Failure> {
         .filter(|s| !s.is_empty())
         .map(|n| {
             CandidateKind::from_name(n).ok_or_else(|| {
-                Failure(format!("--candidates '{list}': no candidate '{n}' (one of {})", names.join(", ")))
+                Failure(format!(
+                    "--candidates '{list}': no candidate '{n}' (one of {})",
+                    names.join(", ")
+                ))
             })
         })
         .collect()
@@ -96,11 +99,19 @@ fn cost_list(list: &str) -> Result<Vec<(CandidateKind, f64)>, Failure> {
             let (name, hours) = item
                 .split_once('=')
                 .ok_or_else(|| fail("write name=hours, e.g. datasheet=3".into()))?;
-            let kind = CandidateKind::from_name(name.trim())
-                .ok_or_else(|| fail(format!("no candidate '{}' (one of {})", name.trim(), names.join(", "))))?;
+            let kind = CandidateKind::from_name(name.trim()).ok_or_else(|| {
+                fail(format!(
+                    "no candidate '{}' (one of {})",
+                    name.trim(),
+                    names.join(", ")
+                ))
+            })?;
             match hours.trim().parse::<f64>() {
                 Ok(h) if h.is_finite() && h > 0.0 => Ok((kind, h)),
-                _ => Err(fail(format!("'{}' is not a positive number of hours", hours.trim()))),
+                _ => Err(fail(format!(
+                    "'{}' is not a positive number of hours",
+                    hours.trim()
+                ))),
             }
         })
         .collect()
@@ -116,7 +127,12 @@ impl PlanArgs {
             p_atm_pa,
         );
         o.speeds_rad_s = self.speeds.as_deref().map(speed_list).transpose()?;
-        o.costs_h = self.costs.as_deref().map(cost_list).transpose()?.unwrap_or_default();
+        o.costs_h = self
+            .costs
+            .as_deref()
+            .map(cost_list)
+            .transpose()?
+            .unwrap_or_default();
         o.fixed_spread = self.fixed_spread;
         o.top = self.top;
         o.kinds = self.candidates.as_deref().map(kind_list).transpose()?;
@@ -134,9 +150,13 @@ impl PlanArgs {
                 unit.from_si(p, p_atm_pa),
                 self.unit
             )),
-            PlanError::BadSpeed(_) => Failure("--speeds: give at least one speed ≥ 0 in rpm".into()),
+            PlanError::BadSpeed(_) => {
+                Failure("--speeds: give at least one speed ≥ 0 in rpm".into())
+            }
             PlanError::BadSpread(f) => Failure(format!("--fixed-spread {f}: not a factor > 1")),
-            PlanError::BadTop => Failure(format!("--top {}: detail at least 1 candidate", self.top)),
+            PlanError::BadTop => {
+                Failure(format!("--top {}: detail at least 1 candidate", self.top))
+            }
             PlanError::NoKinds => Failure("--candidates: name at least one kind".into()),
             e => Failure(e.to_string()),
         }
@@ -150,8 +170,10 @@ pub(crate) fn run(args: &PlanArgs) -> Result<(), Failure> {
     let fit = FitFile::read(&args.fit)?;
     let (options, display) = args.options(fit_atmosphere_pa(&fit))?;
     let bar = Progress::default();
-    let plan = vanefit::plan::plan(&fit, &options, &|what, done, total| bar.tell(what, done, total))
-        .map_err(|e| Failure(format!("{}: {e}", args.fit.display())))?;
+    let plan = vanefit::plan::plan(&fit, &options, &|what, done, total| {
+        bar.tell(what, done, total)
+    })
+    .map_err(|e| Failure(format!("{}: {e}", args.fit.display())))?;
     let source = source_name(&args.fit, &fit);
     std::fs::create_dir_all(&args.out)
         .map_err(|e| Failure(format!("--out {}: {e}", args.out.display())))?;
@@ -162,6 +184,10 @@ pub(crate) fn run(args: &PlanArgs) -> Result<(), Failure> {
         say!("- {n}");
     }
     let written: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-    say!("\nwrote {} ({:.2} s)", written.join(", "), t0.elapsed().as_secs_f64());
+    say!(
+        "\nwrote {} ({:.2} s)",
+        written.join(", "),
+        t0.elapsed().as_secs_f64()
+    );
     Ok(())
 }

@@ -107,27 +107,46 @@ impl Candidate {
         let nan = vec![f64::NAN; self.sigma.len()];
         let row = |p: f64| catalogue_row(motor, &Conditions::supplied(p, p_atm_pa), GRID_RAD_S);
         match &self.design {
-            Design::KeyFigures { p_supply_pa, speeds } => {
+            Design::KeyFigures {
+                p_supply_pa,
+                speeds,
+            } => {
                 let c = Conditions::supplied(*p_supply_pa, p_atm_pa);
                 match at_speeds(motor, &c, speeds).as_deref() {
                     Ok([s, m, f]) => {
-                        vec![s.torque_nm, m.power_w, m.flow1_kg_s, f.torque_nm, f.flow1_kg_s]
+                        vec![
+                            s.torque_nm,
+                            m.power_w,
+                            m.flow1_kg_s,
+                            f.torque_nm,
+                            f.flow1_kg_s,
+                        ]
                     }
                     _ => nan,
                 }
             }
-            Design::Stall { p_supply_pa } => row(*p_supply_pa).map_or(nan, |r| vec![r.stall_torque_nm]),
+            Design::Stall { p_supply_pa } => {
+                row(*p_supply_pa).map_or(nan, |r| vec![r.stall_torque_nm])
+            }
             Design::Air { p_supply_pa } => row(*p_supply_pa)
                 .map_or(nan, |r| vec![r.free_speed_rad_s, r.air_at_free_speed_kg_s]),
-            Design::Sweep { p_supply_pa, speeds } => {
+            Design::Sweep {
+                p_supply_pa,
+                speeds,
+            } => {
                 let c = Conditions::supplied(*p_supply_pa, p_atm_pa);
                 at_speeds(motor, &c, speeds).map_or(nan, |pts| {
-                    pts.iter().flat_map(|p| [p.torque_nm, p.flow1_kg_s]).collect()
+                    pts.iter()
+                        .flat_map(|p| [p.torque_nm, p.flow1_kg_s])
+                        .collect()
                 })
             }
             Design::Free { points } => points
                 .iter()
-                .flat_map(|fp| free_point(motor, fp, p_atm_pa, fp.omega_guess).map_or([f64::NAN; 2], |(w, m)| [w, m]))
+                .flat_map(|fp| {
+                    free_point(motor, fp, p_atm_pa, fp.omega_guess)
+                        .map_or([f64::NAN; 2], |(w, m)| [w, m])
+                })
                 .collect(),
         }
     }
@@ -138,7 +157,13 @@ impl Candidate {
 /// torques, the maximum power, the larger air for both airs.
 fn key_sigma(r: &CatalogueRow) -> Vec<f64> {
     let air = r.optimum.flow1_kg_s.max(r.air_at_free_speed_kg_s);
-    let full = [r.stall_torque_nm, r.optimum.power_w, air, r.stall_torque_nm, air];
+    let full = [
+        r.stall_torque_nm,
+        r.optimum.power_w,
+        air,
+        r.stall_torque_nm,
+        air,
+    ];
     full.iter().map(|v| DEFAULT_TOLERANCE * v.abs()).collect()
 }
 
@@ -207,29 +232,76 @@ pub(super) fn candidates(
     for (p, row) in options.pressures_pa.iter().copied().zip(rows) {
         let speeds = [0.0, row.optimum.speed_rad_s, row.free_speed_rad_s];
         let rig = at_pressure(p, 3, 1, "stall torque, maximum power with its speed and air (a speed sweep), free speed and its air, as a page prints them");
-        out.push(make(CandidateKind::KeyFigures, Some(p), rig, key_sigma(row), Design::KeyFigures { p_supply_pa: p, speeds }));
+        out.push(make(
+            CandidateKind::KeyFigures,
+            Some(p),
+            rig,
+            key_sigma(row),
+            Design::KeyFigures {
+                p_supply_pa: p,
+                speeds,
+            },
+        ));
         let rig = at_pressure(p, 1, REPEATS, "stall torque, brake locked");
-        out.push(make(CandidateKind::StallTorque, Some(p), rig, vec![noise.torque_nm / rep], Design::Stall { p_supply_pa: p }));
-        let rig = at_pressure(p, 1, REPEATS, "free speed and air into port 1 there, shaft free");
+        out.push(make(
+            CandidateKind::StallTorque,
+            Some(p),
+            rig,
+            vec![noise.torque_nm / rep],
+            Design::Stall { p_supply_pa: p },
+        ));
+        let rig = at_pressure(
+            p,
+            1,
+            REPEATS,
+            "free speed and air into port 1 there, shaft free",
+        );
         let sigma = vec![noise.speed_rad_s / rep, noise.flow_kg_s / rep];
-        out.push(make(CandidateKind::AirFlow, Some(p), rig, sigma, Design::Air { p_supply_pa: p }));
+        out.push(make(
+            CandidateKind::AirFlow,
+            Some(p),
+            rig,
+            sigma,
+            Design::Air { p_supply_pa: p },
+        ));
         let w0 = row.free_speed_rad_s;
         let speeds = spaced(SWEEP_SPAN[0] * w0, SWEEP_SPAN[1] * w0, SWEEP_POINTS, false);
-        let mut rig = at_pressure(p, SWEEP_POINTS, 1, "shaft torque and air into port 1 at each imposed speed");
+        let mut rig = at_pressure(
+            p,
+            SWEEP_POINTS,
+            1,
+            "shaft torque and air into port 1 at each imposed speed",
+        );
         rig.speeds_rad_s = Some([speeds[0], speeds[SWEEP_POINTS - 1]]);
         let sigma = [noise.torque_nm, noise.flow_kg_s].repeat(SWEEP_POINTS);
-        out.push(make(CandidateKind::DatasheetSweep, Some(p), rig, sigma, Design::Sweep { p_supply_pa: p, speeds }));
+        out.push(make(
+            CandidateKind::DatasheetSweep,
+            Some(p),
+            rig,
+            sigma,
+            Design::Sweep {
+                p_supply_pa: p,
+                speeds,
+            },
+        ));
         out.push(throttle(motor, options, p, row, &noise, &make));
         out.push(load_step(motor, options, p, row, &noise, &make));
     }
     out.push(ramp(motor, options, rows, &noise, &make));
-    out.retain(|c| options.weighs(c.kind) && !c.sigma.is_empty() && c.sigma.iter().all(|s| *s > 0.0));
+    out.retain(|c| {
+        options.weighs(c.kind) && !c.sigma.is_empty() && c.sigma.iter().all(|s| *s > 0.0)
+    });
     out
 }
 
 /// Free-shaft points solved for the fitted motor in order, each from the last one's speed;
 /// those without a steady state are dropped.
-fn solved(motor: &Motor, p_atm_pa: f64, start_rad_s: f64, points: Vec<FreePoint>) -> Vec<FreePoint> {
+fn solved(
+    motor: &Motor,
+    p_atm_pa: f64,
+    start_rad_s: f64,
+    points: Vec<FreePoint>,
+) -> Vec<FreePoint> {
     let mut omega = start_rad_s;
     points
         .into_iter()
@@ -251,52 +323,134 @@ fn free_sigma(noise: &SensorNoise, n: usize, readings: usize) -> Vec<f64> {
 }
 
 /// The outlet throttle's ramp at `p`, from wide open down (log-spaced conductances).
-fn throttle(motor: &Motor, options: &PlanOptions, p: f64, row: &CatalogueRow, noise: &SensorNoise, make: &Make) -> Candidate {
+fn throttle(
+    motor: &Motor,
+    options: &PlanOptions,
+    p: f64,
+    row: &CatalogueRow,
+    noise: &SensorNoise,
+    make: &Make,
+) -> Candidate {
     let c = motor.params().c_out2();
-    let cs = spaced(THROTTLE_SPAN[1] * c, THROTTLE_SPAN[0] * c, THROTTLE_POINTS, true);
+    let cs = spaced(
+        THROTTLE_SPAN[1] * c,
+        THROTTLE_SPAN[0] * c,
+        THROTTLE_POINTS,
+        true,
+    );
     let pts = cs
         .iter()
-        .map(|c| FreePoint { p_supply_pa: p, c_outlet_m3_s_pa: Some(*c), load_nm: 0.0, omega_guess: 0.0 })
+        .map(|c| FreePoint {
+            p_supply_pa: p,
+            c_outlet_m3_s_pa: Some(*c),
+            load_nm: 0.0,
+            omega_guess: 0.0,
+        })
         .collect();
     let pts = solved(motor, options.p_atm_pa, row.free_speed_rad_s, pts);
-    let mut rig = at_pressure(p, pts.len(), 1, "shaft speed and air into port 1 at each throttle setting, shaft free");
-    rig.throttle_m3_s_pa = pts.first().zip(pts.last()).and_then(|(a, b)| Some([a.c_outlet_m3_s_pa?, b.c_outlet_m3_s_pa?]));
+    let mut rig = at_pressure(
+        p,
+        pts.len(),
+        1,
+        "shaft speed and air into port 1 at each throttle setting, shaft free",
+    );
+    rig.throttle_m3_s_pa = pts
+        .first()
+        .zip(pts.last())
+        .and_then(|(a, b)| Some([a.c_outlet_m3_s_pa?, b.c_outlet_m3_s_pa?]));
     let sigma = free_sigma(noise, pts.len(), 1);
-    make(CandidateKind::OutletThrottleRamp, Some(p), rig, sigma, Design::Free { points: pts })
+    make(
+        CandidateKind::OutletThrottleRamp,
+        Some(p),
+        rig,
+        sigma,
+        Design::Free { points: pts },
+    )
 }
 
 /// The load step at `p`: the brake from 0 to [`LOAD_STEP_FRACTION`] of the stall torque.
-fn load_step(motor: &Motor, options: &PlanOptions, p: f64, row: &CatalogueRow, noise: &SensorNoise, make: &Make) -> Candidate {
+fn load_step(
+    motor: &Motor,
+    options: &PlanOptions,
+    p: f64,
+    row: &CatalogueRow,
+    noise: &SensorNoise,
+    make: &Make,
+) -> Candidate {
     let t = LOAD_STEP_FRACTION * row.stall_torque_nm;
     let pts = [0.0, t]
         .iter()
-        .map(|t| FreePoint { p_supply_pa: p, c_outlet_m3_s_pa: None, load_nm: *t, omega_guess: 0.0 })
+        .map(|t| FreePoint {
+            p_supply_pa: p,
+            c_outlet_m3_s_pa: None,
+            load_nm: *t,
+            omega_guess: 0.0,
+        })
         .collect();
     let pts = solved(motor, options.p_atm_pa, row.free_speed_rad_s, pts);
-    let mut rig = at_pressure(p, pts.len(), REPEATS, "settled shaft speed and air into port 1 before and after the brake's step");
+    let mut rig = at_pressure(
+        p,
+        pts.len(),
+        REPEATS,
+        "settled shaft speed and air into port 1 before and after the brake's step",
+    );
     rig.load_nm = Some([0.0, t]);
     let sigma = free_sigma(noise, pts.len(), REPEATS);
-    make(CandidateKind::LoadStep, Some(p), rig, sigma, Design::Free { points: pts })
+    make(
+        CandidateKind::LoadStep,
+        Some(p),
+        rig,
+        sigma,
+        Design::Free { points: pts },
+    )
 }
 
 /// The supply ramp with the shaft free, from half the lowest asked gauge pressure to the
 /// highest asked pressure.
-fn ramp(motor: &Motor, options: &PlanOptions, rows: &[CatalogueRow], noise: &SensorNoise, make: &Make) -> Candidate {
+fn ramp(
+    motor: &Motor,
+    options: &PlanOptions,
+    rows: &[CatalogueRow],
+    noise: &SensorNoise,
+    make: &Make,
+) -> Candidate {
     let p_atm = options.p_atm_pa;
     let lo_row = options
         .pressures_pa
         .iter()
         .zip(rows)
         .min_by(|a, b| a.0.total_cmp(b.0));
-    let hi = options.pressures_pa.iter().copied().fold(f64::MIN, f64::max);
-    let (lo, w_lo) = lo_row.map_or((hi, 0.0), |(p, r)| (p_atm + 0.5 * (p - p_atm), 0.7 * r.free_speed_rad_s));
+    let hi = options
+        .pressures_pa
+        .iter()
+        .copied()
+        .fold(f64::MIN, f64::max);
+    let (lo, w_lo) = lo_row.map_or((hi, 0.0), |(p, r)| {
+        (p_atm + 0.5 * (p - p_atm), 0.7 * r.free_speed_rad_s)
+    });
     let pts = spaced(lo, hi, RAMP_POINTS, false)
         .into_iter()
-        .map(|p| FreePoint { p_supply_pa: p, c_outlet_m3_s_pa: None, load_nm: 0.0, omega_guess: 0.0 })
+        .map(|p| FreePoint {
+            p_supply_pa: p,
+            c_outlet_m3_s_pa: None,
+            load_nm: 0.0,
+            omega_guess: 0.0,
+        })
         .collect();
     let pts = solved(motor, p_atm, w_lo, pts);
-    let mut rig = at_pressure(lo, pts.len(), 1, "shaft speed and air into port 1 against the supply pressure, shaft free");
+    let mut rig = at_pressure(
+        lo,
+        pts.len(),
+        1,
+        "shaft speed and air into port 1 against the supply pressure, shaft free",
+    );
     rig.p_supply_pa = [lo, hi];
     let sigma = free_sigma(noise, pts.len(), 1);
-    make(CandidateKind::PressureRamp, None, rig, sigma, Design::Free { points: pts })
+    make(
+        CandidateKind::PressureRamp,
+        None,
+        rig,
+        sigma,
+        Design::Free { points: pts },
+    )
 }

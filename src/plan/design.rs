@@ -124,7 +124,11 @@ mod tests {
         let e = expected(&cov, &g, &[s], &targets).unwrap();
         let info = cov.clone().try_inverse().unwrap() + g.transpose() * &g / (s * s);
         let want = info.try_inverse().unwrap();
-        assert!((&e.cov_after - &want).abs().max() < 1e-12, "{}", e.cov_after);
+        assert!(
+            (&e.cov_after - &want).abs().max() < 1e-12,
+            "{}",
+            e.cov_after
+        );
         // ρ² = 0.06²/(0.09·0.16) = 0.25 of the second's variance is what θ₁ can explain.
         let gone = 1.0 - e.var_after[1] / 0.16;
         assert!(gone > 0.0 && gone < 0.25, "{gone}");

@@ -216,8 +216,15 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
     let done = AtomicUsize::new(0);
     let total = 2 * unc.len();
     let observe = |m: &Motor| {
-        let z: Vec<f64> = all.iter().flat_map(|c| c.observe(m, options.p_atm_pa)).collect();
-        progress("candidates", done.fetch_add(1, Ordering::Relaxed) + 1, total);
+        let z: Vec<f64> = all
+            .iter()
+            .flat_map(|c| c.observe(m, options.p_atm_pa))
+            .collect();
+        progress(
+            "candidates",
+            done.fetch_add(1, Ordering::Relaxed) + 1,
+            total,
+        );
         Ok(z)
     };
     let g_c = unc.jacobian(fit, n_obs, &observe)?;
@@ -241,18 +248,7 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
         var_before: &var_before,
         shown_var: &shown_var,
     };
-    let (mut ranked, mut dropped) = (Vec::new(), Vec::new());
-    let mut row0 = 0;
-    for c in all {
-        let rows_c = row0..row0 + c.sigma.len();
-        row0 = rows_c.end;
-        let g = g_c.rows(rows_c.start, rows_c.len()).clone_owned();
-        match assess(c, &g, &now) {
-            Ok(a) => ranked.push(a),
-            Err((c, why)) => dropped.push((label(&c), why.to_string())),
-        }
-    }
-    ranked.sort_by(|a, b| b.v_per_hour().total_cmp(&a.v_per_hour()));
+    let (ranked, dropped) = rank(all, &g_c, &now);
     Ok(Plan {
         options: options.clone(),
         targets,
@@ -348,6 +344,29 @@ struct Now<'a> {
     shown_var: &'a [f64],
 }
 
+/// Every candidate assessed (its rows of `g_c`, the candidates' sensitivities stacked in
+/// their order), best V per hour first, and those left out with the reason.
+fn rank(
+    all: Vec<Candidate>,
+    g_c: &DMatrix<f64>,
+    now: &Now,
+) -> (Vec<Assessed>, Vec<(String, String)>) {
+    let (mut ranked, mut dropped) = (Vec::new(), Vec::new());
+    let mut row0 = 0;
+    for c in all {
+        let rows_c = row0..row0 + c.sigma.len();
+        row0 = rows_c.end;
+        let g = g_c.rows(rows_c.start, rows_c.len()).clone_owned();
+        let name = label(&c);
+        match assess(c, &g, now) {
+            Ok(a) => ranked.push(a),
+            Err(why) => dropped.push((name, why.to_string())),
+        }
+    }
+    ranked.sort_by(|a, b| b.v_per_hour().total_cmp(&a.v_per_hour()));
+    (ranked, dropped)
+}
+
 /// A candidate's name with where it is measured, SI ("datasheet at 500000 Pa"); the
 /// reports name the pressure in the user's unit.
 fn label(c: &Candidate) -> String {
@@ -359,19 +378,25 @@ fn label(c: &Candidate) -> String {
 
 /// One candidate's expected effect, or why it has none. Each band after is the band
 /// `predict` shows with its variance scaled by Var'/Var of the update's space.
-fn assess(c: Candidate, g: &DMatrix<f64>, now: &Now) -> Result<Assessed, (Candidate, &'static str)> {
+fn assess(c: Candidate, g: &DMatrix<f64>, now: &Now) -> Result<Assessed, &'static str> {
     if !g.iter().all(|v| v.is_finite()) {
-        return Err((c, "the motor moved within its uncertainty has no steady state at its settings"));
+        return Err("the motor moved within its uncertainty has no steady state at its settings");
     }
     let g = DMatrix::from_fn(g.nrows(), g.ncols(), |i, j| g[(i, j)] * now.deflate[j]);
     let Some(e) = design::expected(now.cov, &g, &c.sigma, now.g_targets) else {
-        return Err((c, "its noise is not a positive number"));
+        return Err("its noise is not a positive number");
     };
     let ratio: Vec<f64> = now
         .var_before
         .iter()
         .zip(&e.var_after)
-        .map(|(b, a)| if *b > 0.0 { (a / b).clamp(0.0, 1.0) } else { 1.0 })
+        .map(|(b, a)| {
+            if *b > 0.0 {
+                (a / b).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        })
         .collect();
     let band_after = now
         .values
@@ -390,19 +415,27 @@ fn assess(c: Candidate, g: &DMatrix<f64>, now: &Now) -> Result<Assessed, (Candid
             .collect(),
         v_reduction: design::v_reduction(now.values, now.var_before, &e.var_after),
         d_gain_nats: e.d_gain_nats,
-        sd_after: e.cov_after.diagonal().iter().map(|v| v.max(0.0).sqrt()).collect(),
+        sd_after: e
+            .cov_after
+            .diagonal()
+            .iter()
+            .map(|v| v.max(0.0).sqrt())
+            .collect(),
         candidate: c,
     })
 }
 
 /// The fitted motor's catalogue row at supply `p` (motor shaft).
 fn row_at(motor: &Motor, options: &PlanOptions, p: f64) -> Result<CatalogueRow, PredictError> {
-    catalogue_row(motor, &Conditions::supplied(p, options.p_atm_pa), candidates::GRID_RAD_S).map_err(
-        |source| PredictError::AtPressure {
-            p_supply_pa: p,
-            source,
-        },
+    catalogue_row(
+        motor,
+        &Conditions::supplied(p, options.p_atm_pa),
+        candidates::GRID_RAD_S,
     )
+    .map_err(|source| PredictError::AtPressure {
+        p_supply_pa: p,
+        source,
+    })
 }
 
 /// A target's place: (supply Pa, asked speed rad/s, figure).
@@ -426,8 +459,16 @@ fn targets_of(
                 for (f, q, v) in [
                     (TargetFigure::MaxPower, Quantity::Power, r.optimum.power_w),
                     (TargetFigure::FreeSpeed, Quantity::Speed, r.free_speed_rad_s),
-                    (TargetFigure::StallTorque, Quantity::Torque, r.stall_torque_nm),
-                    (TargetFigure::AirAtMaxPower, Quantity::Flow1, r.optimum.flow1_kg_s),
+                    (
+                        TargetFigure::StallTorque,
+                        Quantity::Torque,
+                        r.stall_torque_nm,
+                    ),
+                    (
+                        TargetFigure::AirAtMaxPower,
+                        Quantity::Flow1,
+                        r.optimum.flow1_kg_s,
+                    ),
                 ] {
                     labels.push((p, None, f));
                     values.push(out(q, v));
@@ -436,10 +477,11 @@ fn targets_of(
             Some(speeds) => {
                 let motor_speeds: Vec<f64> = speeds.iter().map(|w| w * ratio).collect();
                 let c = Conditions::supplied(p, options.p_atm_pa);
-                let pts = at_speeds(motor, &c, &motor_speeds).map_err(|e| PredictError::AtPressure {
-                    p_supply_pa: p,
-                    source: e.into(),
-                })?;
+                let pts =
+                    at_speeds(motor, &c, &motor_speeds).map_err(|e| PredictError::AtPressure {
+                        p_supply_pa: p,
+                        source: e.into(),
+                    })?;
                 for (w, pt) in speeds.iter().zip(pts) {
                     for (f, q, v) in [
                         (TargetFigure::Torque, Quantity::Torque, pt.torque_nm),
@@ -500,12 +542,19 @@ mod tests {
         assert_eq!(all.names, vec!["c_in1", "c_ext", "b_crit"]);
         assert!((all.sd[2] - 0.3).abs() < 1e-12);
         let d = profile_inflation(&f, &all);
-        assert!((d[0] - 0.5).abs() < 1e-9 && (d[1] - 1.0).abs() < 1e-12 && (d[2] - 1.0).abs() < 1e-12, "{d:?}");
+        assert!(
+            (d[0] - 0.5).abs() < 1e-9 && (d[1] - 1.0).abs() < 1e-12 && (d[2] - 1.0).abs() < 1e-12,
+            "{d:?}"
+        );
         let file = &f.covariance.as_ref().unwrap().matrix;
         for a in 0..3 {
             for b in 0..3 {
                 let c_c = all.cov[(a, b)] * d[a] * d[b];
-                assert!((c_c - file[a][b]).abs() < 1e-12, "({a},{b}): {c_c} vs {}", file[a][b]);
+                assert!(
+                    (c_c - file[a][b]).abs() < 1e-12,
+                    "({a},{b}): {c_c} vs {}",
+                    file[a][b]
+                );
             }
         }
     }

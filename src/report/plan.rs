@@ -38,7 +38,11 @@ fn unit_of(f: TargetFigure) -> (&'static str, Unit) {
 
 /// `v` rounded to two significant digits of `scale` (four of `v` without one).
 fn rounded(v: f64, scale: f64) -> String {
-    let lead = if scale > 0.0 { scale } else { v.abs().max(1e-300) / 100.0 };
+    let lead = if scale > 0.0 {
+        scale
+    } else {
+        v.abs().max(1e-300) / 100.0
+    };
     let decimals = (1 - lead.log10().floor() as i32).clamp(0, 9) as usize;
     format!("{v:.decimals$}")
 }
@@ -51,7 +55,12 @@ fn band_text(b: [f64; 2], scale: f64) -> String {
 /// "datasheet at 4 bar g", "pressure_ramp".
 pub fn candidate_name(c: &Candidate, display: &PressureDisplay) -> String {
     match c.at_pa {
-        Some(p) => format!("{} at {} {}", c.kind.name(), display.text(p), display.label()),
+        Some(p) => format!(
+            "{} at {} {}",
+            c.kind.name(),
+            display.text(p),
+            display.label()
+        ),
         None => c.kind.name().to_string(),
     }
 }
@@ -60,7 +69,11 @@ pub fn candidate_name(c: &Candidate, display: &PressureDisplay) -> String {
 fn target_name(t: &Target, display: &PressureDisplay) -> String {
     let p = format!("{} {}", display.text(t.p_supply_pa), display.label());
     match t.speed_rad_s {
-        Some(w) => format!("{p}, {} rpm, {}", rounded(Unit::Rpm.from_si(w, 0.0), 0.0), t.figure.name()),
+        Some(w) => format!(
+            "{p}, {} rpm, {}",
+            rounded(Unit::Rpm.from_si(w, 0.0), 0.0),
+            t.figure.name()
+        ),
         None => format!("{p}, {}", t.figure.name()),
     }
 }
@@ -77,7 +90,13 @@ pub fn ranking_markdown(plan: &Plan, display: &PressureDisplay) -> String {
             .iter()
             .enumerate()
             .max_by(|x, y| x.1.total_cmp(y.1))
-            .map_or(String::new(), |(j, v)| format!("{:.0} % ({})", 100.0 * v, target_name(&plan.targets[j], display)));
+            .map_or(String::new(), |(j, v)| {
+                format!(
+                    "{:.0} % ({})",
+                    100.0 * v,
+                    target_name(&plan.targets[j], display)
+                )
+            });
         s += &format!(
             "| {} | {} | {} | {:.1} % | {:.1} %/h | {:.2} | {:.1} % | {} |\n",
             i + 1,
@@ -99,17 +118,29 @@ fn rig_markdown(r: &RigSettings, display: &PressureDisplay) -> String {
     let mut s = if r.p_supply_pa[0] == r.p_supply_pa[1] {
         format!("- supply pressure: {}\n", p(r.p_supply_pa[0]))
     } else {
-        format!("- supply pressure: ramp from {} to {}, slowly enough to stay steady\n", p(r.p_supply_pa[0]), p(r.p_supply_pa[1]))
+        format!(
+            "- supply pressure: ramp from {} to {}, slowly enough to stay steady\n",
+            p(r.p_supply_pa[0]),
+            p(r.p_supply_pa[1])
+        )
     };
     if let Some([a, b]) = r.speeds_rad_s {
         let rpm = |w| rounded(Unit::Rpm.from_si(w, 0.0), 0.0);
-        s += &format!("- imposed speeds: {} to {} rpm, evenly spaced (motor shaft)\n", rpm(a), rpm(b));
+        s += &format!(
+            "- imposed speeds: {} to {} rpm, evenly spaced (motor shaft)\n",
+            rpm(a),
+            rpm(b)
+        );
     }
     if let Some([a, b]) = r.throttle_m3_s_pa {
         s += &format!("- outlet throttle: sonic conductance from {a:.3e} down to {b:.3e} m³/(s·Pa), log-spaced; shaft free\n");
     }
     if let Some([a, b]) = r.load_nm {
-        s += &format!("- brake torque: step from {} to {} N·m (motor shaft)\n", rounded(a, b / 10.0), rounded(b, b / 10.0));
+        s += &format!(
+            "- brake torque: step from {} to {} N·m (motor shaft)\n",
+            rounded(a, b / 10.0),
+            rounded(b, b / 10.0)
+        );
     }
     s += &format!(
         "- points: {}, {} reading(s) averaged at each; about {:.1} min of recording\n- record: {}\n",
@@ -161,7 +192,11 @@ pub fn notes(plan: &Plan) -> Vec<String> {
         out.push(format!("WARNING: the posterior is far from Gaussian ({why}): the expected shrinkage is a linear guess; refit after the measurement to know (posterior samples are not used by the plan)."));
     }
     if !plan.uncovered.is_empty() {
-        let u: Vec<String> = plan.uncovered.iter().map(|(n, w)| format!("{n} ({w})")).collect();
+        let u: Vec<String> = plan
+            .uncovered
+            .iter()
+            .map(|(n, w)| format!("{n} ({w})"))
+            .collect();
         out.push(format!("Not in the bands shown (as predict's): {}; where the fit's covariance holds them, a measurement's information is shared with them and the shrinkage counts it.", u.join(", ")));
     }
     for (c, why) in &plan.dropped {
@@ -177,10 +212,18 @@ pub fn notes(plan: &Plan) -> Vec<String> {
 /// `plan.md`: the operating points, the ranking, the top candidates in detail and the notes.
 pub fn markdown(plan: &Plan, display: &PressureDisplay, source: &str) -> String {
     let mut s = format!("# Which measurement next: {source}\n\nOperating points: ");
-    let ps: Vec<String> = plan.options.pressures_pa.iter().map(|p| display.text(*p)).collect();
+    let ps: Vec<String> = plan
+        .options
+        .pressures_pa
+        .iter()
+        .map(|p| display.text(*p))
+        .collect();
     s += &format!("{} {}", ps.join(", "), display.label());
     if let Some(w) = &plan.options.speeds_rad_s {
-        let r: Vec<String> = w.iter().map(|w| rounded(Unit::Rpm.from_si(*w, 0.0), 0.0)).collect();
+        let r: Vec<String> = w
+            .iter()
+            .map(|w| rounded(Unit::Rpm.from_si(*w, 0.0), 0.0))
+            .collect();
         s += &format!(" at {} rpm", r.join(", "));
     }
     s += ".\n\n## Ranking\n\n";
@@ -249,12 +292,22 @@ pub fn json(plan: &Plan) -> Value {
 }
 
 /// Writes `plan.md` and `plan.json` into `out` (which exists); returns the files written.
-pub fn write(plan: &Plan, display: &PressureDisplay, source: &str, out: &Path) -> Result<Vec<PathBuf>, PlanReportError> {
+pub fn write(
+    plan: &Plan,
+    display: &PressureDisplay,
+    source: &str,
+    out: &Path,
+) -> Result<Vec<PathBuf>, PlanReportError> {
     let md = out.join("plan.md");
     let js = out.join("plan.json");
     let text = serde_json::to_string_pretty(&json(plan)).unwrap_or_default() + "\n";
     for (path, bytes) in [(&md, markdown(plan, display, source)), (&js, text)] {
-        crate::io::write_atomic(path, bytes.as_bytes()).map_err(|source| PlanReportError::Write { path: path.clone(), source })?;
+        crate::io::write_atomic(path, bytes.as_bytes()).map_err(|source| {
+            PlanReportError::Write {
+                path: path.clone(),
+                source,
+            }
+        })?;
     }
     Ok(vec![md, js])
 }

@@ -25,7 +25,14 @@ fn curvature_fit(dir: &Path) -> String {
 
 fn plan_json(dir: &Path, fit: &str) -> Value {
     let out = dir.join("plan");
-    let o = vanefit(&["plan", fit, "--pressures", "3,4,5", "--out", out.to_str().unwrap()]);
+    let o = vanefit(&[
+        "plan",
+        fit,
+        "--pressures",
+        "3,4,5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.join("plan.md").exists());
     serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap()
@@ -40,7 +47,14 @@ fn cell(text: &str, row: usize, name: &str) -> f64 {
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
     let j = head.iter().position(|h| *h == name).unwrap();
-    lines.nth(row).unwrap().split(',').nth(j).unwrap().parse().unwrap()
+    lines
+        .nth(row)
+        .unwrap()
+        .split(',')
+        .nth(j)
+        .unwrap()
+        .parse()
+        .unwrap()
 }
 
 #[test]
@@ -49,7 +63,16 @@ fn bands_now_are_predicts_and_a_direct_measurement_combines_as_independent_estim
     let fit = curvature_fit(tmp.path());
     let p = plan_json(tmp.path(), &fit);
     let pred = tmp.path().join("pred");
-    let o = vanefit(&["predict", &fit, "--pressures", "3,4,5", "--bands", "delta", "--out", pred.to_str().unwrap()]);
+    let o = vanefit(&[
+        "predict",
+        &fit,
+        "--pressures",
+        "3,4,5",
+        "--bands",
+        "delta",
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let cat = std::fs::read_to_string(pred.join("catalogue.csv")).unwrap();
     let targets = p["targets"].as_array().unwrap();
@@ -62,7 +85,10 @@ fn bands_now_are_predicts_and_a_direct_measurement_combines_as_independent_estim
     let [lo, hi] = [num(&t["band95_before"][0]), num(&t["band95_before"][1])];
     for (v, col) in [(lo, "stall_torque_nm_lo"), (hi, "stall_torque_nm_hi")] {
         let want = cell(&cat, 1, col);
-        assert!((v / want - 1.0).abs() < 1e-3, "{col}: {v} vs predict's {want}");
+        assert!(
+            (v / want - 1.0).abs() < 1e-3,
+            "{col}: {v} vs predict's {want}"
+        );
     }
     // The stall-torque measurement there: Var after = 1/(1/Var before + 1/σ²), the band
     // log-normal about the value (half-width 1.96·σ_y/y in ln y).
@@ -89,7 +115,11 @@ fn bands_now_are_predicts_and_a_direct_measurement_combines_as_independent_estim
     for c in ranked {
         assert!((num(&c["v_per_hour"]) - num(&c["v_reduction"]) / num(&c["cost_h"])).abs() < 1e-12);
         assert!(num(&c["d_gain_nats"]) >= 0.0);
-        assert!(c["shrinkage"].as_array().unwrap().iter().all(|s| (0.0..=1.0).contains(&num(s))));
+        assert!(c["shrinkage"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|s| (0.0..=1.0).contains(&num(s))));
     }
 }
 
@@ -101,11 +131,20 @@ fn bad_options_are_refused_naming_them() {
         (vec!["--pressures", "3,x"], "--pressures"),
         (vec!["--pressures", "-2"], "--pressures"),
         (vec!["--pressures", "3", "--speeds", "-5"], "--speeds"),
-        (vec!["--pressures", "3", "--costs", "datasheet=0"], "--costs"),
+        (
+            vec!["--pressures", "3", "--costs", "datasheet=0"],
+            "--costs",
+        ),
         (vec!["--pressures", "3", "--costs", "nosuch=1"], "--costs"),
-        (vec!["--pressures", "3", "--candidates", "nosuch"], "--candidates"),
+        (
+            vec!["--pressures", "3", "--candidates", "nosuch"],
+            "--candidates",
+        ),
         (vec!["--pressures", "3", "--top", "0"], "--top"),
-        (vec!["--pressures", "3", "--fixed-spread", "0.5"], "--fixed-spread"),
+        (
+            vec!["--pressures", "3", "--fixed-spread", "0.5"],
+            "--fixed-spread",
+        ),
     ] {
         let mut all = vec!["plan", FIT, "--out", out.to_str().unwrap()];
         all.extend(args.iter());

@@ -38,7 +38,9 @@ use std::process::Command;
 use twin::motor::{TwinMotor, P_ATM_PA};
 use twin::page::{FIGURES, SPREAD};
 use twin::sizes::{band_label, random_motor_in_band, SIZE_BANDS_CM3};
-use twin::styles::{print_styled_page, styled_page, styled_row, styled_truth, PageKind, StyledPage};
+use twin::styles::{
+    print_styled_page, styled_page, styled_row, styled_truth, PageKind, StyledPage,
+};
 
 /// The operating pressures, bar g.
 const OPERATING_BAR_G: [f64; 3] = [3.0, 4.0, 5.0];
@@ -65,7 +67,15 @@ fn run(args: &[&str]) -> Result<String, String> {
 
 /// Fits the page in `page` to `fit` (default options, one thread).
 fn fit(page: &Path, fit: &Path) -> Result<(), String> {
-    let args = ["fit", page.to_str().unwrap(), "--out", fit.to_str().unwrap(), "--no-plots", "--threads", "1"];
+    let args = [
+        "fit",
+        page.to_str().unwrap(),
+        "--out",
+        fit.to_str().unwrap(),
+        "--no-plots",
+        "--threads",
+        "1",
+    ];
     run(&args).map(|_| ())
 }
 
@@ -89,7 +99,11 @@ fn plan(fit: &Path, out: &Path) -> Result<Value, String> {
 }
 
 fn numbers(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 /// The targets' 95 % bands of a plan.json.
@@ -108,7 +122,14 @@ fn bands(p: &Value) -> Vec<[f64; 2]> {
 /// Writes into `to` the page of `from` with the measurement `cand` (a `ranked` entry of
 /// plan.json) added, as the twin makes it: its figures at the measured pressure, each off
 /// by a normal draw of the σ the plan assumed.
-fn measured_page(from: &Path, to: &Path, m: &TwinMotor, page: &StyledPage, cand: &Value, seed: u64) -> Result<(), String> {
+fn measured_page(
+    from: &Path,
+    to: &Path,
+    m: &TwinMotor,
+    page: &StyledPage,
+    cand: &Value,
+    seed: u64,
+) -> Result<(), String> {
     std::fs::create_dir_all(to).map_err(|e| e.to_string())?;
     for f in ["rig.toml", "curves.csv"] {
         if from.join(f).exists() {
@@ -124,7 +145,12 @@ fn measured_page(from: &Path, to: &Path, m: &TwinMotor, page: &StyledPage, cand:
         sd * z
     };
     let mut toml = std::fs::read_to_string(to.join("rig.toml")).map_err(|e| e.to_string())?;
-    write!(toml, "\n[[experiment]]\nkind = \"catalogue\"\np_supply_mpa = {}\n", p_pa / 1e6).unwrap();
+    write!(
+        toml,
+        "\n[[experiment]]\nkind = \"catalogue\"\np_supply_mpa = {}\n",
+        p_pa / 1e6
+    )
+    .unwrap();
     let fig = |name: &str, v: f64, unit: &str| format!("{name} = \"{v:.6e} {unit}\"\n");
     let rpm = 30.0 / std::f64::consts::PI;
     let l_s = 1.0 / (1e-3 * 1.185);
@@ -132,12 +158,36 @@ fn measured_page(from: &Path, to: &Path, m: &TwinMotor, page: &StyledPage, cand:
         Some("key_figures") => {
             let air = r.air_at_max_power_kg_s.max(r.air_at_free_speed_kg_s);
             toml += "\n[experiment.figures]\n";
-            toml += &fig("stall_torque", r.stall_torque_nm + e(TOLERANCE * r.stall_torque_nm), "N·m");
-            toml += &fig("max_power", r.max_power_w + e(TOLERANCE * r.max_power_w), "W");
-            toml += &fig("speed_at_max_power", r.speed_at_max_power_rad_s * rpm, "rpm");
-            toml += &fig("air_at_max_power", (r.air_at_max_power_kg_s + e(TOLERANCE * air)) * l_s, "l/s ANR");
-            toml += &fig("free_speed", r.free_speed_rad_s * (1.0 + e(TOLERANCE)) * rpm, "rpm");
-            toml += &fig("air_at_free_speed", (r.air_at_free_speed_kg_s + e(TOLERANCE * air)) * l_s, "l/s ANR");
+            toml += &fig(
+                "stall_torque",
+                r.stall_torque_nm + e(TOLERANCE * r.stall_torque_nm),
+                "N·m",
+            );
+            toml += &fig(
+                "max_power",
+                r.max_power_w + e(TOLERANCE * r.max_power_w),
+                "W",
+            );
+            toml += &fig(
+                "speed_at_max_power",
+                r.speed_at_max_power_rad_s * rpm,
+                "rpm",
+            );
+            toml += &fig(
+                "air_at_max_power",
+                (r.air_at_max_power_kg_s + e(TOLERANCE * air)) * l_s,
+                "l/s ANR",
+            );
+            toml += &fig(
+                "free_speed",
+                r.free_speed_rad_s * (1.0 + e(TOLERANCE)) * rpm,
+                "rpm",
+            );
+            toml += &fig(
+                "air_at_free_speed",
+                (r.air_at_free_speed_kg_s + e(TOLERANCE * air)) * l_s,
+                "l/s ANR",
+            );
         }
         Some("stall_torque") => {
             let sd = numbers(&cand["sigma_si"])[0];
@@ -164,7 +214,11 @@ struct Judged {
 /// Mean of 1 − half-width after/before in log space.
 fn mean_shrinkage(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
     let w = |b: &[f64; 2]| (b[1] / b[0]).ln();
-    let s: f64 = before.iter().zip(after).map(|(b, a)| 1.0 - w(a) / w(b)).sum();
+    let s: f64 = before
+        .iter()
+        .zip(after)
+        .map(|(b, a)| 1.0 - w(a) / w(b))
+        .sum();
     s / before.len() as f64
 }
 
@@ -246,7 +300,10 @@ fn line(label: &str, js: &[Judged]) -> String {
 }
 
 fn env_usize(key: &str, default: usize) -> usize {
-    std::env::var(key).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+    std::env::var(key)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
 
 #[test]
