@@ -374,7 +374,7 @@ const LOG_BAND_MAX_RELATIVE: f64 = 2.0;
 /// order), so that a positive quantity keeps a positive band and the band's ends are the
 /// same factor either side of y, as the parameters' log-normal spread makes them; a
 /// figure ≤ 0 (a torque past free speed) keeps the linear y ∓ half, and so does one whose
-/// band reaches more than [`LOG_BAND_MAX_RELATIVE`] times itself: the fit does not tell it
+/// band reaches more than `LOG_BAND_MAX_RELATIVE` (2) times itself: the fit does not tell it
 /// from zero (a curve's torque next to the free speed, whose sign the parameters' spread
 /// can change), and its log-space factor e^(half/y) would grow without bound as y → 0.
 pub fn log_band(y: f64, half: f64) -> [f64; 2] {
