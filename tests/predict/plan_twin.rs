@@ -12,8 +12,9 @@
 //!
 //! Per motor: the promised mean shrinkage of the 12 half-widths (4 figures × 3 pressures),
 //! the achieved one (1 − ln(hi/lo) after / ln(hi/lo) before, the refit against the first
-//! fit), the achieved one of the random measurement, and how many bands after hold the
-//! twin's truth.
+//! fit), the achieved one of the random measurement, the same for V (the ranking's
+//! criterion: the relative variance removed, 1 − Σ ln(hi/lo)² after / Σ before), and how
+//! many bands after hold the twin's truth.
 //!
 //! ```sh
 //! PLAN_MOTORS=8 cargo test --release --test predict -- --ignored --nocapture plan_twin_table
@@ -206,6 +207,10 @@ struct Judged {
     promised: f64,
     achieved: f64,
     random: f64,
+    /// V (the ranking's criterion) promised and achieved, and the random one's achieved.
+    promised_v: f64,
+    achieved_v: f64,
+    random_v: f64,
     held: usize,
     bands: usize,
     top: String,
@@ -220,6 +225,13 @@ fn mean_shrinkage(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
         .map(|(b, a)| 1.0 - w(a) / w(b))
         .sum();
     s / before.len() as f64
+}
+
+/// V achieved: 1 − Σ w_after²/Σ w_before² with w = ln(hi/lo), each band's relative variance
+/// up to a common factor (the plan's V over the same figures).
+fn v_achieved(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
+    let ss = |b: &[[f64; 2]]| b.iter().map(|x| (x[1] / x[0]).ln().powi(2)).sum::<f64>();
+    1.0 - ss(after) / ss(before)
 }
 
 /// Prints, fits, plans, measures (recommended and random), refits one motor in `dir`.
@@ -260,6 +272,9 @@ fn judge(seed: u64, band: (f64, f64), dir: &Path) -> Result<Judged, String> {
         promised: numbers(&top["shrinkage"]).iter().sum::<f64>() / before.len() as f64,
         achieved: mean_shrinkage(&before, &after[0]),
         random: mean_shrinkage(&before, &after[1]),
+        promised_v: top["v_reduction"].as_f64().unwrap(),
+        achieved_v: v_achieved(&before, &after[0]),
+        random_v: v_achieved(&before, &after[1]),
         held,
         bands: before.len(),
         top: format!(
@@ -281,21 +296,25 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// One table line over `js`: motors, median promised, achieved, achieved/promised − 1,
-/// beats random, truth held.
+/// the random one's achieved, beats random; the same for V; truth held.
 fn line(label: &str, js: &[Judged]) -> String {
-    let ratio = median(js.iter().map(|j| j.achieved / j.promised - 1.0).collect());
+    let med = |f: &dyn Fn(&Judged) -> f64| median(js.iter().map(f).collect());
     let beats = js.iter().filter(|j| j.achieved > j.random).count();
+    let beats_v = js.iter().filter(|j| j.achieved_v > j.random_v).count();
     let held: usize = js.iter().map(|j| j.held).sum();
     let bands: usize = js.iter().map(|j| j.bands).sum();
     format!(
-        "| {label} | {} | {:.0} % | {:.0} % | {:+.0} % | {:.0} % | {beats}/{} | {held}/{bands} ({:.0} %) |\n",
+        "| {label} | {} | {:.0} % | {:.0} % | {:+.0} % | {:.0} % | {beats}/{n} | {:.0} % | {:.0} % | {:+.0} % | {beats_v}/{n} | {held}/{bands} ({:.0} %) |\n",
         js.len(),
-        100.0 * median(js.iter().map(|j| j.promised).collect()),
-        100.0 * median(js.iter().map(|j| j.achieved).collect()),
-        100.0 * ratio,
-        100.0 * median(js.iter().map(|j| j.random).collect()),
-        js.len(),
-        100.0 * held as f64 / bands.max(1) as f64
+        100.0 * med(&|j| j.promised),
+        100.0 * med(&|j| j.achieved),
+        100.0 * med(&|j| j.achieved / j.promised - 1.0),
+        100.0 * med(&|j| j.random),
+        100.0 * med(&|j| j.promised_v),
+        100.0 * med(&|j| j.achieved_v),
+        100.0 * med(&|j| j.achieved_v / j.promised_v - 1.0),
+        100.0 * held as f64 / bands.max(1) as f64,
+        n = js.len(),
     )
 }
 
@@ -333,7 +352,7 @@ fn plan_twin_table() {
             .collect()
     });
     let mut md = String::from(
-        "| size | motors | promised shrinkage (median) | achieved | achieved/promised − 1 (median) | random equal-cost measurement, achieved | recommendation beats random | bands after holding the truth |\n|---|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| size | motors | promised shrinkage (median) | achieved | achieved/promised − 1 (median) | random equal-cost measurement, achieved | recommendation beats random | V promised | V achieved | V achieved/promised − 1 | beats random in V | bands after holding the truth |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let mut all = Vec::new();
     for b in &bands {
