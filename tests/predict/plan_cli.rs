@@ -154,3 +154,39 @@ fn bad_options_are_refused_naming_them() {
     }
     assert!(!out.join("plan.md").exists());
 }
+
+/// A fit whose motor does not start at an asked pressure, and one with no uncertainty to
+/// shrink: exit 1 with why, nothing written, no panic.
+#[test]
+fn a_motor_that_does_not_start_or_a_fit_without_bands_is_refused_with_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut f: Value = serde_json::from_str(&std::fs::read_to_string(FIT).unwrap()).unwrap();
+    f["parameters"]["t_coulomb"]["value"] = Value::from(100.0);
+    let stuck = tmp.path().join("stuck.json");
+    std::fs::write(&stuck, serde_json::to_string(&f).unwrap()).unwrap();
+    let flat = curvature_fit(tmp.path());
+    let mut g: Value = serde_json::from_str(&std::fs::read_to_string(&flat).unwrap()).unwrap();
+    g.as_object_mut().unwrap().remove("covariance");
+    std::fs::write(&flat, serde_json::to_string(&g).unwrap()).unwrap();
+    for (fit, why) in [
+        (stuck.to_str().unwrap(), "does not start"),
+        (flat.as_str(), "neither a covariance nor intervals"),
+    ] {
+        let out = tmp.path().join("out");
+        let o = vanefit(&[
+            "plan",
+            fit,
+            "--pressures",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains(why) && !stderr(&o).contains("panicked"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(!out.join("plan.json").exists());
+    }
+}
