@@ -41,7 +41,7 @@
 //!
 //! Below the front door the folders are the layers, each depending only on the ones before
 //! it: `units` → `io` → `numerics` → `model` → `sim` → `data` → `objective` → `estimate` →
-//! {`diagnose`, `control`, `predict`, `export`} → `report` → `task` → `batch` (and the
+//! {`diagnose`, `control`, `predict`, `export`} → `plan` → `report` → `task` → `batch` (and the
 //! command line, part of the `vanefit` binary, on top). SI units everywhere inside; `units`
 //! converts at the file edge. Each layer is a namespace for what builds on the model
 //! directly (the command line, tests, benches, fuzz targets, the Python package and the FMU
@@ -64,6 +64,7 @@ pub mod io;
 pub mod model;
 pub mod numerics;
 pub mod objective;
+pub mod plan;
 pub mod predict;
 pub mod prelude;
 pub mod report;

@@ -19,6 +19,8 @@ const LAYERS: &[&[&str]] = &[
     &["objective"],
     &["estimate"],
     &["diagnose", "control", "predict", "export"],
+    // The planner of the next measurement propagates predict's uncertainty.
+    &["plan"],
     &["report"],
     &["task"],
     &["batch"],

@@ -482,6 +482,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fitting::diagnose, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::predict, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::find_dataset, m)?)?;
+    m.add_function(wrap_pyfunction!(tasks::plan, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::export_petab, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::export_fmu, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::synth, m)?)?;

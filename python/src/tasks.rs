@@ -327,3 +327,95 @@ pub fn synth(
         .map_err(|e| DataError::new_err(e.to_string()))?;
     Ok(())
 }
+
+/// Ranks the measurements that would shrink the bands of the fit `fit` (or its text
+/// `fit_text`) most at the operating `pressures` (in `unit`) and optional `speeds_rpm`, as
+/// `vanefit plan` (docs/plan.md): `candidates` the kinds weighed (None: all), `costs` rig
+/// hours by kind, `fixed_spread` and `top` as the command's. Returns JSON: `plan` (what
+/// `plan.json` holds), `ranking` (the printed table), `notes`, `report` (`plan.md`) and
+/// `written` (the files, when `out` is given). A bad option is a ParameterError naming its
+/// keyword.
+#[pyfunction]
+#[pyo3(signature = (fit, fit_text, pressures, unit, speeds_rpm, candidates, costs, fixed_spread, top, out))]
+#[allow(clippy::too_many_arguments)]
+pub fn plan(
+    py: Python<'_>,
+    fit: PathBuf,
+    fit_text: Option<String>,
+    pressures: Vec<f64>,
+    unit: String,
+    speeds_rpm: Option<Vec<f64>>,
+    candidates: Option<Vec<String>>,
+    costs: Option<Vec<(String, f64)>>,
+    fixed_spread: Option<f64>,
+    top: usize,
+    out: Option<PathBuf>,
+) -> PyResult<String> {
+    use vanefit::plan::{CandidateKind, PlanError, PlanOptions};
+    use vanefit::report::plan as report;
+    use vanefit::report::predict::PressureDisplay;
+    use vanefit::task;
+    let file = load_fit(&fit, fit_text.as_deref())?;
+    let u = task::pressure_unit(task::Opt::PredictUnit, &unit).map_err(|e| option_err(&e))?;
+    let p_atm_pa = task::fit_atmosphere_pa(&file);
+    let kind = |key: &str, n: &str| {
+        CandidateKind::from_name(n).ok_or_else(|| param_err(format!("{key}: no candidate '{n}'")))
+    };
+    let mut o = PlanOptions::new(
+        pressures.iter().map(|p| u.to_si(*p, p_atm_pa)).collect(),
+        p_atm_pa,
+    );
+    o.speeds_rad_s = speeds_rpm.map(|s| {
+        s.iter()
+            .map(|w| vanefit::units::Unit::Rpm.to_si(*w, 0.0))
+            .collect()
+    });
+    o.kinds = candidates
+        .map(|c| {
+            c.iter()
+                .map(|n| kind("candidates", n))
+                .collect::<PyResult<_>>()
+        })
+        .transpose()?;
+    o.costs_h = costs
+        .unwrap_or_default()
+        .iter()
+        .map(|(n, h)| Ok((kind("costs", n)?, *h)))
+        .collect::<PyResult<_>>()?;
+    o.fixed_spread = fixed_spread;
+    o.top = top;
+    let keyword = |e: PlanError| {
+        let key = match e {
+            PlanError::NoPressures | PlanError::BadPressure(_) => "pressures",
+            PlanError::BadSpeed(_) => "speeds",
+            PlanError::BadCost { .. } => "costs",
+            PlanError::BadSpread(_) => "fixed_spread",
+            PlanError::BadTop => "top",
+            PlanError::NoKinds => "candidates",
+            e => return VanefitError::new_err(e.to_string()),
+        };
+        param_err(format!("{key}: {e}"))
+    };
+    o.check().map_err(keyword)?;
+    let p = py
+        .detach(|| vanefit::plan::plan(&file, &o, &|_, _, _| {}))
+        .map_err(keyword)?;
+    let display = PressureDisplay { unit: u, p_atm_pa };
+    let source = task::source_name(&fit, &file);
+    let mut written = Vec::new();
+    if let Some(dir) = &out {
+        vanefit::io::check_dir(dir).map_err(|e| param_err(format!("out {e}")))?;
+        std::fs::create_dir_all(dir).map_err(|e| VanefitError::new_err(e.to_string()))?;
+        written = report::write(&p, &display, &source, dir)
+            .map_err(|e| VanefitError::new_err(e.to_string()))?;
+    }
+    Ok(serde_json::json!({
+        "plan": report::json(&p),
+        "ranking": report::ranking_markdown(&p, &display),
+        "notes": report::notes(&p),
+        "report": report::markdown(&p, &display, &source),
+        "unit": display.unit.suffix(),
+        "written": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+    })
+    .to_string())
+}

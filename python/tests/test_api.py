@@ -473,3 +473,26 @@ def test_control_files_and_tables_are_the_commands(tmp_path):
         vanefit.control("step", pm_deg=50)
     with pytest.raises(vanefit.ParameterError, match="study"):
         vanefit.control("nope")
+
+
+def test_plan_ranks_as_the_command_and_names_bad_keywords(cli_fit, tmp_path):
+    """vanefit.plan is `vanefit plan`: the same plan.json, ranked by V per hour, a stall
+    torque alone when asked, at the asked cost; bad keywords are named."""
+    p = vanefit.plan(cli_fit, pressures=[3, 4, 5], out=tmp_path / "plan")
+    assert isinstance(p, vanefit.Plan)
+    assert (tmp_path / "plan" / "plan.md").read_text() == p.report
+    r = p.ranking
+    assert len(r) == len(p.doc["ranked"]) and list(r["v_per_hour"]) == sorted(r["v_per_hour"], reverse=True)
+    assert (r["v_per_hour"] - r["v_reduction"] / r["cost_h"]).abs().max() < 1e-12
+    run_cli("plan", cli_fit, "--pressures", "3,4,5", "--out", tmp_path / "cli")
+    cli = json.loads((tmp_path / "cli" / "plan.json").read_text())
+    assert cli["ranked"] == p.doc["ranked"]
+    only = vanefit.plan(cli_fit, pressures=[4], candidates=["stall_torque"], costs={"stall_torque": 2})
+    assert [c["kind"] for c in only.doc["ranked"]] == ["stall_torque"]
+    assert only.doc["ranked"][0]["cost_h"] == 2
+    for kw, bad in [("pressures", {"pressures": [-2]}), ("speeds", {"speeds": [-5]}),
+                    ("costs", {"costs": {"datasheet": 0}}), ("candidates", {"candidates": ["x"]}),
+                    ("top", {"top": 0})]:
+        args = {"pressures": [3], **bad}
+        with pytest.raises(vanefit.ParameterError, match=kw):
+            vanefit.plan(cli_fit, **args)

@@ -54,6 +54,8 @@ from ._api import (  # noqa: F401
     export_fmu,
     diagnose,
     predict,
+    plan,
+    Plan,
     control,
     CONTROL_STUDIES,
     synth,

@@ -15,7 +15,7 @@ import numpy as np
 from . import _core
 from ._core import DataError, ParameterError, VanefitError, __version__
 from .progress import Progress, fit_progress, diagnose_progress, predict_progress
-from .results import Diagnosis, Fit, FitStatistics, Prediction, Samples, StudyResult
+from .results import Diagnosis, Fit, FitStatistics, Plan, Prediction, Samples, StudyResult
 
 __all__ = [
     "Dataset",
@@ -24,6 +24,7 @@ __all__ = [
     "Diagnosis",
     "Prediction",
     "Samples",
+    "Plan",
     "StudyResult",
     "Likelihood",
     "chain_diagnostics",
@@ -41,6 +42,7 @@ __all__ = [
     "export_fmu",
     "diagnose",
     "predict",
+    "plan",
     "control",
     "CONTROL_STUDIES",
     "synth",
@@ -525,6 +527,40 @@ def predict(
             units="SI",
         )
     return Prediction(doc, samples)
+
+
+def plan(
+    fit: Union[Fit, PathLike],
+    pressures: Sequence[float],
+    unit: str = "bar_g",
+    speeds: Optional[Sequence[float]] = None,
+    candidates: Optional[Sequence[str]] = None,
+    costs: Optional[Mapping[str, float]] = None,
+    fixed_spread: Optional[float] = None,
+    top: int = 3,
+    out: Optional[PathLike] = None,
+) -> Plan:
+    """Which measurement next, as ``vanefit plan`` (docs/plan.md): the candidate
+    measurements ranked by how much they are expected to shrink the 95 % bands at the
+    operating ``pressures`` (in ``unit``) and, given, ``speeds`` (rpm), per hour of rig
+    time. ``candidates``: the kinds weighed (``key_figures``, ``stall_torque``,
+    ``air_flow``, ``datasheet``, ``pressure_ramp``, ``outlet_throttle``, ``load_step``;
+    default all); ``costs``: rig hours by kind, e.g. ``{"datasheet": 3}``; ``top``: how
+    many are detailed in the report. Returns a :class:`Plan` (``ranking`` DataFrame, the
+    ``plan.json`` document, ``report``). ``out``: also write ``plan.md`` and
+    ``plan.json`` there."""
+    path, text = _fit_source(fit)
+    return Plan(json.loads(_core.plan(
+        path, text,
+        [float(p) for p in pressures],
+        str(unit),
+        None if speeds is None else [float(w) for w in speeds],
+        None if candidates is None else [str(c) for c in candidates],
+        None if costs is None else [(str(k), float(v)) for k, v in costs.items()],
+        None if fixed_spread is None else float(fixed_spread),
+        int(top),
+        None if out is None else os.fspath(out),
+    )))
 
 
 _MOTOR = {"effects": None, "brake_nm_s_rad": None}

@@ -26,6 +26,7 @@ __all__ = [
     "diagnose",
     "predict",
     "find_dataset",
+    "plan",
     "export_petab",
     "export_fmu",
     "synth",
@@ -149,6 +150,18 @@ def predict(
     progress: Optional[Callable[[str, int, int], Any]] = None,
 ) -> Tuple[str, Optional[Tuple[bytearray, bytearray, Tuple[int, int, int], List[float]]]]: ...
 def find_dataset(fit: _Path, fit_text: Optional[str]) -> Tuple[Optional[str], str]: ...
+def plan(
+    fit: _Path,
+    fit_text: Optional[str],
+    pressures: Sequence[float],
+    unit: str,
+    speeds_rpm: Optional[Sequence[float]],
+    candidates: Optional[Sequence[str]],
+    costs: Optional[Sequence[Tuple[str, float]]],
+    fixed_spread: Optional[float],
+    top: int,
+    out: Optional[_Path],
+) -> str: ...
 def export_petab(fit: _Path, fit_text: Optional[str], dataset: _Path, out: _Path) -> str: ...
 def export_fmu(fit: _Path, fit_text: Optional[str], out: _Path, binary: Optional[_Path]) -> str: ...
 def synth(

@@ -545,6 +545,60 @@ class Prediction:
         return f"vanefit.Prediction({len(self.catalogue)} pressure(s), unit {self.unit})"
 
 
+class Plan:
+    """Which measurement next (``vanefit plan``): the candidates ranked, as a DataFrame
+    (``ranking``), the whole ``plan.json`` document (``doc``), the notes and the report
+    (``plan.md``)."""
+
+    def __init__(self, doc: Mapping[str, Any]):
+        self._doc = dict(doc)
+        #: What ``plan.json`` holds (SI).
+        self.doc: Dict[str, Any] = dict(self._doc["plan"])
+
+    @property
+    def ranking(self) -> "pd.DataFrame":
+        """One row per candidate, best V per hour first: kind, supply pressure (in the
+        plan's unit, empty for a ramp), cost in hours, V (variance removed), V per hour,
+        D (nats) and the mean expected shrinkage of the bands."""
+        pd = _pd()
+        unit = self._doc["unit"]
+        rows = []
+        for c in self.doc["ranked"]:
+            rows.append({
+                "kind": c["kind"],
+                "p_supply_pa": c["p_supply_pa"],
+                "cost_h": c["cost_h"],
+                "v_reduction": c["v_reduction"],
+                "v_per_hour": c["v_per_hour"],
+                "d_gain_nats": c["d_gain_nats"],
+                "mean_shrinkage": c["mean_shrinkage"],
+            })
+        frame = pd.DataFrame(rows)
+        frame.attrs["unit"] = unit
+        return frame
+
+    @property
+    def notes(self) -> List[str]:
+        return list(self._doc["notes"])
+
+    @property
+    def report(self) -> str:
+        """The markdown of ``plan.md`` (also shown by a notebook)."""
+        return self._doc["report"]
+
+    @property
+    def written(self) -> List[str]:
+        """The files written (none without ``out``)."""
+        return list(self._doc["written"])
+
+    def _repr_markdown_(self) -> str:
+        return self.report
+
+    def __repr__(self) -> str:
+        best = self.doc["ranked"][0]["kind"] if self.doc["ranked"] else "nothing"
+        return f"vanefit.Plan({len(self.doc['ranked'])} candidates, best {best})"
+
+
 class StudyResult:
     """A control study's results: each table it writes as a DataFrame (``result["step"]``,
     ``result.tables``), each JSON summary as a dict (``result.summaries``), and the folder

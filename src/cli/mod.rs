@@ -20,6 +20,7 @@ pub(crate) mod control;
 pub(crate) mod diagnose;
 pub(crate) mod export;
 pub(crate) mod fit;
+pub(crate) mod plan;
 pub(crate) mod predict;
 
 use clap::{Parser, Subcommand};
@@ -101,6 +102,10 @@ pub(crate) enum Command {
     /// catalogue figures, correction factors and curves with 95% bands.
     #[command(allow_negative_numbers = true)]
     Predict(crate::cli::predict::PredictArgs),
+    /// Which measurement next: candidate measurements ranked by how much they are expected
+    /// to shrink the 95% bands at the given operating points, per hour of rig time.
+    #[command(allow_negative_numbers = true)]
+    Plan(crate::cli::plan::PlanArgs),
     /// Export a fit as a PEtab v1 problem: parameter, observable, measurement and condition
     /// tables, an SBML document declaring the model's symbols, and the problem YAML.
     ExportPetab(crate::cli::export::ExportPetabArgs),
@@ -235,6 +240,7 @@ pub(crate) fn run(cli: Cli) -> Result<(), Failure> {
         Command::Control(args) => crate::cli::control::run(args),
         Command::Diagnose(args) => crate::cli::diagnose::run(&args),
         Command::Predict(args) => crate::cli::predict::run(&args),
+        Command::Plan(args) => crate::cli::plan::run(&args),
         Command::ExportPetab(args) => crate::cli::export::run(&args),
         Command::ExportFmu(args) => crate::cli::export::run_fmu(&args),
         Command::Batch(args) => crate::cli::batch::run(&args),

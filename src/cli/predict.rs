@@ -21,13 +21,13 @@ use vanefit::task::{
 
 /// Progress of the posterior samples on stderr: a line per tenth of each stage.
 #[derive(Default)]
-struct Progress {
+pub(crate) struct Progress {
     t0: std::sync::OnceLock<Instant>,
     last: std::sync::Mutex<(String, usize)>,
 }
 
 impl Progress {
-    fn tell(&self, what: &str, done: usize, total: usize) {
+    pub(crate) fn tell(&self, what: &str, done: usize, total: usize) {
         let t0 = self.t0.get_or_init(Instant::now);
         let tenth = (10 * done) / total.max(1);
         let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
@@ -109,7 +109,7 @@ pub(crate) struct PredictArgs {
 }
 
 /// The column suffixes of the pressure units, the values `--unit` accepts.
-fn pressure_suffixes() -> Vec<&'static str> {
+pub(crate) fn pressure_suffixes() -> Vec<&'static str> {
     vanefit::task::pressure_units()
         .iter()
         .map(|u| u.suffix())
@@ -117,7 +117,7 @@ fn pressure_suffixes() -> Vec<&'static str> {
 }
 
 /// `--pressures`: a comma-separated list of numbers, at least one.
-fn pressure_list(list: &str) -> Result<Vec<f64>, OptionError> {
+pub(crate) fn pressure_list(list: &str) -> Result<Vec<f64>, OptionError> {
     let fail = |why: String| OptionError::of(Opt::PredictPressures, format!(" '{list}': {why}"));
     let items: Vec<&str> = list.split(',').map(str::trim).collect();
     if items.iter().all(|s| s.is_empty()) {

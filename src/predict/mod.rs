@@ -29,7 +29,7 @@ pub use samples::{
     DEFAULT_DRAWS, DEFAULT_STEPS,
 };
 
-pub use uncertainty::{BandBasis, ParamUncertainty};
+pub use uncertainty::{log_band, BandBasis, ParamUncertainty, Z95};
 
 use crate::data::fitfile::FitFile;
 use crate::model::motor::Motor;

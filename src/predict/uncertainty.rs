@@ -41,7 +41,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
 /// The normal quantile of a two-sided 95 % band.
-const Z95: f64 = 1.959_963_984_540_054;
+pub const Z95: f64 = 1.959_963_984_540_054;
 
 /// Of one figure's variance: the share a set of parameters carries, and each parameter's
 /// own share ([`ParamUncertainty::variance_shares`]).
@@ -302,8 +302,9 @@ impl ParamUncertainty {
         Ok(Some(shares))
     }
 
-    /// ∂y_i/∂ln θ_j of the `n` figures by central differences (module documentation).
-    fn jacobian(
+    /// ∂y_i/∂ln θ_j of the `n` figures by central differences (module documentation); an
+    /// `n` × [`Self::len`] matrix, columns in the order of [`Self::names`].
+    pub fn jacobian(
         &self,
         fit: &FitFile,
         n: usize,
@@ -373,10 +374,10 @@ const LOG_BAND_MAX_RELATIVE: f64 = 2.0;
 /// order), so that a positive quantity keeps a positive band and the band's ends are the
 /// same factor either side of y, as the parameters' log-normal spread makes them; a
 /// figure ≤ 0 (a torque past free speed) keeps the linear y ∓ half, and so does one whose
-/// band reaches more than [`LOG_BAND_MAX_RELATIVE`] times itself: the fit does not tell it
+/// band reaches more than `LOG_BAND_MAX_RELATIVE` (2) times itself: the fit does not tell it
 /// from zero (a curve's torque next to the free speed, whose sign the parameters' spread
 /// can change), and its log-space factor e^(half/y) would grow without bound as y → 0.
-fn log_band(y: f64, half: f64) -> [f64; 2] {
+pub fn log_band(y: f64, half: f64) -> [f64; 2] {
     if y > 0.0 && half <= LOG_BAND_MAX_RELATIVE * y {
         let f = (half / y).exp();
         [y / f, y * f]

@@ -5,5 +5,6 @@ pub mod control;
 pub mod diagnose;
 pub mod explain;
 pub mod fit;
+pub mod plan;
 pub mod plot;
 pub mod predict;

@@ -9,6 +9,8 @@ mod every_size;
 mod geared;
 mod page_coverage;
 mod page_pairs;
+mod plan_cli;
+mod plan_twin;
 mod predict;
 mod sampled_bands;
 extern crate twin;
