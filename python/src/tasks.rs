@@ -132,6 +132,9 @@ pub fn predict<'py>(
             burn_in: burn_in.unwrap_or(d.burn_in),
             draws: draws.unwrap_or(d.draws),
             seed: seed.unwrap_or(d.seed),
+            // Beside the outputs, as `vanefit predict` keeps it (docs/cli.md, "predict").
+            checkpoint: out.as_ref().map(|o| o.join("samples.checkpoint")),
+            ..d
         },
     }
     .check(task::fit_atmosphere_pa(&file))

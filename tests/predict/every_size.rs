@@ -126,7 +126,11 @@ fn try_evaluate(
         .unwrap_or_default()
         .replace("{page}", page_s);
     // Delta bands unless SIZE_PREDICT_ARGS asks for others (clap takes `--bands` once).
-    let bands = if extra.contains("--bands") { vec![] } else { vec!["--bands", "delta"] };
+    let bands = if extra.contains("--bands") {
+        vec![]
+    } else {
+        vec!["--bands", "delta"]
+    };
     let mut args = vec![
         "predict",
         fit_s,
