@@ -231,7 +231,7 @@ impl PosteriorDraws {
 }
 
 /// Which sampler drew the posterior. The posterior's Laplace approximation is checked by
-/// importance sampling from its t proposal ([`IMPORTANCE_DRAWS`] draws,
+/// importance sampling from its t proposal (`IMPORTANCE_DRAWS` draws,
 /// [`ImportanceCheck`]): where every draw has a positive density and the weights' Pareto
 /// k̂ < 0.7 (a rig fit: k̂ 0.12) the Laplace-guided chains draw it
 /// ([`crate::estimate::run_chains`]); otherwise (a catalogue page: k̂ 2–10, a fifth of the

@@ -349,7 +349,7 @@ fn check_ensemble(
 
 /// [`run_ensemble_with`] in blocks of `block` steps; with a `checkpoint`, resumed from its
 /// file when there is one and written after every block (removed when the run ends). Walker
-/// k's block b draws from the stream of (seed, k, b) ([`chains`]' determinism), so a
+/// k's block b draws from the stream of (seed, k, b) (the determinism of `estimate::sample::chains`), so a
 /// resumed run ends with the same chains as one that was not stopped, whatever the threads.
 pub fn run_ensemble_resumable(
     density: &dyn LogDensity,

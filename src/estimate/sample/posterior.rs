@@ -121,7 +121,7 @@ impl<'a> FitPosterior<'a> {
 
 impl FitPosterior<'_> {
     /// The Laplace approximation about the fit's estimate in the sampling coordinates
-    /// ([`super::laplace`]): the Gauss–Newton precision of the likelihood's residuals
+    /// (`estimate::sample::laplace`): the Gauss–Newton precision of the likelihood's residuals
     /// (JᵀJ/s²) plus the prior's (−∇² ln π, central differences), regularised by the
     /// supports' widths.
     pub fn laplace(&self) -> Result<Laplace, SampleError> {
