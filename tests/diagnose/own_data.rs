@@ -114,12 +114,19 @@ fn uncatalogued_torque_is_discovered_and_modelled() {
     let path = dir.path().join("extended.json");
     let file = vanefit::data::FitFile::read(&path).unwrap();
     assert_eq!(file.extra, d.extended.fitted.extra);
-    // Its values carry no intervals (the file says none), and the report says so and why.
+    // The fit file holds values only; the extended model's intervals are the diagnosis's
+    // (diagnosis.json `extended.intervals`, the report's table), and the term's holds the
+    // coefficient the data were made with (3e-11 N·m/(Pa·rad/s)).
     assert!(file.ci95.is_empty() && file.statistics.is_none());
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
-    for needle in ["carry no intervals", "outside the catalog"] {
-        assert!(report.contains(needle), "{needle}:\n{report}");
-    }
+    assert!(report.contains("The extended model's 95 % intervals"), "{report}");
+    let intervals = v["extended"]["intervals"].as_array().expect("extended.intervals");
+    let term = intervals
+        .iter()
+        .find(|i| i.get("formula").is_some())
+        .expect("an interval for the discovered term");
+    let (lo, hi) = (term["lo"].as_f64().unwrap(), term["hi"].as_f64().unwrap());
+    assert!(lo < 3e-11 && 3e-11 < hi, "{term}");
 }
 
 /// The table for the README (every case, the command line's settings).
