@@ -455,7 +455,26 @@ class Samples(dict):
         )
 
 
-class Prediction:
+class _Reported:
+    """A result of a command that writes a markdown report: its notes and the report's text
+    (``report``, also what a notebook shows)."""
+
+    _doc: Dict[str, Any]
+
+    @property
+    def notes(self) -> List[str]:
+        return list(self._doc["notes"])
+
+    @property
+    def report(self) -> str:
+        """The markdown of the command's report (``predict.md``, ``plan.md``)."""
+        return self._doc["report"]
+
+    def _repr_markdown_(self) -> str:
+        return self.report
+
+
+class Prediction(_Reported):
     """A prediction: the tables ``vanefit predict`` writes (``catalogue.csv``,
     ``factors.csv``, ``curves.csv``, same columns and numbers) as DataFrames, its notes and
     its report (``predict.md``); which method made the bands and why (:attr:`bands`,
@@ -515,14 +534,6 @@ class Prediction:
         """Torque, power and air against speed at each pressure, with bands."""
         return _read_csv(self._doc["curves"])
 
-    @property
-    def notes(self) -> List[str]:
-        return list(self._doc["notes"])
-
-    @property
-    def report(self) -> str:
-        """The markdown of ``predict.md`` (also shown by a notebook)."""
-        return self._doc["report"]
 
     @property
     def unit(self) -> str:
@@ -538,14 +549,11 @@ class Prediction:
         """A table's CSV text exactly as ``vanefit predict`` writes it."""
         return self._doc[table]
 
-    def _repr_markdown_(self) -> str:
-        return self.report
-
     def __repr__(self) -> str:
         return f"vanefit.Prediction({len(self.catalogue)} pressure(s), unit {self.unit})"
 
 
-class Plan:
+class Plan(_Reported):
     """Which measurement next (``vanefit plan``): the candidates ranked, as a DataFrame
     (``ranking``), the whole ``plan.json`` document (``doc``), the notes and the report
     (``plan.md``)."""
@@ -577,22 +585,11 @@ class Plan:
         frame.attrs["unit"] = unit
         return frame
 
-    @property
-    def notes(self) -> List[str]:
-        return list(self._doc["notes"])
-
-    @property
-    def report(self) -> str:
-        """The markdown of ``plan.md`` (also shown by a notebook)."""
-        return self._doc["report"]
 
     @property
     def written(self) -> List[str]:
         """The files written (none without ``out``)."""
         return list(self._doc["written"])
-
-    def _repr_markdown_(self) -> str:
-        return self.report
 
     def __repr__(self) -> str:
         best = self.doc["ranked"][0]["kind"] if self.doc["ranked"] else "nothing"
