@@ -72,18 +72,40 @@ impl Located {
     }
 }
 
+/// Why a folder does not hold the dataset a fit names.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+enum NotHeld {
+    /// The folder does not exist.
+    #[error("no such folder")]
+    NoFolder,
+    /// It has no `rig.toml`.
+    #[error("the folder has no rig.toml")]
+    NoRig,
+    /// It holds another dataset.
+    #[error("the folder holds dataset {found}, not {name}")]
+    Other {
+        /// The dataset the folder holds.
+        found: String,
+        /// The dataset the fit names.
+        name: String,
+    },
+}
+
 /// Whether `dir` holds the dataset named `name`: its `rig.toml` is a file and the folder's
 /// name is `name` (a dataset's name is its folder's, `Dataset::load`).
-fn holds(dir: &Path, name: &str) -> Result<(), String> {
+fn holds(dir: &Path, name: &str) -> Result<(), NotHeld> {
     if !dir.is_dir() {
-        return Err("no such folder".into());
+        return Err(NotHeld::NoFolder);
     }
     if !dir.join("rig.toml").is_file() {
-        return Err("the folder has no rig.toml".into());
+        return Err(NotHeld::NoRig);
     }
     let found = dataset_name(dir);
     if found != name {
-        return Err(format!("the folder holds dataset {found}, not {name}"));
+        return Err(NotHeld::Other {
+            found,
+            name: name.to_string(),
+        });
     }
     Ok(())
 }

@@ -119,8 +119,13 @@ fn uncatalogued_torque_is_discovered_and_modelled() {
     // coefficient the data were made with (3e-11 N·m/(Pa·rad/s)).
     assert!(file.ci95.is_empty() && file.statistics.is_none());
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
-    assert!(report.contains("The extended model's 95 % intervals"), "{report}");
-    let intervals = v["extended"]["intervals"].as_array().expect("extended.intervals");
+    assert!(
+        report.contains("The extended model's 95 % intervals"),
+        "{report}"
+    );
+    let intervals = v["extended"]["intervals"]
+        .as_array()
+        .expect("extended.intervals");
     let term = intervals
         .iter()
         .find(|i| i.get("formula").is_some())
