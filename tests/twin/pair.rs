@@ -515,7 +515,7 @@ fn to_x(m: &TwinMotor) -> [f64; NP] {
     ]
 }
 
-/// The parameters a path may walk: [`FREE`], then `t_coulomb` (index [`NP`]).
+/// The parameters a path may walk: [`FREE`], then `t_coulomb` (index `NP`).
 pub const WALKABLE: [&str; NP + 1] = [
     "c_in1",
     "c_out2",
@@ -864,7 +864,7 @@ const TARGET_TOL: f64 = 0.004;
 /// Motors printing the same page as `m` whose figure `target.0` of [`FIGURES`] at
 /// `target.1` bar g is steered up and down: a continuation in s = ln(f/f₀) in steps of
 /// 0.02, every coordinate of [`WALKABLE`] re-solved at each step so that the page stays
-/// printed digit for digit and ln f = ln f₀ + s within [`TARGET_TOL`]; it stops where no
+/// printed digit for digit and ln f = ln f₀ + s within `TARGET_TOL`; it stops where no
 /// motor of the twin's population does both. The widest pair the page allows in that
 /// figure, as far as a local search finds it (a walk of one parameter, [`walk_path`], only
 /// sees the figure move as that parameter does). Rows at `bar_g` as in [`friction_path`].
