@@ -19,6 +19,11 @@
 //! the number of rows or the units. Rows are compared in recording order; at most
 //! [`CostOptions::max_points_per_channel`] of them, evenly spaced.
 //!
+//! A catalogue page that prints its max power at a speed adds one term more, after every
+//! channel: w_e·r² with r the distance of the model's power peak from the printed speed in
+//! reading tolerances ([`super::peak`]); it is listed among the channels as
+//! [`PEAK_COLUMN`].
+//!
 //! J never is NaN, infinite or an error: a simulation that fails, or a cost that is not
 //! finite, gives the constant [`FAILURE_PENALTY`] (far above the cost of any completed
 //! simulation: a residual of 10⁴σ on every point of ten channels gives 1e9) and is counted
@@ -28,6 +33,7 @@
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
+use crate::objective::peak::PowerPeak;
 use crate::objective::reference::{
     experiment_references, ChannelReference, Reference, ReferenceOptions,
 };
@@ -35,6 +41,10 @@ use crate::sim::experiment::{Experiment, SimError, Simulated};
 use crate::units::Quantity;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The column name under which a page's power-peak term ([`super::peak`]) is listed among
+/// the channels of a cost.
+pub const PEAK_COLUMN: &str = "power peak at speed_at_max_power";
 
 /// Cost given to a failed simulation or a non-finite cost (dimensionless, like J).
 pub const FAILURE_PENALTY: f64 = 1e10;
@@ -176,6 +186,8 @@ pub(crate) fn compared_rows(abscissa: &[f64], reference: &Reference, values: &[f
 #[derive(Debug)]
 pub struct CostModel {
     experiments: Vec<ExperimentCost>,
+    /// Each page's power-peak condition, compared after every channel.
+    peaks: Vec<PowerPeak>,
     n_points: usize,
     evaluations: AtomicU64,
     failures: AtomicU64,
@@ -185,6 +197,11 @@ impl CostModel {
     /// Builds every experiment's inputs and every channel's reference.
     pub fn new(ds: &Dataset, options: CostOptions) -> Result<CostModel, CostError> {
         let mut experiments = Vec::with_capacity(ds.experiments.len());
+        let peaks: Vec<PowerPeak> = ds
+            .experiments
+            .iter()
+            .filter_map(|data| PowerPeak::of(data, ds.p_atm_pa))
+            .collect();
         for data in &ds.experiments {
             let experiment = Experiment::new(data, ds.p_atm_pa)?;
             let abscissa = experiment.abscissa();
@@ -222,9 +239,11 @@ impl CostModel {
             .iter()
             .flat_map(|e| &e.channels)
             .map(|c| c.rows.len())
-            .sum();
+            .sum::<usize>()
+            + peaks.len();
         Ok(CostModel {
             experiments,
+            peaks,
             n_points,
             evaluations: AtomicU64::new(0),
             failures: AtomicU64::new(0),
@@ -287,6 +306,15 @@ impl CostModel {
                 total += cost;
             }
         }
+        for peak in &self.peaks {
+            match self.peak_cost(peak, motor) {
+                Ok(c) => {
+                    total += c.cost;
+                    channels.push(c);
+                }
+                Err(e) => return self.failed(e.to_string(), channels),
+            }
+        }
         if !total.is_finite() {
             return self.failed("total cost is not finite".into(), channels);
         }
@@ -315,6 +343,21 @@ impl CostModel {
         } else {
             self.experiments.iter().map(one).collect()
         }
+    }
+
+    /// A page's power-peak term of J: w_e·r² ([`super::peak`]).
+    fn peak_cost(&self, peak: &PowerPeak, motor: &Motor) -> Result<ChannelCost, SimError> {
+        let r = peak.residual(peak.simulate(motor)?);
+        Ok(ChannelCost {
+            experiment_kind: Kind::Catalogue,
+            file: peak.file.clone(),
+            channel: Quantity::Speed,
+            column: PEAK_COLUMN.into(),
+            weight: peak.weight,
+            rms_normalized: r.abs(),
+            n: 1,
+            cost: peak.weight * r * r,
+        })
     }
 
     fn failed(&self, message: String, channels: Vec<ChannelCost>) -> CostValue {
@@ -363,7 +406,8 @@ impl CostModel {
     }
 
     /// The simulated values at every channel's compared rows, SI, in channel order (the lean
-    /// part of [`CostModel::residuals`], for likelihoods evaluated thousands of times).
+    /// part of [`CostModel::residuals`], for likelihoods evaluated thousands of times),
+    /// followed by each page's power peak ω_m, rad/s, one value each ([`CostModel::peaks`]).
     pub(crate) fn simulated_rows(
         &self,
         motor: &Motor,
@@ -414,7 +458,16 @@ impl CostModel {
                 );
             }
         }
+        for peak in &self.peaks {
+            out.push(vec![peak.simulate(motor)?]);
+        }
         Ok(out)
+    }
+
+    /// Each page's power-peak condition, in rig.toml order: compared after every channel
+    /// (the trailing entries of [`CostModel::simulated_rows`]).
+    pub(crate) fn peaks(&self) -> &[PowerPeak] {
+        &self.peaks
     }
 
     /// Every channel's reference, in experiment and channel order.
