@@ -596,8 +596,9 @@ fn summary_json(
         "recorded inputs as time functions (a transient experiment is one condition driven by its recording)",
         "the fitting cost J (per-channel means and reference polynomials)",
     ];
-    let peak = |e| crate::objective::peak::PowerPeak::of(e, ds.p_atm_pa).is_some();
-    if ds.experiments.iter().any(peak) {
+    let peak = |(i, e)| crate::objective::peak::PowerPeak::of(e, i).is_some();
+    let has_peaks = ds.experiments.iter().enumerate().any(peak);
+    if has_peaks {
         not_carried.push(
             "the power-peak term of a page that prints max power at a speed (chi2_power_peaks: the vertex of the power at three speeds against the printed speed, not an observable at a condition)",
         );
@@ -618,7 +619,6 @@ fn summary_json(
         "conditions": s.conditions,
         "chi2_rows": s.chi2_rows,
         "chi2_priors": s.chi2_priors,
-        "chi2_power_peaks": s.chi2_power_peaks,
         "chi2": s.chi2_rows + s.chi2_priors + s.chi2_power_peaks,
         "likelihood_chi2": stats.and_then(|st| st.likelihood_chi2),
         "chi2_motor_priors": s.chi2_motor_priors,
@@ -626,6 +626,11 @@ fn summary_json(
         "prior_chi2": stats.and_then(|st| st.prior_chi2),
         "not_carried": not_carried,
     });
+    let mut doc = doc;
+    if has_peaks {
+        // Stated only where a page has the term, so that other exports read as before.
+        doc["chi2_power_peaks"] = s.chi2_power_peaks.into();
+    }
     serde_json::to_string_pretty(&doc).expect("plain data") + "\n"
 }
 

@@ -200,7 +200,8 @@ impl CostModel {
         let peaks: Vec<PowerPeak> = ds
             .experiments
             .iter()
-            .filter_map(|data| PowerPeak::of(data, ds.p_atm_pa))
+            .enumerate()
+            .filter_map(|(e, data)| PowerPeak::of(data, e))
             .collect();
         for data in &ds.experiments {
             let experiment = Experiment::new(data, ds.p_atm_pa)?;
@@ -255,11 +256,8 @@ impl CostModel {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let mut channels = Vec::new();
         let mut total = 0.0;
-        for (ex, sim) in self
-            .experiments
-            .iter()
-            .zip(self.simulate_all(motor, solver))
-        {
+        let sims = self.simulate_all(motor, solver);
+        for (ex, sim) in self.experiments.iter().zip(&sims) {
             let sim = match sim {
                 Ok(s) => s,
                 Err(e) => return self.failed(e.to_string(), channels),
@@ -307,7 +305,7 @@ impl CostModel {
             }
         }
         for peak in &self.peaks {
-            match self.peak_cost(peak, motor) {
+            match simulated(&sims, peak).and_then(|sim| peak_cost(peak, sim)) {
                 Ok(c) => {
                     total += c.cost;
                     channels.push(c);
@@ -343,21 +341,6 @@ impl CostModel {
         } else {
             self.experiments.iter().map(one).collect()
         }
-    }
-
-    /// A page's power-peak term of J: w_e·r² ([`super::peak`]).
-    fn peak_cost(&self, peak: &PowerPeak, motor: &Motor) -> Result<ChannelCost, SimError> {
-        let r = peak.residual(peak.simulate(motor)?);
-        Ok(ChannelCost {
-            experiment_kind: Kind::Catalogue,
-            file: peak.file.clone(),
-            channel: Quantity::Speed,
-            column: PEAK_COLUMN.into(),
-            weight: peak.weight,
-            rms_normalized: r.abs(),
-            n: 1,
-            cost: peak.weight * r * r,
-        })
     }
 
     fn failed(&self, message: String, channels: Vec<ChannelCost>) -> CostValue {
@@ -441,13 +424,10 @@ impl CostModel {
         solver: &dyn StiffSolver,
         rows_of: impl Fn(usize, &'a Channel) -> &'a [usize],
     ) -> Result<Vec<Vec<f64>>, SimError> {
-        let mut out = Vec::with_capacity(self.n_channels());
-        for (ex, sim) in self
-            .experiments
-            .iter()
-            .zip(self.simulate_all(motor, solver))
-        {
-            let sim = sim?;
+        let mut out = Vec::with_capacity(self.n_channels() + self.peaks.len());
+        let sims = self.simulate_all(motor, solver);
+        for (ex, sim) in self.experiments.iter().zip(&sims) {
+            let sim = sim.as_ref().map_err(Clone::clone)?;
             for ch in &ex.channels {
                 let values = channel_values(&sim, ch)?;
                 let rows = rows_of(out.len(), ch);
@@ -459,7 +439,7 @@ impl CostModel {
             }
         }
         for peak in &self.peaks {
-            out.push(vec![peak.simulate(motor)?]);
+            out.push(vec![peak.peak_speed(simulated(&sims, peak)?)?]);
         }
         Ok(out)
     }
@@ -501,6 +481,37 @@ impl CostModel {
     pub fn failures(&self) -> u64 {
         self.failures.load(Ordering::Relaxed)
     }
+}
+
+/// The simulation of a power peak's page among every experiment's (`sims`, in rig.toml
+/// order).
+fn simulated<'a>(
+    sims: &'a [Result<Simulated, SimError>],
+    peak: &PowerPeak,
+) -> Result<&'a Simulated, SimError> {
+    match sims.get(peak.experiment) {
+        Some(Ok(s)) => Ok(s),
+        Some(Err(e)) => Err(e.clone()),
+        None => Err(SimError::NoChannel {
+            experiment: peak.file.clone(),
+            column: PEAK_COLUMN.into(),
+        }),
+    }
+}
+
+/// A page's power-peak term of J: w_e·r² ([`super::peak`]), from its page's simulation.
+fn peak_cost(peak: &PowerPeak, sim: &Simulated) -> Result<ChannelCost, SimError> {
+    let r = peak.residual(peak.peak_speed(sim)?);
+    Ok(ChannelCost {
+        experiment_kind: Kind::Catalogue,
+        file: peak.file.clone(),
+        channel: Quantity::Speed,
+        column: PEAK_COLUMN.into(),
+        weight: peak.weight,
+        rms_normalized: r.abs(),
+        n: 1,
+        cost: peak.weight * r * r,
+    })
 }
 
 /// At most `max` of `items`, evenly spaced and including the first and the last.

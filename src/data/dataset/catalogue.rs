@@ -448,17 +448,13 @@ pub(super) fn figure_rows(figures: &[Figure]) -> Vec<([Cell<'_>; 4], u64)> {
     rows.into_iter().map(|(r, l)| (r, l.unwrap_or(1))).collect()
 }
 
-/// The recording row where the page says the model's power peaks: its max-power row, when
-/// the page prints `max_power` at `speed_at_max_power` (a maker measures the power curve and
-/// prints its maximum and where it lies, so the printed speed is a condition on the curve's
-/// shape, dP/dω = 0 there, not only a speed to compare at). `None` when the page prints no
-/// max power or no speed for it. The figure rows follow the curve rows
-/// ([`figure_rows`], [`recording`]), so the row is counted from the recording's end.
+/// The recording row where the page says the model's power peaks: its max-power row, on a
+/// page whose power peak the catalogue sweep places (`sim::experiment::catalogue::
+/// power_peak_speed`: `max_power` printed at `speed_at_max_power`). `None` on any other
+/// page. The figure rows follow the curve rows ([`figure_rows`], [`recording`]), so the row
+/// is counted from the recording's end.
 pub(crate) fn power_peak_row(ex: &ExperimentData) -> Option<usize> {
-    let printed = |k: &str| ex.figures.iter().any(|f| f.key == k);
-    if !(printed("max_power") && printed("speed_at_max_power")) {
-        return None;
-    }
+    crate::sim::experiment::catalogue::power_peak_speed(&ex.figures)?;
     let rows = figure_rows(&ex.figures);
     let at = rows.iter().position(|(cells, _)| {
         cells[0].is_some_and(|(_, f)| f.is_some_and(|f| f.key == "speed_at_max_power"))
