@@ -200,11 +200,9 @@ impl FitLikelihood {
         let older = stats.likelihood_chi2.is_none();
         let target = data.target_at(&motor);
         let factors: Vec<f64> = data
-            .smoothed
-            .references()
-            .map(|r| {
-                number(&stats.widened_noise, &format!("{} {}", r.file, r.column)).unwrap_or(1.0)
-            })
+            .labels()
+            .iter()
+            .map(|label| number(&stats.widened_noise, label).unwrap_or(1.0))
             .collect();
         let target = target.widened(&factors);
         let dims = fit
