@@ -429,7 +429,7 @@ impl CostModel {
         for (ex, sim) in self.experiments.iter().zip(&sims) {
             let sim = sim.as_ref().map_err(Clone::clone)?;
             for ch in &ex.channels {
-                let values = channel_values(&sim, ch)?;
+                let values = channel_values(sim, ch)?;
                 let rows = rows_of(out.len(), ch);
                 out.push(
                     rows.iter()

@@ -7,7 +7,9 @@ pub(crate) mod nuisance;
 pub(crate) mod peak;
 pub(crate) mod reference;
 
-pub use cost::{ChannelCost, PEAK_COLUMN, ChannelResiduals, CostError, CostModel, CostOptions, CostValue};
+pub use cost::{
+    ChannelCost, ChannelResiduals, CostError, CostModel, CostOptions, CostValue, PEAK_COLUMN,
+};
 pub use likelihood::{ChannelTarget, InputSmoothing, Target};
 pub use nuisance::{Nuisance, Nuisances};
 pub use reference::{

@@ -450,13 +450,12 @@ impl FitLikelihood {
         let chi2_power_peaks = r[start..n_points].iter().map(|v| v * v).sum();
         let chi2_prior = r[n_points..].iter().map(|v| v * v).sum();
         let nuisances = match self.target.nuisances() {
-            Some(n) => {
-                n.items()
-                    .iter()
-                    .zip(beta)
-                    .map(|(it, (label, b))| (label, b, it.prior_sd))
-                    .collect()
-            }
+            Some(n) => n
+                .items()
+                .iter()
+                .zip(beta)
+                .map(|(it, (label, b))| (label, b, it.prior_sd))
+                .collect(),
             None => Vec::new(),
         };
         Ok(Breakdown {

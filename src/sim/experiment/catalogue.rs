@@ -89,8 +89,8 @@ pub fn power_peak_speed(figures: &[Figure]) -> Option<f64> {
 /// `None` where the parabola has no maximum (y₀ − 2y₁ + y₂ ≥ 0) or a value is not finite.
 pub fn parabola_vertex(x0: f64, dx: f64, y: [f64; 3]) -> Option<f64> {
     let curvature = y[0] - 2.0 * y[1] + y[2];
-    // Written so that a NaN curvature is refused too.
-    if !(curvature < 0.0) {
+    // A NaN curvature is refused too.
+    if curvature.is_nan() || curvature >= 0.0 {
         return None;
     }
     let x = x0 + dx * (y[0] - y[2]) / (2.0 * curvature);
