@@ -130,15 +130,20 @@ pub struct PetabSummary {
     pub chi2_rows: f64,
     /// Σ(β̂/τ)² of the nuisances' priors at their nominal values.
     pub chi2_priors: f64,
+    /// Σ r² of the pages' power-peak terms at the fit (docs/model.md, "Cost J"): part of
+    /// the fit's likelihood that no PEtab table carries (it compares the vertex of the
+    /// power at three speeds, not an observable at a condition).
+    pub chi2_power_peaks: f64,
     /// χ²_prior of the motor prior at the fit (the parameter table's `parameterScaleNormal`
     /// priors at the nominal values; 0 for a fit made without priors).
     pub chi2_motor_priors: f64,
 }
 
 impl PetabSummary {
-    /// The fit's objective at its estimate: rows + nuisance priors + motor priors.
+    /// The fit's objective at its estimate: rows + nuisance priors + power peaks + motor
+    /// priors.
     pub fn objective(&self) -> f64 {
-        self.chi2_rows + self.chi2_priors + self.chi2_motor_priors
+        self.chi2_rows + self.chi2_priors + self.chi2_power_peaks + self.chi2_motor_priors
     }
 }
 
@@ -198,6 +203,7 @@ pub fn tables(
         conditions: conditions.len(),
         chi2_rows: b.chi2_data,
         chi2_priors: b.chi2_prior,
+        chi2_power_peaks: b.chi2_power_peaks,
         chi2_motor_priors,
     };
     let t = PetabTables {
@@ -590,6 +596,13 @@ fn summary_json(
         "recorded inputs as time functions (a transient experiment is one condition driven by its recording)",
         "the fitting cost J (per-channel means and reference polynomials)",
     ];
+    let peak = |(i, e)| crate::objective::peak::PowerPeak::of(e, i).is_some();
+    let has_peaks = ds.experiments.iter().enumerate().any(peak);
+    if has_peaks {
+        not_carried.push(
+            "the power-peak term of a page that prints max power at a speed (chi2_power_peaks: the vertex of the power at three speeds against the printed speed, not an observable at a condition)",
+        );
+    }
     let v_disp = ParamId::V_DISP.name();
     if likelihood.names().iter().any(|n| n == v_disp) && !likelihood.prior_terms().is_empty() {
         not_carried.push(
@@ -606,13 +619,18 @@ fn summary_json(
         "conditions": s.conditions,
         "chi2_rows": s.chi2_rows,
         "chi2_priors": s.chi2_priors,
-        "chi2": s.chi2_rows + s.chi2_priors,
+        "chi2": s.chi2_rows + s.chi2_priors + s.chi2_power_peaks,
         "likelihood_chi2": stats.and_then(|st| st.likelihood_chi2),
         "chi2_motor_priors": s.chi2_motor_priors,
         "objective": s.objective(),
         "prior_chi2": stats.and_then(|st| st.prior_chi2),
         "not_carried": not_carried,
     });
+    let mut doc = doc;
+    if has_peaks {
+        // Stated only where a page has the term, so that other exports read as before.
+        doc["chi2_power_peaks"] = s.chi2_power_peaks.into();
+    }
     serde_json::to_string_pretty(&doc).expect("plain data") + "\n"
 }
 

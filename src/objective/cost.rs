@@ -19,6 +19,11 @@
 //! the number of rows or the units. Rows are compared in recording order; at most
 //! [`CostOptions::max_points_per_channel`] of them, evenly spaced.
 //!
+//! A catalogue page that prints its max power at a speed adds one term more, after every
+//! channel: w_e·r² with r the distance of the model's power peak from the printed speed in
+//! reading tolerances ([`super::peak`]); it is listed among the channels as
+//! [`PEAK_COLUMN`].
+//!
 //! J never is NaN, infinite or an error: a simulation that fails, or a cost that is not
 //! finite, gives the constant [`FAILURE_PENALTY`] (far above the cost of any completed
 //! simulation: a residual of 10⁴σ on every point of ten channels gives 1e9) and is counted
@@ -28,6 +33,7 @@
 use crate::data::dataset::{DataError, Dataset, Kind};
 use crate::model::motor::Motor;
 use crate::numerics::ode::StiffSolver;
+use crate::objective::peak::PowerPeak;
 use crate::objective::reference::{
     experiment_references, ChannelReference, Reference, ReferenceOptions,
 };
@@ -35,6 +41,10 @@ use crate::sim::experiment::{Experiment, SimError, Simulated};
 use crate::units::Quantity;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The column name under which a page's power-peak term ([`super::peak`]) is listed among
+/// the channels of a cost.
+pub const PEAK_COLUMN: &str = "power peak at speed_at_max_power";
 
 /// Cost given to a failed simulation or a non-finite cost (dimensionless, like J).
 pub const FAILURE_PENALTY: f64 = 1e10;
@@ -176,6 +186,8 @@ pub(crate) fn compared_rows(abscissa: &[f64], reference: &Reference, values: &[f
 #[derive(Debug)]
 pub struct CostModel {
     experiments: Vec<ExperimentCost>,
+    /// Each page's power-peak condition, compared after every channel.
+    peaks: Vec<PowerPeak>,
     n_points: usize,
     evaluations: AtomicU64,
     failures: AtomicU64,
@@ -185,6 +197,12 @@ impl CostModel {
     /// Builds every experiment's inputs and every channel's reference.
     pub fn new(ds: &Dataset, options: CostOptions) -> Result<CostModel, CostError> {
         let mut experiments = Vec::with_capacity(ds.experiments.len());
+        let peaks: Vec<PowerPeak> = ds
+            .experiments
+            .iter()
+            .enumerate()
+            .filter_map(|(e, data)| PowerPeak::of(data, e))
+            .collect();
         for data in &ds.experiments {
             let experiment = Experiment::new(data, ds.p_atm_pa)?;
             let abscissa = experiment.abscissa();
@@ -222,9 +240,11 @@ impl CostModel {
             .iter()
             .flat_map(|e| &e.channels)
             .map(|c| c.rows.len())
-            .sum();
+            .sum::<usize>()
+            + peaks.len();
         Ok(CostModel {
             experiments,
+            peaks,
             n_points,
             evaluations: AtomicU64::new(0),
             failures: AtomicU64::new(0),
@@ -236,11 +256,8 @@ impl CostModel {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let mut channels = Vec::new();
         let mut total = 0.0;
-        for (ex, sim) in self
-            .experiments
-            .iter()
-            .zip(self.simulate_all(motor, solver))
-        {
+        let sims = self.simulate_all(motor, solver);
+        for (ex, sim) in self.experiments.iter().zip(&sims) {
             let sim = match sim {
                 Ok(s) => s,
                 Err(e) => return self.failed(e.to_string(), channels),
@@ -285,6 +302,15 @@ impl CostModel {
                     return self.failed(msg, channels);
                 }
                 total += cost;
+            }
+        }
+        for peak in &self.peaks {
+            match simulated(&sims, peak).and_then(|sim| peak_cost(peak, sim)) {
+                Ok(c) => {
+                    total += c.cost;
+                    channels.push(c);
+                }
+                Err(e) => return self.failed(e.to_string(), channels),
             }
         }
         if !total.is_finite() {
@@ -363,7 +389,8 @@ impl CostModel {
     }
 
     /// The simulated values at every channel's compared rows, SI, in channel order (the lean
-    /// part of [`CostModel::residuals`], for likelihoods evaluated thousands of times).
+    /// part of [`CostModel::residuals`], for likelihoods evaluated thousands of times),
+    /// followed by each page's power peak ω_m, rad/s, one value each ([`CostModel::peaks`]).
     pub(crate) fn simulated_rows(
         &self,
         motor: &Motor,
@@ -397,15 +424,12 @@ impl CostModel {
         solver: &dyn StiffSolver,
         rows_of: impl Fn(usize, &'a Channel) -> &'a [usize],
     ) -> Result<Vec<Vec<f64>>, SimError> {
-        let mut out = Vec::with_capacity(self.n_channels());
-        for (ex, sim) in self
-            .experiments
-            .iter()
-            .zip(self.simulate_all(motor, solver))
-        {
-            let sim = sim?;
+        let mut out = Vec::with_capacity(self.n_channels() + self.peaks.len());
+        let sims = self.simulate_all(motor, solver);
+        for (ex, sim) in self.experiments.iter().zip(&sims) {
+            let sim = sim.as_ref().map_err(Clone::clone)?;
             for ch in &ex.channels {
-                let values = channel_values(&sim, ch)?;
+                let values = channel_values(sim, ch)?;
                 let rows = rows_of(out.len(), ch);
                 out.push(
                     rows.iter()
@@ -414,7 +438,16 @@ impl CostModel {
                 );
             }
         }
+        for peak in &self.peaks {
+            out.push(vec![peak.peak_speed(simulated(&sims, peak)?)?]);
+        }
         Ok(out)
+    }
+
+    /// Each page's power-peak condition, in rig.toml order: compared after every channel
+    /// (the trailing entries of [`CostModel::simulated_rows`]).
+    pub(crate) fn peaks(&self) -> &[PowerPeak] {
+        &self.peaks
     }
 
     /// Every channel's reference, in experiment and channel order.
@@ -448,6 +481,37 @@ impl CostModel {
     pub fn failures(&self) -> u64 {
         self.failures.load(Ordering::Relaxed)
     }
+}
+
+/// The simulation of a power peak's page among every experiment's (`sims`, in rig.toml
+/// order).
+fn simulated<'a>(
+    sims: &'a [Result<Simulated, SimError>],
+    peak: &PowerPeak,
+) -> Result<&'a Simulated, SimError> {
+    match sims.get(peak.experiment) {
+        Some(Ok(s)) => Ok(s),
+        Some(Err(e)) => Err(e.clone()),
+        None => Err(SimError::NoChannel {
+            experiment: peak.file.clone(),
+            column: PEAK_COLUMN.into(),
+        }),
+    }
+}
+
+/// A page's power-peak term of J: w_e·r² ([`super::peak`]), from its page's simulation.
+fn peak_cost(peak: &PowerPeak, sim: &Simulated) -> Result<ChannelCost, SimError> {
+    let r = peak.residual(peak.peak_speed(sim)?);
+    Ok(ChannelCost {
+        experiment_kind: Kind::Catalogue,
+        file: peak.file.clone(),
+        channel: Quantity::Speed,
+        column: PEAK_COLUMN.into(),
+        weight: peak.weight,
+        rms_normalized: r.abs(),
+        n: 1,
+        cost: peak.weight * r * r,
+    })
 }
 
 /// At most `max` of `items`, evenly spaced and including the first and the last.

@@ -219,7 +219,8 @@ pub(crate) fn smooth_inputs(ds: &Dataset) -> (Dataset, Vec<InputSmoothing>) {
 
 impl Target {
     /// The compared rows of every channel of `cost` (built from `ds`), the recorded values
-    /// there and each channel's noise.
+    /// there and each channel's noise, then each page's power peak (`super::peak`: the
+    /// printed speed at max power and its reading tolerance).
     pub fn new(cost: &CostModel, ds: &Dataset) -> Result<Self, CostError> {
         let mut channels = Vec::new();
         for ex in cost.experiments() {
@@ -254,6 +255,15 @@ impl Target {
                 });
             }
         }
+        // Each page's power peak, after every channel as the cost simulates it.
+        channels.extend(cost.peaks().iter().map(|p| ChannelTarget {
+            file: p.file.clone(),
+            quantity: Quantity::Speed,
+            rows: vec![p.row],
+            data: vec![p.speed_rad_s],
+            sigma: p.sigma_rad_s,
+            stated: true,
+        }));
         Ok(Self {
             channels,
             nuisances: None,

@@ -4,9 +4,12 @@
 pub(crate) mod cost;
 pub(crate) mod likelihood;
 pub(crate) mod nuisance;
+pub(crate) mod peak;
 pub(crate) mod reference;
 
-pub use cost::{ChannelCost, ChannelResiduals, CostError, CostModel, CostOptions, CostValue};
+pub use cost::{
+    ChannelCost, ChannelResiduals, CostError, CostModel, CostOptions, CostValue, PEAK_COLUMN,
+};
 pub use likelihood::{ChannelTarget, InputSmoothing, Target};
 pub use nuisance::{Nuisance, Nuisances};
 pub use reference::{

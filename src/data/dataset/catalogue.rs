@@ -11,7 +11,7 @@
 //! starting torque.
 
 use super::{key_location, located, DataError, Table};
-use crate::sim::recording::{Column, Figure, Recording};
+use crate::sim::recording::{Column, ExperimentData, Figure, Recording};
 use crate::units::{unit_of, Quantity, Unit};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -446,6 +446,21 @@ pub(super) fn figure_rows(figures: &[Figure]) -> Vec<([Cell<'_>; 4], u64)> {
         rows.push(([Some(w), Some((0.0, None)), None, a], line("free_speed")));
     }
     rows.into_iter().map(|(r, l)| (r, l.unwrap_or(1))).collect()
+}
+
+/// The recording row where the page says the model's power peaks: its max-power row, on a
+/// page whose power peak the catalogue sweep places (`sim::experiment::catalogue::
+/// power_peak_speed`: `max_power` printed at `speed_at_max_power`). `None` on any other
+/// page. The figure rows follow the curve rows ([`figure_rows`], [`recording`]), so the row
+/// is counted from the recording's end.
+pub(crate) fn power_peak_row(ex: &ExperimentData) -> Option<usize> {
+    crate::sim::experiment::catalogue::power_peak_speed(&ex.figures)?;
+    let rows = figure_rows(&ex.figures);
+    let at = rows.iter().position(|(cells, _)| {
+        cells[0].is_some_and(|(_, f)| f.is_some_and(|f| f.key == "speed_at_max_power"))
+    })?;
+    let n_curve_rows = ex.recording.rows().checked_sub(rows.len())?;
+    Some(n_curve_rows + at)
 }
 
 /// The catalogue's recording: the curve rows (if a file is given) followed by the figure

@@ -126,12 +126,15 @@ pub struct Breakdown {
     pub chi2_data: f64,
     /// Σ (β̂/τ)² over the nuisances.
     pub chi2_prior: f64,
+    /// Σ r² of the pages' power-peak terms (`objective::peak`): a condition on the power
+    /// curve's shape, in no channel's rows.
+    pub chi2_power_peaks: f64,
 }
 
 impl Breakdown {
-    /// χ² = `chi2_data` + `chi2_prior`.
+    /// χ² = `chi2_data` + `chi2_prior` + `chi2_power_peaks`.
     pub fn chi2(&self) -> f64 {
-        self.chi2_data + self.chi2_prior
+        self.chi2_data + self.chi2_prior + self.chi2_power_peaks
     }
 }
 
@@ -197,11 +200,9 @@ impl FitLikelihood {
         let older = stats.likelihood_chi2.is_none();
         let target = data.target_at(&motor);
         let factors: Vec<f64> = data
-            .smoothed
-            .references()
-            .map(|r| {
-                number(&stats.widened_noise, &format!("{} {}", r.file, r.column)).unwrap_or(1.0)
-            })
+            .labels()
+            .iter()
+            .map(|label| number(&stats.widened_noise, label).unwrap_or(1.0))
             .collect();
         let target = target.widened(&factors);
         let dims = fit
@@ -413,6 +414,9 @@ impl FitLikelihood {
         if r.iter().any(|v| !v.is_finite()) {
             return Err(FitLikelihoodError::Simulation);
         }
+        // The channels' rows, then the pages' power peaks (which have no reference).
+        let beta = self.target.nuisance_estimates(&simulated);
+        let n_points = self.target.n_points();
         let shapes: Vec<&[f64]> = self
             .target
             .nuisances()
@@ -443,21 +447,15 @@ impl FitLikelihood {
             })
             .collect();
         let chi2_data = r[..start].iter().map(|v| v * v).sum();
-        let chi2_prior = r[start..].iter().map(|v| v * v).sum();
+        let chi2_power_peaks = r[start..n_points].iter().map(|v| v * v).sum();
+        let chi2_prior = r[n_points..].iter().map(|v| v * v).sum();
         let nuisances = match self.target.nuisances() {
-            Some(n) => {
-                let beta = self.target.nuisance_estimates(
-                    &channels
-                        .iter()
-                        .map(|c| c.simulated.clone())
-                        .collect::<Vec<_>>(),
-                );
-                n.items()
-                    .iter()
-                    .zip(beta)
-                    .map(|(it, (label, b))| (label, b, it.prior_sd))
-                    .collect()
-            }
+            Some(n) => n
+                .items()
+                .iter()
+                .zip(beta)
+                .map(|(it, (label, b))| (label, b, it.prior_sd))
+                .collect(),
             None => Vec::new(),
         };
         Ok(Breakdown {
@@ -465,6 +463,7 @@ impl FitLikelihood {
             nuisances,
             chi2_data,
             chi2_prior,
+            chi2_power_peaks,
         })
     }
 }

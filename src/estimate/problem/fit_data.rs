@@ -104,18 +104,34 @@ impl FitData {
             .ok()
     }
 
-    /// Each channel's χ² under the likelihood of `target`, from [`FitData::simulate`]'s values.
+    /// Each channel's χ² under the likelihood of `target`, from [`FitData::simulate`]'s values,
+    /// then each page's power-peak term (one row each), labelled as [`FitData::labels`].
     pub(crate) fn channel_chi2(&self, target: &Target, simulated: &[Vec<f64>]) -> Vec<ChannelChi2> {
-        self.smoothed
-            .references()
+        self.labels()
+            .into_iter()
             .zip(simulated)
             .zip(target.channel_chi2(simulated))
-            .map(|((r, s), c)| ChannelChi2 {
-                label: format!("{} {}", r.file, r.column),
+            .map(|((label, s), c)| ChannelChi2 {
+                label,
                 chi2: c,
                 n: s.len(),
             })
             .collect()
+    }
+
+    /// The label of every compared channel ("file column"), then of each page's power-peak
+    /// term ("file power peak at speed_at_max_power"), in the likelihood's order.
+    pub(crate) fn labels(&self) -> Vec<String> {
+        let channels = self
+            .smoothed
+            .references()
+            .map(|r| format!("{} {}", r.file, r.column));
+        let peaks = self
+            .smoothed
+            .peaks()
+            .iter()
+            .map(|p| format!("{} {}", p.file, crate::objective::PEAK_COLUMN));
+        channels.chain(peaks).collect()
     }
 }
 

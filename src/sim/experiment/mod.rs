@@ -86,6 +86,15 @@ pub enum SimError {
         /// The recorded column's name.
         column: String,
     },
+    /// A catalogue page prints its max power at a speed, and the model's power is not
+    /// concave there (no maximum to place at that speed).
+    #[error("simulating {experiment}: the model's power has no maximum near the printed speed at max power ({speed_rpm:.0} rpm)")]
+    NoPowerPeak {
+        /// Recording file name as given in rig.toml.
+        experiment: String,
+        /// The printed speed at max power, rpm.
+        speed_rpm: f64,
+    },
     /// No free-running speed (of a synthetic dataset's motor).
     #[error("simulating free speed: {0}")]
     FreeSpeed(#[source] SteadyError),
@@ -103,7 +112,8 @@ impl SimError {
             | Self::SteadyRow { experiment, .. }
             | Self::InitialState { experiment, .. }
             | Self::Solve { experiment, .. }
-            | Self::NoChannel { experiment, .. } => experiment,
+            | Self::NoChannel { experiment, .. }
+            | Self::NoPowerPeak { experiment, .. } => experiment,
             Self::FreeSpeed(_) => "free speed",
         }
     }
