@@ -42,7 +42,7 @@ use crate::units::Quantity;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// The column name under which a page's power-peak term ([`super::peak`]) is listed among
+/// The column name under which a page's power-peak term (`objective::peak`) is listed among
 /// the channels of a cost.
 pub const PEAK_COLUMN: &str = "power peak at speed_at_max_power";
 
