@@ -11,8 +11,9 @@ use vanefit::task::petab_problem;
 pub(crate) struct ExportPetabArgs {
     /// Fit file written by `vanefit fit` (vanefit.fit/1).
     pub(crate) fit: PathBuf,
-    /// The dataset the fit was made from; omitted: `measurements/<its name>` beside the fit
-    /// file's folder, or in the current folder.
+    /// The dataset the fit was made from; omitted: the one the fit file records
+    /// (`dataset_path`), else `measurements/<its name>` beside the fit file's folder, or in
+    /// the current folder (as predict finds it).
     #[arg(long)]
     pub(crate) dataset: Option<PathBuf>,
     /// Output folder: parameters.tsv, observables.tsv, measurements.tsv, conditions.tsv,

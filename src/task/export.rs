@@ -4,6 +4,7 @@
 
 use crate::data::dataset::{DataError, Dataset};
 use crate::data::fitfile::{FitFile, FitFileError};
+use crate::data::locate::{locate_dataset, Located};
 use crate::export::petab::{self, PetabError, PetabSummary, PetabTables};
 use crate::task::Opt;
 use std::path::{Path, PathBuf};
@@ -65,29 +66,29 @@ impl ExportError {
     }
 }
 
-/// `measurements/<name>` beside the fit file's folder (fits/x.json → measurements/name),
-/// then in the current folder.
-fn find_dataset(fit: &Path, name: &str) -> Result<PathBuf, ExportError> {
-    let beside = fit
-        .parent()
-        .and_then(Path::parent)
-        .map(|p| p.join("measurements").join(name));
-    let here = Path::new("measurements").join(name);
-    let candidates: Vec<PathBuf> = beside.into_iter().chain([here]).collect();
-    candidates
-        .iter()
-        .find(|p| p.join("rig.toml").is_file())
-        .cloned()
-        .ok_or_else(|| ExportError::NoDataset {
-            fit: fit.display().to_string(),
-            name: name.to_string(),
-            tried: candidates
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-            option: Opt::ExportDataset,
-        })
+/// The dataset `fit` (read from `fit_path`) was made from, by the rule `predict` follows
+/// ([`crate::data::locate`]): its recorded `dataset_path`, else `measurements/<name>` beside
+/// the fit file's folder, then in the current folder.
+fn find_dataset(fit_path: &Path, fit: &FitFile) -> Result<PathBuf, ExportError> {
+    match locate_dataset(Some(fit_path), fit) {
+        Located::Found(dir, _) => Ok(dir),
+        Located::Missing { tried, recorded } => {
+            let mut tried: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
+            if tried.is_empty() {
+                tried.push("nothing (the fit file names no dataset)".into());
+            }
+            let mut tried = tried.join(", ");
+            if let Some(why) = recorded {
+                tried.push_str(&format!(" ({why})"));
+            }
+            Err(ExportError::NoDataset {
+                fit: fit_path.display().to_string(),
+                name: fit.dataset.clone(),
+                tried,
+                option: Opt::ExportDataset,
+            })
+        }
+    }
 }
 
 /// A fit as a PEtab problem, not yet written.
@@ -106,7 +107,7 @@ pub fn petab_problem(fit_path: &Path, dataset: Option<&Path>) -> Result<PetabPro
     let fit = FitFile::read(fit_path)?;
     let dir = match dataset {
         Some(d) => d.to_path_buf(),
-        None => find_dataset(fit_path, &fit.dataset)?,
+        None => find_dataset(fit_path, &fit)?,
     };
     let ds = Dataset::load(&dir)?;
     let (tables, summary) = petab::tables(&ds, &fit, fit_path)?;

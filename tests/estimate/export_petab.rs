@@ -348,6 +348,45 @@ fn export_refuses_bad_input_with_exit_status_1() {
     assert!(stderr(&o).contains("--out afile"));
 }
 
+/// Without `--dataset`, the export finds the dataset the fit file records (`dataset_path`)
+/// as `predict` does, also where no `measurements/` folder would lead to it; a recorded path
+/// that no longer holds the dataset is an error naming `--dataset`, exit status 1.
+#[test]
+fn export_finds_the_dataset_the_fit_file_records() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let data = d.join("rig-logs").join("ar034-synthetic-catalogue");
+    std::fs::create_dir_all(&data).unwrap();
+    for entry in std::fs::read_dir(CATALOGUE).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), data.join(entry.file_name())).unwrap();
+    }
+    std::fs::create_dir_all(d.join("fits").join("page")).unwrap();
+    let fit = d.join("fits").join("page").join("fit.json");
+    let o = vanefit(&[
+        "fit",
+        data.to_str().unwrap(),
+        "--starts",
+        "2",
+        "--no-plots",
+        "--out",
+        fit.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = vanefit_in(&["export-petab", "fits/page/fit.json", "--out", "petab"], d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join("petab").join("problem.yaml").is_file());
+    // The recorded folder gone: refused, naming the option that names a dataset.
+    std::fs::rename(&data, d.join("moved")).unwrap();
+    let o = vanefit_in(
+        &["export-petab", "fits/page/fit.json", "--out", "petab2"],
+        d,
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--dataset"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("dataset_path"), "{}", stderr(&o));
+}
+
 #[test]
 fn fit_file_profiles_round_trip_and_bad_ones_are_located() {
     let good = r#"{
