@@ -103,11 +103,8 @@ pub fn fit(
     observer.raise_callback_error()?;
     let mut run = run.map_err(fit_err)?;
     if let Some(o) = &out {
-        // As `vanefit fit` writes it: with the dataset's folder relative to the file's.
-        run.file.dataset_path = vanefit::data::locate::relative_dataset_path(&dataset, o);
-        run.file
-            .write(o)
-            .map_err(|e| VanefitError::new_err(format!("{}: {e}", o.display())))?;
+        // The Fit returned is the file written, its dataset_path included.
+        run.file = vanefit::task::write_fit_file(&run.file, &dataset, o).map_err(fit_err)?;
     }
     let starts: Vec<serde_json::Value> = run
         .outcome

@@ -656,6 +656,22 @@ pub fn write_fit(run: &Fit, out: &Path, plots: bool) -> Result<FitWritten, FitEr
     write_fit_to(run, &FitPaths::beside(out), plots)
 }
 
+/// Writes the fit file `file` to `out` with the folder of the dataset it was fitted to
+/// (`dataset_dir`) recorded relative to it (`dataset_path`), so that `predict` finds the
+/// dataset (`data::locate`) wherever the checkout is moved: as `vanefit fit` and Python's
+/// `fit(out=)` write it. Returns the file as written.
+pub fn write_fit_file(file: &FitFile, dataset_dir: &Path, out: &Path) -> Result<FitFile, FitError> {
+    let file = FitFile {
+        dataset_path: crate::data::locate::relative_dataset_path(dataset_dir, out),
+        ..file.clone()
+    };
+    file.write(out).map_err(|source| FitError::Write {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    Ok(file)
+}
+
 /// [`write_fit`] to paths resolved before the fit.
 pub fn write_fit_to(run: &Fit, paths: &FitPaths, plots: bool) -> Result<FitWritten, FitError> {
     let write_error = |path: &Path| {
@@ -663,13 +679,7 @@ pub fn write_fit_to(run: &Fit, paths: &FitPaths, plots: bool) -> Result<FitWritt
         move |source| FitError::Write { path, source }
     };
     let out = &paths.fit;
-    // The dataset's folder relative to the fit file's, so that `predict` finds it
-    // (`data::locate`) wherever the checkout is moved.
-    let file = FitFile {
-        dataset_path: crate::data::locate::relative_dataset_path(&run.dataset.dir, out),
-        ..run.file.clone()
-    };
-    file.write(out).map_err(write_error(out))?;
+    write_fit_file(&run.file, &run.dataset.dir, out)?;
     let mut written = FitWritten::default();
     if plots {
         // Predicted here, not by the report, which formats what it is given.

@@ -30,8 +30,8 @@ pub use diagnose::{
 pub use export::{export_fmu, petab_problem, ExportError, FmuExport, FmuOptions, PetabProblem};
 pub use fit::{
     displacement_first_line, displacement_start_line, fit, fit_to, page_displacement_of,
-    pinning_lines, write_fit, write_fit_to, Fit, FitError, FitObserver, FitOptions, FitPaths,
-    FitSettings, FitWritten, ParamRange, Pinning, RangeSyntax,
+    pinning_lines, write_fit, write_fit_file, write_fit_to, Fit, FitError, FitObserver, FitOptions,
+    FitPaths, FitSettings, FitWritten, ParamRange, Pinning, RangeSyntax,
 };
 pub use option::{Opt, OptionError};
 pub use predict::{
