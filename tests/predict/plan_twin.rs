@@ -211,9 +211,13 @@ struct Judged {
     promised_v: f64,
     achieved_v: f64,
     random_v: f64,
+    /// The random one's promised mean shrinkage and V.
+    random_promised: f64,
+    random_promised_v: f64,
     held: usize,
     bands: usize,
     top: String,
+    other: String,
 }
 
 /// Mean of 1 − half-width after/before in log space.
@@ -268,7 +272,18 @@ fn judge(seed: u64, band: (f64, f64), dir: &Path) -> Result<Judged, String> {
         })
         .count();
     let top = &ranked[0];
+    let name = |c: &Value| {
+        format!(
+            "{} at {:.0} bar g",
+            c["kind"].as_str().unwrap(),
+            (c["p_supply_pa"].as_f64().unwrap() - P_ATM_PA) / 1e5
+        )
+    };
     Ok(Judged {
+        random_promised: numbers(&ranked[other]["shrinkage"]).iter().sum::<f64>()
+            / before.len() as f64,
+        random_promised_v: ranked[other]["v_reduction"].as_f64().unwrap(),
+        other: name(&ranked[other]),
         promised: numbers(&top["shrinkage"]).iter().sum::<f64>() / before.len() as f64,
         achieved: mean_shrinkage(&before, &after[0]),
         random: mean_shrinkage(&before, &after[1]),
@@ -277,11 +292,7 @@ fn judge(seed: u64, band: (f64, f64), dir: &Path) -> Result<Judged, String> {
         random_v: v_achieved(&before, &after[1]),
         held,
         bands: before.len(),
-        top: format!(
-            "{} at {:.0} bar g",
-            top["kind"].as_str().unwrap(),
-            (top["p_supply_pa"].as_f64().unwrap() - P_ATM_PA) / 1e5
-        ),
+        top: name(top),
     })
 }
 
@@ -370,6 +381,29 @@ fn plan_twin_table() {
         *tops.entry(j.top.clone()).or_default() += 1;
     }
     writeln!(md, "\nRecommended: {tops:?}").unwrap();
+    md += "\n| band | seed | recommended | promised | achieved | V promised | V achieved | random | promised | achieved | V promised | V achieved | held |\n|---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+    for (b, seed, r) in &results {
+        if let Ok(j) = r {
+            let pc = |x: f64| format!("{:.0} %", 100.0 * x);
+            writeln!(
+                md,
+                "| {b} | {seed} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {}/{} |",
+                j.top,
+                pc(j.promised),
+                pc(j.achieved),
+                pc(j.promised_v),
+                pc(j.achieved_v),
+                j.other,
+                pc(j.random_promised),
+                pc(j.random),
+                pc(j.random_promised_v),
+                pc(j.random_v),
+                j.held,
+                j.bands
+            )
+            .unwrap();
+        }
+    }
     for (b, seed, r) in &results {
         if let Err(e) = r {
             writeln!(md, "- band {b} seed {seed} failed: {e}").unwrap();
