@@ -193,6 +193,8 @@ impl FitOutcome {
 /// coordinates θ: Σ_log = D·Σ_θ·D with D = diag(d ln v_j/dθ_j) at θ. With u = 1/(1 + e^(−θ))
 /// the position in the bounds, d ln v/dθ = (ln hi − ln lo)·u·(1 − u) on a log scale and
 /// (hi − lo)·u·(1 − u)/v on a linear one (`estimate::problem::space`). Symmetrised against rounding.
+/// A parameter without variance (one the curvature left out, on a bound of the search) is
+/// left out of it, since a fit file's covariance states positive variances only.
 /// `None` when the sizes disagree or a linearly placed parameter is not positive (it has no
 /// logarithm).
 fn log_covariance(space: &ParamSpace, theta: &[f64], cov: &DMatrix<f64>) -> Option<LogCovariance> {
@@ -215,15 +217,20 @@ fn log_covariance(space: &ParamSpace, theta: &[f64], cov: &DMatrix<f64>) -> Opti
             }
         })
         .collect::<Option<_>>()?;
-    let matrix = (0..k)
-        .map(|i| {
-            (0..k)
-                .map(|j| d[i] * 0.5 * (cov[(i, j)] + cov[(j, i)]) * d[j])
+    let held: Vec<usize> = (0..k)
+        .filter(|&i| d[i] * d[i] * cov[(i, i)] > 0.0)
+        .collect();
+    let matrix = held
+        .iter()
+        .map(|&i| {
+            held.iter()
+                .map(|&j| d[i] * 0.5 * (cov[(i, j)] + cov[(j, i)]) * d[j])
                 .collect()
         })
         .collect();
+    let names = space.names();
     Some(LogCovariance {
-        parameters: space.names(),
+        parameters: held.iter().map(|&i| names[i].clone()).collect(),
         matrix,
     })
 }
@@ -774,5 +781,15 @@ mod tests {
             }
         }
         assert!(log_covariance(&space, &theta[..1], &cov).is_none());
+        // b_crit without variance (on a bound, left out by the curvature): c_in1 alone.
+        let held = DMatrix::from_row_slice(2, 2, &[0.04, 0.0, 0.0, 0.0]);
+        let lc = log_covariance(&space, &theta, &held).unwrap();
+        assert_eq!(lc.parameters, vec!["c_in1"]);
+        let want = slope[0] * 0.04 * slope[0];
+        assert!(
+            (lc.matrix[0][0] - want).abs() < 1e-7 * want,
+            "{:?}",
+            lc.matrix
+        );
     }
 }

@@ -171,8 +171,11 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
 /// fit's H came out indefinite (twin seed 2 of the coverage test); first differences of the
 /// residuals divide the jitter by h only, and JᵀJ is positive semi-definite by
 /// construction. The term the Gauss–Newton form drops, Σ r·∇²r, averages out where the
-/// residuals are the data's noise. `None` when the curvature is not positive definite (a
-/// flat or ill-posed direction).
+/// residuals are the data's noise. A coordinate the residuals do not move at all (JᵀJ's
+/// diagonal 0 to rounding: a parameter pinned to a bound of the search, where the logistic
+/// coordinate's slope vanishes) has no variance and leaves the others' covariance to the
+/// rest ([`inverse_over_informed`]). `None` when the curvature is otherwise not positive
+/// definite (a flat or ill-posed direction).
 pub fn curvature_covariance<C: Coordinates + ?Sized>(
     problem: &Problem<'_, C>,
     theta: &[f64],
@@ -180,12 +183,45 @@ pub fn curvature_covariance<C: Coordinates + ?Sized>(
     scale2: f64,
 ) -> Option<DMatrix<f64>> {
     if let Some(jtj) = gauss_newton_curvature(problem, theta, h) {
-        return Some(jtj.cholesky()?.inverse() * scale2);
+        return inverse_over_informed(&jtj).map(|c| c * scale2);
     }
     let chi2 = |t: &[f64]| problem.evaluate(t).chi2;
     let hess = hessian(&chi2, theta, chi2(theta), h);
     let chol = hess.cholesky()?;
     Some(chol.inverse() * (2.0 * scale2))
+}
+
+/// Below this fraction of JᵀJ's largest diagonal entry a coordinate counts as one the
+/// residuals do not move (a saturated logistic coordinate gives exactly 0).
+const UNINFORMED: f64 = 1e-12;
+
+/// (JᵀJ)⁻¹, or where JᵀJ is singular because coordinates have a zero diagonal (the
+/// residuals do not depend on them), the inverse over the others with zero rows and columns
+/// for those: their variance is unknown, and the others' covariance is that of the fit with
+/// them held where they are. Without it, one parameter on a bound (a page's `b_crit` at 0.6)
+/// took the whole covariance away, and `predict` fell back to independent parameters with
+/// bands several times wider (docs/plan.md). `None` when what remains is not positive
+/// definite.
+fn inverse_over_informed(jtj: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    if let Some(c) = jtj.clone().cholesky() {
+        return Some(c.inverse());
+    }
+    let top = jtj.diagonal().max();
+    let keep: Vec<usize> = (0..jtj.nrows())
+        .filter(|&i| jtj[(i, i)] > UNINFORMED * top)
+        .collect();
+    if keep.len() == jtj.nrows() || keep.is_empty() {
+        return None;
+    }
+    let sub = DMatrix::from_fn(keep.len(), keep.len(), |a, b| jtj[(keep[a], keep[b])]);
+    let inv = sub.cholesky()?.inverse();
+    let mut out = DMatrix::zeros(jtj.nrows(), jtj.ncols());
+    for (a, &i) in keep.iter().enumerate() {
+        for (b, &j) in keep.iter().enumerate() {
+            out[(i, j)] = inv[(a, b)];
+        }
+    }
+    Some(out)
 }
 
 /// JᵀJ of the residual vector at θ, J by central differences of step `h`; `None` when the
@@ -457,4 +493,34 @@ fn profile_path(value: f64, below: &[ProfilePoint], above: &[ProfilePoint]) -> V
     path.extend_from_slice(above);
     path.sort_by(|a, b| a.value.total_cmp(&b.value));
     path
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// JᵀJ of two informed coordinates and a third the residuals do not move: the
+    /// covariance of the first two is the inverse of their 2×2 block (the fit with the third
+    /// held), the third has none; a regular JᵀJ is simply inverted.
+    #[test]
+    fn a_coordinate_the_residuals_ignore_leaves_the_others_covariance() {
+        let jtj = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0]);
+        let c = inverse_over_informed(&jtj).unwrap();
+        let det = 4.0 * 2.0 - 1.0;
+        let want = [[2.0 / det, -1.0 / det], [-1.0 / det, 4.0 / det]];
+        for a in 0..2 {
+            for b in 0..2 {
+                assert!((c[(a, b)] - want[a][b]).abs() < 1e-15, "{c}");
+            }
+            assert_eq!(c[(a, 2)], 0.0);
+            assert_eq!(c[(2, a)], 0.0);
+        }
+        assert_eq!(c[(2, 2)], 0.0);
+        let regular = DMatrix::from_row_slice(2, 2, &[4.0, 1.0, 1.0, 2.0]);
+        let inv = inverse_over_informed(&regular).unwrap();
+        assert!((&inv * &regular - DMatrix::identity(2, 2)).abs().max() < 1e-15);
+        // Singular among the informed ones: no covariance.
+        let flat = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+        assert!(inverse_over_informed(&flat).is_none());
+    }
 }
