@@ -11,6 +11,7 @@ mod page_coverage;
 mod page_pairs;
 mod plan_cli;
 mod plan_twin;
+mod plan_twin_rig;
 mod predict;
 mod sampled_bands;
 extern crate twin;

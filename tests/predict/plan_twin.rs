@@ -49,7 +49,7 @@ const OPERATING_BAR_G: [f64; 3] = [3.0, 4.0, 5.0];
 const TOLERANCE: f64 = 0.02;
 
 /// Runs the binary; its stdout, or what went wrong.
-fn run(args: &[&str]) -> Result<String, String> {
+pub(crate) fn run(args: &[&str]) -> Result<String, String> {
     let out = Command::new(vanefit_bin())
         .args(args)
         .output()
@@ -99,7 +99,7 @@ fn plan(fit: &Path, out: &Path) -> Result<Value, String> {
     serde_json::from_str(&text).map_err(|e| e.to_string())
 }
 
-fn numbers(v: &Value) -> Vec<f64> {
+pub(crate) fn numbers(v: &Value) -> Vec<f64> {
     v.as_array()
         .unwrap()
         .iter()
@@ -108,7 +108,7 @@ fn numbers(v: &Value) -> Vec<f64> {
 }
 
 /// The targets' 95 % bands of a plan.json.
-fn bands(p: &Value) -> Vec<[f64; 2]> {
+pub(crate) fn bands(p: &Value) -> Vec<[f64; 2]> {
     p["targets"]
         .as_array()
         .unwrap()
@@ -203,25 +203,25 @@ fn measured_page(
 
 /// What one motor gave.
 #[derive(Debug, Clone, Default)]
-struct Judged {
-    promised: f64,
-    achieved: f64,
-    random: f64,
+pub(crate) struct Judged {
+    pub promised: f64,
+    pub achieved: f64,
+    pub random: f64,
     /// V (the ranking's criterion) promised and achieved, and the random one's achieved.
-    promised_v: f64,
-    achieved_v: f64,
-    random_v: f64,
+    pub promised_v: f64,
+    pub achieved_v: f64,
+    pub random_v: f64,
     /// The random one's promised mean shrinkage and V.
-    random_promised: f64,
-    random_promised_v: f64,
-    held: usize,
-    bands: usize,
-    top: String,
-    other: String,
+    pub random_promised: f64,
+    pub random_promised_v: f64,
+    pub held: usize,
+    pub bands: usize,
+    pub top: String,
+    pub other: String,
 }
 
 /// Mean of 1 − half-width after/before in log space.
-fn mean_shrinkage(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
+pub(crate) fn mean_shrinkage(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
     let w = |b: &[f64; 2]| (b[1] / b[0]).ln();
     let s: f64 = before
         .iter()
@@ -233,7 +233,7 @@ fn mean_shrinkage(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
 
 /// V achieved: 1 − Σ w_after²/Σ w_before² with w = ln(hi/lo), each band's relative variance
 /// up to a common factor (the plan's V over the same figures).
-fn v_achieved(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
+pub(crate) fn v_achieved(before: &[[f64; 2]], after: &[[f64; 2]]) -> f64 {
     let ss = |b: &[[f64; 2]]| b.iter().map(|x| (x[1] / x[0]).ln().powi(2)).sum::<f64>();
     1.0 - ss(after) / ss(before)
 }
@@ -297,7 +297,7 @@ fn judge(seed: u64, band: (f64, f64), dir: &Path) -> Result<Judged, String> {
 }
 
 /// The median of `v` (NaN when empty).
-fn median(mut v: Vec<f64>) -> f64 {
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     match v.len() {
         0 => f64::NAN,
@@ -308,7 +308,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// One table line over `js`: motors, median promised, achieved, achieved/promised − 1,
 /// the random one's achieved, beats random; the same for V; truth held.
-fn line(label: &str, js: &[Judged]) -> String {
+pub(crate) fn line(label: &str, js: &[Judged]) -> String {
     let med = |f: &dyn Fn(&Judged) -> f64| median(js.iter().map(f).collect());
     let beats = js.iter().filter(|j| j.achieved > j.random).count();
     let beats_v = js.iter().filter(|j| j.achieved_v > j.random_v).count();
@@ -329,7 +329,33 @@ fn line(label: &str, js: &[Judged]) -> String {
     )
 }
 
-fn env_usize(key: &str, default: usize) -> usize {
+/// The header of the table of [`line`]s.
+pub(crate) const TABLE_HEADER: &str = "| size | motors | promised shrinkage (median) | achieved | achieved/promised − 1 (median) | random equal-cost measurement, achieved | recommendation beats random | V promised | V achieved | V achieved/promised − 1 | beats random in V | bands after holding the truth |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+
+/// The header of the per-motor lines.
+pub(crate) const MOTOR_HEADER: &str = "\n| band | seed | recommended | promised | achieved | V promised | V achieved | random | promised | achieved | V promised | V achieved | held |\n|---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+
+/// One motor's line: the recommended and the random measurement, each promised and achieved.
+pub(crate) fn motor_line(band: usize, seed: u64, j: &Judged) -> String {
+    let pc = |x: f64| format!("{:.0} %", 100.0 * x);
+    format!(
+        "| {band} | {seed} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {}/{} |\n",
+        j.top,
+        pc(j.promised),
+        pc(j.achieved),
+        pc(j.promised_v),
+        pc(j.achieved_v),
+        j.other,
+        pc(j.random_promised),
+        pc(j.random),
+        pc(j.random_promised_v),
+        pc(j.random_v),
+        j.held,
+        j.bands
+    )
+}
+
+pub(crate) fn env_usize(key: &str, default: usize) -> usize {
     std::env::var(key)
         .ok()
         .and_then(|v| v.parse().ok())
@@ -362,9 +388,7 @@ fn plan_twin_table() {
             })
             .collect()
     });
-    let mut md = String::from(
-        "| size | motors | promised shrinkage (median) | achieved | achieved/promised − 1 (median) | random equal-cost measurement, achieved | recommendation beats random | V promised | V achieved | V achieved/promised − 1 | beats random in V | bands after holding the truth |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-    );
+    let mut md = String::from(TABLE_HEADER);
     let mut all = Vec::new();
     for b in &bands {
         let js: Vec<Judged> = results
@@ -381,27 +405,10 @@ fn plan_twin_table() {
         *tops.entry(j.top.clone()).or_default() += 1;
     }
     writeln!(md, "\nRecommended: {tops:?}").unwrap();
-    md += "\n| band | seed | recommended | promised | achieved | V promised | V achieved | random | promised | achieved | V promised | V achieved | held |\n|---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+    md += MOTOR_HEADER;
     for (b, seed, r) in &results {
         if let Ok(j) = r {
-            let pc = |x: f64| format!("{:.0} %", 100.0 * x);
-            writeln!(
-                md,
-                "| {b} | {seed} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {}/{} |",
-                j.top,
-                pc(j.promised),
-                pc(j.achieved),
-                pc(j.promised_v),
-                pc(j.achieved_v),
-                j.other,
-                pc(j.random_promised),
-                pc(j.random),
-                pc(j.random_promised_v),
-                pc(j.random_v),
-                j.held,
-                j.bands
-            )
-            .unwrap();
+            md += &motor_line(*b, *seed, j);
         }
     }
     for (b, seed, r) in &results {

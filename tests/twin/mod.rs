@@ -32,6 +32,6 @@ pub use cases::{perturbed_motor, perturbed_motor_within, varied_config, CALIBRAT
 pub use experiment::Conditions;
 pub use motor::{Breakaway, SealLeakage, TwinMotor};
 pub use record::{
-    write_dataset, FlowUnit, NoiseSigmas, OffsetSpec, Offsets, PressureUnit, RecordConfig,
-    SpeedUnit, Units, WrittenDataset,
+    write_dataset, write_experiment, Experiment, FlowUnit, NoiseSigmas, OffsetSpec, Offsets,
+    PressureUnit, RecordConfig, SpeedUnit, Units, WrittenDataset,
 };

@@ -374,3 +374,71 @@ pub fn write_dataset(
         offsets: off,
     })
 }
+
+/// A reference experiment recorded on its own by [`write_experiment`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Experiment {
+    /// Torque and air at `datasheet_points` speeds from 0 to the free speed.
+    Datasheet,
+    /// Port 1 from atmosphere to the supply pressure, shaft on the brake.
+    PressureRamp,
+    /// The outlet throttle's sweep at the supply pressure, shaft on the brake.
+    OutletThrottle,
+}
+
+/// One more experiment on the rig of `cfg` (the same sensor offsets, a fresh noise draw from
+/// `seed`) under `cfg.conditions` (supply pressure, throttle range, datasheet points, rate),
+/// written as `dir/file` in the same columns as [`write_dataset`]'s; returns its
+/// `[[experiment]]` entry for rig.toml.
+pub fn write_experiment(
+    dir: &Path,
+    motor: &TwinMotor,
+    cfg: &RecordConfig,
+    seed: u64,
+    kind: Experiment,
+    file: &str,
+) -> io::Result<String> {
+    let c = &cfg.conditions;
+    let off = cfg.offsets.resolve();
+    let mut noise = Noise(Xoshiro256PlusPlus::seed_from_u64(seed));
+    let (u, sig) = (cfg.units, cfg.noise);
+    let p_mpa = c.p_supply_pa * 1e-6;
+    let load = format!(
+        "load = {{ kind = \"viscous_brake\", c_nm_s_rad = {:e} }}",
+        c.brake_nm_s_rad
+    );
+    let (csv, entry) = match kind {
+        Experiment::Datasheet => {
+            let rows = experiment::datasheet(motor, c).map_err(io::Error::other)?;
+            (
+                datasheet_csv(&rows, cfg, &mut noise),
+                format!("kind = \"datasheet\"\nfile = \"{file}\"\np_supply_mpa = {p_mpa}\n"),
+            )
+        }
+        Experiment::PressureRamp => {
+            let rows = experiment::pressure_ramp(motor, c).map_err(io::Error::other)?;
+            let mut p_in = |p_pa: f64, n: &mut Noise| {
+                u.pressure(p_pa + off.p_port1_pa + n.draw(sig.p_port1_pa)).1
+            };
+            let p_name = format!("p_port1_{}", u.pressure(0.0).0);
+            (
+                transient_csv(&rows, cfg, &off, &mut noise, (p_name, &mut p_in)),
+                format!("kind = \"pressure_ramp\"\nfile = \"{file}\"\n{load}\n"),
+            )
+        }
+        Experiment::OutletThrottle => {
+            let rows = experiment::outlet_throttle(motor, c).map_err(io::Error::other)?;
+            let mut c_in = |c: f64, n: &mut Noise| c * (1.0 + n.draw(sig.c_port2_rel));
+            let c_name = "c_port2_m3_s_pa".to_string();
+            (
+                transient_csv(&rows, cfg, &off, &mut noise, (c_name, &mut c_in)),
+                format!(
+                    "kind = \"outlet_throttle\"\nfile = \"{file}\"\np_supply_mpa = {p_mpa}\n{load}\n"
+                ),
+            )
+        }
+    };
+    std::fs::create_dir_all(dir)?;
+    std::fs::write(dir.join(file), csv.text())?;
+    Ok(format!("\n[[experiment]]\n{entry}"))
+}
