@@ -87,7 +87,8 @@ pub struct RunInfo {
 /// (`estimate::profile::uncertainty::curvature_covariance`, s² the intervals' scale) and
 /// D = diag(d ln v/dθ). Written as
 /// `{"space": "log", "parameters": [names], "matrix": [[...]]}`; `null` when a fit computed
-/// no intervals or the curvature was not positive definite. The profile intervals (`ci95`)
+/// no intervals or the curvature was not positive definite. A parameter on a bound of the
+/// search (no variance) is not listed. The profile intervals (`ci95`)
 /// are the better marginal widths; this matrix adds the correlations between parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LogCovariance {
