@@ -174,7 +174,7 @@ pub fn polish_chi2(problem: &Problem<'_>, theta: &[f64], max_iters: u64) -> (Vec
 /// residuals are the data's noise. A coordinate the residuals do not move at all (JᵀJ's
 /// diagonal 0 to rounding: a parameter pinned to a bound of the search, where the logistic
 /// coordinate's slope vanishes) has no variance and leaves the others' covariance to the
-/// rest ([`inverse_over_informed`]). `None` when the curvature is otherwise not positive
+/// rest (`inverse_over_informed`). `None` when the curvature is otherwise not positive
 /// definite (a flat or ill-posed direction).
 pub fn curvature_covariance<C: Coordinates + ?Sized>(
     problem: &Problem<'_, C>,
