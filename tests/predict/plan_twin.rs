@@ -430,3 +430,28 @@ fn the_recommended_measurement_narrows_the_bands_on_a_twin_page() {
     assert!(j.promised > 0.05, "{j:?}");
     assert!(j.achieved > 0.0, "{j:?}");
 }
+
+/// Twin page 107 (1–5 cm³): its refit with the key figures at 3 bar g puts `b_crit` on the
+/// upper bound of its search (0.6). The fit file still has a covariance (without `b_crit`),
+/// so the bands after are not the independent parameters' several-fold wider ones; before,
+/// the covariance was lost and the recommendation widened the bands by 200 %.
+#[test]
+fn a_refit_with_a_parameter_on_its_bound_keeps_the_others_covariance() {
+    let tmp = tempfile::tempdir().unwrap();
+    let j = judge(107, SIZE_BANDS_CM3[1], tmp.path()).unwrap();
+    let text = std::fs::read_to_string(tmp.path().join("fit-top.json")).unwrap();
+    let f: Value = serde_json::from_str(&text).unwrap();
+    let b_crit = f["parameters"]["b_crit"]["value"].as_f64().unwrap();
+    assert!(
+        b_crit > 0.599,
+        "b_crit {b_crit}: the case no longer tests a bound"
+    );
+    let names = f["covariance"]["parameters"]
+        .as_array()
+        .expect("a covariance");
+    assert!(
+        names.len() >= 8 && !names.iter().any(|n| n == "b_crit"),
+        "{names:?}"
+    );
+    assert!(j.achieved > -1.0, "{j:?}");
+}
