@@ -353,7 +353,12 @@ impl ParamUncertainty {
         let c_pp = DMatrix::from_fn(in_set.len(), in_set.len(), |a, b| {
             self.cov[(in_set[a], in_set[b])]
         });
-        let c_pp_inv = c_pp.clone().pseudo_inverse(1e-300).unwrap_or(c_pp * 0.0);
+        // An empty set removes nothing (and nalgebra's SVD panics on a 0×0 matrix).
+        let c_pp_inv = if in_set.is_empty() {
+            c_pp
+        } else {
+            c_pp.clone().pseudo_inverse(1e-300).unwrap_or(c_pp * 0.0)
+        };
         let shares = which
             .iter()
             .map(|&i| {
@@ -695,6 +700,14 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!((all[0].0 - 1.0).abs() < 1e-6, "{:?}", all[0]);
+        // An empty set removes nothing: share 0, each parameter's own share as before (a
+        // page whose figures rest on no prior parameter made `fit` panic here).
+        let none = u
+            .variance_shares(&f, 1, &[0], &[false, false], &y)
+            .unwrap()
+            .unwrap();
+        assert_eq!(none[0].0, 0.0);
+        assert!((none[0].1[1] - want).abs() < 1e-6, "{:?}", none[0]);
     }
 
     /// A positive figure with a spread wider than itself (a linear band would reach below
