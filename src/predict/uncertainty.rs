@@ -628,21 +628,35 @@ mod tests {
         let var_d = c11 + c22 - 2.0 * c12;
         let cov_d1 = c11 - c12;
         let want_sd = (var_d + 3.0 * cov_d1 * cov_d1 / c11).sqrt();
-        assert!((half(&u) - Z95 * want_sd).abs() < 1e-9, "{} vs {}", half(&u), Z95 * want_sd);
+        assert!(
+            (half(&u) - Z95 * want_sd).abs() < 1e-9,
+            "{} vs {}",
+            half(&u),
+            Z95 * want_sd
+        );
         let srs = ParamUncertainty::of(&f, None);
         assert_eq!(srs.names, vec!["c_in1"]);
         assert!((half(&srs) - Z95 * 0.2).abs() < 1e-9);
-        assert!(half(&u) < 0.3 * half(&srs), "{} vs {}", half(&u), half(&srs));
+        assert!(
+            half(&u) < 0.3 * half(&srs),
+            "{} vs {}",
+            half(&u),
+            half(&srs)
+        );
     }
 
     /// With several profile widths the sweeps bring every variance to its profile's and C
     /// stays positive definite.
     #[test]
     fn stretching_reaches_every_profile_width() {
-        let mut c = DMatrix::from_row_slice(3, 3, &[1.0, 0.9, -0.5, 0.9, 1.0, -0.3, -0.5, -0.3, 1.0]);
+        let mut c =
+            DMatrix::from_row_slice(3, 3, &[1.0, 0.9, -0.5, 0.9, 1.0, -0.3, -0.5, -0.3, 1.0]);
         let target = [Some(4.0), Some(0.5), None];
         stretch_to(&mut c, &target);
-        assert!((c[(0, 0)] - 4.0).abs() < 1e-8 && (c[(1, 1)] - 0.5).abs() < 1e-8, "{c}");
+        assert!(
+            (c[(0, 0)] - 4.0).abs() < 1e-8 && (c[(1, 1)] - 0.5).abs() < 1e-8,
+            "{c}"
+        );
         assert!(c.clone().cholesky().is_some(), "{c}");
     }
 
