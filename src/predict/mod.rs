@@ -330,12 +330,20 @@ pub fn predict_with(
     request: &BandRequest,
 ) -> Result<Prediction, PredictError> {
     let (centre, speeds) = centre_and_figures(fit, options)?;
-    let unc = ParamUncertainty::of(fit, options.fixed_spread);
+    // The delta bands' distribution, and the one the sampler starts from (and that sampled
+    // bands report): `uncertainty`'s module documentation.
+    let unc = ParamUncertainty::for_bands(fit, options.fixed_spread);
+    let sampler = ParamUncertainty::of(fit, options.fixed_spread);
     let shown = centre.flat(false);
     let figures =
         |m: &Motor| Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true));
     let figures_sync = &figures as &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync);
-    let (bands, made) = choose_bands(fit, &unc, &shown, figures_sync, request)?;
+    let (bands, made) = choose_bands(fit, [&unc, &sampler], &shown, figures_sync, request)?;
+    let unc = if made.method == BandMethod::Delta {
+        unc
+    } else {
+        sampler
+    };
     let resting = if made.method == BandMethod::Delta {
         resting_on_prior(fit, &unc, &centre, options, &figures)?
     } else {
@@ -403,10 +411,12 @@ type Bands = Vec<[f64; 2]>;
 /// and which method made them and why (`predict::samples`, "When the bands come from
 /// samples"): `delta` always by the delta method; `samples` always from samples (an error
 /// without the posterior); `auto` from samples when the posterior is at hand and they
-/// converged, else by the delta method, whatever went wrong with the samples.
+/// converged, else by the delta method, whatever went wrong with the samples. `unc` is the
+/// delta method's distribution and the sampler's starts' ([`ParamUncertainty::for_bands`],
+/// [`ParamUncertainty::of`]).
 fn choose_bands(
     fit: &FitFile,
-    unc: &ParamUncertainty,
+    [unc, sampler]: [&ParamUncertainty; 2],
     shown: &[f64],
     figures: &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync),
     request: &BandRequest,
@@ -422,7 +432,7 @@ fn choose_bands(
     let sample = |source: PosteriorSource| {
         samples::sample_bands(
             fit,
-            unc,
+            sampler,
             source,
             request.sampling,
             figures,
@@ -546,7 +556,7 @@ pub fn check_bands(
     seed: u64,
 ) -> Result<Vec<BandCheck>, PredictError> {
     let (centre, speeds) = centre_and_figures(fit, options)?;
-    let unc = ParamUncertainty::of(fit, options.fixed_spread);
+    let unc = ParamUncertainty::for_bands(fit, options.fixed_spread);
     let smooth = centre.flat(true);
     let figures =
         |m: &Motor| Outcome::of(m, options, Some(&speeds), fit.gear.as_ref()).map(|o| o.flat(true));

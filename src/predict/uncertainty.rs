@@ -2,19 +2,50 @@
 //! vector of predicted figures: the delta method (what `vanefit predict` reports) and a
 //! Monte-Carlo check of it.
 //!
-//! # The parameters' distribution
+//! # The parameters' distribution, as `predict`'s bands take it
 //!
-//! ln θ of the covered parameters is taken as normal, N(ln θ̂, C) with C = S·R·S:
-//! R is the correlation of the fit file's `covariance` (the curvature of χ² at the estimate,
-//! in log space), and S = diag(σ_j) the marginal standard deviations, each taken from the
-//! parameter's profile-likelihood `ci95` where one exists (σ_j = (ln hi − ln lo)/(2·1.96):
-//! the two sides' half-widths in log space averaged, since a profile interval is the better
-//! marginal and the curvature only adds how the parameters move together), else from the
-//! covariance's own diagonal. A fit file without a covariance but with intervals gives the
-//! parameters as independent (R = I); without either there is no band.
+//! ln θ of the covered parameters is taken as normal, N(ln θ̂, C)
+//! ([`ParamUncertainty::for_bands`]). C starts from the fit file's `covariance` C_c, the
+//! curvature of the posterior's χ² at the estimate (prior included, in log space): the
+//! Gaussian (Laplace) approximation of the posterior. It covers every estimated parameter
+//! the covariance holds, those the profile found open (`"identifiable": false`, a page's
+//! `b_crit`) too: their width is the curvature's, which their prior bounds, and a figure
+//! that depends on them is traded against the parameters correlated with them (leaving one
+//! out takes its marginal spread into the others' but drops that trade, and widened the
+//! bands of the figures a page prints to several times their reading tolerance).
+//!
+//! Where a parameter's profile-likelihood `ci95` gives a marginal σ_j = (ln hi − ln lo)/(2·1.96)
+//! other than the curvature's √C_jj (the likelihood is not quadratic along the profile),
+//! the distribution is stretched along that parameter's profile path to it: the linear map
+//! x ↦ x + (λ − 1)·x_j·C·e_j/C_jj, λ² = σ_j²/C_jj, which gives
+//! C ← C + (λ² − 1)·C·e_j·e_jᵀ·C/C_jj. C·e_j/C_jj is how the others' optimum moves with θ_j
+//! (the profile path of a Gaussian posterior), so the map moves every parameter along that
+//! path and leaves the others' conditional distribution given θ_j as it was: what the data
+//! pin stays pinned, and a figure's variance grows by (λ² − 1)·Cov(y, ln θ_j)²/C_jj, at most
+//! λ² times. One such stretch changes the other diagonals a little, so they are repeated over
+//! all parameters until every C_jj is σ_j² within 1e-9 (at most 200 sweeps; on the twin's
+//! pages a few).
+//!
+//! Measured on 240 twin pages of six styles (docs/validation.md, "Bands as wide as the data
+//! allow"): at the page's own pressure the printed figures' bands are about the page's
+//! reading tolerance; the former C = S·R·S (the curvature's correlations R rescaled to the
+//! profile widths S, non-identifiable parameters left out) made them 2–4 times that, since
+//! rescaling each parameter alone breaks the cancellations along the directions the data
+//! pin. [`ParamUncertainty::of`] keeps that construction for `vanefit plan`'s update
+//! (`C' = D·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·D`, docs/plan.md) and for the posterior sampler's starts.
+//!
+//! # S·R·S, and fits without a covariance
+//!
+//! [`ParamUncertainty::of`] takes C = S·R·S: R the correlation of the fit file's
+//! `covariance`, and S = diag(σ_j) the marginal standard deviations, each from the
+//! parameter's profile `ci95` where one exists, else from the covariance's own diagonal;
+//! the parameters the profile found open are left out. A fit file without a covariance but
+//! with intervals gives the parameters as independent (R = I), in both constructions;
+//! without either there is no band.
 //!
 //! Not covered, and said so in every output: parameters held fixed in the fit, estimated
-//! parameters that are not identifiable (`"identifiable": false`) or have no interval, and
+//! parameters that are not identifiable and not held by the covariance (all of them in
+//! [`ParamUncertainty::of`]) or have no interval, and
 //! the coefficients of discovered terms. With a stated spread F (`--fixed-spread`), the
 //! parameters a fit could estimate (the six conductances, `t_coulomb`, `visc`) that were
 //! held fixed or are not identifiable are covered too, independently, with
@@ -53,6 +84,9 @@ pub type VarianceShares = (f64, Vec<f64>);
 pub enum BandBasis {
     /// The fit's covariance (correlations) with profile-interval widths.
     Covariance,
+    /// The fit's curvature covariance, every parameter it holds, stretched along the
+    /// profile paths to the profile intervals' widths ([`ParamUncertainty::for_bands`]).
+    Stretched,
     /// The parameters' intervals taken as independent: the fit file has no covariance.
     Independent,
     /// Only the stated spread of the fixed parameters: the fit gives no usable uncertainty.
@@ -68,6 +102,11 @@ impl BandBasis {
             BandBasis::Covariance => {
                 "95 % bands by the delta method from the fit's covariance of the log-parameters \
                  (correlations of the curvature, widths of the profile intervals)"
+            }
+            BandBasis::Stretched => {
+                "95 % bands by the delta method from the fit's covariance of the log-parameters \
+                 (the curvature of the posterior, stretched along each parameter's profile to \
+                 its profile interval)"
             }
             BandBasis::Independent => {
                 "95 % bands by the delta method with the parameters taken as INDEPENDENT: the \
@@ -104,14 +143,54 @@ pub struct ParamUncertainty {
 }
 
 impl ParamUncertainty {
-    /// The distribution a fit file states (see the module documentation).
-    pub fn of(fit: &FitFile, spread: Option<f64>) -> Self {
-        let ci = |n: &str| fit.ci95.iter().find(|(m, _)| m == n).map(|(_, c)| *c);
-        let ci_sd = |n: &str| {
-            ci(n)
-                .filter(|[lo, hi]| *lo > 0.0 && hi > lo)
-                .map(|[lo, hi]| (hi.ln() - lo.ln()) / (2.0 * Z95))
+    /// The distribution `predict`'s delta bands stand on (the module documentation): the
+    /// fit's curvature covariance over every estimated parameter it holds, stretched along
+    /// each parameter's profile path to its profile interval's width; without a covariance,
+    /// as [`Self::of`].
+    pub fn for_bands(fit: &FitFile, spread: Option<f64>) -> Self {
+        let mut u = Self::select(fit, spread, true);
+        let Some(file) = &fit.covariance else {
+            return u;
         };
+        let at = |n: &str| file.parameters.iter().position(|m| m == n);
+        let k = u.len();
+        let fitted: Vec<Option<usize>> = u
+            .names
+            .iter()
+            .map(|n| at(n).filter(|_| !u.spread.contains(n)))
+            .collect();
+        if fitted.iter().all(Option::is_none) {
+            return u;
+        }
+        u.cov = DMatrix::from_fn(k, k, |a, b| match (fitted[a], fitted[b]) {
+            (Some(i), Some(j)) => file.matrix[i][j],
+            _ if a == b => u.sd[a] * u.sd[a],
+            _ => 0.0,
+        });
+        let target: Vec<Option<f64>> = (0..k)
+            .map(|a| {
+                fitted[a]?;
+                profile_sd(fit, &u.names[a]).map(|s| s * s)
+            })
+            .collect();
+        stretch_to(&mut u.cov, &target);
+        u.sd = (0..k).map(|a| u.cov[(a, a)].max(0.0).sqrt()).collect();
+        u.basis = BandBasis::Stretched;
+        u
+    }
+
+    /// The distribution with C = S·R·S (the module documentation's last section): the
+    /// curvature's correlations with the profile intervals' widths, parameters the profile
+    /// found open left out. `vanefit plan`'s update and the posterior sampler's starts stand
+    /// on it.
+    pub fn of(fit: &FitFile, spread: Option<f64>) -> Self {
+        Self::select(fit, spread, false)
+    }
+
+    /// The covered parameters and C = S·R·S over them; with `open_too`, an estimated
+    /// parameter the profile found open is covered where the covariance holds it.
+    fn select(fit: &FitFile, spread: Option<f64>, open_too: bool) -> Self {
+        let ci_sd = |n: &str| profile_sd(fit, n);
         let value = |n: &str| fit.params.get(n).filter(|v| *v > 0.0);
         let not_identifiable =
             |n: &str| fit.verdicts.iter().any(|v| v.name == n && !v.identifiable);
@@ -124,7 +203,7 @@ impl ParamUncertainty {
                 .covariance
                 .as_ref()
                 .and_then(|c| c.parameters.iter().position(|m| m == n));
-            let why = if not_identifiable(n) {
+            let why = if not_identifiable(n) && !(open_too && in_cov.is_some()) {
                 Some("not identifiable")
             } else if value(n).is_none() {
                 Some("not positive (no logarithm)")
@@ -274,7 +353,12 @@ impl ParamUncertainty {
         let c_pp = DMatrix::from_fn(in_set.len(), in_set.len(), |a, b| {
             self.cov[(in_set[a], in_set[b])]
         });
-        let c_pp_inv = c_pp.clone().pseudo_inverse(1e-300).unwrap_or(c_pp * 0.0);
+        // An empty set removes nothing (and nalgebra's SVD panics on a 0×0 matrix).
+        let c_pp_inv = if in_set.is_empty() {
+            c_pp
+        } else {
+            c_pp.clone().pseudo_inverse(1e-300).unwrap_or(c_pp * 0.0)
+        };
         let shares = which
             .iter()
             .map(|&i| {
@@ -365,6 +449,43 @@ impl ParamUncertainty {
     }
 }
 
+/// σ of ln θ of parameter `n` from its profile-likelihood `ci95`: (ln hi − ln lo)/(2·1.96),
+/// the two sides' half-widths in log space averaged; `None` without a positive interval.
+fn profile_sd(fit: &FitFile, n: &str) -> Option<f64> {
+    fit.ci95
+        .iter()
+        .find(|(m, _)| m == n)
+        .map(|(_, c)| *c)
+        .filter(|[lo, hi]| *lo > 0.0 && hi > lo)
+        .map(|[lo, hi]| (hi.ln() - lo.ln()) / (2.0 * Z95))
+}
+
+/// Sweeps over the parameters with a `target` variance; each stretches (or shrinks) `c`
+/// along its profile path, C ← C + (λ² − 1)·C·e_j·e_jᵀ·C/C_jj with λ² = target/C_jj (the
+/// module documentation), until every C_jj is its target within 1e-9 relative or after
+/// 200 sweeps. Each step is a congruence A·C·Aᵀ with det A = λ > 0: C stays positive
+/// definite.
+fn stretch_to(c: &mut DMatrix<f64>, target: &[Option<f64>]) {
+    for _ in 0..200 {
+        let mut worst = 0.0_f64;
+        for (j, t) in target.iter().enumerate() {
+            let (Some(t), cjj) = (t, c[(j, j)]) else {
+                continue;
+            };
+            if cjj <= 0.0 {
+                continue;
+            }
+            let l2 = t / cjj;
+            worst = worst.max((l2 - 1.0).abs());
+            let v = c.column(j).clone_owned();
+            *c += (&v * v.transpose()) * ((l2 - 1.0) / cjj);
+        }
+        if worst < 1e-9 {
+            return;
+        }
+    }
+}
+
 /// Largest half-width of a linear band, relative to the figure, that is still propagated in
 /// log space (a factor e² ≈ 7.4 either side): beyond it the figure is not resolved from 0.
 const LOG_BAND_MAX_RELATIVE: f64 = 2.0;
@@ -451,6 +572,94 @@ mod tests {
         assert_eq!(ParamUncertainty::of(&f, None).basis, BandBasis::None);
     }
 
+    /// Two parameters the curvature ties (correlation 0.99, σ 0.1 each): the data pin
+    /// d = ln c_in1 − ln c_ext to σ_d = 0.1·√(2·0.01). c_in1's profile is twice as wide as
+    /// its curvature (σ 0.2), c_ext is open (not identifiable, no interval). `for_bands`
+    /// covers c_ext with its curvature width and stretches along c_in1's profile path, one
+    /// stretch of λ² = 4: C' = C + 3·C·e₁·e₁ᵀ·C/C₁₁, so C'₁₁ = 4·C₁₁, C'₁₂ = 4·C₁₂ and
+    /// C'₂₂ = C₂₂ + 3·C₁₂²/C₁₁, which keeps Var(c_ext | c_in1) = C₂₂ − C₁₂²/C₁₁; d's
+    /// variance becomes Var d + 3·Cov(d, ln c_in1)²/C₁₁.
+    /// S·R·S (`of`) drops c_ext and gives d the band of c_in1 alone.
+    #[test]
+    fn stretched_bands_keep_what_the_data_pin() {
+        let mut f = fit_file();
+        let v = MotorParams::default();
+        let c_in1 = v.get("c_in1").unwrap();
+        f.estimated = vec!["c_in1".into(), "c_ext".into()];
+        f.ci95 = vec![(
+            "c_in1".into(),
+            [c_in1 * (-Z95 * 0.2f64).exp(), c_in1 * (Z95 * 0.2f64).exp()],
+        )];
+        f.verdicts = vec![ParamVerdict {
+            name: "c_ext".into(),
+            bounds95: [None, None],
+            identifiable: false,
+            why: Some("open".into()),
+        }];
+        let (s, rho) = (0.1f64, 0.99f64);
+        f.covariance = Some(LogCovariance {
+            parameters: vec!["c_in1".into(), "c_ext".into()],
+            matrix: vec![vec![s * s, rho * s * s], vec![rho * s * s, s * s]],
+        });
+        let u = ParamUncertainty::for_bands(&f, None);
+        assert_eq!(u.basis, BandBasis::Stretched);
+        assert_eq!(u.names, vec!["c_in1", "c_ext"]);
+        assert!(u.uncovered.is_empty(), "{:?}", u.uncovered);
+        let (c11, c12, c22) = (s * s, rho * s * s, s * s);
+        let want = [
+            [4.0 * c11, 4.0 * c12],
+            [4.0 * c12, c22 + 3.0 * c12 * c12 / c11],
+        ];
+        for (a, row) in want.iter().enumerate() {
+            for (b, w) in row.iter().enumerate() {
+                assert!((u.cov[(a, b)] - w).abs() < 1e-12, "{} vs {want:?}", u.cov);
+            }
+        }
+        let cond = |c: &DMatrix<f64>| c[(1, 1)] - c[(0, 1)].powi(2) / c[(0, 0)];
+        assert!((cond(&u.cov) - (c22 - c12 * c12 / c11)).abs() < 1e-15);
+        assert!((u.sd[0] - 0.2).abs() < 1e-12);
+        // The pinned difference: its delta band against the closed form, and against S·R·S.
+        let d = |m: &Motor| Ok(vec![m.params().c_in1().ln() - m.params().c_ext().ln()]);
+        let half = |u: &ParamUncertainty| {
+            let centre = d(&u.motor_at(&f, &u.log_values).unwrap()).unwrap();
+            let [lo, hi] = u.delta_bands(&f, &centre, &d).unwrap().unwrap()[0];
+            (hi - lo) / 2.0
+        };
+        let var_d = c11 + c22 - 2.0 * c12;
+        let cov_d1 = c11 - c12;
+        let want_sd = (var_d + 3.0 * cov_d1 * cov_d1 / c11).sqrt();
+        assert!(
+            (half(&u) - Z95 * want_sd).abs() < 1e-9,
+            "{} vs {}",
+            half(&u),
+            Z95 * want_sd
+        );
+        let srs = ParamUncertainty::of(&f, None);
+        assert_eq!(srs.names, vec!["c_in1"]);
+        assert!((half(&srs) - Z95 * 0.2).abs() < 1e-9);
+        assert!(
+            half(&u) < 0.3 * half(&srs),
+            "{} vs {}",
+            half(&u),
+            half(&srs)
+        );
+    }
+
+    /// With several profile widths the sweeps bring every variance to its profile's and C
+    /// stays positive definite.
+    #[test]
+    fn stretching_reaches_every_profile_width() {
+        let mut c =
+            DMatrix::from_row_slice(3, 3, &[1.0, 0.9, -0.5, 0.9, 1.0, -0.3, -0.5, -0.3, 1.0]);
+        let target = [Some(4.0), Some(0.5), None];
+        stretch_to(&mut c, &target);
+        assert!(
+            (c[(0, 0)] - 4.0).abs() < 1e-8 && (c[(1, 1)] - 0.5).abs() < 1e-8,
+            "{c}"
+        );
+        assert!(c.clone().cholesky().is_some(), "{c}");
+    }
+
     #[test]
     fn a_stated_spread_covers_the_fixed_and_the_flat_estimable_parameters() {
         let mut f = fit_file();
@@ -505,6 +714,14 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!((all[0].0 - 1.0).abs() < 1e-6, "{:?}", all[0]);
+        // An empty set removes nothing: share 0, each parameter's own share as before (a
+        // page whose figures rest on no prior parameter made `fit` panic here).
+        let none = u
+            .variance_shares(&f, 1, &[0], &[false, false], &y)
+            .unwrap()
+            .unwrap();
+        assert_eq!(none[0].0, 0.0);
+        assert!((none[0].1[1] - want).abs() < 1e-6, "{:?}", none[0]);
     }
 
     /// A positive figure with a spread wider than itself (a linear band would reach below

@@ -21,8 +21,8 @@
 //! all), `SIZE_STARTS` (`fit --starts`; default vanefit's), `SIZE_THREADS` (pages run at
 //! once, default 2), `SIZE_OUT` (the markdown file; default target/every-size-pages.md),
 //! `SIZE_DIR` (keep the pages, fits and predictions there, each page with the twin's
-//! figures beside it in truth.csv), `SIZE_ONLY` ("style:seed,…": only those pages),
-//! `SIZE_PREDICT_ARGS` (options added to predict; "{page}" is the page's folder),
+//! figures beside it in truth.csv and its motor in motor.txt), `SIZE_ONLY`
+//! ("style:seed,…": only those pages), `SIZE_PREDICT_ARGS` (options added to predict; "{page}" is the page's folder),
 //! `SIZE_TOLERANCE` (every page states that reading tolerance, `tolerance`),
 //! `VANEFIT_BIN` (the binary; default the one cargo builds). Each page's line on stderr names
 //! its worst figure at 5–7 bar g (pressure, error, band).
@@ -97,6 +97,9 @@ fn try_evaluate(
     let page_dir = dir.join("page");
     print_styled_page(&page_dir, &motor, &page).map_err(|e| format!("twin: {e}"))?;
     let truth = styled_truth(&motor, &page, &BAR_G).map_err(|e| format!("twin: {e}"))?;
+    // The twin's motor beside the page (its parameters carry vanefit's names and SI units):
+    // what an oracle fit holds at the truth.
+    std::fs::write(dir.join("motor.txt"), format!("{motor:#?}\n")).map_err(|e| e.to_string())?;
     state_tolerance(&page_dir)?;
     let fit = dir.join("fit.json");
     let (fit_s, page_s) = (fit.to_str().unwrap(), page_dir.to_str().unwrap());

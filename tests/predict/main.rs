@@ -7,6 +7,7 @@ mod catalogue_predict;
 mod common;
 mod every_size;
 mod geared;
+mod page_bands;
 mod page_coverage;
 mod page_pairs;
 mod plan_cli;
