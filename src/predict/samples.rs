@@ -1,9 +1,9 @@
 //! Bands from posterior samples, where the delta method fails: a curved valley, an
 //! interval that is lopsided, a parameter the data do not pin (two optima that fit equally).
 //!
-//! The ensemble sampler ([`crate::estimate::sample`]) draws the fit's estimated parameters
-//! from their posterior (the fit's likelihood, with a prior if one is given, flat within the
-//! search bounds otherwise), starting from a small ball about the estimate. `draws` of the
+//! A sampler ([`crate::estimate::sample`]; which one: [`Sampler`]) draws the fit's
+//! estimated parameters from their posterior (the fit's likelihood, with a prior if one is
+//! given, flat within the search bounds otherwise). `draws` of the
 //! kept samples, spread evenly over walkers and steps, are each propagated through every
 //! figure; a figure's 95 % band is the 2.5 and 97.5 percentiles of its values (linear
 //! interpolation between order statistics). Parameters covered by a stated spread
@@ -236,10 +236,12 @@ impl PosteriorDraws {
 /// importance sampling from its t proposal (`IMPORTANCE_DRAWS` draws,
 /// [`ImportanceCheck`]): where every draw has a positive density and the weights' Pareto
 /// k̂ < 0.7 (a rig fit: k̂ 0.12) the Laplace-guided chains draw it
-/// ([`crate::estimate::run_chains`]); otherwise (a catalogue page: k̂ 2–10, a fifth of the
-/// draws outside the support) the affine-invariant ensemble does, whose walkers follow thin,
-/// curved constraints that the Gaussian misses (docs/validation.md, "Sampled bands on a
-/// page").
+/// ([`crate::estimate::run_chains`]); otherwise (a catalogue page: k̂ 2–21, a fifth of the
+/// draws outside the support, a valley that the residuals' own curvature bends) the same
+/// chains run in the coordinates of a quadratic transport map learnt from a pilot ensemble,
+/// and where that map does not straighten the posterior (its t's k̂ >
+/// [`TRANSPORT_K_HAT_LIMIT`]) the affine-invariant ensemble draws it (docs/validation.md,
+/// "Sampled bands on a page").
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub enum Sampler {

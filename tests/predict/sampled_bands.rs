@@ -189,7 +189,10 @@ fn auto_falls_back_to_the_delta_method_with_the_reason_when_the_samples_do_not_c
     assert_eq!(json["sampling"]["draws"], 0);
     assert_eq!(json["sampling"]["propagated"], false);
     assert!(!stderr.contains("propagating"), "{stderr}");
-    assert!(md.contains("none was propagated through the figures"), "{md}");
+    assert!(
+        md.contains("none was propagated through the figures"),
+        "{md}"
+    );
     // The fit file's own reasons against the delta method are still said.
     if let Some(w) = json["delta_unreliable"].as_str() {
         assert!(
