@@ -338,4 +338,68 @@ mod tests {
         }
         assert_eq!(u.log_density(&[f64::INFINITY]), f64::NEG_INFINITY);
     }
+
+    /// The banana p(x) = N(x₁; 0, 1)·N(x₂; ½x₁², 0.05²): chains in the coordinates of a map
+    /// fitted to 2000 draws of it (a pilot), with the t of the mapped draws for their
+    /// independence moves, draw it: E x₂ = ½·E x₁² = ½, Var x₁ = 1 (closed forms), within
+    /// 4 Monte-Carlo standard errors, and R̂ < 1.01.
+    #[test]
+    fn chains_in_the_map_s_coordinates_draw_a_banana() {
+        use crate::estimate::sample::{run_chains, summarise, ChainSettings, TProposal};
+        struct Banana;
+        impl LogDensity for Banana {
+            fn dim(&self) -> usize {
+                2
+            }
+            fn log_density(&self, x: &[f64]) -> f64 {
+                let u = (x[1] - 0.5 * x[0] * x[0]) / 0.05;
+                -0.5 * (x[0] * x[0] + u * u)
+            }
+        }
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(8);
+        let pilot: Vec<Vec<f64>> = (0..2000)
+            .map(|_| {
+                let a: f64 = StandardNormal.sample(&mut rng);
+                let e: f64 = StandardNormal.sample(&mut rng);
+                vec![a, 0.5 * a * a + 0.05 * e]
+            })
+            .collect();
+        let map = QuadraticMap::fit(&pilot, 1e-6).unwrap();
+        let zs: Vec<Vec<f64>> = pilot.iter().map(|x| map.forward(x)).collect();
+        let q = TProposal {
+            laplace: gaussian_of(&zs).unwrap(),
+            nu: 5.0,
+            scale: 1.2,
+        };
+        let mapped = Mapped {
+            density: &Banana,
+            map: &map,
+        };
+        let settings = ChainSettings {
+            chains: 4,
+            steps: 4000,
+            burn_in: 500,
+            block: 4500,
+            seed: 2,
+        };
+        let zc = run_chains(&mapped, &q, &settings, None, &|_, _| {}).unwrap();
+        let xs: Vec<Vec<Vec<f64>>> = zc
+            .draws
+            .iter()
+            .map(|c| c.iter().map(|z| map.inverse(z)).collect())
+            .collect();
+        let diag = summarise(&xs);
+        let flat: Vec<&Vec<f64>> = xs.iter().flatten().collect();
+        let n = flat.len() as f64;
+        let mean = |i: usize| flat.iter().map(|x| x[i]).sum::<f64>() / n;
+        let (m0, m1) = (mean(0), mean(1));
+        let v0 = flat.iter().map(|x| (x[0] - m0).powi(2)).sum::<f64>() / n;
+        // Var x₂ = ¼·Var x₁² + 0.05² = ½ + 0.0025.
+        let mcse1 = (0.5025 / diag[1].ess_bulk).sqrt();
+        let mcse0 = (1.0 / diag[0].ess_bulk).sqrt();
+        assert!((m1 - 0.5).abs() < 4.0 * mcse1, "E x₂ {m1} ± {mcse1}");
+        assert!(m0.abs() < 4.0 * mcse0, "E x₁ {m0} ± {mcse0}");
+        assert!((v0 - 1.0).abs() < 0.1, "Var x₁ {v0}");
+        assert!(diag.iter().all(|d| d.rhat < 1.01), "{diag:?}");
+    }
 }
