@@ -13,7 +13,12 @@
 //! proposal is no use as an importance density, Vehtari et al. 2024, "Pareto smoothed
 //! importance sampling", JMLR 25). `SAMPLER=chains` samples with `estimate::run_chains`
 //! (8 chains) instead of the ensemble; then each chain's mean of the parameter with the
-//! largest R̂ shows whether chains sit in different places.
+//! largest R̂ shows whether chains sit in different places. `SAMPLER=map`: the transport
+//! sampler's parts by hand (a pilot ensemble of `PILOT` steps, `MAPS` quadratic maps, 8
+//! chains in the map's coordinates; `SCALE10` the t's scale × 10, `MAPENS=1` the ensemble
+//! in those coordinates instead), with the mapped t's k̂ per round. `HESS=step`: the Laplace
+//! approximation from the full Hessian of ln p at that step, and its k̂. `DIAG=1`: why the
+//! posterior is not Gaussian (`diagnose`), then stop.
 
 use nalgebra::DMatrix;
 use std::path::Path;

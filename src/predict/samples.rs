@@ -578,95 +578,139 @@ fn draw(
         let chains = run_chains(post, q, &settings, checkpoint.as_ref(), &step_progress)?;
         return Ok((chains, Sampler::Laplace { k_hat: c.k_hat }));
     }
-    let estimate = source.likelihood.estimate();
-    let walkers = sampling.walkers_for(post.dim());
-    let x0 = starts(post, unc, &estimate, walkers, sampling.seed);
-    let laplace_k_hat = check.map(|c| c.k_hat);
-    // Sampled in unbounded coordinates u: a t proposal there has the posterior's support.
-    let ub = Unbounded {
-        density: post,
-        bounds: post.coord_bounds(),
+    let far = Far {
+        post,
+        x0: starts(
+            post,
+            unc,
+            &source.likelihood.estimate(),
+            sampling.walkers_for(post.dim()),
+            sampling.seed,
+        ),
+        sampling,
+        laplace_k_hat: check.map(|c| c.k_hat),
+        checkpoint: checkpoint.as_ref(),
     };
-    let u0: Vec<Vec<f64>> = x0.iter().map(|x| ub.to_u(x)).collect();
-    let pilot = EnsembleSettings {
-        walkers,
-        steps: PILOT_STEPS,
-        burn_in: PILOT_STEPS,
-        seed: sampling.seed,
-    };
-    let pilot_progress = |done: usize, total: usize| progress("pilot", done, total);
-    let moves = Moves::Mixed { de: DE_SHARE };
-    let pc = run_ensemble_with(&ub, &u0, &pilot, moves, &pilot_progress)?;
-    let mut draws = pc.flat();
-    let chains_of = |steps: usize, seed: u64| ChainSettings {
-        chains: sampling.walkers.unwrap_or(DEFAULT_CHAINS),
-        steps,
-        burn_in: sampling.burn_in,
-        block: sampling.block,
-        seed,
-    };
-    for round in 0..MAP_ROUNDS - 1 {
-        let (map, q, _) = fit_map(&ub, &draws, sampling.seed)?;
+    Ok(far.draw(progress)?)
+}
+
+/// A posterior far from its Laplace approximation, and how to sample it: the transport
+/// chains, or the ensemble where the map does not straighten it ([`Sampler`]).
+struct Far<'a> {
+    post: &'a FitPosterior<'a>,
+    /// The walkers' starts about the estimate (the pilot's and the ensemble's).
+    x0: Vec<Vec<f64>>,
+    sampling: &'a SamplingOptions,
+    laplace_k_hat: Option<f64>,
+    checkpoint: Option<&'a Checkpoint>,
+}
+
+impl Far<'_> {
+    /// The chains of `sampling` with `steps` kept steps from the streams of `seed`.
+    fn chains(&self, steps: usize, seed: u64) -> ChainSettings {
+        ChainSettings {
+            chains: self.sampling.walkers.unwrap_or(DEFAULT_CHAINS),
+            steps,
+            burn_in: self.sampling.burn_in,
+            block: self.sampling.block,
+            seed,
+        }
+    }
+
+    /// Draws the posterior (see [`Sampler`]), in the coordinates of [`FitPosterior`].
+    fn draw(
+        &self,
+        progress: &(dyn Fn(&str, usize, usize) + Sync),
+    ) -> Result<(crate::estimate::sample::Chains, Sampler), SampleError> {
+        let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+        // Sampled in unbounded coordinates u: a t proposal there has the posterior's support.
+        let ub = Unbounded {
+            density: self.post,
+            bounds: self.post.coord_bounds(),
+        };
+        let (map, q, k_hat) = self.straighten(&ub, progress)?;
+        let seed = self.sampling.seed;
+        if k_hat > TRANSPORT_K_HAT_LIMIT {
+            // The map did not straighten the posterior: the ensemble mixes better there.
+            let settings = EnsembleSettings {
+                walkers: self.x0.len(),
+                steps: self.sampling.steps,
+                burn_in: self.sampling.burn_in,
+                seed,
+            };
+            let chains = run_ensemble_resumable(
+                self.post,
+                &self.x0,
+                &settings,
+                Moves::Mixed { de: DE_SHARE },
+                self.sampling.block,
+                self.checkpoint,
+                &step_progress,
+            )?;
+            let sampler = Sampler::Ensemble {
+                k_hat: self.laplace_k_hat,
+                transport_k_hat: Some(k_hat),
+            };
+            return Ok((chains, sampler));
+        }
         let mapped = Mapped {
             density: &ub,
             map: &map,
         };
-        let settings = chains_of(
-            sampling.steps.div_ceil(2).max(4),
-            sampling.seed ^ (0x6d61_7030 + round as u64),
-        );
-        let zc = run_chains(&mapped, &q, &settings, None, &step_progress)?;
-        draws = zc
-            .thinned(MAP_DRAWS)
-            .iter()
-            .map(|z| map.inverse(z))
-            .collect();
-    }
-    let (map, q, k_hat) = fit_map(&ub, &draws, sampling.seed)?;
-    if k_hat > TRANSPORT_K_HAT_LIMIT {
-        // The map did not straighten the posterior: the ensemble mixes better there.
-        let settings = EnsembleSettings {
-            walkers,
-            steps: sampling.steps,
-            burn_in: sampling.burn_in,
-            seed: sampling.seed,
+        let settings = self.chains(self.sampling.steps, seed);
+        let zc = run_chains(&mapped, &q, &settings, self.checkpoint, &step_progress)?;
+        let chains = crate::estimate::sample::Chains {
+            draws: zc
+                .draws
+                .iter()
+                .map(|c| c.iter().map(|z| ub.to_x(&map.inverse(z))).collect())
+                .collect(),
+            ..zc
         };
-        let chains = run_ensemble_resumable(
-            post,
-            &x0,
-            &settings,
-            moves,
-            sampling.block,
-            checkpoint.as_ref(),
-            &step_progress,
-        )?;
-        let sampler = Sampler::Ensemble {
-            k_hat: laplace_k_hat,
-            transport_k_hat: Some(k_hat),
-        };
-        return Ok((chains, sampler));
-    }
-    let mapped = Mapped {
-        density: &ub,
-        map: &map,
-    };
-    let settings = chains_of(sampling.steps, sampling.seed);
-    let zc = run_chains(&mapped, &q, &settings, checkpoint.as_ref(), &step_progress)?;
-    let chains = crate::estimate::sample::Chains {
-        draws: zc
-            .draws
-            .iter()
-            .map(|c| c.iter().map(|z| ub.to_x(&map.inverse(z))).collect())
-            .collect(),
-        ..zc
-    };
-    Ok((
-        chains,
-        Sampler::Transport {
-            laplace_k_hat,
+        let sampler = Sampler::Transport {
+            laplace_k_hat: self.laplace_k_hat,
             k_hat,
-        },
-    ))
+        };
+        Ok((chains, sampler))
+    }
+
+    /// The last of [`MAP_ROUNDS`] maps in the coordinates of `ub` (the first fitted to a
+    /// pilot ensemble's draws, each next to those of chains run in the one before's
+    /// coordinates with half the steps), its t proposal and that t's k̂ ([`fit_map`]).
+    fn straighten(
+        &self,
+        ub: &Unbounded,
+        progress: &(dyn Fn(&str, usize, usize) + Sync),
+    ) -> Result<(QuadraticMap, TProposal, f64), SampleError> {
+        let seed = self.sampling.seed;
+        let u0: Vec<Vec<f64>> = self.x0.iter().map(|x| ub.to_u(x)).collect();
+        let pilot = EnsembleSettings {
+            walkers: u0.len(),
+            steps: PILOT_STEPS,
+            burn_in: PILOT_STEPS,
+            seed,
+        };
+        let pilot_progress = |done: usize, total: usize| progress("pilot", done, total);
+        let moves = Moves::Mixed { de: DE_SHARE };
+        let mut draws = run_ensemble_with(ub, &u0, &pilot, moves, &pilot_progress)?.flat();
+        let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+        for round in 0..MAP_ROUNDS - 1 {
+            let (map, q, _) = fit_map(ub, &draws, seed)?;
+            let mapped = Mapped {
+                density: ub,
+                map: &map,
+            };
+            let steps = self.sampling.steps.div_ceil(2).max(4);
+            let settings = self.chains(steps, seed ^ (0x6d61_7030 + round as u64));
+            let zc = run_chains(&mapped, &q, &settings, None, &step_progress)?;
+            draws = zc
+                .thinned(MAP_DRAWS)
+                .iter()
+                .map(|z| map.inverse(z))
+                .collect();
+        }
+        fit_map(ub, &draws, seed)
+    }
 }
 
 /// Steps per walker of the pilot ensemble whose draws the first transport map is fitted

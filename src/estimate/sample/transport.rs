@@ -30,7 +30,8 @@ pub struct QuadraticMap {
     pub mean: Vec<f64>,
     /// Principal axes V (columns), widest first.
     pub axes: DMatrix<f64>,
-    /// Coefficients of g_k over the features of y₁…y_{k−1} ([`features`]); empty for k = 1.
+    /// Coefficients of g_k over the features of y₁…y_{k−1}: 1, yᵢ, yᵢ·yⱼ (i ≤ j); 1 and yᵢ
+    /// only where the draws were too few for a quadratic; empty for k = 1.
     pub coefs: Vec<Vec<f64>>,
 }
 
