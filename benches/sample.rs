@@ -4,6 +4,10 @@
 //!   ensemble `predict` samples a page with; per step of 40 walkers, 40 evaluations;
 //! * `page_posterior/laplace_check`: the Laplace approximation of the same posterior and the
 //!   400-draw importance check that picks the sampler;
+//! * `page_posterior/transport_map_fit`: the quadratic transport map fitted to 8000 draws of
+//!   a pilot ensemble of the same posterior (`estimate::QuadraticMap`), and
+//!   `page_posterior/transport_chains_8x200`: 8 chains × 200 steps after 50 in its
+//!   coordinates, as `predict` samples a page with;
 //! * `rig_posterior/laplace_chains_8x200`: the shipped rig fit's posterior
 //!   (`fits/ar034-synthetic.json`), 8 Laplace-guided chains × 200 steps after 50.
 //!
@@ -15,8 +19,8 @@ use std::path::Path;
 use vanefit::data::{Dataset, FitFile};
 use vanefit::estimate::multistart::Silent;
 use vanefit::estimate::{
-    run_chains, run_ensemble_with, ChainSettings, EnsembleSettings, FitLikelihood, FitPosterior,
-    ImportanceCheck, LogDensity, LogPrior, Moves,
+    gaussian_of, run_chains, run_ensemble_with, ChainSettings, EnsembleSettings, FitLikelihood,
+    FitPosterior, ImportanceCheck, LogDensity, LogPrior, Mapped, Moves, QuadraticMap, TProposal,
 };
 use vanefit::task::FitOptions;
 
@@ -61,6 +65,42 @@ fn bench(c: &mut Criterion) {
             let q = post.proposal().unwrap();
             black_box(ImportanceCheck::of(&post, &q, 400, 1))
         })
+    });
+    // The transport sampler's parts: the quadratic map fitted to the pilot's draws (made
+    // once here: 40 walkers × 200 steps), and 8 chains × 200 steps after 50 in its
+    // coordinates.
+    let pilot = EnsembleSettings {
+        walkers,
+        steps: 200,
+        burn_in: 200,
+        seed: 1,
+    };
+    let draws = run_ensemble_with(&post, &starts, &pilot, moves, &|_, _| {})
+        .unwrap()
+        .flat();
+    group.bench_function("transport_map_fit", |b| {
+        b.iter(|| black_box(QuadraticMap::fit(&draws, 1e-6).unwrap()))
+    });
+    let map = QuadraticMap::fit(&draws, 1e-6).unwrap();
+    let zs: Vec<Vec<f64>> = draws.iter().map(|x| map.forward(x)).collect();
+    let qz = TProposal {
+        laplace: gaussian_of(&zs).unwrap(),
+        nu: 5.0,
+        scale: 1.2,
+    };
+    let mapped = Mapped {
+        density: &post,
+        map: &map,
+    };
+    let cs = ChainSettings {
+        chains: 8,
+        steps: 200,
+        burn_in: 50,
+        block: 250,
+        seed: 1,
+    };
+    group.bench_function("transport_chains_8x200", |b| {
+        b.iter(|| black_box(run_chains(&mapped, &qz, &cs, None, &|_, _| {}).unwrap()))
     });
     group.finish();
 

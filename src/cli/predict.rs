@@ -88,7 +88,9 @@ pub(crate) struct PredictArgs {
     /// fit file's folder or in the current folder).
     #[arg(long)]
     pub(crate) data: Option<PathBuf>,
-    /// Walkers of the posterior sampler (even; default max(16, 4 × estimated parameters)).
+    /// Chains (≥ 2) or walkers of the posterior sampler (the ensemble needs an even number
+    /// ≥ 2 × (estimated parameters + 1); default 8 chains, or max(16, 4 × estimated
+    /// parameters) walkers).
     #[arg(long)]
     pub(crate) walkers: Option<usize>,
     /// Kept steps per walker of the posterior sampler.

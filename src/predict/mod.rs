@@ -26,7 +26,7 @@ pub use options::{Nozzle, NozzlePort, PredictOptions, DEFAULT_CURVE_POINTS};
 pub use samples::{
     delta_unreliable, BandChoice, BandMethod, BandReason, BandRequest, BandsMade, PosteriorData,
     PosteriorDraws, PosteriorSource, PosteriorSummary, Sampler, SamplingOptions, DEFAULT_BURN_IN,
-    DEFAULT_DRAWS, DEFAULT_STEPS,
+    DEFAULT_DRAWS, DEFAULT_STEPS, MAP_ROUNDS, PILOT_STEPS, TRANSPORT_K_HAT_LIMIT,
 };
 
 pub use uncertainty::{log_band, BandBasis, ParamUncertainty, Z95};
@@ -430,11 +430,15 @@ fn choose_bands(
         data: request.data.cloned(),
     };
     let sample = |source: PosteriorSource| {
-        samples::sample_bands(
+        samples::sample_posterior(unc, source, request.sampling, request.progress)
+    };
+    let bands = |source: PosteriorSource, drawn: samples::Drawn| {
+        samples::propagate_bands(
             fit,
             sampler,
             source,
             request.sampling,
+            drawn,
             figures,
             request.progress,
         )
@@ -442,7 +446,7 @@ fn choose_bands(
     match (request.choice, request.posterior) {
         (BandChoice::Samples, None) => return Err(PredictError::NoPosterior),
         (BandChoice::Samples, Some(source)) => {
-            let (b, summary) = sample(source)?;
+            let (b, summary) = bands(source, sample(source)?)?;
             made.method = BandMethod::Samples;
             made.sampling = Some(summary);
             return Ok((Some(b), made));
@@ -453,16 +457,21 @@ fn choose_bands(
                 _ => "the fit's dataset was not given".into(),
             });
         }
+        // Convergence is decided before any sample is propagated: samples that did not
+        // converge are summarised, never run through the figures.
         (BandChoice::Auto, Some(source)) => match sample(source) {
-            Ok((b, summary)) if summary.converged() => {
-                made.method = BandMethod::Samples;
-                made.reason = BandReason::Converged;
-                made.sampling = Some(summary);
-                return Ok((Some(b), made));
-            }
-            Ok((_, summary)) => {
+            Ok(drawn) if drawn.summary.converged() => match bands(source, drawn) {
+                Ok((b, summary)) => {
+                    made.method = BandMethod::Samples;
+                    made.reason = BandReason::Converged;
+                    made.sampling = Some(summary);
+                    return Ok((Some(b), made));
+                }
+                Err(e) => made.reason = BandReason::SamplingFailed(e.to_string()),
+            },
+            Ok(drawn) => {
                 made.reason = BandReason::NotConverged;
-                made.sampling = Some(summary);
+                made.sampling = Some(drawn.summary);
             }
             Err(e) => made.reason = BandReason::SamplingFailed(e.to_string()),
         },

@@ -1,9 +1,9 @@
 //! Bands from posterior samples, where the delta method fails: a curved valley, an
 //! interval that is lopsided, a parameter the data do not pin (two optima that fit equally).
 //!
-//! The ensemble sampler ([`crate::estimate::sample`]) draws the fit's estimated parameters
-//! from their posterior (the fit's likelihood, with a prior if one is given, flat within the
-//! search bounds otherwise), starting from a small ball about the estimate. `draws` of the
+//! A sampler ([`crate::estimate::sample`]; which one: [`Sampler`]) draws the fit's
+//! estimated parameters from their posterior (the fit's likelihood, with a prior if one is
+//! given, flat within the search bounds otherwise). `draws` of the
 //! kept samples, spread evenly over walkers and steps, are each propagated through every
 //! figure; a figure's 95 % band is the 2.5 and 97.5 percentiles of its values (linear
 //! interpolation between order statistics). Parameters covered by a stated spread
@@ -31,8 +31,9 @@ use super::PredictError;
 use crate::data::fitfile::FitFile;
 use crate::estimate::fit::fit_likelihood::FitLikelihood;
 use crate::estimate::sample::{
-    run_chains, run_ensemble_resumable, summarise, ChainSettings, Checkpoint, EnsembleSettings,
-    FitPosterior, ImportanceCheck, LogDensity, LogPrior, Moves, ParamDiagnostics,
+    gaussian_of, run_chains, run_ensemble_resumable, run_ensemble_with, summarise, ChainSettings,
+    Checkpoint, EnsembleSettings, FitPosterior, ImportanceCheck, LogDensity, LogPrior, Mapped,
+    Moves, ParamDiagnostics, QuadraticMap, SampleError, TProposal, Unbounded, PROPOSAL_NU,
 };
 use crate::model::motor::Motor;
 use crate::model::params::ParamSet;
@@ -192,7 +193,8 @@ pub struct PosteriorSummary {
     pub seed: u64,
     /// Mean acceptance fraction.
     pub acceptance: f64,
-    /// Samples propagated through the figures.
+    /// Samples propagated through the figures: 0 where `auto` found that they did not
+    /// converge (decided before any was propagated).
     pub draws: usize,
     /// Of those, how many gave no figures (the motor failed at some pressure): left out.
     pub failed_draws: usize,
@@ -234,10 +236,12 @@ impl PosteriorDraws {
 /// importance sampling from its t proposal (`IMPORTANCE_DRAWS` draws,
 /// [`ImportanceCheck`]): where every draw has a positive density and the weights' Pareto
 /// k̂ < 0.7 (a rig fit: k̂ 0.12) the Laplace-guided chains draw it
-/// ([`crate::estimate::run_chains`]); otherwise (a catalogue page: k̂ 2–10, a fifth of the
-/// draws outside the support) the affine-invariant ensemble does, whose walkers follow thin,
-/// curved constraints that the Gaussian misses (docs/validation.md, "Sampled bands on a
-/// page").
+/// ([`crate::estimate::run_chains`]); otherwise (a catalogue page: k̂ 2–21, a fifth of the
+/// draws outside the support, a valley that the residuals' own curvature bends) the same
+/// chains run in the coordinates of a quadratic transport map learnt from a pilot ensemble,
+/// and where that map does not straighten the posterior (its t's k̂ >
+/// [`TRANSPORT_K_HAT_LIMIT`]) the affine-invariant ensemble draws it (docs/validation.md,
+/// "Sampled bands on a page").
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub enum Sampler {
@@ -247,11 +251,26 @@ pub enum Sampler {
         /// The importance weights' k̂.
         k_hat: f64,
     },
+    /// Metropolis–Hastings chains in the coordinates of a quadratic transport map learnt
+    /// from a pilot ensemble ([`crate::estimate::QuadraticMap`]), which straightens the
+    /// posterior's curved valley: independence moves from the t of the mapped draws'
+    /// Gaussian and whitened random walks (`PredictSummary`'s chains are in the fit's
+    /// coordinates).
+    Transport {
+        /// The Laplace approximation's importance weights' k̂ (∞ where a draw fell outside
+        /// the support), `None` where it could not be made.
+        laplace_k_hat: Option<f64>,
+        /// The mapped t's importance weights' k̂, over its draws where p > 0.
+        k_hat: f64,
+    },
     /// The affine-invariant ensemble of differential-evolution and stretch moves.
     Ensemble {
         /// The importance weights' k̂ (∞ where a draw fell outside the support), `None`
         /// where the Laplace approximation could not be made.
         k_hat: Option<f64>,
+        /// The transport map's t's k̂, above [`TRANSPORT_K_HAT_LIMIT`] (`None`: no map
+        /// was tried).
+        transport_k_hat: Option<f64>,
     },
 }
 
@@ -445,30 +464,76 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[i] + f * (next - sorted[i])
 }
 
-/// The 95 % bands of `figures` from posterior samples, and what the samples were.
-pub(super) fn sample_bands(
+/// Posterior samples of a fit, drawn but not yet propagated through any figure: `auto`
+/// decides on their convergence first, so that samples it would throw away cost no
+/// simulations of the figures.
+pub(super) struct Drawn {
+    chains: crate::estimate::sample::Chains,
+    /// Their summary, with no draws propagated yet (`draws` 0).
+    pub(super) summary: PosteriorSummary,
+}
+
+/// Draws the posterior of `source` (see [`Sampler`]) and summarises the draws: R̂, ESS,
+/// quantiles; nothing is propagated through the figures ([`propagate_bands`] does that).
+pub(super) fn sample_posterior(
+    unc: &ParamUncertainty,
+    source: PosteriorSource,
+    sampling: &SamplingOptions,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Drawn, PredictError> {
+    let post = posterior_of(&source);
+    let names = post.names();
+    let (chains, sampler) = draw(&post, unc, &source, sampling, progress)?;
+    let diagnostics = summarise(&chains.draws);
+    let quantiles = posterior_quantiles(&post, &chains, names.len());
+    let spread = spread_not_sampled(unc, &names);
+    let summary = PosteriorSummary {
+        names,
+        diagnostics,
+        quantiles,
+        walkers: chains.walkers(),
+        steps: sampling.steps,
+        burn_in: sampling.burn_in,
+        seed: sampling.seed,
+        acceptance: chains.mean_acceptance(),
+        draws: 0,
+        failed_draws: 0,
+        spread: spread.into_iter().map(|(_, n)| n).collect(),
+        kept: PosteriorDraws::of(&post, &chains),
+        sampler,
+    };
+    Ok(Drawn { chains, summary })
+}
+
+/// The posterior of `source`: its likelihood and its prior, if any.
+fn posterior_of<'a>(source: &PosteriorSource<'a>) -> FitPosterior<'a> {
+    let post = FitPosterior::new(source.likelihood);
+    match source.prior {
+        Some(p) => post.with_prior(p),
+        None => post,
+    }
+}
+
+/// The 95 % bands of `figures` from the samples `drawn` ([`SamplingOptions::draws`] of
+/// them, spread evenly over the chains), and their summary with the draws propagated.
+pub(super) fn propagate_bands(
     fit: &FitFile,
     unc: &ParamUncertainty,
     source: PosteriorSource,
     sampling: &SamplingOptions,
+    drawn: Drawn,
     figures: &(dyn Fn(&Motor) -> Result<Vec<f64>, PredictError> + Sync),
     progress: &(dyn Fn(&str, usize, usize) + Sync),
 ) -> Result<(Vec<[f64; 2]>, PosteriorSummary), PredictError> {
-    let mut post = FitPosterior::new(source.likelihood);
-    if let Some(p) = source.prior {
-        post = post.with_prior(p);
-    }
-    let names = post.names();
-    let (chains, sampler) = draw(&post, unc, &source, sampling, progress)?;
-    let diagnostics = summarise(&chains.draws);
+    let post = posterior_of(&source);
+    let Drawn { chains, summary } = drawn;
     let values: Vec<Vec<f64>> = chains
         .thinned(sampling.draws)
         .iter()
         .map(|x| post.to_values(x))
         .collect();
-    let quantiles = posterior_quantiles(&post, &chains, names.len());
-    let spread = spread_not_sampled(unc, &names);
-    let jobs = with_spread_draws(values, &names, unc, &spread, sampling.seed);
+    let spread = spread_not_sampled(unc, &summary.names);
+    let jobs = with_spread_draws(values, &summary.names, unc, &spread, sampling.seed);
     let total = jobs.len();
     let results = propagate(fit, &jobs, figures, progress);
     let ok: Vec<&Vec<f64>> = results.iter().flatten().collect();
@@ -479,19 +544,9 @@ pub(super) fn sample_bands(
     Ok((
         percentile_bands(&ok),
         PosteriorSummary {
-            names,
-            diagnostics,
-            quantiles,
-            walkers: chains.walkers(),
-            steps: sampling.steps,
-            burn_in: sampling.burn_in,
-            seed: sampling.seed,
-            acceptance: chains.mean_acceptance(),
             draws: total,
             failed_draws: failed,
-            spread: spread.into_iter().map(|(_, n)| n).collect(),
-            kept: PosteriorDraws::of(&post, &chains),
-            sampler,
+            ..summary
         },
     ))
 }
@@ -523,30 +578,183 @@ fn draw(
         let chains = run_chains(post, q, &settings, checkpoint.as_ref(), &step_progress)?;
         return Ok((chains, Sampler::Laplace { k_hat: c.k_hat }));
     }
-    let estimate = source.likelihood.estimate();
-    let walkers = sampling.walkers_for(post.dim());
-    let settings = EnsembleSettings {
-        walkers,
-        steps: sampling.steps,
-        burn_in: sampling.burn_in,
-        seed: sampling.seed,
-    };
-    let x0 = starts(post, unc, &estimate, walkers, sampling.seed);
-    let chains = run_ensemble_resumable(
+    let far = Far {
         post,
-        &x0,
-        &settings,
-        Moves::Mixed { de: DE_SHARE },
-        sampling.block,
-        checkpoint.as_ref(),
-        &step_progress,
-    )?;
-    Ok((
-        chains,
-        Sampler::Ensemble {
-            k_hat: check.map(|c| c.k_hat),
-        },
-    ))
+        x0: starts(
+            post,
+            unc,
+            &source.likelihood.estimate(),
+            sampling.walkers_for(post.dim()),
+            sampling.seed,
+        ),
+        sampling,
+        laplace_k_hat: check.map(|c| c.k_hat),
+        checkpoint: checkpoint.as_ref(),
+    };
+    Ok(far.draw(progress)?)
+}
+
+/// A posterior far from its Laplace approximation, and how to sample it: the transport
+/// chains, or the ensemble where the map does not straighten it ([`Sampler`]).
+struct Far<'a> {
+    post: &'a FitPosterior<'a>,
+    /// The walkers' starts about the estimate (the pilot's and the ensemble's).
+    x0: Vec<Vec<f64>>,
+    sampling: &'a SamplingOptions,
+    laplace_k_hat: Option<f64>,
+    checkpoint: Option<&'a Checkpoint>,
+}
+
+impl Far<'_> {
+    /// The chains of `sampling` with `steps` kept steps from the streams of `seed`.
+    fn chains(&self, steps: usize, seed: u64) -> ChainSettings {
+        ChainSettings {
+            chains: self.sampling.walkers.unwrap_or(DEFAULT_CHAINS),
+            steps,
+            burn_in: self.sampling.burn_in,
+            block: self.sampling.block,
+            seed,
+        }
+    }
+
+    /// Draws the posterior (see [`Sampler`]), in the coordinates of [`FitPosterior`].
+    fn draw(
+        &self,
+        progress: &(dyn Fn(&str, usize, usize) + Sync),
+    ) -> Result<(crate::estimate::sample::Chains, Sampler), SampleError> {
+        let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+        // Sampled in unbounded coordinates u: a t proposal there has the posterior's support.
+        let ub = Unbounded {
+            density: self.post,
+            bounds: self.post.coord_bounds(),
+        };
+        let (map, q, k_hat) = self.straighten(&ub, progress)?;
+        let seed = self.sampling.seed;
+        if k_hat > TRANSPORT_K_HAT_LIMIT {
+            // The map did not straighten the posterior: the ensemble mixes better there.
+            let settings = EnsembleSettings {
+                walkers: self.x0.len(),
+                steps: self.sampling.steps,
+                burn_in: self.sampling.burn_in,
+                seed,
+            };
+            let chains = run_ensemble_resumable(
+                self.post,
+                &self.x0,
+                &settings,
+                Moves::Mixed { de: DE_SHARE },
+                self.sampling.block,
+                self.checkpoint,
+                &step_progress,
+            )?;
+            let sampler = Sampler::Ensemble {
+                k_hat: self.laplace_k_hat,
+                transport_k_hat: Some(k_hat),
+            };
+            return Ok((chains, sampler));
+        }
+        let mapped = Mapped {
+            density: &ub,
+            map: &map,
+        };
+        let settings = self.chains(self.sampling.steps, seed);
+        let zc = run_chains(&mapped, &q, &settings, self.checkpoint, &step_progress)?;
+        let chains = crate::estimate::sample::Chains {
+            draws: zc
+                .draws
+                .iter()
+                .map(|c| c.iter().map(|z| ub.to_x(&map.inverse(z))).collect())
+                .collect(),
+            ..zc
+        };
+        let sampler = Sampler::Transport {
+            laplace_k_hat: self.laplace_k_hat,
+            k_hat,
+        };
+        Ok((chains, sampler))
+    }
+
+    /// The last of [`MAP_ROUNDS`] maps in the coordinates of `ub` (the first fitted to a
+    /// pilot ensemble's draws, each next to those of chains run in the one before's
+    /// coordinates with half the steps), its t proposal and that t's k̂ ([`fit_map`]).
+    fn straighten(
+        &self,
+        ub: &Unbounded,
+        progress: &(dyn Fn(&str, usize, usize) + Sync),
+    ) -> Result<(QuadraticMap, TProposal, f64), SampleError> {
+        let seed = self.sampling.seed;
+        let u0: Vec<Vec<f64>> = self.x0.iter().map(|x| ub.to_u(x)).collect();
+        let pilot = EnsembleSettings {
+            walkers: u0.len(),
+            steps: PILOT_STEPS,
+            burn_in: PILOT_STEPS,
+            seed,
+        };
+        let pilot_progress = |done: usize, total: usize| progress("pilot", done, total);
+        let moves = Moves::Mixed { de: DE_SHARE };
+        let mut draws = run_ensemble_with(ub, &u0, &pilot, moves, &pilot_progress)?.flat();
+        let step_progress = |done: usize, total: usize| progress("sampling", done, total);
+        for round in 0..MAP_ROUNDS - 1 {
+            let (map, q, _) = fit_map(ub, &draws, seed)?;
+            let mapped = Mapped {
+                density: ub,
+                map: &map,
+            };
+            let steps = self.sampling.steps.div_ceil(2).max(4);
+            let settings = self.chains(steps, seed ^ (0x6d61_7030 + round as u64));
+            let zc = run_chains(&mapped, &q, &settings, None, &step_progress)?;
+            draws = zc
+                .thinned(MAP_DRAWS)
+                .iter()
+                .map(|z| map.inverse(z))
+                .collect();
+        }
+        fit_map(ub, &draws, seed)
+    }
+}
+
+/// Steps per walker of the pilot ensemble whose draws the first transport map is fitted
+/// to, after as many burn-in steps.
+pub const PILOT_STEPS: usize = 500;
+/// Maps fitted in turn: the first to the pilot's draws, each next to the draws of chains
+/// that ran (half the steps) in the coordinates of the one before; the chains of the last
+/// run all the steps.
+pub const MAP_ROUNDS: usize = 2;
+/// Draws a map is fitted to (spread evenly over the chains).
+pub const MAP_DRAWS: usize = 8000;
+/// Relative ridge of the map's least squares.
+pub const MAP_RIDGE: f64 = 1e-6;
+/// Scale c of the mapped draws' t proposal on their Cholesky factor.
+pub const MAP_SCALE: f64 = 1.2;
+/// Largest k̂ of the last map's t at which its chains draw the posterior; above it the
+/// ensemble does. On the 30 twin pages of every size and style the transport chains
+/// reached a lower R̂ than the ensemble on every page up to k̂ 1.83, a higher one on the
+/// three from 2.51 (docs/validation.md, "Sampled bands on a page").
+pub const TRANSPORT_K_HAT_LIMIT: f64 = 2.0;
+
+/// The quadratic map fitted to `draws` (coordinates of `density`), the t proposal of the
+/// mapped draws' Gaussian, and its importance weights' k̂ over `IMPORTANCE_DRAWS` draws
+/// where p > 0.
+fn fit_map(
+    density: &dyn LogDensity,
+    draws: &[Vec<f64>],
+    seed: u64,
+) -> Result<(QuadraticMap, TProposal, f64), SampleError> {
+    let map = QuadraticMap::fit(draws, MAP_RIDGE).ok_or(SampleError::Curvature(
+        "no draws to fit the transport map to",
+    ))?;
+    let zs: Vec<Vec<f64>> = draws.iter().map(|x| map.forward(x)).collect();
+    let q = TProposal {
+        laplace: gaussian_of(&zs).ok_or(SampleError::Curvature(
+            "the mapped draws' covariance is not positive definite",
+        ))?,
+        nu: PROPOSAL_NU,
+        scale: MAP_SCALE,
+    };
+    let mapped = Mapped { density, map: &map };
+    let (_, log_w) = ImportanceCheck::weighed(&mapped, &q, IMPORTANCE_DRAWS, seed ^ 0x1a91);
+    let k_hat = ImportanceCheck::of_inside(log_w).k_hat;
+    Ok((map, q, k_hat))
 }
 
 /// The 2.5, 50 and 97.5 % quantiles of each of the `n` sampled parameters over every kept

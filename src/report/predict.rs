@@ -592,7 +592,8 @@ pub fn band_notes(pr: &Prediction) -> Vec<String> {
     }
     if b.sampling.is_some() {
         out.push(
-            "The samples that did not converge are summarised under \"Posterior samples\"."
+            "The samples that did not converge are summarised under \"Posterior samples\"; \
+             none was propagated through the figures (convergence is decided first)."
                 .to_string(),
         );
     }
@@ -662,7 +663,7 @@ fn sampled_band_notes(pr: &Prediction, s: &crate::predict::PosteriorSummary) -> 
 
 /// What drew the samples: (its units, "walkers" or "chains"; its description and why).
 fn sampler_words(s: crate::predict::Sampler) -> (&'static str, String) {
-    use crate::predict::Sampler;
+    use crate::predict::{Sampler, TRANSPORT_K_HAT_LIMIT};
     match s {
         Sampler::Laplace { k_hat } => (
             "chains",
@@ -672,10 +673,31 @@ fn sampler_words(s: crate::predict::Sampler) -> (&'static str, String) {
                  k̂ {k_hat:.2} < 0.7"
             ),
         ),
-        Sampler::Ensemble { k_hat } => (
+        Sampler::Transport {
+            laplace_k_hat,
+            k_hat,
+        } => (
+            "chains",
+            format!(
+                "Metropolis–Hastings in the coordinates of a quadratic transport map learnt \
+                 from a pilot ensemble, which straightens the posterior's curved valley \
+                 (independence moves from a t there, importance weights' k̂ {k_hat:.2}, and \
+                 whitened random walks), as the posterior is far from the fit's Laplace \
+                 approximation{}",
+                match laplace_k_hat {
+                    Some(k) if k.is_finite() => format!(" (its weights' k̂ {k:.2} ≥ 0.7)"),
+                    Some(_) => " (some of its draws lie outside the support)".to_string(),
+                    None => String::new(),
+                }
+            ),
+        ),
+        Sampler::Ensemble {
+            k_hat,
+            transport_k_hat,
+        } => (
             "walkers",
             format!(
-                "affine-invariant ensemble of differential-evolution and stretch moves{}",
+                "affine-invariant ensemble of differential-evolution and stretch moves{}{}",
                 match k_hat {
                     Some(k) if k.is_finite() => format!(
                         ", as the posterior is far from the fit's Laplace approximation \
@@ -684,6 +706,13 @@ fn sampler_words(s: crate::predict::Sampler) -> (&'static str, String) {
                     Some(_) => ", as the posterior is far from the fit's Laplace \
                          approximation (some of its draws lie outside the support)"
                         .to_string(),
+                    None => String::new(),
+                },
+                match transport_k_hat {
+                    Some(k) => format!(
+                        ", and a quadratic transport map did not straighten it (k̂ {k:.2} > \
+                         {TRANSPORT_K_HAT_LIMIT})"
+                    ),
                     None => String::new(),
                 }
             ),
@@ -776,12 +805,22 @@ pub fn sampling_json(pr: &Prediction) -> serde_json::Value {
             "sampler": match s.sampler {
                 crate::predict::Sampler::Laplace { .. } => "laplace_chains",
                 crate::predict::Sampler::Ensemble { .. } => "ensemble",
+                crate::predict::Sampler::Transport { .. } => "transport_chains",
             },
             "laplace_k_hat": match s.sampler {
                 crate::predict::Sampler::Laplace { k_hat } => Some(k_hat),
-                crate::predict::Sampler::Ensemble { k_hat } => k_hat.filter(|k| k.is_finite()),
+                crate::predict::Sampler::Ensemble { k_hat, .. } => k_hat.filter(|k| k.is_finite()),
+                crate::predict::Sampler::Transport { laplace_k_hat, .. } => {
+                    laplace_k_hat.filter(|k| k.is_finite())
+                }
+            },
+            "transport_k_hat": match s.sampler {
+                crate::predict::Sampler::Transport { k_hat, .. } => Some(k_hat),
+                crate::predict::Sampler::Ensemble { transport_k_hat, .. } => transport_k_hat,
+                _ => None,
             },
             "acceptance": s.acceptance, "draws": s.draws, "failed_draws": s.failed_draws,
+            "propagated": s.draws > 0,
             "converged": s.converged(), "spread": s.spread, "parameters": params,
         })
     });

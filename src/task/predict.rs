@@ -187,10 +187,16 @@ impl PredictOptions {
     /// Samples asked need the dataset; the sampler's counts must be usable.
     fn check_sampling(&self) -> Result<(), OptionError> {
         let s = &self.sampling;
-        if let Some(w) = s.walkers.filter(|w| *w < 4 || w % 2 == 1) {
+        // Which sampler runs is known only once the posterior is: the Laplace-guided
+        // chains take any number ≥ 2, the ensemble checks its own need when it runs.
+        if let Some(w) = s.walkers.filter(|w| *w < 2) {
             return Err(OptionError::of(
                 Opt::PredictWalkers,
-                format!(" {w}: give an even number ≥ 2·(estimated parameters + 1)"),
+                format!(
+                    " {w}: give at least 2 (chains of the Laplace-guided sampler: any number \
+                     ≥ 2; walkers of the ensemble, which a posterior far from Gaussian gets: \
+                     an even number ≥ 2·(estimated parameters + 1))"
+                ),
             ));
         }
         if s.steps < 20 {
@@ -646,5 +652,30 @@ pub fn source_name(path: &Path, fit: &FitFile) -> String {
         path.display().to_string()
     } else {
         format!("{} (fit of dataset {})", path.display(), fit.dataset)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Laplace-guided chains run with any number ≥ 2 of chains (R̂ compares two or
+    /// more), so `--walkers` takes 2 or 3; 1 and 0 are refused, naming the option.
+    #[test]
+    fn walkers_take_any_number_of_chains_from_two() {
+        let with = |w: usize| {
+            let mut o = PredictOptions::default();
+            o.sampling.walkers = Some(w);
+            o.check(101_325.0)
+        };
+        assert!(with(2).is_ok() && with(3).is_ok() && with(40).is_ok());
+        for w in [0, 1] {
+            let e = with(w).unwrap_err();
+            let m = e.to_string();
+            assert!(
+                m.contains("sampling.walkers") && m.contains("at least 2"),
+                "{m}"
+            );
+        }
     }
 }

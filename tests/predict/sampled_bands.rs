@@ -154,7 +154,7 @@ fn auto_falls_back_to_the_delta_method_with_the_reason_when_the_samples_do_not_c
     let dir = tempfile::tempdir().unwrap();
     let fit = catalogue_fit(dir.path(), &[]);
     let out = dir.path().join("auto");
-    // 20 steps of 16+ walkers cannot reach R̂ < 1.01 and an ESS of 400.
+    // 20 steps of 8 chains (or 16+ walkers) cannot reach R̂ < 1.01 and an ESS of 400.
     let (code, stdout, stderr) = predict_run(&[
         fit.to_str().unwrap(),
         "--steps",
@@ -185,6 +185,14 @@ fn auto_falls_back_to_the_delta_method_with_the_reason_when_the_samples_do_not_c
         "{md}"
     );
     assert!(md.contains("Not used for the bands"), "{md}");
+    // Convergence is decided before propagating: no sample was run through the figures.
+    assert_eq!(json["sampling"]["draws"], 0);
+    assert_eq!(json["sampling"]["propagated"], false);
+    assert!(!stderr.contains("propagating"), "{stderr}");
+    assert!(
+        md.contains("none was propagated through the figures"),
+        "{md}"
+    );
     // The fit file's own reasons against the delta method are still said.
     if let Some(w) = json["delta_unreliable"].as_str() {
         assert!(

@@ -34,7 +34,7 @@
 //! how many threads rayon runs them on nor on where a run was stopped and resumed.
 
 use super::checkpoint::{chains_key, ChainState, Checkpoint, Saved};
-use super::laplace::TProposal;
+use super::proposal::Proposal;
 use super::{Chains, LogDensity, SampleError};
 use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
@@ -91,22 +91,22 @@ pub(crate) fn stream(seed: u64, chain: usize, block: usize) -> Xoshiro256PlusPlu
 }
 
 /// Chain `c`'s start: a draw of `q` where p > 0 (module documentation).
-fn start(density: &dyn LogDensity, q: &TProposal, seed: u64, c: usize) -> ChainState {
+fn start<P: Proposal>(density: &dyn LogDensity, q: &P, seed: u64, c: usize) -> ChainState {
     // A stream of its own: block 0's stream, which the start's draws precede.
     let mut rng = stream(seed, c, 0);
     let first = (0..100)
-        .map(|_| q.draw(&mut rng))
+        .map(|_| q.draw_with(&mut rng))
         .map(|x| {
             let lp = density.log_density(&x);
             (x, lp)
         })
         .find(|(_, lp)| lp.is_finite());
     let (x, lp) = first.unwrap_or_else(|| {
-        let m = q.laplace.mode.clone();
+        let m = q.walk().mode.clone();
         let lp = density.log_density(&m);
         (m, lp)
     });
-    ChainState::new(x, lp, (2.38 / (q.laplace.dim() as f64).sqrt()).ln())
+    ChainState::new(x, lp, (2.38 / (q.dim() as f64).sqrt()).ln())
 }
 
 /// Robbins–Monro update of ln ε after the `n`-th tuned proposal (gain n^−0.6) towards the
@@ -117,9 +117,9 @@ fn tune(log_eps: &mut f64, n: u64, accepted: bool, target: f64) {
 }
 
 /// One step of chain `s` at step `t` (burn-in while t < `burn_in`).
-fn step(
+fn step<P: Proposal>(
     density: &dyn LogDensity,
-    q: &TProposal,
+    q: &P,
     s: &mut ChainState,
     rng: &mut Xoshiro256PlusPlus,
     t: usize,
@@ -127,12 +127,12 @@ fn step(
 ) {
     let independent = rng.random::<f64>() < INDEPENDENCE_SHARE;
     let (y, log_q_ratio) = if independent {
-        let y = q.draw(rng);
+        let y = q.draw_with(rng);
         let r = q.log_q(&s.x) - q.log_q(&y);
         (y, r)
     } else {
         let z = DVector::from_fn(s.x.len(), |_, _| StandardNormal.sample(rng));
-        let dx = &q.laplace.chol * z * s.log_eps.exp();
+        let dx = &q.walk().chol * z * s.log_eps.exp();
         (s.x.iter().zip(dx.iter()).map(|(a, b)| a + b).collect(), 0.0)
     };
     let u: f64 = rng.random();
@@ -155,9 +155,9 @@ fn step(
 }
 
 /// Runs chain `s` through block `b` of `settings`.
-fn run_block(
+fn run_block<P: Proposal>(
     density: &dyn LogDensity,
-    q: &TProposal,
+    q: &P,
     s: &mut ChainState,
     settings: &ChainSettings,
     c: usize,
@@ -175,9 +175,9 @@ fn run_block(
 /// draws; with a `checkpoint`, resumes from its file when there is one and writes it after
 /// every block (removed when the run ends). `progress(done, total)` after every block, in
 /// steps per chain.
-pub fn run_chains(
+pub fn run_chains<P: Proposal>(
     density: &dyn LogDensity,
-    q: &TProposal,
+    q: &P,
     settings: &ChainSettings,
     checkpoint: Option<&Checkpoint>,
     progress: &(dyn Fn(usize, usize) + Sync),
@@ -192,11 +192,11 @@ pub fn run_chains(
         return Err(SampleError::Block);
     }
     let d = density.dim();
-    if q.laplace.dim() != d {
+    if q.dim() != d {
         return Err(SampleError::Starts {
             got: 1,
             want: 1,
-            dim_got: q.laplace.dim(),
+            dim_got: q.dim(),
             dim: d,
         });
     }
@@ -251,7 +251,7 @@ pub fn run_chains(
 mod tests {
     use super::*;
     use crate::estimate::sample::checkpoint::CheckpointError;
-    use crate::estimate::sample::laplace::Laplace;
+    use crate::estimate::sample::laplace::{Laplace, TProposal};
     use nalgebra::DMatrix;
 
     /// A correlated Gaussian N(μ, A⁻¹) in 3 dimensions.

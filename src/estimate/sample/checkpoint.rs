@@ -24,7 +24,7 @@
 //! error naming the file ([`CheckpointError`]); it is never silently overwritten.
 
 use super::chains::ChainSettings;
-use super::laplace::TProposal;
+use super::proposal::Proposal;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -180,14 +180,12 @@ pub(crate) fn fingerprint<'a>(numbers: impl Iterator<Item = &'a f64>) -> String 
 }
 
 /// The key of a chains run with the proposal `q`.
-pub(crate) fn chains_key(settings: &ChainSettings, q: &TProposal) -> Key {
-    let l = &q.laplace;
-    let nums = [q.nu, q.scale];
+pub(crate) fn chains_key(settings: &ChainSettings, q: &dyn Proposal) -> Key {
     Key {
         sampler: "chains",
         settings: settings.clone(),
-        fingerprint: fingerprint(l.mode.iter().chain(l.chol.iter()).chain(nums.iter())),
-        dim: l.dim(),
+        fingerprint: fingerprint(q.numbers().iter()),
+        dim: q.dim(),
     }
 }
 

@@ -148,16 +148,33 @@ pub const K_HAT_LIMIT: f64 = 0.7;
 impl ImportanceCheck {
     /// `n` draws of `q` from the stream of `seed`, weighed by the density; the draws are made
     /// in one stream and evaluated in parallel, so the result does not depend on the threads.
-    pub fn of(density: &dyn super::LogDensity, q: &TProposal, n: usize, seed: u64) -> Self {
+    pub fn of(
+        density: &dyn super::LogDensity,
+        q: &dyn super::proposal::Proposal,
+        n: usize,
+        seed: u64,
+    ) -> Self {
+        let (_, log_w) = Self::weighed(density, q, n, seed);
+        Self::of_log_weights(log_w)
+    }
+
+    /// `n` draws of `q` from the stream of `seed` and their log-weights ln p − ln q (−∞
+    /// where p = 0), evaluated in parallel.
+    pub fn weighed(
+        density: &dyn super::LogDensity,
+        q: &dyn super::proposal::Proposal,
+        n: usize,
+        seed: u64,
+    ) -> (Vec<Vec<f64>>, Vec<f64>) {
         use rand::SeedableRng;
         use rayon::prelude::*;
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
-        let xs: Vec<Vec<f64>> = (0..n).map(|_| q.draw(&mut rng)).collect();
+        let xs: Vec<Vec<f64>> = (0..n).map(|_| q.draw_with(&mut rng)).collect();
         let log_w: Vec<f64> = xs
             .par_iter()
             .map(|x| density.log_density(x) - q.log_q(x))
             .collect();
-        Self::of_log_weights(log_w)
+        (xs, log_w)
     }
 
     /// The check of log-weights `log_w` (−∞ where p = 0).
@@ -181,6 +198,17 @@ impl ImportanceCheck {
             inside,
             ess,
             k_hat,
+        }
+    }
+
+    /// The check of log-weights `log_w` with k̂ over the draws inside the support only: a
+    /// draw where p = 0 has weight 0, it costs an evaluation and biases nothing.
+    pub fn of_inside(log_w: Vec<f64>) -> Self {
+        let draws = log_w.len();
+        let inside: Vec<f64> = log_w.into_iter().filter(|v| v.is_finite()).collect();
+        Self {
+            draws,
+            ..Self::of_log_weights(inside)
         }
     }
 

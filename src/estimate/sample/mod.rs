@@ -39,6 +39,8 @@ pub(crate) mod checkpoint;
 pub(crate) mod diagnostics;
 pub(crate) mod laplace;
 pub(crate) mod posterior;
+pub(crate) mod proposal;
+pub(crate) mod transport;
 
 pub use chains::{
     run_chains, ChainSettings, INDEPENDENCE_SHARE, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
@@ -46,6 +48,8 @@ pub use chains::{
 pub use checkpoint::{Checkpoint, CheckpointError};
 pub use diagnostics::{ess, ess_bulk, ess_tail, rhat_rank, summarise, ParamDiagnostics};
 pub use laplace::{ImportanceCheck, Laplace, TProposal, K_HAT_LIMIT};
+pub use proposal::Proposal;
+pub use transport::{gaussian_of, Mapped, QuadraticMap, Unbounded};
 
 pub use posterior::{FitPosterior, LogPrior};
 

@@ -154,6 +154,28 @@ impl FitPosterior<'_> {
         Laplace::from_precision(x, &h, &widths)
     }
 
+    /// The Laplace approximation with the full Hessian of ln p at the estimate (central
+    /// differences of the log-density, steps `step` in each coordinate), where the
+    /// Gauss–Newton one leaves out the residuals' own curvature Σ rᵢ∇²rᵢ.
+    pub fn laplace_full(&self, step: f64) -> Result<Laplace, SampleError> {
+        let x = self.to_coords(&self.likelihood.estimate());
+        let bounds = self.coord_bounds();
+        let steps: Vec<f64> = x
+            .iter()
+            .zip(&bounds)
+            .map(|(v, (lo, hi))| step.min(0.5 * (v - lo)).min(0.5 * (hi - v)).max(1e-9))
+            .collect();
+        let f = |y: &[f64]| self.log_density(y);
+        let h = neg_hessian(&f, &x, &steps);
+        if h.iter().any(|v| !v.is_finite()) {
+            return Err(SampleError::Curvature(
+                "the density is not finite beside the estimate",
+            ));
+        }
+        let widths: Vec<f64> = bounds.iter().map(|(lo, hi)| hi - lo).collect();
+        Laplace::from_precision(x, &h, &widths)
+    }
+
     /// The t proposal of [`Self::laplace`] with the sampler's ν and scale
     /// ([`super::PROPOSAL_NU`], [`super::PROPOSAL_SCALE`]).
     pub fn proposal(&self) -> Result<TProposal, SampleError> {
