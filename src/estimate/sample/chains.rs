@@ -35,6 +35,7 @@
 
 use super::checkpoint::{chains_key, ChainState, Checkpoint, Saved};
 use super::proposal::Proposal;
+use super::settings::ChainSettings;
 use super::{Chains, LogDensity, SampleError};
 use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
@@ -50,33 +51,6 @@ pub const PROPOSAL_NU: f64 = 5.0;
 pub const PROPOSAL_SCALE: f64 = 1.3;
 /// Acceptance of the random-walk moves that the burn-in tunes ε towards.
 pub const RW_TARGET: f64 = 0.25;
-
-/// How to run the chains.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ChainSettings {
-    /// Independent chains.
-    pub chains: usize,
-    /// Steps kept per chain after the burn-in.
-    pub steps: usize,
-    /// Steps per chain run first, tuning ε, and discarded.
-    pub burn_in: usize,
-    /// Steps per block (each block ends with a checkpoint, when one is asked).
-    pub block: usize,
-    /// Seed of the chains' streams.
-    pub seed: u64,
-}
-
-impl ChainSettings {
-    /// Steps per chain, burn-in and kept.
-    pub fn total(&self) -> usize {
-        self.burn_in + self.steps
-    }
-
-    /// Blocks of [`Self::block`] steps (the last may be shorter).
-    pub fn blocks(&self) -> usize {
-        self.total().div_ceil(self.block.max(1))
-    }
-}
 
 /// The stream of block `block` of chain `chain` (see the module documentation).
 pub(crate) fn stream(seed: u64, chain: usize, block: usize) -> Xoshiro256PlusPlus {

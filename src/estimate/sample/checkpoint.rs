@@ -23,8 +23,8 @@
 //! A checkpoint made with other settings, for another posterior or in another format is an
 //! error naming the file ([`CheckpointError`]); it is never silently overwritten.
 
-use super::chains::ChainSettings;
 use super::proposal::Proposal;
+use super::settings::ChainSettings;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

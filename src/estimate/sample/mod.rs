@@ -37,18 +37,20 @@
 pub(crate) mod chains;
 pub(crate) mod checkpoint;
 pub(crate) mod diagnostics;
+pub(crate) mod importance;
 pub(crate) mod laplace;
 pub(crate) mod posterior;
 pub(crate) mod proposal;
+pub(crate) mod settings;
 pub(crate) mod transport;
 
-pub use chains::{
-    run_chains, ChainSettings, INDEPENDENCE_SHARE, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
-};
+pub use chains::{run_chains, INDEPENDENCE_SHARE, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET};
 pub use checkpoint::{Checkpoint, CheckpointError};
 pub use diagnostics::{ess, ess_bulk, ess_tail, rhat_rank, summarise, ParamDiagnostics};
-pub use laplace::{ImportanceCheck, Laplace, TProposal, K_HAT_LIMIT};
+pub use importance::{ImportanceCheck, K_HAT_LIMIT};
+pub use laplace::{Laplace, TProposal};
 pub use proposal::Proposal;
+pub use settings::ChainSettings;
 pub use transport::{gaussian_of, Mapped, QuadraticMap, Unbounded};
 
 pub use posterior::{FitPosterior, LogPrior};
