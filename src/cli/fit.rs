@@ -1,5 +1,6 @@
 //! `vanefit fit` (docs/cli.md, "fit"): the options, progress and summary on the terminal; the fit
-//! itself is `vanefit::task::fit`, shared with `batch` and the Python package.
+//! itself is `vanefit::task::fit` (named by its module, where it is defined), shared with
+//! `batch` and the Python package.
 
 use crate::cli::Failure;
 use clap::{Args, ValueEnum};
@@ -11,7 +12,7 @@ use vanefit::estimate::{FitOutcome, FitSetup, UncertaintyMethod};
 use vanefit::model::EffectSet;
 use vanefit::report::explain;
 use vanefit::report::fit as report;
-use vanefit::task::{
+use vanefit::task::fit::{
     displacement_start_line, fit_to, pinning_lines, FitObserver, FitOptions, ParamRange, Pinning,
 };
 
