@@ -16,10 +16,10 @@
 
 use super::context::Context;
 use super::discover::{self, Regression};
-use super::error::DiagnoseError;
 use super::fitting::{FitJob, Fitted};
-use super::models::{parts, Models};
-use super::{AlsoConsistent, Candidate, ModelKind, SELECT_DELTA_BIC};
+use super::models::{parts, refit_job, Models};
+use super::observe::Note;
+use super::{AlsoConsistent, Candidate, ModelKind, Selected, SELECT_DELTA_BIC};
 use crate::model::effects::{Category, EffectSet};
 use crate::model::motor::{BalanceId, ExtraTerm, PressureFactor, SpeedFactor};
 
@@ -40,12 +40,11 @@ pub(crate) fn one_explanation(
     baseline: &Fitted,
     models: &mut Models,
     chosen: Option<Candidate>,
-) -> Result<Option<Candidate>, DiagnoseError> {
-    let Some(c) = chosen else {
-        return Ok(None);
-    };
+    notes: &mut Vec<Note>,
+) -> Option<Candidate> {
+    let c = chosen?;
     let Some(reg) = reg.filter(|_| !c.fitted.extra.is_empty() && parts(&c.fitted) >= 2) else {
-        return Ok(Some(c));
+        return Some(c);
     };
     let jobs: Vec<(ModelKind, FitJob)> = alone_terms(&c, reg)
         .into_iter()
@@ -53,8 +52,8 @@ pub(crate) fn one_explanation(
         .filter(|(_, j)| !models.all.iter().any(|m| m.label == j.label))
         .collect();
     if !jobs.is_empty() {
-        cx.say(super::Progress::DiscoveredStart(jobs.len()));
-        let found = models.refit(cx, &jobs, Some("one-explanation refit"))?;
+        notes.push(Note::DiscoveredStart(jobs.len()));
+        let found = models.refit(cx, &jobs, Some("one-explanation refit"), notes);
         models.all.extend(found);
         models.sort();
     }
@@ -64,7 +63,22 @@ pub(crate) fn one_explanation(
         .filter(|m| parts(&m.fitted) == 1 && m.delta_bic <= c.delta_bic + SELECT_DELTA_BIC)
         .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
         .cloned();
-    Ok(Some(one.unwrap_or(c)))
+    Some(one.unwrap_or(c))
+}
+
+/// The models also consistent with the data beside the extended `model`, and an experiment
+/// that would separate them; none when nothing is `selected`.
+pub(crate) fn runners_up(
+    model: &Candidate,
+    selected: &[Selected],
+    all: &[Candidate],
+) -> (Vec<AlsoConsistent>, Option<String>) {
+    if selected.is_empty() {
+        return (Vec::new(), None);
+    }
+    let also = also_consistent(model, all);
+    let experiment = separating_experiment(model, &also);
+    (also, experiment)
 }
 
 /// The terms to refit alone: every flow law (constant and times |ω|) on the paths of the
@@ -137,7 +151,8 @@ fn alone_terms(c: &Candidate, reg: &Regression) -> Vec<ExtraTerm> {
 /// The refit of the base model with `t` alone, warm from the baseline, labelled by the
 /// term's formula.
 fn term_job(cx: &Context, t: ExtraTerm, baseline: &Fitted) -> FitJob {
-    cx.refit_job(
+    refit_job(
+        cx,
         format!(
             "uncatalogued {} ~ {}",
             discover::balance_symbol(t.balance),

@@ -105,9 +105,9 @@ pub(crate) mod fitting;
 pub(crate) mod stats;
 
 pub use alternatives::ALSO_CONSISTENT_DELTA_BIC;
+pub use analysis::noise_ratio_limit;
 pub use error::DiagnoseError;
 pub use json::{extended_fit_file, to_json};
-pub use locate::noise_ratio_limit;
 pub use observe::{ChowTest, DiagnoseObserver, Progress, Proposal, Silent};
 /// A number for people (also in the report).
 pub(crate) use summary::num;
@@ -123,6 +123,7 @@ use crate::model::effects::Effect;
 use crate::model::params::{spec, MotorParams};
 use context::Context;
 use models::Models;
+use observe::Note;
 use std::time::Instant;
 
 /// A refitted model must beat the simpler ones by this much BIC to be selected.
@@ -139,47 +140,56 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
 
 /// Runs a diagnosis of a dataset, telling `observer` how it goes: the phases of the module
 /// documentation, one after the other, every fit on `engine` (the thread count of
-/// `opts` is not used: the engine has its own).
+/// `opts` is not used: the engine has its own). The phases compute and return what they
+/// did; this orchestrator tells the observer and keeps the phases' clock ([`Account`]).
 pub(crate) fn diagnose_observed(
     recorded: &Dataset,
     opts: &DiagnoseOptions,
     engine: &Engine,
     observer: &dyn DiagnoseObserver,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let t0 = Instant::now();
+    let mut account = Account::new(observer);
     let (smoothed, inputs) = crate::objective::likelihood::smooth_inputs(recorded);
-    let cx = Context::new(&smoothed, opts, engine, observer, t0)?;
-    let fitted = baseline::fit(&cx)?;
-    cx.end_phase("baseline fit");
-    let refits = candidates::refit_singles(&cx, fitted)?;
-    cx.end_phase("candidate refits");
-    let base = locate::baseline(&cx, refits.baseline)?;
-    let mut models = Models::new(base.fitted.bic());
-    candidates::rank_singles(&cx, &mut models, refits.singles)?;
-    candidates::pairs(&cx, base.limit, &mut models)?;
-    cx.end_phase("pairs");
-    let regression = uncatalogued::search(&cx, &base.fitted, base.limit, &mut models)?;
-    candidates::similar_pairs(&cx, &mut models)?;
-    cx.end_phase("uncatalogued search");
-    let chosen = select::eliminate(&cx, &mut models)?;
-    let chosen =
-        alternatives::one_explanation(&cx, regression.as_ref(), &base.fitted, &mut models, chosen)?;
+    let cx = Context::new(&smoothed, opts, engine)?;
+    let notes = &mut Vec::new();
+    let Found {
+        base,
+        mut models,
+        skipped,
+        regression,
+    } = search(&cx, &mut account, notes)?;
+    let chosen = select::eliminate(&cx, &mut models, notes);
+    let reg = regression.as_ref();
+    let chosen = alternatives::one_explanation(&cx, reg, &base.fitted, &mut models, chosen, notes);
+    account.tell(notes);
     let mut baseline_c = base.candidate();
-    let concealment = concealment::test(&cx, &base, &mut baseline_c, &mut models, chosen.as_ref())?;
-    cx.end_phase("concealment and held-out prediction");
-    let extended = select::extend(&cx, chosen, &models.all, &baseline_c)?;
-    cx.end_phase("selection");
-    let extended_intervals = intervals::of_extended(&cx, &extended.model)?;
-    if !extended_intervals.is_empty() {
-        cx.end_phase("intervals of the extended model");
-    }
-    let (also_consistent, separating_experiment) = if extended.selected.is_empty() {
-        (Vec::new(), None)
+    let concealed = if concealment::applies(&cx) {
+        account.say(Progress::ConcealmentStart);
+        let held = chosen.as_ref();
+        let test = concealment::test(&cx, &base, &mut baseline_c, &mut models, held, notes)?;
+        account.tell(notes);
+        Some(test)
     } else {
-        let also = alternatives::also_consistent(&extended.model, &models.all);
-        let experiment = alternatives::separating_experiment(&extended.model, &also);
-        (also, experiment)
+        None
     };
+    account.end_phase("concealment and held-out prediction");
+    let extended = select::extend(&cx, chosen, &models.all, &baseline_c, notes)?;
+    account.tell(notes);
+    account.end_phase("selection");
+    let parameters = intervals::parameters(&extended.model);
+    if parameters > 0 {
+        account.say(Progress::IntervalsStart {
+            parameters,
+            profile: opts.profile_intervals,
+        });
+    }
+    let extended_intervals = intervals::of_extended(&cx, &extended.model, notes)?;
+    account.tell(notes);
+    if !extended_intervals.is_empty() {
+        account.end_phase("intervals of the extended model");
+    }
+    let (also_consistent, separating_experiment) =
+        alternatives::runners_up(&extended.model, &extended.selected, &models.all);
     let d = Diagnosis {
         dataset: smoothed.name.clone(),
         p_atm_pa: smoothed.p_atm_pa,
@@ -188,7 +198,7 @@ pub(crate) fn diagnose_observed(
         baseline_channels: base.channels,
         locations: base.locations,
         candidates: models.all,
-        skipped: refits.skipped,
+        skipped,
         selected: extended.selected,
         extended: extended.model,
         extended_channels: extended.channels,
@@ -196,18 +206,170 @@ pub(crate) fn diagnose_observed(
         extended_intervals,
         also_consistent,
         separating_experiment,
-        concealment,
+        concealment: concealed,
         regression,
         noise_ratio_limit: base.limit,
         estimated: cx.base_names.clone(),
         inputs,
-        phases: cx.phases(),
-        phase_evaluations: cx.phase_evaluations(),
-        wall_s: cx.elapsed_s(),
+        phases: account.phases(),
+        phase_evaluations: account.phase_evaluations(),
+        wall_s: account.elapsed_s(),
         threads: engine.threads(),
     };
-    cx.say(Progress::Done { wall_s: d.wall_s });
+    account.say(Progress::Done { wall_s: d.wall_s });
     Ok(d)
+}
+
+/// What the search of phases 1 to 5 found.
+struct Found {
+    /// The fitted baseline against the data.
+    base: locate::Baseline,
+    /// Every refitted model.
+    models: Models,
+    /// The catalog effects not tried.
+    skipped: Vec<Skipped>,
+    /// The regression of the baseline's misfit (None when discovery is off).
+    regression: Option<discover::Regression>,
+}
+
+/// Phases 1 to 5 in turn: the baseline, the candidates, where the baseline misses, the
+/// pairs and the uncatalogued terms, each phase's notes told to `account`.
+fn search(
+    cx: &Context,
+    account: &mut Account,
+    notes: &mut Vec<Note>,
+) -> Result<Found, DiagnoseError> {
+    account.say(Progress::BaselineStart {
+        starts: cx.opts.starts,
+        points: cx.cost.n_points(),
+        channels: cx.cost.n_channels(),
+    });
+    let fitted = baseline::fit(cx)?;
+    account.count(fitted.evaluations);
+    account.say(Progress::BaselineFitted(&fitted));
+    account.end_phase("baseline fit");
+    let (tried, skipped) = applicable_effects(cx.ds);
+    account.say(Progress::CandidatesStart(&tried));
+    let refits = candidates::refit_singles(cx, fitted, &tried, notes)?;
+    account.tell(notes);
+    account.end_phase("candidate refits");
+    let base = locate::baseline(cx, refits.baseline, notes)?;
+    account.tell(notes);
+    account.say(Progress::BaselineLocated {
+        ratio: base.ratio,
+        limit: base.limit,
+        locations: base.locations.len(),
+    });
+    let mut models = Models::new(base.fitted.bic());
+    candidates::rank_singles(cx, &mut models, refits.singles, notes);
+    account.tell(notes);
+    for c in &models.all {
+        account.say(Progress::Ranked(c));
+    }
+    candidates::pairs(cx, base.limit, &mut models, notes)?;
+    account.tell(notes);
+    account.end_phase("pairs");
+    let regression = if cx.opts.discover {
+        account.say(Progress::RegressionStart);
+        let found = uncatalogued::search(cx, &base.fitted, base.limit, &mut models, notes)?;
+        account.tell(notes);
+        Some(found)
+    } else {
+        None
+    };
+    candidates::similar_pairs(cx, &mut models, notes);
+    account.tell(notes);
+    account.end_phase("uncatalogued search");
+    Ok(Found {
+        base,
+        models,
+        skipped,
+        regression,
+    })
+}
+
+/// The orchestrator's account of a diagnosis: it tells the observer what each phase did,
+/// and keeps each finished phase's time and cost evaluations ([`Diagnosis::phases`],
+/// [`Diagnosis::phase_evaluations`]).
+struct Account<'a> {
+    observer: &'a dyn DiagnoseObserver,
+    /// When the diagnosis started.
+    t0: Instant,
+    /// When the current phase started (the end of the previous one).
+    phase_start: Instant,
+    /// Cost evaluations (whole simulations of every experiment) of the current phase.
+    evaluations: u64,
+    /// (phase, seconds, cost evaluations) of each finished phase.
+    phases: Vec<(String, f64, u64)>,
+}
+
+impl<'a> Account<'a> {
+    /// The account of a diagnosis starting now.
+    fn new(observer: &'a dyn DiagnoseObserver) -> Self {
+        let t0 = Instant::now();
+        Self {
+            observer,
+            t0,
+            phase_start: t0,
+            evaluations: 0,
+            phases: Vec::new(),
+        }
+    }
+
+    /// Tells the observer of one event, with the seconds since the start.
+    fn say(&self, event: Progress<'_>) {
+        self.observer.progress(self.elapsed_s(), &event);
+    }
+
+    /// Counts `n` cost evaluations of the current phase.
+    fn count(&mut self, n: u64) {
+        self.evaluations += n;
+    }
+
+    /// Tells the observer what a phase did (`notes`, emptied), in order, and counts its
+    /// evaluations. A phase that fails is not told: its error is the diagnosis's.
+    fn tell(&mut self, notes: &mut Vec<Note>) {
+        for note in notes.drain(..) {
+            match note.progress() {
+                Some(event) => self.say(event),
+                None => {
+                    if let Note::Evaluated(n) = note {
+                        self.count(n);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Ends the phase `name` (its time counts from the end of the previous one).
+    fn end_phase(&mut self, name: &str) {
+        let seconds = self.phase_start.elapsed().as_secs_f64();
+        let evaluations = std::mem::take(&mut self.evaluations);
+        self.phases.push((name.to_string(), seconds, evaluations));
+        self.phase_start = Instant::now();
+        self.observer.phase(name, seconds);
+    }
+
+    /// (phase, seconds) of the finished phases.
+    fn phases(&self) -> Vec<(String, f64)> {
+        self.phases
+            .iter()
+            .map(|(p, s, _)| (p.clone(), *s))
+            .collect()
+    }
+
+    /// (phase, evaluations) of the finished phases.
+    fn phase_evaluations(&self) -> Vec<(String, u64)> {
+        self.phases
+            .iter()
+            .map(|(p, _, n)| (p.clone(), *n))
+            .collect()
+    }
+
+    /// Seconds since the diagnosis started.
+    fn elapsed_s(&self) -> f64 {
+        self.t0.elapsed().as_secs_f64()
+    }
 }
 
 /// The catalog effects tried on a dataset, and those skipped with the reason.

@@ -1,12 +1,15 @@
 //! The refitted models of a diagnosis: their names, labels and scores.
 
+use super::analysis::channels;
 use super::context::Context;
 use super::error::DiagnoseError;
 use super::fitting::{self, FitJob, Fitted};
-use super::observe::Progress;
+use super::observe::Note;
 use super::{analysis, Candidate, ModelKind};
 use crate::data::dataset::Dataset;
 use crate::model::effects::EffectSet;
+use crate::model::motor::ExtraTerm;
+use crate::model::params::{estimated_names as names_for, MotorParams};
 
 /// Every refitted model so far, scored against the baseline's BIC.
 pub(crate) struct Models {
@@ -30,15 +33,16 @@ impl Models {
         self.all.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
     }
 
-    /// A fit with its ΔBIC and noise ratio.
+    /// A fit with its ΔBIC and noise ratio (the simulation of its channels noted in `notes`).
     pub(crate) fn score(
         &self,
         cx: &Context,
         label: &str,
         kind: ModelKind,
         f: Fitted,
+        notes: &mut Vec<Note>,
     ) -> Result<Candidate, DiagnoseError> {
-        let ch = cx.channels(&f)?;
+        let ch = channels(cx, &f, notes)?;
         Ok(Candidate {
             label: label.to_string(),
             kind,
@@ -49,43 +53,60 @@ impl Models {
         })
     }
 
-    /// Runs the fits and scores each, reporting it; a failed fit is reported as `what`
-    /// failed (None: the job's label) and left out.
+    /// Runs the fits and scores each, noting it; a failed fit is noted as `what` failed
+    /// (None: the job's label) and left out.
     pub fn refit(
         &self,
         cx: &Context,
         jobs: &[(ModelKind, FitJob)],
         what: Option<&str>,
-    ) -> Result<Vec<Candidate>, DiagnoseError> {
+        notes: &mut Vec<Note>,
+    ) -> Vec<Candidate> {
         let only: Vec<FitJob> = jobs.iter().map(|(_, j)| j.clone()).collect();
         let mut out = Vec::new();
-        for ((kind, job), r) in
-            jobs.iter()
-                .zip(fitting::run_jobs(&cx.cost, &cx.target, &only, cx.threads()))
+        for ((kind, job), r) in jobs
+            .iter()
+            .zip(fitting::run_jobs(&cx.cost, &cx.target, &only, cx.engine))
         {
+            let what = what.unwrap_or(&job.label);
             match r {
                 Ok(f) => {
-                    cx.count(f.evaluations);
+                    notes.push(Note::Evaluated(f.evaluations));
                     // A fitted point whose simulation then fails (a datasheet row without
                     // steady state) is a failed fit, not a failed diagnosis.
-                    match self.score(cx, &job.label, *kind, f) {
+                    match self.score(cx, &job.label, *kind, f, notes) {
                         Ok(c) => {
-                            cx.say(Progress::Scored(&c));
+                            notes.push(Note::Scored(c.clone()));
                             out.push(c);
                         }
-                        Err(e) => cx.say(Progress::Failed {
-                            what: what.unwrap_or(&job.label),
-                            error: &e.to_string(),
-                        }),
+                        Err(e) => notes.push(Note::failed(what, &e)),
                     }
                 }
-                Err(e) => cx.say(Progress::Failed {
-                    what: what.unwrap_or(&job.label),
-                    error: &e.to_string(),
-                }),
+                Err(e) => notes.push(Note::failed(what, &e)),
             }
         }
-        Ok(out)
+        out
+    }
+}
+
+/// A warm refit of a model (catalog `effects` and discovered terms `extra`) from given
+/// starts, with the refit budget: what [`Models::refit`] runs.
+pub(crate) fn refit_job(
+    cx: &Context,
+    label: String,
+    effects: EffectSet,
+    extra: Vec<ExtraTerm>,
+    starts: Vec<MotorParams>,
+) -> FitJob {
+    FitJob {
+        label,
+        names: names_for(&effects),
+        effects,
+        extra,
+        starts,
+        lhs: 0,
+        max_iters: cx.opts.refit_iters,
+        seed: cx.opts.seed,
     }
 }
 

@@ -2,13 +2,14 @@
 //! BIC, checked by backward elimination; then the extended model and its `selected`
 //! entries.
 
+use super::analysis::channels;
 use super::analysis::{self, ChannelData, Location};
 use super::context::Context;
 use super::discover;
 use super::error::DiagnoseError;
 use super::fitting::FitJob;
-use super::models::{label_of, parts, Models};
-use super::observe::Progress;
+use super::models::{label_of, parts, refit_job, Models};
+use super::observe::Note;
 use super::{Candidate, Effect, ModelKind, Selected, SELECT_DELTA_BIC};
 use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
@@ -21,13 +22,14 @@ use crate::model::params::spec;
 pub(crate) fn eliminate(
     cx: &Context,
     models: &mut Models,
-) -> Result<Option<Candidate>, DiagnoseError> {
+    notes: &mut Vec<Note>,
+) -> Option<Candidate> {
     models.sort();
     let mut chosen = choose(&models.all);
     while let Some(c) = chosen.clone().filter(|c| parts(&c.fitted) >= 2) {
         let jobs = removals(cx, &c);
-        cx.say(Progress::Elimination(&c.label));
-        let subs = models.refit(cx, &jobs, None)?;
+        notes.push(Note::Elimination(c.label.clone()));
+        let subs = models.refit(cx, &jobs, None, notes);
         for sub in &subs {
             match models.all.iter_mut().find(|x| x.label == sub.label) {
                 Some(x) if x.delta_bic <= sub.delta_bic => {}
@@ -42,7 +44,7 @@ pub(crate) fn eliminate(
         }
         chosen = next;
     }
-    Ok(chosen)
+    chosen
 }
 
 /// The refits of `c` without each of its parts, warm from its optimum.
@@ -66,7 +68,7 @@ fn removals(cx: &Context, c: &Candidate) -> Vec<(ModelKind, FitJob)> {
                 .collect();
             let (label, kind) = label_of(&keep_effects, keep_terms.len());
             let starts = vec![c.fitted.params.clone()];
-            (kind, cx.refit_job(label, keep_effects, keep_terms, starts))
+            (kind, refit_job(cx, label, keep_effects, keep_terms, starts))
         })
         .collect()
 }
@@ -111,6 +113,7 @@ pub(crate) fn extend(
     chosen: Option<Candidate>,
     all: &[Candidate],
     baseline: &Candidate,
+    notes: &mut Vec<Note>,
 ) -> Result<Extended, DiagnoseError> {
     let chosen = chosen.map(|c| {
         all.iter()
@@ -123,7 +126,7 @@ pub(crate) fn extend(
         None => Vec::new(),
     };
     let model = chosen.unwrap_or_else(|| baseline.clone());
-    let channels = cx.channels(&model.fitted)?;
+    let channels = channels(cx, &model.fitted, notes)?;
     let locations = analysis::locate(&channels, cx.ds.p_atm_pa);
     Ok(Extended {
         model,
