@@ -9,8 +9,9 @@ use super::error::DiagnoseError;
 use super::fitting::{self, FitJob, Fitted};
 use super::models::{label_of, refit_job, Models};
 use super::observe::Note;
-use super::{analysis, off_value, Candidate, ModelKind};
+use super::{analysis, off_value, Candidate, ModelKind, Skipped};
 use super::{Effect, SELECT_DELTA_BIC};
+use crate::data::dataset::Dataset;
 use crate::model::effects::EffectSet;
 use crate::model::params::{spec, MotorParams, ParamId, DEFAULT_ESTIMATED_IDS};
 use crate::model::spec::SizeLaw;
@@ -21,6 +22,28 @@ pub(crate) struct Refits {
     pub baseline: Fitted,
     /// Each single effect's refit.
     pub(crate) singles: Vec<(FitJob, Fitted)>,
+}
+
+/// The catalog effects tried on a dataset, and those skipped with the reason.
+pub(crate) fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
+    let transient = ds.experiments.iter().any(|e| e.kind.is_transient());
+    let mut tried = Vec::new();
+    let mut skipped = Vec::new();
+    for e in Effect::ALL {
+        use crate::model::effects::ShowsIn;
+        match e.shows_in() {
+            ShowsIn::Never { reason } => skipped.push(Skipped {
+                effect: e,
+                reason: reason.into(),
+            }),
+            ShowsIn::TransientOnly { reason } if !transient => skipped.push(Skipped {
+                effect: e,
+                reason: reason.into(),
+            }),
+            _ => tried.push(e),
+        }
+    }
+    (tried, skipped)
 }
 
 /// Refits the base model (the null refit) and each effect of `tried`, warm from `baseline`;

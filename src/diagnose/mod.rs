@@ -248,7 +248,7 @@ fn search(
     account.count(fitted.evaluations);
     account.say(Progress::BaselineFitted(&fitted));
     account.end_phase("baseline fit");
-    let (tried, skipped) = applicable_effects(cx.ds);
+    let (tried, skipped) = candidates::applicable_effects(cx.ds);
     account.say(Progress::CandidatesStart(&tried));
     let refits = candidates::refit_singles(cx, fitted, &tried, notes)?;
     account.tell(notes);
@@ -372,28 +372,6 @@ impl<'a> Account<'a> {
     }
 }
 
-/// The catalog effects tried on a dataset, and those skipped with the reason.
-pub(crate) fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
-    let transient = ds.experiments.iter().any(|e| e.kind.is_transient());
-    let mut tried = Vec::new();
-    let mut skipped = Vec::new();
-    for e in Effect::ALL {
-        use crate::model::effects::ShowsIn;
-        match e.shows_in() {
-            ShowsIn::Never { reason } => skipped.push(Skipped {
-                effect: e,
-                reason: reason.into(),
-            }),
-            ShowsIn::TransientOnly { reason } if !transient => skipped.push(Skipped {
-                effect: e,
-                reason: reason.into(),
-            }),
-            _ => tried.push(e),
-        }
-    }
-    (tried, skipped)
-}
-
 /// The "off" value of an effect parameter (the nested base model, or as near as the search
 /// range allows), given the base parameters.
 fn off_value(name: &str, base: &MotorParams) -> f64 {
@@ -401,7 +379,7 @@ fn off_value(name: &str, base: &MotorParams) -> f64 {
 }
 #[cfg(test)]
 mod tests {
-    use super::candidates::effect_starts;
+    use super::candidates::{applicable_effects, effect_starts};
     use super::fitting::Fitted;
     use super::models::{label_of, subset};
     use super::select::choose;
