@@ -409,6 +409,59 @@ mod tests {
         }
     }
 
+    /// An observer that keeps what it is told.
+    #[derive(Default)]
+    struct Recorder {
+        lines: std::cell::RefCell<Vec<String>>,
+        phases: std::cell::RefCell<Vec<String>>,
+    }
+
+    impl DiagnoseObserver for Recorder {
+        fn progress(&self, _elapsed_s: f64, event: &Progress<'_>) {
+            self.lines.borrow_mut().push(event.to_string());
+        }
+        fn phase(&self, name: &str, _seconds: f64) {
+            self.phases.borrow_mut().push(name.to_string());
+        }
+    }
+
+    /// The orchestrator tells the observer a phase's notes in the order the phase made
+    /// them, counts their evaluations into that phase alone, and empties the notes.
+    #[test]
+    fn the_account_tells_a_phases_notes_in_order_and_counts_its_evaluations() {
+        let recorder = Recorder::default();
+        let mut account = Account::new(&recorder);
+        let notes = &mut vec![
+            Note::PairsStart(2),
+            Note::Evaluated(40),
+            Note::Failed {
+                what: "pair".into(),
+                error: "no start".into(),
+            },
+            Note::Evaluated(2),
+        ];
+        account.count(7);
+        account.tell(notes);
+        assert!(notes.is_empty());
+        account.end_phase("pairs");
+        account.tell(&mut vec![Note::Evaluated(5)]);
+        account.end_phase("selection");
+        assert_eq!(
+            *recorder.lines.borrow(),
+            ["refitting 2 pair(s)", "pair failed: no start"]
+        );
+        assert_eq!(*recorder.phases.borrow(), ["pairs", "selection"]);
+        assert_eq!(
+            account.phase_evaluations(),
+            [
+                ("pairs".to_string(), 7 + 40 + 2),
+                ("selection".to_string(), 5)
+            ]
+        );
+        let names: Vec<String> = account.phases().into_iter().map(|(p, _)| p).collect();
+        assert_eq!(names, ["pairs", "selection"]);
+    }
+
     #[test]
     fn the_simplest_model_within_ten_of_the_best_is_chosen() {
         use ModelKind::*;
