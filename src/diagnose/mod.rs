@@ -69,13 +69,16 @@
 //!
 //! # Code
 //!
-//! `diagnose_observed` runs the phases in turn, one file each, passing a small context
-//! (dataset, cost, likelihood target, options, observer, phase clock): `baseline.rs` (1),
+//! `diagnose_observed` runs the phases in turn, one file each, passing a small read-only
+//! context (dataset, cost, likelihood target, options, thread pool): `baseline.rs` (1),
 //! `candidates.rs` (the single refits with the null refit, which may still improve the
 //! baseline, so they run before locating; then the pairs), `locate.rs` (2),
 //! `uncatalogued.rs` (5), `select.rs` (backward elimination, then the extended model),
-//! `concealment.rs` (3) and `intervals.rs` (7). The types are in `types.rs`, the outputs in
-//! `json.rs` and `summary.rs`. Progress goes to a [`DiagnoseObserver`]: the library prints nothing.
+//! `concealment.rs` (3) and `intervals.rs` (7). A phase returns its result and what it did
+//! (`observe::Note`s: a refit scored or failed, a term proposed, the cost evaluations it
+//! spent); the orchestrator says the event that opens each phase, tells the notes, and keeps
+//! the phases' clock. The types are in `types.rs`, the outputs in `json.rs` and
+//! `summary.rs`. Progress goes to a [`DiagnoseObserver`]: the library prints nothing.
 
 mod alternatives;
 mod baseline;

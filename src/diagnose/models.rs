@@ -76,7 +76,7 @@ impl Models {
                     // steady state) is a failed fit, not a failed diagnosis.
                     match self.score(cx, &job.label, *kind, f, notes) {
                         Ok(c) => {
-                            notes.push(Note::Scored(c.clone()));
+                            notes.push(Note::Scored(Box::new(c.clone())));
                             out.push(c);
                         }
                         Err(e) => notes.push(Note::failed(what, &e)),

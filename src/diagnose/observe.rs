@@ -204,7 +204,7 @@ pub(crate) enum Note {
         error: String,
     },
     /// [`Progress::Scored`].
-    Scored(Candidate),
+    Scored(Box<Candidate>),
     /// [`Progress::PairsStart`].
     PairsStart(usize),
     /// [`Progress::Proposed`].
