@@ -387,6 +387,7 @@ mod tests {
     use super::models::{label_of, subset};
     use super::select::choose;
     use super::*;
+    use crate::data::{SensorNoise, SynthPlan};
     use crate::model::effects::EffectSet;
     use crate::model::params::ParamId;
     use std::path::Path;
@@ -463,6 +464,65 @@ mod tests {
         );
         let names: Vec<String> = account.phases().into_iter().map(|(p, _)| p).collect();
         assert_eq!(names, ["pairs", "selection"]);
+    }
+
+    /// An observer that notes, for each event, its line, the refits it announces (at least)
+    /// and how many refits had run when it arrived.
+    #[derive(Default)]
+    struct RefitClock {
+        events: std::cell::RefCell<Vec<(String, usize, usize)>>,
+    }
+
+    impl DiagnoseObserver for RefitClock {
+        fn progress(&self, _elapsed_s: f64, event: &Progress<'_>) {
+            let announced = match event {
+                Progress::PairsStart(n) | Progress::DiscoveredStart(n) => *n,
+                Progress::Elimination(_) => 1,
+                _ => 0,
+            };
+            let run = models::REFITS_RUN.with(|n| n.get());
+            let line = event.to_string();
+            self.events.borrow_mut().push((line, announced, run));
+        }
+    }
+
+    /// A line that announces refits ("refitting 3 pair(s)") arrives before them: the next
+    /// event (the first refit's score) finds that many more refits run. A diagnosis of
+    /// synthetic data with breakaway friction, pairs always tried.
+    #[test]
+    fn a_line_that_announces_refits_arrives_before_them() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/measurements/ar034-synthetic");
+        let mut ds = Dataset::load(Path::new(dir)).unwrap();
+        let params = MotorParams::default()
+            .with_value(ParamId::T_STATIC, 0.0265)
+            .and_then(|p| p.with_value(ParamId::W_STRIBECK, 30.0))
+            .unwrap();
+        let effects = EffectSet::empty().with(Effect::BreakawayFriction);
+        let truth = crate::model::motor::Motor::new(params, effects);
+        let (plan, noise) = (SynthPlan::default(), SensorNoise::typical());
+        let solver = crate::numerics::DefaultSolver::default();
+        ds.experiments = crate::data::synthesize(&truth, &solver, &plan, &noise, 1).unwrap();
+        let opts = DiagnoseOptions {
+            concealment: false,
+            pairs_always: true,
+            ..DiagnoseOptions::quick(1)
+        };
+        let clock = RefitClock::default();
+        let engine = Engine::with_threads(Some(2)).unwrap();
+        diagnose_observed(&ds, &opts, &engine, &clock).unwrap();
+        let events = clock.events.borrow();
+        let opened: Vec<_> = events
+            .windows(2)
+            .filter(|w| w[0].1 > 0)
+            .map(|w| (&w[0].0, w[0].1, w[1].2 - w[0].2))
+            .collect();
+        assert!(
+            opened.iter().any(|(line, _, _)| line.ends_with("pair(s)")),
+            "{events:#?}"
+        );
+        for (line, announced, ran_after) in opened {
+            assert!(ran_after >= announced, "{line}: {ran_after} refit(s) after it");
+        }
     }
 
     #[test]

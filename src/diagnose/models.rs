@@ -11,6 +11,13 @@ use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
 use crate::model::params::{estimated_names as names_for, MotorParams};
 
+#[cfg(test)]
+thread_local! {
+    /// Refits that [`Models::refit`] has run on this thread: a test observer reads it to see
+    /// whether a progress line arrives before the work it announces.
+    pub(crate) static REFITS_RUN: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// Every refitted model so far, scored against the baseline's BIC.
 pub(crate) struct Models {
     /// BIC of the baseline (after the null refit).
@@ -63,11 +70,11 @@ impl Models {
         notes: &mut Vec<Note>,
     ) -> Vec<Candidate> {
         let only: Vec<FitJob> = jobs.iter().map(|(_, j)| j.clone()).collect();
+        let results = fitting::run_jobs(&cx.cost, &cx.target, &only, cx.engine);
+        #[cfg(test)]
+        REFITS_RUN.with(|n| n.set(n.get() + jobs.len()));
         let mut out = Vec::new();
-        for ((kind, job), r) in jobs
-            .iter()
-            .zip(fitting::run_jobs(&cx.cost, &cx.target, &only, cx.engine))
-        {
+        for ((kind, job), r) in jobs.iter().zip(results) {
             let what = what.unwrap_or(&job.label);
             match r {
                 Ok(f) => {
