@@ -17,7 +17,7 @@
 use super::context::Context;
 use super::discover::{self, Regression};
 use super::fitting::{FitJob, Fitted};
-use super::models::{parts, refit_job, Models};
+use super::models::{parts, refit_job, Batch, Models};
 use super::observe::Note;
 use super::{AlsoConsistent, Candidate, ModelKind, Selected, SELECT_DELTA_BIC};
 use crate::model::effects::{Category, EffectSet};
@@ -31,31 +31,46 @@ const RANKED_PATH_TERMS: usize = 2;
 /// Most models listed as also consistent.
 const MAX_ALSO: usize = 4;
 
-/// The chosen model, or a one-part model within [`SELECT_DELTA_BIC`] of it when it holds a
-/// discovered term beside other parts (see the module documentation). The refits join
-/// `models`.
-pub(crate) fn one_explanation(
+/// The regression of a chosen model that holds a discovered term beside other parts (a
+/// possible patchwork, see the module documentation); None otherwise.
+fn patchwork<'a>(c: &Candidate, reg: Option<&'a Regression>) -> Option<&'a Regression> {
+    reg.filter(|_| !c.fitted.extra.is_empty() && parts(&c.fitted) >= 2)
+}
+
+/// The refits that test a patchwork `chosen` against one explanation: each term of
+/// [`alone_terms`] alone, warm from the baseline, unless already fitted. None when there is
+/// nothing to refit.
+pub(crate) fn alone_refits(
     cx: &Context,
     reg: Option<&Regression>,
     baseline: &Fitted,
-    models: &mut Models,
-    chosen: Option<Candidate>,
-    notes: &mut Vec<Note>,
-) -> Option<Candidate> {
+    models: &Models,
+    chosen: Option<&Candidate>,
+) -> Option<Batch> {
     let c = chosen?;
-    let Some(reg) = reg.filter(|_| !c.fitted.extra.is_empty() && parts(&c.fitted) >= 2) else {
-        return Some(c);
-    };
-    let jobs: Vec<(ModelKind, FitJob)> = alone_terms(&c, reg)
+    let reg = patchwork(c, reg)?;
+    let jobs: Vec<(ModelKind, FitJob)> = alone_terms(c, reg)
         .into_iter()
         .map(|t| (ModelKind::Uncatalogued, term_job(cx, t, baseline)))
         .filter(|(_, j)| !models.all.iter().any(|m| m.label == j.label))
         .collect();
-    if !jobs.is_empty() {
-        notes.push(Note::DiscoveredStart(jobs.len()));
-        let found = models.refit(cx, &jobs, Some("one-explanation refit"), notes);
-        models.all.extend(found);
-        models.sort();
+    (!jobs.is_empty()).then(|| Batch {
+        opening: Note::DiscoveredStart(jobs.len()),
+        jobs,
+        what: Some("one-explanation refit"),
+    })
+}
+
+/// The chosen model, or, when it is a patchwork, the best one-part model of `models` within
+/// [`SELECT_DELTA_BIC`] of it (after [`alone_refits`] joined `models`).
+pub(crate) fn one_explanation(
+    reg: Option<&Regression>,
+    models: &Models,
+    chosen: Option<Candidate>,
+) -> Option<Candidate> {
+    let c = chosen?;
+    if patchwork(&c, reg).is_none() {
+        return Some(c);
     }
     let one = models
         .all

@@ -7,7 +7,7 @@ use super::analysis::channels;
 use super::context::Context;
 use super::error::DiagnoseError;
 use super::fitting::{self, FitJob, Fitted};
-use super::models::{label_of, refit_job, Models};
+use super::models::{label_of, refit_job, Batch, Models};
 use super::observe::Note;
 use super::{analysis, off_value, Candidate, ModelKind, Skipped};
 use super::{Effect, SELECT_DELTA_BIC};
@@ -116,24 +116,24 @@ pub(crate) fn rank_singles(
     models.sort();
 }
 
-/// When the best single effect is significant, refits it paired with each of the next three
-/// (always, or only when its residuals still show structure beyond the baseline's noise
+/// When the best single effect is significant, the refits of it paired with each of the next
+/// three (always, or only when its residuals still show structure beyond the baseline's noise
 /// ratio `limit`, by [`super::DiagnoseOptions::pairs_always`]).
 pub(crate) fn pairs(
     cx: &Context,
     limit: f64,
-    models: &mut Models,
+    models: &Models,
     notes: &mut Vec<Note>,
-) -> Result<(), DiagnoseError> {
-    let singles: Vec<Candidate> = models.all.clone();
+) -> Result<Option<Batch>, DiagnoseError> {
+    let singles = &models.all;
     let Some(best) = singles.first().filter(|b| b.delta_bic < -SELECT_DELTA_BIC) else {
-        return Ok(());
+        return Ok(None);
     };
     let best_channels = channels(cx, &best.fitted, notes)?;
     let structure = analysis::noise_ratio(&best_channels) > limit
         || !analysis::locate(&best_channels, cx.ds.p_atm_pa).is_empty();
     if !(cx.opts.pairs_always || structure) {
-        return Ok(());
+        return Ok(None);
     }
     let jobs: Vec<(ModelKind, FitJob)> = singles
         .iter()
@@ -141,10 +141,16 @@ pub(crate) fn pairs(
         .take(3)
         .map(|other| (ModelKind::Pair, pair_job(cx, best, other)))
         .collect();
-    notes.push(Note::PairsStart(jobs.len()));
-    let found = models.refit(cx, &jobs, Some("pair"), notes);
-    models.all.extend(found);
-    Ok(())
+    Ok(Some(pair_batch(jobs)))
+}
+
+/// Pairs to refit, announced.
+fn pair_batch(jobs: Vec<(ModelKind, FitJob)>) -> Batch {
+    Batch {
+        opening: Note::PairsStart(jobs.len()),
+        jobs,
+        what: Some("pair"),
+    }
 }
 
 /// A discovered term can imitate a catalog effect that was never tried together with the best
@@ -153,15 +159,16 @@ pub(crate) fn pairs(
 /// can miss it: ω² vane friction ranks below breakaway friction on its own, yet is the
 /// partner of speed-dependent leakage); pairs already fitted are not refitted. The simplicity order then
 /// prefers the pair over "single + uncatalogued" whenever it explains the data as well.
-pub(crate) fn similar_pairs(cx: &Context, models: &mut Models, notes: &mut Vec<Note>) {
+/// None when there is no such pair to refit.
+pub(crate) fn similar_pairs(cx: &Context, models: &Models) -> Option<Batch> {
     let singles: Vec<&Candidate> = models
         .all
         .iter()
         .filter(|c| c.kind == ModelKind::Single)
         .collect();
-    let Some(best) = singles.first().filter(|b| b.delta_bic < -SELECT_DELTA_BIC) else {
-        return;
-    };
+    let best = singles
+        .first()
+        .filter(|b| b.delta_bic < -SELECT_DELTA_BIC)?;
     let categories: Vec<_> = models
         .all
         .iter()
@@ -186,12 +193,7 @@ pub(crate) fn similar_pairs(cx: &Context, models: &mut Models, notes: &mut Vec<N
             }
         }
     }
-    if jobs.is_empty() {
-        return;
-    }
-    notes.push(Note::PairsStart(jobs.len()));
-    let found = models.refit(cx, &jobs, Some("pair"), notes);
-    models.all.extend(found);
+    (!jobs.is_empty()).then(|| pair_batch(jobs))
 }
 
 /// The refit of `best`'s effect with `other`'s: warm from `best`'s optimum with `other`'s

@@ -77,7 +77,10 @@
 //! `concealment.rs` (3) and `intervals.rs` (7). A phase returns its result and what it did
 //! (`observe::Note`s: a refit scored or failed, a term proposed, the cost evaluations it
 //! spent); the orchestrator says the event that opens each phase, tells the notes, and keeps
-//! the phases' clock. The types are in `types.rs`, the outputs in `json.rs` and
+//! the phases' clock. A phase that refits models plans them (a `models::Batch`: the jobs
+//! and the line that announces them) and the orchestrator runs them (`Models::run`, the one
+//! place a model is refitted: the line is said before the work), handing the scored models
+//! back; backward elimination does so at each step of its loop. The types are in `types.rs`, the outputs in `json.rs` and
 //! `summary.rs`. Progress goes to a [`DiagnoseObserver`]: the library prints nothing.
 
 mod alternatives;
@@ -144,7 +147,8 @@ pub fn diagnose(recorded: &Dataset, opts: &DiagnoseOptions) -> Result<Diagnosis,
 /// Runs a diagnosis of a dataset, telling `observer` how it goes: the phases of the module
 /// documentation, one after the other, every fit on `engine` (the thread count of
 /// `opts` is not used: the engine has its own). The phases compute and return what they
-/// did; this orchestrator tells the observer and keeps the phases' clock ([`Account`]).
+/// did, and plan the refits they need; this orchestrator runs those ([`Models::run`]), tells the
+/// observer and keeps the phases' clock ([`Account`]).
 pub(crate) fn diagnose_observed(
     recorded: &Dataset,
     opts: &DiagnoseOptions,
@@ -161,23 +165,22 @@ pub(crate) fn diagnose_observed(
         skipped,
         regression,
     } = search(&cx, &mut account, notes)?;
-    let chosen = select::eliminate(&cx, &mut models, notes);
     let reg = regression.as_ref();
-    let chosen = alternatives::one_explanation(&cx, reg, &base.fitted, &mut models, chosen, notes);
-    account.tell(notes);
+    let chosen = chosen_model(&cx, &mut account, reg, &base.fitted, &mut models, notes);
     let mut baseline_c = base.candidate();
     let concealed = if concealment::applies(&cx) {
         account.say(Progress::ConcealmentStart);
         let held = chosen.as_ref();
-        let test = concealment::test(&cx, &base, &mut baseline_c, &mut models, held, notes)?;
+        let test = concealment::test(&cx, &base, &mut baseline_c, &mut models, held, notes);
         account.tell(notes);
-        Some(test)
+        Some(test?)
     } else {
         None
     };
     account.end_phase("concealment and held-out prediction");
-    let extended = select::extend(&cx, chosen, &models.all, &baseline_c, notes)?;
+    let extended = select::extended(&cx, chosen, &models.all, &baseline_c, notes);
     account.tell(notes);
+    let extended = extended?;
     account.end_phase("selection");
     let parameters = intervals::parameters(&extended.model);
     if parameters > 0 {
@@ -186,8 +189,9 @@ pub(crate) fn diagnose_observed(
             profile: opts.profile_intervals,
         });
     }
-    let extended_intervals = intervals::of_extended(&cx, &extended.model, notes)?;
+    let extended_intervals = intervals::of_extended(&cx, &extended.model, notes);
     account.tell(notes);
+    let extended_intervals = extended_intervals?;
     if !extended_intervals.is_empty() {
         account.end_phase("intervals of the extended model");
     }
@@ -235,8 +239,8 @@ struct Found {
     regression: Option<discover::Regression>,
 }
 
-/// Phases 1 to 5 in turn: the baseline, the candidates, where the baseline misses, the
-/// pairs and the uncatalogued terms, each phase's notes told to `account`.
+/// Phases 1 to 5 in turn: the baseline, the candidates, where the baseline misses, then
+/// [`widen`]; each phase's notes told to `account`.
 fn search(
     cx: &Context,
     account: &mut Account,
@@ -253,11 +257,13 @@ fn search(
     account.end_phase("baseline fit");
     let (tried, skipped) = candidates::applicable_effects(cx.ds);
     account.say(Progress::CandidatesStart(&tried));
-    let refits = candidates::refit_singles(cx, fitted, &tried, notes)?;
+    let refits = candidates::refit_singles(cx, fitted, &tried, notes);
     account.tell(notes);
+    let refits = refits?;
     account.end_phase("candidate refits");
-    let base = locate::baseline(cx, refits.baseline, notes)?;
+    let base = locate::baseline(cx, refits.baseline, notes);
     account.tell(notes);
+    let base = base?;
     account.say(Progress::BaselineLocated {
         ratio: base.ratio,
         limit: base.limit,
@@ -269,26 +275,83 @@ fn search(
     for c in &models.all {
         account.say(Progress::Ranked(c));
     }
-    candidates::pairs(cx, base.limit, &mut models, notes)?;
-    account.tell(notes);
-    account.end_phase("pairs");
-    let regression = if cx.opts.discover {
-        account.say(Progress::RegressionStart);
-        let found = uncatalogued::search(cx, &base.fitted, base.limit, &mut models, notes)?;
-        account.tell(notes);
-        Some(found)
-    } else {
-        None
-    };
-    candidates::similar_pairs(cx, &mut models, notes);
-    account.tell(notes);
-    account.end_phase("uncatalogued search");
+    let regression = widen(cx, account, &base, &mut models, notes)?;
     Ok(Found {
         base,
         models,
         skipped,
         regression,
     })
+}
+
+/// Phases 4 and 5 beyond the single effects: the pairs, the uncatalogued terms (returns the
+/// baseline's regression when discovery is on) and the pairs that a discovered term calls for.
+fn widen(
+    cx: &Context,
+    account: &mut Account,
+    base: &locate::Baseline,
+    models: &mut Models,
+    notes: &mut Vec<Note>,
+) -> Result<Option<discover::Regression>, DiagnoseError> {
+    let pairs = candidates::pairs(cx, base.limit, models, notes);
+    account.tell(notes);
+    if let Some(batch) = pairs? {
+        let found = models.run(cx, batch, notes, &mut |n| account.tell(n));
+        models.all.extend(found);
+    }
+    account.end_phase("pairs");
+    let regression = if cx.opts.discover {
+        account.say(Progress::RegressionStart);
+        let reg = uncatalogued::regress(cx, &base.fitted, notes);
+        account.tell(notes);
+        let reg = reg?;
+        let batch = uncatalogued::term_refits(cx, &base.fitted, &reg, base.limit, models, notes);
+        account.tell(notes);
+        if let Some(batch) = batch? {
+            let found = models.run(cx, batch, notes, &mut |n| account.tell(n));
+            models.all.extend(found);
+        }
+        Some(reg)
+    } else {
+        None
+    };
+    if let Some(batch) = candidates::similar_pairs(cx, models) {
+        let found = models.run(cx, batch, notes, &mut |n| account.tell(n));
+        models.all.extend(found);
+    }
+    account.end_phase("uncatalogued search");
+    Ok(regression)
+}
+
+/// The chosen model (phase 6): backward elimination ([`select::elimination`]) refits each
+/// part's removal of a model of several parts and chooses again, until the choice stands;
+/// then a patchwork is held against one explanation ([`alternatives::one_explanation`],
+/// warm from the `baseline`). The refits join `models`.
+fn chosen_model(
+    cx: &Context,
+    account: &mut Account,
+    reg: Option<&discover::Regression>,
+    baseline: &fitting::Fitted,
+    models: &mut Models,
+    notes: &mut Vec<Note>,
+) -> Option<Candidate> {
+    models.sort();
+    let mut chosen = select::choose(&models.all);
+    while let Some(batch) = chosen.as_ref().and_then(|c| select::elimination(cx, c)) {
+        let subs = models.run(cx, batch, notes, &mut |n| account.tell(n));
+        let next = select::rechoose(models, subs);
+        if next.as_ref().map(|n| &n.label) == chosen.as_ref().map(|c| &c.label) {
+            break;
+        }
+        chosen = next;
+    }
+    let batch = alternatives::alone_refits(cx, reg, baseline, models, chosen.as_ref());
+    if let Some(batch) = batch {
+        let found = models.run(cx, batch, notes, &mut |n| account.tell(n));
+        models.all.extend(found);
+        models.sort();
+    }
+    alternatives::one_explanation(reg, models, chosen)
 }
 
 /// The orchestrator's account of a diagnosis: it tells the observer what each phase did,
@@ -330,7 +393,8 @@ impl<'a> Account<'a> {
     }
 
     /// Tells the observer what a phase did (`notes`, emptied), in order, and counts its
-    /// evaluations. A phase that fails is not told: its error is the diagnosis's.
+    /// evaluations. The orchestrator tells a phase's notes before it looks at the phase's
+    /// result, so that a failing phase's lines are said before its error ends the diagnosis.
     fn tell(&mut self, notes: &mut Vec<Note>) {
         for note in notes.drain(..) {
             match note.progress() {
@@ -521,7 +585,10 @@ mod tests {
             "{events:#?}"
         );
         for (line, announced, ran_after) in opened {
-            assert!(ran_after >= announced, "{line}: {ran_after} refit(s) after it");
+            assert!(
+                ran_after >= announced,
+                "{line}: {ran_after} refit(s) after it"
+            );
         }
     }
 

@@ -11,13 +11,6 @@ use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
 use crate::model::params::{estimated_names as names_for, MotorParams};
 
-#[cfg(test)]
-thread_local! {
-    /// Refits that [`Models::refit`] has run on this thread: a test observer reads it to see
-    /// whether a progress line arrives before the work it announces.
-    pub(crate) static REFITS_RUN: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
-}
-
 /// Every refitted model so far, scored against the baseline's BIC.
 pub(crate) struct Models {
     /// BIC of the baseline (after the null refit).
@@ -60,9 +53,26 @@ impl Models {
         })
     }
 
+    /// Runs the refits a phase planned, the one place a diagnosis refits a model: `tell`
+    /// (the orchestrator's account) hears what the phase noted so far, then the batch's
+    /// opening line, before the work, then the fits' scores. Returns the scored models.
+    pub fn run(
+        &self,
+        cx: &Context,
+        batch: Batch,
+        notes: &mut Vec<Note>,
+        tell: &mut dyn FnMut(&mut Vec<Note>),
+    ) -> Vec<Candidate> {
+        tell(notes);
+        tell(&mut vec![batch.opening]);
+        let found = self.refit(cx, &batch.jobs, batch.what, notes);
+        tell(notes);
+        found
+    }
+
     /// Runs the fits and scores each, noting it; a failed fit is noted as `what` failed
     /// (None: the job's label) and left out.
-    pub fn refit(
+    fn refit(
         &self,
         cx: &Context,
         jobs: &[(ModelKind, FitJob)],
@@ -71,8 +81,7 @@ impl Models {
     ) -> Vec<Candidate> {
         let only: Vec<FitJob> = jobs.iter().map(|(_, j)| j.clone()).collect();
         let results = fitting::run_jobs(&cx.cost, &cx.target, &only, cx.engine);
-        #[cfg(test)]
-        REFITS_RUN.with(|n| n.set(n.get() + jobs.len()));
+        count_refits(jobs.len());
         let mut out = Vec::new();
         for ((kind, job), r) in jobs.iter().zip(results) {
             let what = what.unwrap_or(&job.label);
@@ -96,8 +105,19 @@ impl Models {
     }
 }
 
+/// Refits a phase plans and the orchestrator runs ([`Models::run`]): the note that opens
+/// them, said before the work, the fits, and what a failed one is called (None: its label).
+pub(crate) struct Batch {
+    /// The progress line that announces the refits.
+    pub opening: Note,
+    /// The fits, each with the kind of model it makes.
+    pub jobs: Vec<(ModelKind, FitJob)>,
+    /// What a failed fit is called in its progress line.
+    pub what: Option<&'static str>,
+}
+
 /// A warm refit of a model (catalog `effects` and discovered terms `extra`) from given
-/// starts, with the refit budget: what [`Models::refit`] runs.
+/// starts, with the refit budget: what [`Models::run`] runs.
 pub(crate) fn refit_job(
     cx: &Context,
     label: String,
@@ -156,4 +176,21 @@ pub(crate) fn subset(ds: &Dataset, keep: impl Fn(usize) -> bool) -> Dataset {
             .collect(),
         ..ds.clone()
     }
+}
+
+/// Counts `n` refits run on this thread ([`REFITS_RUN`]); nothing outside the tests.
+#[cfg(not(test))]
+fn count_refits(_n: usize) {}
+
+/// Counts `n` refits run on this thread ([`REFITS_RUN`]).
+#[cfg(test)]
+fn count_refits(n: usize) {
+    REFITS_RUN.with(|c| c.set(c.get() + n));
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Refits that [`Models::run`] has run on this thread: a test observer reads it to see
+    /// whether a progress line arrives before the work it announces.
+    pub(crate) static REFITS_RUN: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }

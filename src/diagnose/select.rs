@@ -8,43 +8,38 @@ use super::context::Context;
 use super::discover;
 use super::error::DiagnoseError;
 use super::fitting::FitJob;
-use super::models::{label_of, parts, refit_job, Models};
+use super::models::{label_of, parts, refit_job, Batch, Models};
 use super::observe::Note;
 use super::{Candidate, Effect, ModelKind, Selected, SELECT_DELTA_BIC};
 use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
 use crate::model::params::spec;
 
-/// The chosen model after backward elimination, or `None`. A model of several parts keeps
-/// each part only if dropping it, refitted warm from the same optimum (so with the same
-/// convergence), costs more than [`SELECT_DELTA_BIC`]: a pair can otherwise "win" by
-/// converging better than its single. The removals' refits join `models`.
-pub(crate) fn eliminate(
-    cx: &Context,
-    models: &mut Models,
-    notes: &mut Vec<Note>,
-) -> Option<Candidate> {
-    models.sort();
-    let mut chosen = choose(&models.all);
-    while let Some(c) = chosen.clone().filter(|c| parts(&c.fitted) >= 2) {
-        let jobs = removals(cx, &c);
-        notes.push(Note::Elimination(c.label.clone()));
-        let subs = models.refit(cx, &jobs, None, notes);
-        for sub in &subs {
-            match models.all.iter_mut().find(|x| x.label == sub.label) {
-                Some(x) if x.delta_bic <= sub.delta_bic => {}
-                Some(x) => *x = sub.clone(),
-                None => models.all.push(sub.clone()),
-            }
+/// Backward elimination, one step at a time (the orchestrator runs the refits between): a
+/// chosen model of several parts keeps each part only if dropping it, refitted warm from the
+/// same optimum (so with the same convergence), costs more than [`SELECT_DELTA_BIC`]: a pair
+/// can otherwise "win" by converging better than its single. The refits that check
+/// `chosen`: each part's removal; None when it has one part.
+pub(crate) fn elimination(cx: &Context, chosen: &Candidate) -> Option<Batch> {
+    (parts(&chosen.fitted) >= 2).then(|| Batch {
+        opening: Note::Elimination(chosen.label.clone()),
+        jobs: removals(cx, chosen),
+        what: None,
+    })
+}
+
+/// Takes the refitted removals `subs` into `models` (a model already there keeps the better
+/// ΔBIC) and chooses again.
+pub(crate) fn rechoose(models: &mut Models, subs: Vec<Candidate>) -> Option<Candidate> {
+    for sub in subs {
+        match models.all.iter_mut().find(|x| x.label == sub.label) {
+            Some(x) if x.delta_bic <= sub.delta_bic => {}
+            Some(x) => *x = sub,
+            None => models.all.push(sub),
         }
-        models.sort();
-        let next = choose(&models.all);
-        if next.as_ref().map(|n| &n.label) == Some(&c.label) {
-            break;
-        }
-        chosen = next;
     }
-    chosen
+    models.sort();
+    choose(&models.all)
 }
 
 /// The refits of `c` without each of its parts, warm from its optimum.
@@ -108,7 +103,7 @@ pub(crate) struct Extended {
 
 /// The extended model: `chosen` as last scored in `all` (with its held-out ratio), or the
 /// baseline.
-pub(crate) fn extend(
+pub(crate) fn extended(
     cx: &Context,
     chosen: Option<Candidate>,
     all: &[Candidate],

@@ -1,52 +1,26 @@
 //! Phase 5, uncatalogued terms ([`super::discover`]): sparse regression of the misfit over
 //! the term library, on the baseline and on the best significant catalog model; each
-//! proposed term is put into the model and refitted.
+//! proposed term is put into the model, and the orchestrator refits it.
 
 use super::analysis::channels;
 use super::context::Context;
 use super::discover::{self, Regression};
 use super::error::DiagnoseError;
 use super::fitting::{FitJob, Fitted};
-use super::models::{label_of, refit_job, Models};
+use super::models::{label_of, refit_job, Batch, Models};
 use super::observe::Note;
 use super::{ModelKind, SELECT_DELTA_BIC};
 use crate::model::params::estimated_names as names_for;
 
-/// Regresses the baseline's misfit, refits the proposed models into `models` and returns the
-/// baseline's regression (discovery on: the orchestrator asks). `limit` is the noise ratio
-/// that noise alone stays below ([`super::noise_ratio_limit`] of the baseline's channels).
-pub(crate) fn search(
+/// Regresses the baseline's misfit over the term library and notes the terms it proposes
+/// (discovery on: the orchestrator asks).
+pub(crate) fn regress(
     cx: &Context,
     baseline: &Fitted,
-    limit: f64,
-    models: &mut Models,
     notes: &mut Vec<Note>,
 ) -> Result<Regression, DiagnoseError> {
     let reg = discover::regress(&cx.cost, &cx.target, baseline, &cx.base_names, cx.engine)?;
     notes.push(Note::Evaluated(discover::evaluations(cx.base_names.len())));
-    let mut jobs = on_the_baseline(cx, baseline, &reg, notes);
-    jobs.extend(on_the_best_catalog_model(cx, limit, models, notes)?);
-    if !jobs.is_empty() {
-        notes.push(Note::DiscoveredStart(jobs.len()));
-    }
-    let found = models.refit(cx, &jobs, Some("discovered-term refit"), notes);
-    models.all.extend(found);
-    Ok(reg)
-}
-
-/// The base model with the first proposed term, and with every proposed term when there
-/// are several (warm from the baseline with the refit budget: the coefficients start from
-/// their linearised values).
-fn on_the_baseline(
-    cx: &Context,
-    baseline: &Fitted,
-    reg: &Regression,
-    notes: &mut Vec<Note>,
-) -> Vec<(ModelKind, FitJob)> {
-    let mut jobs = Vec::new();
-    let Some(first) = reg.selected.first() else {
-        return jobs;
-    };
     for t in &reg.selected {
         notes.push(Note::Proposed {
             term: t.term,
@@ -54,6 +28,38 @@ fn on_the_baseline(
             on_top_of: None,
         });
     }
+    Ok(reg)
+}
+
+/// The refits of the models with discovered terms: the baseline's proposals (`reg`), and the
+/// best catalog model with a term of its own misfit. None when nothing is proposed. `limit`
+/// is the noise ratio that noise alone stays below ([`super::noise_ratio_limit`] of the
+/// baseline's channels).
+pub(crate) fn term_refits(
+    cx: &Context,
+    baseline: &Fitted,
+    reg: &Regression,
+    limit: f64,
+    models: &Models,
+    notes: &mut Vec<Note>,
+) -> Result<Option<Batch>, DiagnoseError> {
+    let mut jobs = on_the_baseline(cx, baseline, reg);
+    jobs.extend(on_the_best_catalog_model(cx, limit, models, notes)?);
+    Ok((!jobs.is_empty()).then(|| Batch {
+        opening: Note::DiscoveredStart(jobs.len()),
+        jobs,
+        what: Some("discovered-term refit"),
+    }))
+}
+
+/// The base model with the first proposed term, and with every proposed term when there
+/// are several (warm from the baseline with the refit budget: the coefficients start from
+/// their linearised values).
+fn on_the_baseline(cx: &Context, baseline: &Fitted, reg: &Regression) -> Vec<(ModelKind, FitJob)> {
+    let mut jobs = Vec::new();
+    let Some(first) = reg.selected.first() else {
+        return jobs;
+    };
     jobs.push((
         ModelKind::Uncatalogued,
         FitJob {
