@@ -18,7 +18,6 @@ use super::context::Context;
 use super::discover::{self, Regression};
 use super::fitting::{FitJob, Fitted};
 use super::models::{parts, refit_job, Batch, Models};
-use super::observe::Note;
 use super::{AlsoConsistent, Candidate, ModelKind, Selected, SELECT_DELTA_BIC};
 use crate::model::effects::{Category, EffectSet};
 use crate::model::motor::{BalanceId, ExtraTerm, PressureFactor, SpeedFactor};
@@ -54,11 +53,7 @@ pub(crate) fn alone_refits(
         .map(|t| (ModelKind::Uncatalogued, term_job(cx, t, baseline)))
         .filter(|(_, j)| !models.all.iter().any(|m| m.label == j.label))
         .collect();
-    (!jobs.is_empty()).then(|| Batch {
-        opening: Note::DiscoveredStart(jobs.len()),
-        jobs,
-        what: Some("one-explanation refit"),
-    })
+    Batch::discovered(jobs, "one-explanation refit")
 }
 
 /// The chosen model, or, when it is a patchwork, the best one-part model of `models` within

@@ -116,6 +116,21 @@ pub(crate) struct Batch {
     pub what: Option<&'static str>,
 }
 
+impl Batch {
+    /// Models with discovered terms to refit, announced as such ([`Note::DiscoveredStart`]),
+    /// a failed one called `what`; None when there are none.
+    pub fn discovered(jobs: Vec<(ModelKind, FitJob)>, what: &'static str) -> Option<Self> {
+        if jobs.is_empty() {
+            return None;
+        }
+        Some(Self {
+            opening: Note::DiscoveredStart(jobs.len()),
+            jobs,
+            what: Some(what),
+        })
+    }
+}
+
 /// A warm refit of a model (catalog `effects` and discovered terms `extra`) from given
 /// starts, with the refit budget: what [`Models::run`] runs.
 pub(crate) fn refit_job(

@@ -45,11 +45,7 @@ pub(crate) fn term_refits(
 ) -> Result<Option<Batch>, DiagnoseError> {
     let mut jobs = on_the_baseline(cx, baseline, reg);
     jobs.extend(on_the_best_catalog_model(cx, limit, models, notes)?);
-    Ok((!jobs.is_empty()).then(|| Batch {
-        opening: Note::DiscoveredStart(jobs.len()),
-        jobs,
-        what: Some("discovered-term refit"),
-    }))
+    Ok(Batch::discovered(jobs, "discovered-term refit"))
 }
 
 /// The base model with the first proposed term, and with every proposed term when there
