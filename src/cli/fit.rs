@@ -1,23 +1,22 @@
 //! `vanefit fit` (docs/cli.md, "fit"): the options, progress and summary on the terminal; the fit
-//! itself is `vanefit::task::fit`, shared with `batch` and the Python package.
+//! itself is `vanefit::task::fit` (named by its module, where it is defined), shared with
+//! `batch` and the Python package.
 
 use crate::cli::Failure;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
-use vanefit::data::{Dataset, Kind};
+use vanefit::data::Dataset;
 use vanefit::estimate::multistart::{RunObserver, StartResult};
 use vanefit::estimate::DisplacementEstimate;
-use vanefit::estimate::{FitOutcome, FitSetup, UncertaintyMethod};
+use vanefit::estimate::UncertaintyMethod;
 use vanefit::model::EffectSet;
-use vanefit::report::explain;
-use vanefit::report::fit as report;
-use vanefit::task::{
+use vanefit::report::fit::{self as report, SummaryLine};
+use vanefit::task::fit::{
     displacement_start_line, fit_to, pinning_lines, FitObserver, FitOptions, ParamRange, Pinning,
 };
 
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -323,7 +322,14 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     );
     progress.clear();
     let (fitted, written) = done.map_err(Failure::fit)?;
-    print_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
+    let summary =
+        report::terminal_summary(&fitted.dataset, &fitted.setup, &fitted.outcome, &args.out);
+    for line in summary {
+        match line {
+            SummaryLine::Say(text) => say!("{text}"),
+            SummaryLine::Warn(text) => eprintln!("warning: {text}"),
+        }
+    }
     for w in &fitted.figure_warnings {
         say!("{w}");
     }
@@ -343,115 +349,4 @@ pub(crate) fn run(args: &FitArgs) -> Result<(), Failure> {
     }
     say!("report: {}", written.report.display());
     Ok(())
-}
-
-fn print_summary(ds: &Dataset, setup: &FitSetup, out: &FitOutcome, path: &Path) {
-    let run = &out.run;
-    say!(
-        "fit of {}: {} starts ({} converged), {} evaluations, {:.1} s on {} thread(s)",
-        ds.name,
-        run.results.len(),
-        run.converged(),
-        out.evaluations,
-        out.wall_s,
-        run.threads
-    );
-    if !setup.space.effects.is_empty() {
-        say!("effects: {}", setup.space.effects.ids().join(", "));
-    }
-    if let Some(g) = ds.gear() {
-        say!(
-            "geared motor: the pages' figures are the OUTPUT shaft's, moved to the motor shaft (speed × G, torque ÷ η·G, power ÷ η); the parameters below are the MOTOR shaft's (with the gearbox's drag in its friction). {}{}",
-            g.describe(),
-            if g.efficiency_printed { "" } else { "; its spread is profiled out of the likelihood as a gain on the pages' torques and powers, so the intervals hold it" }
-        );
-    }
-    for ex in ds.experiments.iter().filter(|e| e.kind == Kind::Catalogue) {
-        say!(
-            "{}: catalogue points weigh with their reading tolerance ({:.0} % of each curve's full scale) as σ, not a noise estimate, and carry no sensor offsets",
-            ex.file,
-            100.0 * ex.tolerance.unwrap_or(0.0)
-        );
-    }
-    print_goodness(out);
-    for line in report::terminal_table(&report::parameter_rows(ds, setup, out)) {
-        say!("{line}");
-    }
-    for w in report::bound_warnings(out) {
-        say!("warning: {w}");
-    }
-    say!("fixed (not estimated):");
-    for (s, v) in report::fixed_parameters(setup, out) {
-        say!(
-            "  {:<10} {:<42} {}",
-            s.name,
-            explain::value(s.name, v, 5),
-            s.description()
-        );
-    }
-    let minima: Vec<String> = out
-        .clusters
-        .iter()
-        .take(5)
-        .map(|c| format!("{:.4} (x{})", c.cost, c.members.len()))
-        .collect();
-    say!("local minima (cost J x starts): {}", minima.join(", "));
-    say!("wrote {}", path.display());
-}
-
-/// What the estimate is, how well it fits, and cost against χ².
-fn print_goodness(out: &FitOutcome) {
-    say!(
-        "estimate: the maximum-likelihood point of the recorded rows (each channel's σ from the data's noise, a catalogue's from its reading tolerance; recorded sensors' offsets within calibration tolerance profiled out)"
-    );
-    if !out.nuisances.is_empty() {
-        let list: Vec<String> = out
-            .nuisances
-            .iter()
-            .map(|(k, v)| format!("{k} {v:+.3e}"))
-            .collect();
-        say!(
-            "systematic errors at the estimate (SI): {}",
-            list.join(", ")
-        );
-    }
-    if let Some(g) = &out.goodness {
-        let verdict = if g.noise_reached {
-            "the model reaches the noise".to_string()
-        } else {
-            let worst = out
-                .worst_channel
-                .as_ref()
-                .map(|(c, r)| format!("; worst {c} at {r:.2}x its noise"))
-                .unwrap_or_default();
-            format!(
-                "the model does NOT reach the noise{worst}: intervals widened {:.2}x; do not trust them without a look at the plots",
-                g.interval_scale
-            )
-        };
-        say!(
-            "goodness of fit: {}, noise ratio {:.3} (limit {:.3}): {verdict}",
-            report::chi2_summary(g),
-            g.noise_ratio,
-            g.noise_ratio_limit
-        );
-        if let Some(warning) = report::dof_warning(g) {
-            eprintln!("warning: {warning}");
-        }
-    }
-    let likelihood = report::likelihood_chi2_summary(out);
-    if let Some(line) = &likelihood {
-        say!("{line}");
-    }
-    say!(
-        "cost J {:.4} at the estimate; the best start reached {:.4} (J weighs each channel by its reference polynomial's scatter, chi2 by the data's noise, so their optima differ a little)",
-        out.cost, out.best_start_cost
-    );
-    say!("  what these are: {}.", explain::NOISE_RATIO);
-    say!("  {}; {}.", explain::CHI2_PER_DOF, explain::CHI2_OFFSETS);
-    if likelihood.is_some() {
-        say!("  {}.", explain::LIKELIHOOD_CHI2);
-    }
-    say!("  {}.", explain::COST_J);
-    say!("  {}.", explain::CONDUCTANCE_UNITS);
 }

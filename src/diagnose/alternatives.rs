@@ -16,10 +16,9 @@
 
 use super::context::Context;
 use super::discover::{self, Regression};
-use super::error::DiagnoseError;
 use super::fitting::{FitJob, Fitted};
-use super::models::{parts, Models};
-use super::{AlsoConsistent, Candidate, ModelKind, SELECT_DELTA_BIC};
+use super::models::{parts, refit_job, Batch, Models};
+use super::{AlsoConsistent, Candidate, ModelKind, Selected, SELECT_DELTA_BIC};
 use crate::model::effects::{Category, EffectSet};
 use crate::model::motor::{BalanceId, ExtraTerm, PressureFactor, SpeedFactor};
 
@@ -31,32 +30,42 @@ const RANKED_PATH_TERMS: usize = 2;
 /// Most models listed as also consistent.
 const MAX_ALSO: usize = 4;
 
-/// The chosen model, or a one-part model within [`SELECT_DELTA_BIC`] of it when it holds a
-/// discovered term beside other parts (see the module documentation). The refits join
-/// `models`.
-pub(crate) fn one_explanation(
+/// The regression of a chosen model that holds a discovered term beside other parts (a
+/// possible patchwork, see the module documentation); None otherwise.
+fn patchwork<'a>(c: &Candidate, reg: Option<&'a Regression>) -> Option<&'a Regression> {
+    reg.filter(|_| !c.fitted.extra.is_empty() && parts(&c.fitted) >= 2)
+}
+
+/// The refits that test a patchwork `chosen` against one explanation: each term of
+/// [`alone_terms`] alone, warm from the baseline, unless already fitted. None when there is
+/// nothing to refit.
+pub(crate) fn alone_refits(
     cx: &Context,
     reg: Option<&Regression>,
     baseline: &Fitted,
-    models: &mut Models,
-    chosen: Option<Candidate>,
-) -> Result<Option<Candidate>, DiagnoseError> {
-    let Some(c) = chosen else {
-        return Ok(None);
-    };
-    let Some(reg) = reg.filter(|_| !c.fitted.extra.is_empty() && parts(&c.fitted) >= 2) else {
-        return Ok(Some(c));
-    };
-    let jobs: Vec<(ModelKind, FitJob)> = alone_terms(&c, reg)
+    models: &Models,
+    chosen: Option<&Candidate>,
+) -> Option<Batch> {
+    let c = chosen?;
+    let reg = patchwork(c, reg)?;
+    let jobs: Vec<(ModelKind, FitJob)> = alone_terms(c, reg)
         .into_iter()
         .map(|t| (ModelKind::Uncatalogued, term_job(cx, t, baseline)))
         .filter(|(_, j)| !models.all.iter().any(|m| m.label == j.label))
         .collect();
-    if !jobs.is_empty() {
-        cx.say(super::Progress::DiscoveredStart(jobs.len()));
-        let found = models.refit(cx, &jobs, Some("one-explanation refit"))?;
-        models.all.extend(found);
-        models.sort();
+    Batch::discovered(jobs, "one-explanation refit")
+}
+
+/// The chosen model, or, when it is a patchwork, the best one-part model of `models` within
+/// [`SELECT_DELTA_BIC`] of it (after [`alone_refits`] joined `models`).
+pub(crate) fn one_explanation(
+    reg: Option<&Regression>,
+    models: &Models,
+    chosen: Option<Candidate>,
+) -> Option<Candidate> {
+    let c = chosen?;
+    if patchwork(&c, reg).is_none() {
+        return Some(c);
     }
     let one = models
         .all
@@ -64,7 +73,22 @@ pub(crate) fn one_explanation(
         .filter(|m| parts(&m.fitted) == 1 && m.delta_bic <= c.delta_bic + SELECT_DELTA_BIC)
         .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
         .cloned();
-    Ok(Some(one.unwrap_or(c)))
+    Some(one.unwrap_or(c))
+}
+
+/// The models also consistent with the data beside the extended `model`, and an experiment
+/// that would separate them; none when nothing is `selected`.
+pub(crate) fn runners_up(
+    model: &Candidate,
+    selected: &[Selected],
+    all: &[Candidate],
+) -> (Vec<AlsoConsistent>, Option<String>) {
+    if selected.is_empty() {
+        return (Vec::new(), None);
+    }
+    let also = also_consistent(model, all);
+    let experiment = separating_experiment(model, &also);
+    (also, experiment)
 }
 
 /// The terms to refit alone: every flow law (constant and times |ω|) on the paths of the
@@ -137,7 +161,8 @@ fn alone_terms(c: &Candidate, reg: &Regression) -> Vec<ExtraTerm> {
 /// The refit of the base model with `t` alone, warm from the baseline, labelled by the
 /// term's formula.
 fn term_job(cx: &Context, t: ExtraTerm, baseline: &Fitted) -> FitJob {
-    cx.refit_job(
+    refit_job(
+        cx,
         format!(
             "uncatalogued {} ~ {}",
             discover::balance_symbol(t.balance),

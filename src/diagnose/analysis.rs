@@ -34,6 +34,9 @@
 //! A location's severity is |m|, the mean residual over the region in units of the noise
 //! σ (1 means the model is off by one noise standard deviation throughout the region).
 
+use super::context::Context;
+use super::fitting::Fitted;
+use super::observe::Note;
 use super::stats;
 use crate::data::dataset::Kind;
 use crate::model::motor::Motor;
@@ -130,6 +133,16 @@ pub(crate) fn channel_data(
     Ok(out)
 }
 
+/// A fitted model's channels against the data: one simulation, noted in `notes`.
+pub(crate) fn channels(
+    cx: &Context,
+    f: &Fitted,
+    notes: &mut Vec<Note>,
+) -> Result<Vec<ChannelData>, SimError> {
+    notes.push(Note::Evaluated(1));
+    channel_data(&cx.cost, &cx.target, &f.motor(), &cx.solver)
+}
+
 /// √(mean over channels of the mean squared normalised residual against the data) (see the
 /// module documentation). 0 for no channels.
 pub fn noise_ratio(channels: &[ChannelData]) -> f64 {
@@ -137,6 +150,21 @@ pub fn noise_ratio(channels: &[ChannelData]) -> f64 {
         return 0.0;
     }
     (channels.iter().map(ChannelData::mean_square).sum::<f64>() / channels.len() as f64).sqrt()
+}
+
+/// The noise ratio that a correct model exceeds with probability ≈ 0.1%: with C channels of
+/// n_c points and Gaussian noise, each channel's mean square is ≈ χ²(n_c)/n_c (variance
+/// 2/n_c), so the squared ratio (their mean) has standard deviation √(2·Σ1/n_c)/C; the
+/// limit is √(1 + 3.09·that) (≈ 1.08 for the paper's three experiments, ≈ 1.05 for one
+/// 600-row transient). The spread of the estimated σ is left out, which makes the limit
+/// strict: it is also the test that a fit "looks acceptable".
+pub fn noise_ratio_limit(channels: &[ChannelData]) -> f64 {
+    let c = channels.len().max(1) as f64;
+    let var: f64 = channels
+        .iter()
+        .map(|ch| 2.0 / ch.x.len().max(1) as f64)
+        .sum();
+    (1.0 + 3.09 * var.sqrt() / c).sqrt()
 }
 
 /// Where a model misses.

@@ -3,13 +3,15 @@
 //! with further convergence), ranked by ΔBIC; then the best significant effect paired with
 //! the next three.
 
+use super::analysis::channels;
 use super::context::Context;
 use super::error::DiagnoseError;
 use super::fitting::{self, FitJob, Fitted};
-use super::models::{label_of, Models};
-use super::observe::Progress;
-use super::{analysis, applicable_effects, off_value, Candidate, ModelKind, Skipped};
+use super::models::{label_of, refit_job, Batch, Models};
+use super::observe::Note;
+use super::{analysis, off_value, Candidate, ModelKind, Skipped};
 use super::{Effect, SELECT_DELTA_BIC};
+use crate::data::dataset::Dataset;
 use crate::model::effects::EffectSet;
 use crate::model::params::{spec, MotorParams, ParamId, DEFAULT_ESTIMATED_IDS};
 use crate::model::spec::SizeLaw;
@@ -20,45 +22,70 @@ pub(crate) struct Refits {
     pub baseline: Fitted,
     /// Each single effect's refit.
     pub(crate) singles: Vec<(FitJob, Fitted)>,
-    /// The catalog effects not tried.
-    pub skipped: Vec<Skipped>,
 }
 
-/// Refits the base model (the null refit) and each applicable effect, warm from `baseline`.
-pub(crate) fn refit_singles(cx: &Context, baseline: Fitted) -> Result<Refits, DiagnoseError> {
-    let (tried, skipped) = applicable_effects(cx.ds);
+/// The catalog effects tried on a dataset, and those skipped with the reason.
+pub(crate) fn applicable_effects(ds: &Dataset) -> (Vec<Effect>, Vec<Skipped>) {
+    let transient = ds.experiments.iter().any(|e| e.kind.is_transient());
+    let mut tried = Vec::new();
+    let mut skipped = Vec::new();
+    for e in Effect::ALL {
+        use crate::model::effects::ShowsIn;
+        match e.shows_in() {
+            ShowsIn::Never { reason } => skipped.push(Skipped {
+                effect: e,
+                reason: reason.into(),
+            }),
+            ShowsIn::TransientOnly { reason } if !transient => skipped.push(Skipped {
+                effect: e,
+                reason: reason.into(),
+            }),
+            _ => tried.push(e),
+        }
+    }
+    (tried, skipped)
+}
+
+/// Refits the base model (the null refit) and each effect of `tried`, warm from `baseline`;
+/// what it did goes to `notes`.
+pub(crate) fn refit_singles(
+    cx: &Context,
+    baseline: Fitted,
+    tried: &[Effect],
+    notes: &mut Vec<Note>,
+) -> Result<Refits, DiagnoseError> {
     let mut jobs = vec![FitJob {
         label: "null refit".into(),
         starts: vec![baseline.params.clone()],
         lhs: 0,
         max_iters: cx.opts.refit_iters,
-        ..cx.base_job()
+        ..cx.base_job.clone()
     }];
-    for e in &tried {
+    for e in tried {
         let mut starts = effect_starts(&[*e], &baseline.params, cx.opts.effect_starts);
         if *e == Effect::BreakawayFriction {
             starts.truncate(1);
-            starts.extend(stribeck_starts(cx, &baseline.params));
+            starts.extend(stribeck_starts(cx, &baseline.params, notes));
         }
-        jobs.push(cx.refit_job(
+        jobs.push(refit_job(
+            cx,
             e.id().into(),
             EffectSet::empty().with(*e),
             Vec::new(),
             starts,
         ));
     }
-    cx.say(Progress::CandidatesStart(&tried));
-    let results = fitting::run_jobs(&cx.cost, &cx.target, &jobs, cx.threads());
+    let results = fitting::run_jobs(&cx.cost, &cx.target, &jobs, cx.engine);
     let mut baseline = baseline;
     let mut singles = Vec::new();
     for (job, r) in jobs.into_iter().zip(results) {
         if let Ok(f) = &r {
-            cx.count(f.evaluations);
+            notes.push(Note::Evaluated(f.evaluations));
         }
         match r {
             Ok(f) if job.label == "null refit" => {
                 if f.cost < baseline.cost {
-                    cx.say(Progress::NullRefitImproved {
+                    notes.push(Note::NullRefitImproved {
                         before: baseline.cost,
                         after: f.cost,
                     });
@@ -66,17 +93,10 @@ pub(crate) fn refit_singles(cx: &Context, baseline: Fitted) -> Result<Refits, Di
                 }
             }
             Ok(f) => singles.push((job, f)),
-            Err(e) => cx.say(Progress::Failed {
-                what: "candidate",
-                error: &e.to_string(),
-            }),
+            Err(e) => notes.push(Note::failed("candidate", &e)),
         }
     }
-    Ok(Refits {
-        baseline,
-        singles,
-        skipped,
-    })
+    Ok(Refits { baseline, singles })
 }
 
 /// Scores the single effects' refits into `models`, best ΔBIC first.
@@ -84,37 +104,36 @@ pub(crate) fn rank_singles(
     cx: &Context,
     models: &mut Models,
     singles: Vec<(FitJob, Fitted)>,
-) -> Result<(), DiagnoseError> {
+    notes: &mut Vec<Note>,
+) {
     for (job, f) in singles {
         // As in `Models::refit`: a fitted point that does not simulate is a failed fit.
-        match models.score(cx, &job.label, ModelKind::Single, f) {
+        match models.score(cx, &job.label, ModelKind::Single, f, notes) {
             Ok(c) => models.all.push(c),
-            Err(e) => cx.say(Progress::Failed {
-                what: "candidate",
-                error: &e.to_string(),
-            }),
+            Err(e) => notes.push(Note::failed("candidate", &e)),
         }
     }
     models.sort();
-    for c in &models.all {
-        cx.say(Progress::Ranked(c));
-    }
-    Ok(())
 }
 
-/// When the best single effect is significant, refits it paired with each of the next three
-/// (always, or only when its residuals still show structure beyond the baseline's noise
+/// When the best single effect is significant, the refits of it paired with each of the next
+/// three (always, or only when its residuals still show structure beyond the baseline's noise
 /// ratio `limit`, by [`super::DiagnoseOptions::pairs_always`]).
-pub(crate) fn pairs(cx: &Context, limit: f64, models: &mut Models) -> Result<(), DiagnoseError> {
-    let singles: Vec<Candidate> = models.all.clone();
+pub(crate) fn pairs(
+    cx: &Context,
+    limit: f64,
+    models: &Models,
+    notes: &mut Vec<Note>,
+) -> Result<Option<Batch>, DiagnoseError> {
+    let singles = &models.all;
     let Some(best) = singles.first().filter(|b| b.delta_bic < -SELECT_DELTA_BIC) else {
-        return Ok(());
+        return Ok(None);
     };
-    let best_channels = cx.channels(&best.fitted)?;
+    let best_channels = channels(cx, &best.fitted, notes)?;
     let structure = analysis::noise_ratio(&best_channels) > limit
         || !analysis::locate(&best_channels, cx.ds.p_atm_pa).is_empty();
     if !(cx.opts.pairs_always || structure) {
-        return Ok(());
+        return Ok(None);
     }
     let jobs: Vec<(ModelKind, FitJob)> = singles
         .iter()
@@ -122,10 +141,16 @@ pub(crate) fn pairs(cx: &Context, limit: f64, models: &mut Models) -> Result<(),
         .take(3)
         .map(|other| (ModelKind::Pair, pair_job(cx, best, other)))
         .collect();
-    cx.say(Progress::PairsStart(jobs.len()));
-    let found = models.refit(cx, &jobs, Some("pair"))?;
-    models.all.extend(found);
-    Ok(())
+    Ok(Some(pair_batch(jobs)))
+}
+
+/// Pairs to refit, announced.
+fn pair_batch(jobs: Vec<(ModelKind, FitJob)>) -> Batch {
+    Batch {
+        opening: Note::PairsStart(jobs.len()),
+        jobs,
+        what: Some("pair"),
+    }
 }
 
 /// A discovered term can imitate a catalog effect that was never tried together with the best
@@ -134,15 +159,16 @@ pub(crate) fn pairs(cx: &Context, limit: f64, models: &mut Models) -> Result<(),
 /// can miss it: ω² vane friction ranks below breakaway friction on its own, yet is the
 /// partner of speed-dependent leakage); pairs already fitted are not refitted. The simplicity order then
 /// prefers the pair over "single + uncatalogued" whenever it explains the data as well.
-pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), DiagnoseError> {
+/// None when there is no such pair to refit.
+pub(crate) fn similar_pairs(cx: &Context, models: &Models) -> Option<Batch> {
     let singles: Vec<&Candidate> = models
         .all
         .iter()
         .filter(|c| c.kind == ModelKind::Single)
         .collect();
-    let Some(best) = singles.first().filter(|b| b.delta_bic < -SELECT_DELTA_BIC) else {
-        return Ok(());
-    };
+    let best = singles
+        .first()
+        .filter(|b| b.delta_bic < -SELECT_DELTA_BIC)?;
     let categories: Vec<_> = models
         .all
         .iter()
@@ -167,13 +193,7 @@ pub(crate) fn similar_pairs(cx: &Context, models: &mut Models) -> Result<(), Dia
             }
         }
     }
-    if jobs.is_empty() {
-        return Ok(());
-    }
-    cx.say(Progress::PairsStart(jobs.len()));
-    let found = models.refit(cx, &jobs, Some("pair"))?;
-    models.all.extend(found);
-    Ok(())
+    (!jobs.is_empty()).then(|| pair_batch(jobs))
 }
 
 /// The refit of `best`'s effect with `other`'s: warm from `best`'s optimum with `other`'s
@@ -191,7 +211,7 @@ fn pair_job(cx: &Context, best: &Candidate, other: &Candidate) -> FitJob {
     // nothing (ω² vane friction beside unmodelled leakage), its fitted value is at the
     // bound, where the refit cannot leave it.
     starts.extend(effect_starts(&[b], warm, 3));
-    cx.refit_job(label_of(&effects, 0).0, effects, Vec::new(), starts)
+    refit_job(cx, label_of(&effects, 0).0, effects, Vec::new(), starts)
 }
 
 /// Start points of a candidate: `base` with the effect off, then at positions u of the
@@ -252,7 +272,7 @@ const STRIBECK_GRID: [f64; 7] = [1.0, 2.4, 5.8, 14.0, 34.0, 83.0, 200.0];
 /// one Stribeck speed stays in its valley: the static excess and the Stribeck speed trade
 /// against each other along the ramp's start-up, and a late start can be fitted by a high
 /// T_s that decays fast or a lower one that decays slowly.
-fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
+fn stribeck_starts(cx: &Context, base: &MotorParams, notes: &mut Vec<Note>) -> Vec<MotorParams> {
     let base = &unpinned(base);
     // The grids' speeds are the reference motor's; a motor of another size runs at speeds
     // ∝ s^{-⅓} (`SizeLaw::SPEED`), and so do its Stribeck and hand-over speeds.
@@ -274,7 +294,7 @@ fn stribeck_starts(cx: &Context, base: &MotorParams) -> Vec<MotorParams> {
         .collect();
     let effects = EffectSet::empty().with(Effect::BreakawayFriction);
     let (cost, target, solver) = (&cx.cost, &cx.target, &cx.solver);
-    cx.count(grid.len() as u64);
+    notes.push(Note::Evaluated(grid.len() as u64));
     let chi2 = cx.engine.map(&grid, |(_, p)| {
         let motor = crate::model::motor::Motor::new(p.clone(), effects.clone());
         target.chi2(cost, &motor, solver).unwrap_or(f64::INFINITY)

@@ -2,12 +2,13 @@
 //! joint fit (likelihood-ratio/Chow test), and each experiment predicted from a fit to the
 //! others (held-out noise ratio) for the baseline, the best candidates and the chosen model.
 
+use super::analysis::noise_ratio_limit;
 use super::context::Context;
 use super::error::DiagnoseError;
 use super::fitting::{self, FitJob, Fitted};
-use super::locate::{noise_ratio_limit, Baseline};
-use super::models::{subset, Models};
-use super::observe::{ChowTest, Progress};
+use super::locate::Baseline;
+use super::models::{refit_job, subset, Models};
+use super::observe::{ChowTest, Note};
 use super::{analysis, stats, Candidate, Concealment, ExperimentCheck};
 use crate::data::dataset::Dataset;
 use crate::objective::cost::{CostModel, CostOptions};
@@ -54,24 +55,26 @@ impl Split {
     }
 }
 
-/// Runs the test when asked for and there are two experiments or more; sets the held-out
-/// ratio of `baseline_c` and of the held-out models in `models`.
+/// Whether the test runs: asked for, and two experiments or more.
+pub(crate) fn applies(cx: &Context) -> bool {
+    cx.opts.concealment && cx.ds.experiments.len() >= 2
+}
+
+/// Runs the test ([`applies`] says when); sets the held-out ratio of `baseline_c` and of
+/// the held-out models in `models`.
 pub(crate) fn test(
     cx: &Context,
     base: &Baseline,
     baseline_c: &mut Candidate,
     models: &mut Models,
     chosen: Option<&Candidate>,
-) -> Result<Option<Concealment>, DiagnoseError> {
-    let n_exp = cx.ds.experiments.len();
-    if !cx.opts.concealment || n_exp < 2 {
-        return Ok(None);
-    }
-    cx.say(Progress::ConcealmentStart);
+    notes: &mut Vec<Note>,
+) -> Result<Concealment, DiagnoseError> {
     let split = Split::new(cx.ds)?;
     let held = held_models(cx, baseline_c, &models.all, chosen);
     let tasks = tasks(cx, &base.fitted, &held);
     let fitted = fit_tasks(cx, &split, &tasks)?;
+    notes.push(Note::Evaluated(fitted.iter().map(|f| f.evaluations).sum()));
     let mut checks: Vec<ExperimentCheck> = Vec::new();
     let mut held_ms: Vec<Vec<f64>> = vec![Vec::new(); held.len()];
     for ((m, i, _), f) in tasks.iter().zip(fitted) {
@@ -104,7 +107,9 @@ pub(crate) fn test(
             x.held_out = Some(v);
         }
     }
-    Ok(Some(chow(cx, &base.fitted, checks)))
+    let (test, concealment) = chow(cx, &base.fitted, checks);
+    notes.push(Note::ConcealmentResult(test));
+    Ok(concealment)
 }
 
 /// Models whose held-out prediction is wanted: the baseline, the top candidates, the chosen
@@ -141,13 +146,14 @@ fn tasks(cx: &Context, baseline: &Fitted, held: &[Candidate]) -> Vec<Task> {
                 starts: vec![baseline.params.clone()],
                 lhs: 0,
                 max_iters: cx.opts.refit_iters,
-                ..cx.base_job()
+                ..cx.base_job.clone()
             },
         ));
     }
     for (m, c) in held.iter().enumerate() {
         for (i, ex) in experiments.iter().enumerate() {
-            let job = cx.refit_job(
+            let job = refit_job(
+                cx,
                 format!("{} without {}", c.label, ex.file),
                 c.fitted.effects.clone(),
                 c.fitted.extra.clone(),
@@ -161,7 +167,7 @@ fn tasks(cx: &Context, baseline: &Fitted, held: &[Candidate]) -> Vec<Task> {
 
 /// Runs every task in parallel, in task order.
 fn fit_tasks(cx: &Context, split: &Split, tasks: &[Task]) -> Result<Vec<Fitted>, DiagnoseError> {
-    let threads = cx.threads();
+    let threads = cx.engine;
     let Split {
         cost_only,
         cost_without,
@@ -180,7 +186,6 @@ fn fit_tasks(cx: &Context, split: &Split, tasks: &[Task]) -> Result<Vec<Fitted>,
         .into_iter()
         .map(|r| r.map_err(DiagnoseError::from))
         .collect::<Result<_, _>>()?;
-    cx.count(fitted.iter().map(|f| f.evaluations).sum());
     Ok(fitted)
 }
 
@@ -217,24 +222,26 @@ fn alone_check(
     })
 }
 
-/// The likelihood-ratio (Chow) test: χ²_joint − Σ χ²_alone against χ²(k·(E − 1)).
-fn chow(cx: &Context, baseline: &Fitted, checks: Vec<ExperimentCheck>) -> Concealment {
+/// The likelihood-ratio (Chow) test: χ²_joint − Σ χ²_alone against χ²(k·(E − 1)); its
+/// statistic and the concealment it finds.
+fn chow(cx: &Context, baseline: &Fitted, checks: Vec<ExperimentCheck>) -> (ChowTest, Concealment) {
     let n_exp = cx.ds.experiments.len();
     let sum_alone: f64 = checks.iter().map(|c| c.alone_chi2).sum();
     let lr = (baseline.chi2 - sum_alone).max(0.0);
     let df = (cx.base_names.len() * (n_exp - 1)) as f64;
     let p_value = stats::chi2_sf(lr, df);
-    cx.say(Progress::ConcealmentResult(ChowTest {
+    let test = ChowTest {
         joint: baseline.chi2,
         separate: sum_alone,
         lr,
         df,
         p_value,
-    }));
-    Concealment {
+    };
+    let concealment = Concealment {
         experiments: checks,
         lr,
         df,
         p_value,
-    }
+    };
+    (test, concealment)
 }

@@ -14,7 +14,7 @@
 use super::context::Context;
 use super::error::DiagnoseError;
 use super::fitting::{HandOver, RefitError, TermSpace};
-use super::observe::Progress;
+use super::observe::Note;
 use super::{Candidate, ExtendedInterval, ModelKind};
 use crate::estimate::fit::goodness::interval_threshold;
 use crate::estimate::problem::likelihood::Likelihood;
@@ -27,11 +27,21 @@ use crate::estimate::profile::uncertainty::{
 use crate::model::params::estimated_names as names_for;
 use crate::numerics::DefaultSolver;
 
+/// The parameters of `model` that get an interval: its estimated ones and one per discovered
+/// term; none when `model` is the baseline (nothing selected).
+pub(crate) fn parameters(model: &Candidate) -> usize {
+    if model.kind == ModelKind::Baseline {
+        return 0;
+    }
+    names_for(&model.fitted.effects).len() + model.fitted.extra.len()
+}
+
 /// The 95 % intervals of `model`'s estimated parameters in the order of its estimated names,
 /// then one per discovered term; none when `model` is the baseline (nothing selected).
 pub(crate) fn of_extended(
     cx: &Context,
     model: &Candidate,
+    notes: &mut Vec<Note>,
 ) -> Result<Vec<ExtendedInterval>, DiagnoseError> {
     if model.kind == ModelKind::Baseline {
         return Ok(Vec::new());
@@ -54,15 +64,11 @@ pub(crate) fn of_extended(
     let mut x = space.theta(&f.params);
     x.extend(std::iter::repeat_n(1.0, f.extra.len()));
     let profile = cx.opts.profile_intervals;
-    cx.say(Progress::IntervalsStart {
-        parameters: x.len(),
-        profile,
-    });
     let threshold = interval_threshold(model.noise_ratio);
     let cov = curvature_covariance(&problem, &x, CURVATURE_STEP, threshold / CHI2_95);
     let intervals = if profile {
         let chi2_min = problem.evaluate(&x).chi2;
-        let (engine, cov) = (cx.threads(), cov.as_ref());
+        let (engine, cov) = (cx.engine, cov.as_ref());
         profile_intervals(
             engine,
             &problem,
@@ -75,7 +81,7 @@ pub(crate) fn of_extended(
     } else {
         curvature_intervals(&problem, &x, cov.as_ref())
     };
-    cx.count(problem.evaluations());
+    notes.push(Note::Evaluated(problem.evaluations()));
     Ok(intervals
         .into_iter()
         .enumerate()

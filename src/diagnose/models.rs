@@ -1,12 +1,15 @@
 //! The refitted models of a diagnosis: their names, labels and scores.
 
+use super::analysis::channels;
 use super::context::Context;
 use super::error::DiagnoseError;
 use super::fitting::{self, FitJob, Fitted};
-use super::observe::Progress;
+use super::observe::Note;
 use super::{analysis, Candidate, ModelKind};
 use crate::data::dataset::Dataset;
 use crate::model::effects::EffectSet;
+use crate::model::motor::ExtraTerm;
+use crate::model::params::{estimated_names as names_for, MotorParams};
 
 /// Every refitted model so far, scored against the baseline's BIC.
 pub(crate) struct Models {
@@ -30,15 +33,16 @@ impl Models {
         self.all.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
     }
 
-    /// A fit with its ΔBIC and noise ratio.
+    /// A fit with its ΔBIC and noise ratio (the simulation of its channels noted in `notes`).
     pub(crate) fn score(
         &self,
         cx: &Context,
         label: &str,
         kind: ModelKind,
         f: Fitted,
+        notes: &mut Vec<Note>,
     ) -> Result<Candidate, DiagnoseError> {
-        let ch = cx.channels(&f)?;
+        let ch = channels(cx, &f, notes)?;
         Ok(Candidate {
             label: label.to_string(),
             kind,
@@ -49,43 +53,102 @@ impl Models {
         })
     }
 
-    /// Runs the fits and scores each, reporting it; a failed fit is reported as `what`
-    /// failed (None: the job's label) and left out.
-    pub fn refit(
+    /// Runs the refits a phase planned, the one place a diagnosis refits a model: `tell`
+    /// (the orchestrator's account) hears what the phase noted so far, then the batch's
+    /// opening line, before the work, then the fits' scores. Returns the scored models.
+    pub fn run(
+        &self,
+        cx: &Context,
+        batch: Batch,
+        notes: &mut Vec<Note>,
+        tell: &mut dyn FnMut(&mut Vec<Note>),
+    ) -> Vec<Candidate> {
+        tell(notes);
+        tell(&mut vec![batch.opening]);
+        let found = self.refit(cx, &batch.jobs, batch.what, notes);
+        tell(notes);
+        found
+    }
+
+    /// Runs the fits and scores each, noting it; a failed fit is noted as `what` failed
+    /// (None: the job's label) and left out.
+    fn refit(
         &self,
         cx: &Context,
         jobs: &[(ModelKind, FitJob)],
         what: Option<&str>,
-    ) -> Result<Vec<Candidate>, DiagnoseError> {
+        notes: &mut Vec<Note>,
+    ) -> Vec<Candidate> {
         let only: Vec<FitJob> = jobs.iter().map(|(_, j)| j.clone()).collect();
+        let results = fitting::run_jobs(&cx.cost, &cx.target, &only, cx.engine);
+        count_refits(jobs.len());
         let mut out = Vec::new();
-        for ((kind, job), r) in
-            jobs.iter()
-                .zip(fitting::run_jobs(&cx.cost, &cx.target, &only, cx.threads()))
-        {
+        for ((kind, job), r) in jobs.iter().zip(results) {
+            let what = what.unwrap_or(&job.label);
             match r {
                 Ok(f) => {
-                    cx.count(f.evaluations);
+                    notes.push(Note::Evaluated(f.evaluations));
                     // A fitted point whose simulation then fails (a datasheet row without
                     // steady state) is a failed fit, not a failed diagnosis.
-                    match self.score(cx, &job.label, *kind, f) {
+                    match self.score(cx, &job.label, *kind, f, notes) {
                         Ok(c) => {
-                            cx.say(Progress::Scored(&c));
+                            notes.push(Note::Scored(Box::new(c.clone())));
                             out.push(c);
                         }
-                        Err(e) => cx.say(Progress::Failed {
-                            what: what.unwrap_or(&job.label),
-                            error: &e.to_string(),
-                        }),
+                        Err(e) => notes.push(Note::failed(what, &e)),
                     }
                 }
-                Err(e) => cx.say(Progress::Failed {
-                    what: what.unwrap_or(&job.label),
-                    error: &e.to_string(),
-                }),
+                Err(e) => notes.push(Note::failed(what, &e)),
             }
         }
-        Ok(out)
+        out
+    }
+}
+
+/// Refits a phase plans and the orchestrator runs ([`Models::run`]): the note that opens
+/// them, said before the work, the fits, and what a failed one is called (None: its label).
+pub(crate) struct Batch {
+    /// The progress line that announces the refits.
+    pub opening: Note,
+    /// The fits, each with the kind of model it makes.
+    pub jobs: Vec<(ModelKind, FitJob)>,
+    /// What a failed fit is called in its progress line.
+    pub what: Option<&'static str>,
+}
+
+impl Batch {
+    /// Models with discovered terms to refit, announced as such ([`Note::DiscoveredStart`]),
+    /// a failed one called `what`; None when there are none.
+    pub fn discovered(jobs: Vec<(ModelKind, FitJob)>, what: &'static str) -> Option<Self> {
+        if jobs.is_empty() {
+            return None;
+        }
+        Some(Self {
+            opening: Note::DiscoveredStart(jobs.len()),
+            jobs,
+            what: Some(what),
+        })
+    }
+}
+
+/// A warm refit of a model (catalog `effects` and discovered terms `extra`) from given
+/// starts, with the refit budget: what [`Models::run`] runs.
+pub(crate) fn refit_job(
+    cx: &Context,
+    label: String,
+    effects: EffectSet,
+    extra: Vec<ExtraTerm>,
+    starts: Vec<MotorParams>,
+) -> FitJob {
+    FitJob {
+        label,
+        names: names_for(&effects),
+        effects,
+        extra,
+        starts,
+        lhs: 0,
+        max_iters: cx.opts.refit_iters,
+        seed: cx.opts.seed,
     }
 }
 
@@ -128,4 +191,21 @@ pub(crate) fn subset(ds: &Dataset, keep: impl Fn(usize) -> bool) -> Dataset {
             .collect(),
         ..ds.clone()
     }
+}
+
+/// Counts `n` refits run on this thread ([`REFITS_RUN`]); nothing outside the tests.
+#[cfg(not(test))]
+fn count_refits(_n: usize) {}
+
+/// Counts `n` refits run on this thread ([`REFITS_RUN`]).
+#[cfg(test)]
+fn count_refits(n: usize) {
+    REFITS_RUN.with(|c| c.set(c.get() + n));
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Refits that [`Models::run`] has run on this thread: a test observer reads it to see
+    /// whether a progress line arrives before the work it announces.
+    pub(crate) static REFITS_RUN: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }

@@ -179,6 +179,87 @@ impl fmt::Display for Progress<'_> {
     }
 }
 
+/// What a phase did, returned to the orchestrator (`diagnose_observed`), which tells the
+/// observer and counts the work of the phase: the phases compute, they do not report. Each
+/// note but [`Note::Evaluated`] is one [`Progress`] event, owned, so that it outlives the
+/// phase that made it; the events that open a phase the orchestrator says itself, before
+/// it runs the phase.
+#[derive(Debug, Clone)]
+pub(crate) enum Note {
+    /// `n` cost evaluations (whole simulations of every experiment): a fit, a regression, a
+    /// grid, or the one simulation of a fitted model's channels.
+    Evaluated(u64),
+    /// [`Progress::NullRefitImproved`].
+    NullRefitImproved {
+        /// Cost J before.
+        before: f64,
+        /// Cost J after.
+        after: f64,
+    },
+    /// [`Progress::Failed`].
+    Failed {
+        /// What failed.
+        what: String,
+        /// Its error message.
+        error: String,
+    },
+    /// [`Progress::Scored`].
+    Scored(Box<Candidate>),
+    /// [`Progress::PairsStart`].
+    PairsStart(usize),
+    /// [`Progress::Proposed`].
+    Proposed {
+        /// The term.
+        term: ExtraTerm,
+        /// Its linearised ΔBIC.
+        delta_bic: f64,
+        /// The catalog model it extends (None: the baseline).
+        on_top_of: Option<String>,
+    },
+    /// [`Progress::DiscoveredStart`].
+    DiscoveredStart(usize),
+    /// [`Progress::Elimination`].
+    Elimination(String),
+    /// [`Progress::ConcealmentResult`].
+    ConcealmentResult(ChowTest),
+}
+
+impl Note {
+    /// A failed refit, `what` naming it.
+    pub(crate) fn failed(what: &str, error: &dyn std::error::Error) -> Self {
+        Note::Failed {
+            what: what.to_string(),
+            error: error.to_string(),
+        }
+    }
+
+    /// The event the observer is told (`None` for [`Note::Evaluated`], which is counted).
+    pub(crate) fn progress(&self) -> Option<Progress<'_>> {
+        Some(match self {
+            Note::Evaluated(_) => return None,
+            Note::NullRefitImproved { before, after } => Progress::NullRefitImproved {
+                before: *before,
+                after: *after,
+            },
+            Note::Failed { what, error } => Progress::Failed { what, error },
+            Note::Scored(c) => Progress::Scored(c),
+            Note::PairsStart(n) => Progress::PairsStart(*n),
+            Note::Proposed {
+                term,
+                delta_bic,
+                on_top_of,
+            } => Progress::Proposed(Proposal {
+                term,
+                delta_bic: *delta_bic,
+                on_top_of: on_top_of.as_deref(),
+            }),
+            Note::DiscoveredStart(n) => Progress::DiscoveredStart(*n),
+            Note::Elimination(label) => Progress::Elimination(label),
+            Note::ConcealmentResult(t) => Progress::ConcealmentResult(*t),
+        })
+    }
+}
+
 /// A term proposed by the linearised regression ([`super::discover`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Proposal<'a> {

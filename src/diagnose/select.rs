@@ -2,47 +2,44 @@
 //! BIC, checked by backward elimination; then the extended model and its `selected`
 //! entries.
 
+use super::analysis::channels;
 use super::analysis::{self, ChannelData, Location};
 use super::context::Context;
 use super::discover;
 use super::error::DiagnoseError;
 use super::fitting::FitJob;
-use super::models::{label_of, parts, Models};
-use super::observe::Progress;
+use super::models::{label_of, parts, refit_job, Batch, Models};
+use super::observe::Note;
 use super::{Candidate, Effect, ModelKind, Selected, SELECT_DELTA_BIC};
 use crate::model::effects::EffectSet;
 use crate::model::motor::ExtraTerm;
 use crate::model::params::spec;
 
-/// The chosen model after backward elimination, or `None`. A model of several parts keeps
-/// each part only if dropping it, refitted warm from the same optimum (so with the same
-/// convergence), costs more than [`SELECT_DELTA_BIC`]: a pair can otherwise "win" by
-/// converging better than its single. The removals' refits join `models`.
-pub(crate) fn eliminate(
-    cx: &Context,
-    models: &mut Models,
-) -> Result<Option<Candidate>, DiagnoseError> {
-    models.sort();
-    let mut chosen = choose(&models.all);
-    while let Some(c) = chosen.clone().filter(|c| parts(&c.fitted) >= 2) {
-        let jobs = removals(cx, &c);
-        cx.say(Progress::Elimination(&c.label));
-        let subs = models.refit(cx, &jobs, None)?;
-        for sub in &subs {
-            match models.all.iter_mut().find(|x| x.label == sub.label) {
-                Some(x) if x.delta_bic <= sub.delta_bic => {}
-                Some(x) => *x = sub.clone(),
-                None => models.all.push(sub.clone()),
-            }
+/// Backward elimination, one step at a time (the orchestrator runs the refits between): a
+/// chosen model of several parts keeps each part only if dropping it, refitted warm from the
+/// same optimum (so with the same convergence), costs more than [`SELECT_DELTA_BIC`]: a pair
+/// can otherwise "win" by converging better than its single. The refits that check
+/// `chosen`: each part's removal; None when it has one part.
+pub(crate) fn elimination(cx: &Context, chosen: &Candidate) -> Option<Batch> {
+    (parts(&chosen.fitted) >= 2).then(|| Batch {
+        opening: Note::Elimination(chosen.label.clone()),
+        jobs: removals(cx, chosen),
+        what: None,
+    })
+}
+
+/// Takes the refitted removals `subs` into `models` (a model already there keeps the better
+/// ΔBIC) and chooses again.
+pub(crate) fn rechoose(models: &mut Models, subs: Vec<Candidate>) -> Option<Candidate> {
+    for sub in subs {
+        match models.all.iter_mut().find(|x| x.label == sub.label) {
+            Some(x) if x.delta_bic <= sub.delta_bic => {}
+            Some(x) => *x = sub,
+            None => models.all.push(sub),
         }
-        models.sort();
-        let next = choose(&models.all);
-        if next.as_ref().map(|n| &n.label) == Some(&c.label) {
-            break;
-        }
-        chosen = next;
     }
-    Ok(chosen)
+    models.sort();
+    choose(&models.all)
 }
 
 /// The refits of `c` without each of its parts, warm from its optimum.
@@ -66,7 +63,7 @@ fn removals(cx: &Context, c: &Candidate) -> Vec<(ModelKind, FitJob)> {
                 .collect();
             let (label, kind) = label_of(&keep_effects, keep_terms.len());
             let starts = vec![c.fitted.params.clone()];
-            (kind, cx.refit_job(label, keep_effects, keep_terms, starts))
+            (kind, refit_job(cx, label, keep_effects, keep_terms, starts))
         })
         .collect()
 }
@@ -106,11 +103,12 @@ pub(crate) struct Extended {
 
 /// The extended model: `chosen` as last scored in `all` (with its held-out ratio), or the
 /// baseline.
-pub(crate) fn extend(
+pub(crate) fn extended(
     cx: &Context,
     chosen: Option<Candidate>,
     all: &[Candidate],
     baseline: &Candidate,
+    notes: &mut Vec<Note>,
 ) -> Result<Extended, DiagnoseError> {
     let chosen = chosen.map(|c| {
         all.iter()
@@ -123,7 +121,7 @@ pub(crate) fn extend(
         None => Vec::new(),
     };
     let model = chosen.unwrap_or_else(|| baseline.clone());
-    let channels = cx.channels(&model.fitted)?;
+    let channels = channels(cx, &model.fitted, notes)?;
     let locations = analysis::locate(&channels, cx.ds.p_atm_pa);
     Ok(Extended {
         model,

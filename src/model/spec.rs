@@ -5,7 +5,8 @@
 //! them ([`ParamValues`]), and the base model's parameters ([`BASE_PARAMS`], with a
 //! `ParamId` constant for each).
 //!
-//! Each effect declares its own parameters in its file under `model/effects/`; `params`
+//! Each effect declares its own parameters in its file under `model/effects/`, through this
+//! file's `effect_params!` (the base model's rows are `base_table!`'s); `params`
 //! assembles the base model's and theirs into `PARAMS` and holds a motor's values
 //! (`MotorParams`). This file imports neither, so the imports run one way: `params`
 //! imports `effects` and `spec`, `effects` imports `spec`.
@@ -161,8 +162,8 @@ const PINNED_BY_MAX_POWER_AIR: &str = "the air consumption at max power";
 
 impl ParamSpec {
     /// The registry's facts that an effect's parameter does not set: no size law, no prior,
-    /// estimated only with its effect, pinned by a rig experiment. An effect's spec is its
-    /// own fields followed by `..ParamSpec::EFFECT`.
+    /// estimated only with its effect, pinned by a rig experiment. An effect's rows in
+    /// `effect_params!` set the rest.
     pub const EFFECT: ParamSpec = ParamSpec {
         name: "",
         unit: "1",
@@ -351,6 +352,35 @@ macro_rules! base_params {
         }
     };
 }
+
+/// An effect's parameter table, in the effect's file under `model/effects/`: rows like
+/// `base_table!`'s (the constant, `name: unit = default`, domain, search range, meaning, size
+/// law), each with the value that switches the effect off; what a row does not set is
+/// [`ParamSpec::EFFECT`]'s. It makes the effect's `PARAMS` and, per row, the constant that
+/// is the parameter's position among the effect's own values (`own[VALVE_TAU]` in its
+/// hooks), so that each name is written once, as an identifier, as the base model's are.
+macro_rules! effect_params {
+    ($(#[$doc:meta])* $effect:path {
+        $( $(#[$row_doc:meta])* $id:ident $field:ident : $unit:literal = $default:expr,
+           $domain:expr, ($lo:expr, $hi:expr), $meaning:literal, size $k:expr, off $off:expr; )*
+    }) => {
+        #[allow(non_camel_case_types)]
+        enum Own { $( $field, )* }
+
+        $( $(#[$row_doc])* pub(crate) const $id: usize = Own::$field as usize; )*
+
+        $(#[$doc])*
+        pub const PARAMS: &[$crate::model::spec::ParamSpec] = &[
+            $( $crate::model::spec::ParamSpec {
+                name: stringify!($field), unit: $unit, default: $default, domain: $domain,
+                search: ($lo, $hi), effect: Some($effect),
+                off: $off, meaning: $meaning, size_exponent: $k,
+                ..$crate::model::spec::ParamSpec::EFFECT
+            }, )*
+        ];
+    };
+}
+pub(crate) use effect_params;
 
 use Domain::{Integer, Interval, NonNegative, Positive};
 use Estimated::{ByDefault, OnPagesWithPrior, OnRequest};

@@ -3,7 +3,7 @@
 //! waterfall of final costs over the starts, and per experiment an overlay of data,
 //! reference polynomial and simulation for every channel.
 
-use crate::data::dataset::Dataset;
+use crate::data::dataset::{Dataset, Kind};
 use crate::estimate::fit::{FitOutcome, FitSetup};
 use crate::estimate::problem::dimension::BoundSide;
 use crate::estimate::problem::space::ParamSpace;
@@ -299,6 +299,150 @@ pub fn likelihood_chi2_summary(out: &FitOutcome) -> Option<String> {
         "likelihood chi2 {:.1} over {} rows ({widened})",
         out.chi2, out.n_points
     ))
+}
+
+/// A line of the terminal summary of a fit: for stdout, or a warning for stderr.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SummaryLine {
+    /// A line for stdout.
+    Say(String),
+    /// A warning for stderr (`warning: …`).
+    Warn(String),
+}
+
+/// What `vanefit fit` prints after the fit, from what the fit computed: the run, the
+/// dataset's notes (gearbox, catalogue tolerances), the estimate and its goodness of fit
+/// ([`goodness_summary`]), the parameter table, the fixed parameters, the local minima and
+/// the fit file written to `path`.
+pub fn terminal_summary(
+    ds: &Dataset,
+    setup: &FitSetup,
+    out: &FitOutcome,
+    path: &Path,
+) -> Vec<SummaryLine> {
+    let mut lines = Vec::new();
+    let mut say = |text: String| lines.push(SummaryLine::Say(text));
+    let run = &out.run;
+    say(format!(
+        "fit of {}: {} starts ({} converged), {} evaluations, {:.1} s on {} thread(s)",
+        ds.name,
+        run.results.len(),
+        run.converged(),
+        out.evaluations,
+        out.wall_s,
+        run.threads
+    ));
+    if !setup.space.effects.is_empty() {
+        say(format!("effects: {}", setup.space.effects.ids().join(", ")));
+    }
+    if let Some(g) = ds.gear() {
+        say(format!(
+            "geared motor: the pages' figures are the OUTPUT shaft's, moved to the motor shaft (speed × G, torque ÷ η·G, power ÷ η); the parameters below are the MOTOR shaft's (with the gearbox's drag in its friction). {}{}",
+            g.describe(),
+            if g.efficiency_printed { "" } else { "; its spread is profiled out of the likelihood as a gain on the pages' torques and powers, so the intervals hold it" }
+        ));
+    }
+    for ex in ds.experiments.iter().filter(|e| e.kind == Kind::Catalogue) {
+        say(format!(
+            "{}: catalogue points weigh with their reading tolerance ({:.0} % of each curve's full scale) as σ, not a noise estimate, and carry no sensor offsets",
+            ex.file,
+            100.0 * ex.tolerance.unwrap_or(0.0)
+        ));
+    }
+    lines.extend(goodness_summary(out));
+    let mut say = |text: String| lines.push(SummaryLine::Say(text));
+    for line in terminal_table(&parameter_rows(ds, setup, out)) {
+        say(line);
+    }
+    for w in bound_warnings(out) {
+        say(format!("warning: {w}"));
+    }
+    say("fixed (not estimated):".to_string());
+    for (s, v) in fixed_parameters(setup, out) {
+        say(format!(
+            "  {:<10} {:<42} {}",
+            s.name,
+            explain::value(s.name, v, 5),
+            s.description()
+        ));
+    }
+    let minima: Vec<String> = out
+        .clusters
+        .iter()
+        .take(5)
+        .map(|c| format!("{:.4} (x{})", c.cost, c.members.len()))
+        .collect();
+    say(format!(
+        "local minima (cost J x starts): {}",
+        minima.join(", ")
+    ));
+    say(format!("wrote {}", path.display()));
+    lines
+}
+
+/// What the estimate is, how well it fits, and cost against χ² (of [`terminal_summary`]).
+fn goodness_summary(out: &FitOutcome) -> Vec<SummaryLine> {
+    let mut lines = Vec::new();
+    let mut say = |text: String| lines.push(SummaryLine::Say(text));
+    say(
+        "estimate: the maximum-likelihood point of the recorded rows (each channel's σ from the data's noise, a catalogue's from its reading tolerance; recorded sensors' offsets within calibration tolerance profiled out)".to_string()
+    );
+    if !out.nuisances.is_empty() {
+        let list: Vec<String> = out
+            .nuisances
+            .iter()
+            .map(|(k, v)| format!("{k} {v:+.3e}"))
+            .collect();
+        say(format!(
+            "systematic errors at the estimate (SI): {}",
+            list.join(", ")
+        ));
+    }
+    if let Some(g) = &out.goodness {
+        let verdict = if g.noise_reached {
+            "the model reaches the noise".to_string()
+        } else {
+            let worst = out
+                .worst_channel
+                .as_ref()
+                .map(|(c, r)| format!("; worst {c} at {r:.2}x its noise"))
+                .unwrap_or_default();
+            format!(
+                "the model does NOT reach the noise{worst}: intervals widened {:.2}x; do not trust them without a look at the plots",
+                g.interval_scale
+            )
+        };
+        say(format!(
+            "goodness of fit: {}, noise ratio {:.3} (limit {:.3}): {verdict}",
+            chi2_summary(g),
+            g.noise_ratio,
+            g.noise_ratio_limit
+        ));
+        if let Some(warning) = dof_warning(g) {
+            lines.push(SummaryLine::Warn(warning));
+        }
+    }
+    let mut say = |text: String| lines.push(SummaryLine::Say(text));
+    let likelihood = likelihood_chi2_summary(out);
+    if let Some(line) = &likelihood {
+        say(line.clone());
+    }
+    say(format!(
+        "cost J {:.4} at the estimate; the best start reached {:.4} (J weighs each channel by its reference polynomial's scatter, chi2 by the data's noise, so their optima differ a little)",
+        out.cost, out.best_start_cost
+    ));
+    say(format!("  what these are: {}.", explain::NOISE_RATIO));
+    say(format!(
+        "  {}; {}.",
+        explain::CHI2_PER_DOF,
+        explain::CHI2_OFFSETS
+    ));
+    if likelihood.is_some() {
+        say(format!("  {}.", explain::LIKELIHOOD_CHI2));
+    }
+    say(format!("  {}.", explain::COST_J));
+    say(format!("  {}.", explain::CONDUCTANCE_UNITS));
+    lines
 }
 
 /// The goodness of fit and the cost, each with one line on what it is.

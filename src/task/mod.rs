@@ -15,7 +15,7 @@
 pub(crate) mod control;
 pub(crate) mod diagnose;
 pub(crate) mod export;
-pub(crate) mod fit;
+pub mod fit;
 mod option;
 pub(crate) mod predict;
 pub(crate) mod simulate;

@@ -5,44 +5,25 @@
 
 use super::{Category, CatalogEffect, Effect, Term};
 use crate::model::friction;
-use crate::model::spec::{Domain, OffValue, ParamId, ParamSpec, SizeLaw};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamId, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct BreakawayFriction;
 
-/// Position of T_s among its parameters (`ParamId::T_STATIC` in `params` names it).
-pub(crate) const T_STATIC: usize = 0;
-/// Position of ω_s among its parameters (`ParamId::W_STRIBECK` in `params` names it).
-pub(crate) const W_STRIBECK: usize = 1;
-
-/// Its parameters: T_s and ω_s. Off: T_s = T_c (clamped into its search range) leaves the
-/// base model's friction; ω_s then does not matter and stays at its default.
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "t_static",
-        unit: "N*m",
-        default: 0.06,
-        domain: Domain::NonNegative,
-        search: (1e-3, 0.5),
-        effect: Some(Effect::BreakawayFriction),
-        off: OffValue::BaseClamped(ParamId::T_COULOMB),
-        meaning: "static (breakaway) friction torque",
-        size_exponent: Some(SizeLaw::TORQUE),
-        ..ParamSpec::EFFECT
-    },
-    ParamSpec {
-        name: "w_stribeck",
-        unit: "rad/s",
-        default: 30.0,
-        domain: Domain::Positive,
-        search: (1.0, 500.0),
-        effect: Some(Effect::BreakawayFriction),
-        off: OffValue::Default,
-        meaning: "Stribeck speed (the excess over Coulomb falls to 1/e)",
-        size_exponent: Some(SizeLaw::SPEED),
-        ..ParamSpec::EFFECT
-    },
-];
+effect_params! {
+    /// Its parameters: T_s and ω_s. Off: T_s = T_c (clamped into its search range) leaves the
+    /// base model's friction; ω_s then does not matter and stays at its default.
+    Effect::BreakawayFriction {
+        /// Position of T_s among its parameters (`ParamId::T_STATIC` in `params` names it).
+        T_STATIC t_static: "N*m" = 0.06, Domain::NonNegative, (1e-3, 0.5),
+            "static (breakaway) friction torque",
+            size Some(SizeLaw::TORQUE), off OffValue::BaseClamped(ParamId::T_COULOMB);
+        /// Position of ω_s among its parameters (`ParamId::W_STRIBECK` in `params` names it).
+        W_STRIBECK w_stribeck: "rad/s" = 30.0, Domain::Positive, (1.0, 500.0),
+            "Stribeck speed (the excess over Coulomb falls to 1/e)",
+            size Some(SizeLaw::SPEED), off OffValue::Default;
+    }
+}
 
 impl Term for BreakawayFriction {
     /// T_c + (T_s + (T_c − T_c,base) − T_c)·exp(−(ω/ω_s)²), with T_c = `dry`.

@@ -3,28 +3,21 @@
 //! p_discharge·V_carry·z·|ω|/(2π·R·T0), kg/s.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamSpec, SizeLaw};
 use crate::units::constants::RT0;
 use std::f64::consts::PI;
 
 /// The effect (see the module documentation).
 pub struct DeadVolumeCarryover;
 
-const V_CARRY: usize = 0;
-
-/// Its parameter V_carry; off at the bottom of its search range.
-pub const PARAMS: &[ParamSpec] = &[ParamSpec {
-    name: "v_carry",
-    unit: "m3",
-    default: 0.05e-6,
-    domain: Domain::NonNegative,
-    search: (1e-9, 1e-6),
-    effect: Some(Effect::DeadVolumeCarryover),
-    off: OffValue::SearchLower,
-    meaning: "volume carried back at discharge pressure per compartment",
-    size_exponent: Some(SizeLaw::VOLUME),
-    ..ParamSpec::EFFECT
-}];
+effect_params! {
+    /// Its parameter V_carry; off at the bottom of its search range.
+    Effect::DeadVolumeCarryover {
+        V_CARRY v_carry: "m3" = 0.05e-6, Domain::NonNegative, (1e-9, 1e-6),
+            "volume carried back at discharge pressure per compartment",
+            size Some(SizeLaw::VOLUME), off OffValue::SearchLower;
+    }
+}
 
 impl Term for DeadVolumeCarryover {
     /// p_discharge·V_carry·z·|ω|/(2π·R·T0).

@@ -3,27 +3,20 @@
 //! (p_inlet − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct IncompleteFilling;
 
-const W_FILL: usize = 0;
-
-/// Its parameter ω_f; off at the top of its search range (filling complete at every speed
-/// reached).
-pub const PARAMS: &[ParamSpec] = &[ParamSpec {
-    name: "w_fill",
-    unit: "rad/s",
-    default: 3000.0,
-    domain: Domain::Positive,
-    search: (100.0, 1e5),
-    effect: Some(Effect::IncompleteFilling),
-    off: OffValue::SearchUpper,
-    meaning: "speed at which filling reaches half the pressure difference",
-    size_exponent: Some(SizeLaw::SPEED),
-    ..ParamSpec::EFFECT
-}];
+effect_params! {
+    /// Its parameter ω_f; off at the top of its search range (filling complete at every speed
+    /// reached).
+    Effect::IncompleteFilling {
+        W_FILL w_fill: "rad/s" = 3000.0, Domain::Positive, (100.0, 1e5),
+            "speed at which filling reaches half the pressure difference",
+            size Some(SizeLaw::SPEED), off OffValue::SearchUpper;
+    }
+}
 
 impl Term for IncompleteFilling {
     /// p_e + (p_fill − p_e)·η(ω), η = 1/(1 + (ω/ω_f)²).

@@ -180,8 +180,8 @@ pub trait CatalogEffect: Term {
 }
 
 /// One line per effect: `file::Type;` declares the module `file` (which must define the
-/// unit struct `Type` implementing [`CatalogEffect`] and `pub const PARAMS: &[ParamSpec]`)
-/// and the constant `Effect::Type`.
+/// unit struct `Type` implementing [`CatalogEffect`] and its parameters `PARAMS` through
+/// `spec`'s `effect_params!`) and the constant `Effect::Type`.
 macro_rules! registry {
     ($( $file:ident :: $ty:ident ; )*) => {
         $( pub mod $file; )*

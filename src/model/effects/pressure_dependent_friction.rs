@@ -3,26 +3,19 @@
 //! k·max(p_inlet − p_e, 0), N·m.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct PressureDependentFriction;
 
-const K_FRIC_P: usize = 0;
-
-/// Its parameter k; off at the bottom of its search range.
-pub const PARAMS: &[ParamSpec] = &[ParamSpec {
-    name: "k_fric_p",
-    unit: "N*m/Pa",
-    default: 3e-8,
-    domain: Domain::NonNegative,
-    search: (1e-10, 1e-6),
-    effect: Some(Effect::PressureDependentFriction),
-    off: OffValue::SearchLower,
-    meaning: "Coulomb friction per Pa of p_1 - p_e",
-    size_exponent: Some(SizeLaw::TORQUE),
-    ..ParamSpec::EFFECT
-}];
+effect_params! {
+    /// Its parameter k; off at the bottom of its search range.
+    Effect::PressureDependentFriction {
+        K_FRIC_P k_fric_p: "N*m/Pa" = 3e-8, Domain::NonNegative, (1e-10, 1e-6),
+            "Coulomb friction per Pa of p_1 - p_e",
+            size Some(SizeLaw::TORQUE), off OffValue::SearchLower;
+    }
+}
 
 impl Term for PressureDependentFriction {
     /// T_c + k·max(p_inlet − p_e, 0).

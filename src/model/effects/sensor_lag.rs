@@ -3,25 +3,19 @@
 //! transient recordings.
 
 use super::{Category, CatalogEffect, Effect, ShowsIn, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub struct SensorLag;
 
-const TAU_SENSOR: usize = 0;
-
-/// Its parameter τ; off at the bottom of its search range.
-pub const PARAMS: &[ParamSpec] = &[ParamSpec {
-    name: "tau_sensor",
-    unit: "s",
-    default: 0.5,
-    domain: Domain::Positive,
-    search: (1e-3, 10.0),
-    effect: Some(Effect::SensorLag),
-    off: OffValue::SearchLower,
-    meaning: "first-order lag of the flow and speed sensors",
-    ..ParamSpec::EFFECT
-}];
+effect_params! {
+    /// Its parameter τ; off at the bottom of its search range.
+    Effect::SensorLag {
+        TAU_SENSOR tau_sensor: "s" = 0.5, Domain::Positive, (1e-3, 10.0),
+            "first-order lag of the flow and speed sensors",
+            size None, off OffValue::SearchLower;
+    }
+}
 
 impl Term for SensorLag {
     /// The channel through `first_order_lag` with τ.

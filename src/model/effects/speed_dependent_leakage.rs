@@ -3,41 +3,23 @@
 //! multiplied by 1 + g/(1 + (ω/ω_seal)²).
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct SpeedDependentLeakage;
 
-const G_SEAL: usize = 0;
-const W_SEAL: usize = 1;
-
-/// Its parameters g and ω_seal; off: g at the bottom of its search range, ω_seal at its
-/// default (it does not matter when g ≈ 0).
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "g_seal",
-        unit: "1",
-        default: 1.0,
-        domain: Domain::NonNegative,
-        search: (0.01, 10.0),
-        effect: Some(Effect::SpeedDependentLeakage),
-        off: OffValue::SearchLower,
-        meaning: "extra leakage at standstill, relative",
-        ..ParamSpec::EFFECT
-    },
-    ParamSpec {
-        name: "w_seal",
-        unit: "rad/s",
-        default: 300.0,
-        domain: Domain::Positive,
-        search: (10.0, 5000.0),
-        effect: Some(Effect::SpeedDependentLeakage),
-        off: OffValue::Default,
-        meaning: "speed at which vane sealing halves the extra leakage",
-        size_exponent: Some(SizeLaw::SPEED),
-        ..ParamSpec::EFFECT
-    },
-];
+effect_params! {
+    /// Its parameters g and ω_seal; off: g at the bottom of its search range, ω_seal at its
+    /// default (it does not matter when g ≈ 0).
+    Effect::SpeedDependentLeakage {
+        G_SEAL g_seal: "1" = 1.0, Domain::NonNegative, (0.01, 10.0),
+            "extra leakage at standstill, relative",
+            size None, off OffValue::SearchLower;
+        W_SEAL w_seal: "rad/s" = 300.0, Domain::Positive, (10.0, 5000.0),
+            "speed at which vane sealing halves the extra leakage",
+            size Some(SizeLaw::SPEED), off OffValue::Default;
+    }
+}
 
 impl Term for SpeedDependentLeakage {
     /// 1 + g/(1 + (ω/ω_seal)²).

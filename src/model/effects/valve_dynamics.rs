@@ -5,39 +5,22 @@
 //! output, so it never shows in them.
 
 use super::{Category, CatalogEffect, Effect, ShowsIn, SupplyValve, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamSpec};
 
 /// The effect (see the module documentation).
 pub(crate) struct ValveDynamics;
 
-const VALVE_TAU: usize = 0;
-const VALVE_ZETA: usize = 1;
-
-/// Its parameters τ and ζ; off at the bottom of their search ranges.
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "valve_tau",
-        unit: "s",
-        default: 0.05,
-        domain: Domain::Positive,
-        search: (1e-3, 1.0),
-        effect: Some(Effect::ValveDynamics),
-        off: OffValue::SearchLower,
-        meaning: "time constant of the pressure control valve",
-        ..ParamSpec::EFFECT
-    },
-    ParamSpec {
-        name: "valve_zeta",
-        unit: "1",
-        default: 0.7,
-        domain: Domain::Positive,
-        search: (0.1, 3.0),
-        effect: Some(Effect::ValveDynamics),
-        off: OffValue::SearchLower,
-        meaning: "damping ratio of the second-order valve",
-        ..ParamSpec::EFFECT
-    },
-];
+effect_params! {
+    /// Its parameters τ and ζ; off at the bottom of their search ranges.
+    Effect::ValveDynamics {
+        VALVE_TAU valve_tau: "s" = 0.05, Domain::Positive, (1e-3, 1.0),
+            "time constant of the pressure control valve",
+            size None, off OffValue::SearchLower;
+        VALVE_ZETA valve_zeta: "1" = 0.7, Domain::Positive, (0.1, 3.0),
+            "damping ratio of the second-order valve",
+            size None, off OffValue::SearchLower;
+    }
+}
 
 impl Term for ValveDynamics {
     /// Second order with τ and ζ when switched on, otherwise first order with τ.

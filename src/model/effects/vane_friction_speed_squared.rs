@@ -3,27 +3,20 @@
 //! smooth part of the friction.
 
 use super::{Category, CatalogEffect, Effect, Term};
-use crate::model::spec::{Domain, OffValue, ParamSpec, SizeLaw};
+use crate::model::spec::{effect_params, Domain, OffValue, ParamSpec, SizeLaw};
 
 /// The effect (see the module documentation).
 pub struct VaneFrictionSpeedSquared;
 
-const C_W2: usize = 0;
-
-/// Its parameter c₂; off at the bottom of its search range (c₂ = 0 is outside the log-space
-/// search).
-pub const PARAMS: &[ParamSpec] = &[ParamSpec {
-    name: "c_w2",
-    unit: "N*m*s2/rad2",
-    default: 1e-8,
-    domain: Domain::NonNegative,
-    search: (1e-10, 1e-6),
-    effect: Some(Effect::VaneFrictionSpeedSquared),
-    off: OffValue::SearchLower,
-    meaning: "friction torque per (rad/s)² (vane tips, windage)",
-    size_exponent: Some(SizeLaw::TORQUE_PER_SPEED2),
-    ..ParamSpec::EFFECT
-}];
+effect_params! {
+    /// Its parameter c₂; off at the bottom of its search range (c₂ = 0 is outside the log-space
+    /// search).
+    Effect::VaneFrictionSpeedSquared {
+        C_W2 c_w2: "N*m*s2/rad2" = 1e-8, Domain::NonNegative, (1e-10, 1e-6),
+            "friction torque per (rad/s)² (vane tips, windage)",
+            size Some(SizeLaw::TORQUE_PER_SPEED2), off OffValue::SearchLower;
+    }
+}
 
 impl Term for VaneFrictionSpeedSquared {
     /// wet + c₂·ω·|ω|.
