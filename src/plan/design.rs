@@ -167,9 +167,38 @@ mod tests {
         &b * b.transpose() + DMatrix::identity(n, n) * (0.01 * n as f64)
     }
 
+    /// The update of (C_c, A) by G, Σ against A·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·Aᵀ by direct inversion:
+    /// C' and each target row's gᵀC'g agree to 1e-10 of C'; returns the update and C'.
+    fn against_direct_inverse(
+        c_c: &DMatrix<f64>,
+        a: &DMatrix<f64>,
+        g: &DMatrix<f64>,
+        sigma: &[f64],
+        targets: &DMatrix<f64>,
+    ) -> (Expected, DMatrix<f64>) {
+        let prior = Prior {
+            curvature: c_c,
+            stretch: a,
+        };
+        let e = expected(&prior, g, sigma, targets).unwrap();
+        let w = DMatrix::from_diagonal(&DVector::from_iterator(
+            sigma.len(),
+            sigma.iter().map(|s| 1.0 / (s * s)),
+        ));
+        let info = c_c.clone().try_inverse().unwrap() + g.transpose() * w * g;
+        let want = a * info.try_inverse().unwrap() * a.transpose();
+        let scale = want.abs().max();
+        let diff = (&e.cov_after - &want).abs().max();
+        assert!(diff < 1e-10 * scale, "{}\n{want}", e.cov_after);
+        for (i, v) in variances(&want, targets).iter().enumerate() {
+            assert!((e.var_after[i] - v).abs() < 1e-10 * scale, "{i}");
+        }
+        (e, want)
+    }
+
     /// With A = D diagonal (each parameter stretched alone, as the former update took it),
-    /// the update is the former closed form C' = D·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·D, by direct inversion,
-    /// and the D gain ½·ln(det C/det C') is the same as without the stretch.
+    /// the update is the former closed form C' = D·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·D, by direct inversion
+    /// and as the former code made it (C = D·C_c·D updated by G·D⁻¹), and the D gain ½·ln(det C/det C') is the same as without the stretch.
     #[test]
     fn a_diagonal_stretch_gives_the_former_update() {
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
@@ -177,26 +206,23 @@ mod tests {
         let d = DMatrix::from_diagonal(&DVector::from_vec(vec![2.0, 1.0, 1.5, 0.8]));
         let g = DMatrix::from_fn(2, 4, |_, _| rng.random_range(-1.0..1.0));
         let sigma = [0.05, 0.1];
-        let prior = Prior {
-            curvature: &c_c,
-            stretch: &d,
-        };
-        let targets = DMatrix::identity(4, 4);
-        let e = expected(&prior, &g, &sigma, &targets).unwrap();
-        let w = DMatrix::from_diagonal(&DVector::from_iterator(
-            2,
-            sigma.iter().map(|s| 1.0 / (s * s)),
-        ));
-        let info = c_c.clone().try_inverse().unwrap() + g.transpose() * w * &g;
-        let want = &d * info.try_inverse().unwrap() * &d;
-        let scale = want.abs().max();
-        assert!((&e.cov_after - &want).abs().max() < 1e-10 * scale, "{}\n{want}", e.cov_after);
-        for i in 0..4 {
-            assert!((e.var_after[i] - want[(i, i)]).abs() < 1e-10 * scale);
-        }
+        let (e, want) = against_direct_inverse(&c_c, &d, &g, &sigma, &DMatrix::identity(4, 4));
         let before = &d * &c_c * &d;
+        // The former code's path: the plain update of C = D·C_c·D by the sensitivities G·D⁻¹.
+        let g_scaled = &g * d.clone().try_inverse().unwrap();
+        let id = DMatrix::identity(4, 4);
+        let former = Prior {
+            curvature: &before,
+            stretch: &id,
+        };
+        let f = expected(&former, &g_scaled, &sigma, &id).unwrap();
+        assert!((&f.cov_after - &e.cov_after).abs().max() < 1e-10 * want.abs().max());
         let gain = 0.5 * (before.determinant() / want.determinant()).ln();
-        assert!((e.d_gain_nats - gain).abs() < 1e-9, "{} vs {gain}", e.d_gain_nats);
+        assert!(
+            (e.d_gain_nats - gain).abs() < 1e-9,
+            "{} vs {gain}",
+            e.d_gain_nats
+        );
     }
 
     /// On a random SPD C_c, a full stretch A and three observables, the Woodbury form
@@ -207,27 +233,11 @@ mod tests {
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
         let n = 6;
         let c_c = random_spd(&mut rng, n) * 0.02;
-        let a = DMatrix::identity(n, n) + DMatrix::from_fn(n, n, |_, _| rng.random_range(-0.3..0.3));
+        let a =
+            DMatrix::identity(n, n) + DMatrix::from_fn(n, n, |_, _| rng.random_range(-0.3..0.3));
         let g = DMatrix::from_fn(3, n, |_, _| rng.random_range(-2.0..2.0));
         let sigma = [0.02, 0.07, 0.3];
         let targets = DMatrix::from_fn(2, n, |_, _| rng.random_range(-1.0..1.0));
-        let prior = Prior {
-            curvature: &c_c,
-            stretch: &a,
-        };
-        let e = expected(&prior, &g, &sigma, &targets).unwrap();
-        let w = DMatrix::from_diagonal(&DVector::from_iterator(
-            3,
-            sigma.iter().map(|s| 1.0 / (s * s)),
-        ));
-        let info = c_c.clone().try_inverse().unwrap() + g.transpose() * w * &g;
-        let want = &a * info.try_inverse().unwrap() * a.transpose();
-        let scale = want.abs().max();
-        assert!((&e.cov_after - &want).abs().max() < 1e-10 * scale, "{}\n{want}", e.cov_after);
-        for i in 0..2 {
-            let t = targets.row(i).transpose();
-            let v = (t.transpose() * &want * &t)[(0, 0)];
-            assert!((e.var_after[i] - v).abs() < 1e-10 * v.abs().max(scale));
-        }
+        against_direct_inverse(&c_c, &a, &g, &sigma, &targets);
     }
 }

@@ -197,7 +197,10 @@ pub fn notes(plan: &Plan) -> Vec<String> {
             .iter()
             .map(|(n, w)| format!("{n} ({w})"))
             .collect();
-        out.push(format!("Not in the bands (as in predict's): {}.", u.join(", ")));
+        out.push(format!(
+            "Not in the bands (as in predict's): {}.",
+            u.join(", ")
+        ));
     }
     for (c, why) in &plan.dropped {
         out.push(format!("Left out: {c}: {why}."));
