@@ -1,9 +1,10 @@
 //! Which measurement next (docs/plan.md): candidate measurements ranked by how much they
 //! are expected to shrink the 95 % bands at the user's operating points.
 //!
-//! The parameters' uncertainty is the one `predict` propagates (`ParamUncertainty`: the
-//! fit's covariance of ln θ, the inverse of its Fisher information JᵀWJ plus the motor
-//! prior's precision at the estimate, with profile-interval widths). The operating points'
+//! The parameters' uncertainty is the one `predict`'s delta bands propagate
+//! (`ParamUncertainty::for_bands`: the fit's curvature covariance of ln θ, the inverse of its
+//! Fisher information JᵀWJ plus the motor prior's precision at the estimate, stretched along
+//! each parameter's profile path to its profile interval's width). The operating points'
 //! figures (the catalogue figures at each asked pressure, or torque, power and air at each
 //! asked speed there) and each candidate's observables (`candidates`) are differentiated by
 //! the same central differences; `design` adds each candidate's information GᵀΣ⁻¹G and
@@ -167,8 +168,8 @@ pub struct Plan {
     pub targets: Vec<Target>,
     /// The candidates, best V per hour first.
     pub ranked: Vec<Assessed>,
-    /// The parameters the update spans (ln θ): those `predict` covers, then those it leaves
-    /// out that the fit's covariance holds.
+    /// The parameters the bands and the update span (ln θ): those `predict`'s delta bands
+    /// cover.
     pub parameters: Vec<String>,
     /// Their σ of ln θ now.
     pub sd_before: Vec<f64>,
@@ -191,11 +192,10 @@ pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 /// the module documentation).
 pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<Plan, PlanError> {
     options.check()?;
-    let shown = ParamUncertainty::of(fit, options.fixed_spread);
-    if shown.is_empty() {
+    let unc = ParamUncertainty::for_bands(fit, options.fixed_spread);
+    if unc.is_empty() {
         return Err(PlanError::NoUncertainty);
     }
-    let unc = with_flat_parameters(fit, &shown);
     let motor = unc.motor_at(fit, &unc.log_values)?;
     let gear = fit.gear;
     let rows = options
@@ -208,8 +208,6 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
     progress("operating points", 0, 1);
     let g_t = unc.jacobian(fit, values.len(), &figures)?;
     progress("operating points", 1, 1);
-    let k = shown.len();
-    let shown_var = design::variances(&shown.cov, &g_t.columns(0, k).clone_owned());
     let var_before = design::variances(&unc.cov, &g_t);
     let all = candidates::candidates(&motor, options, &rows);
     let n_obs: usize = all.iter().map(|c| c.sigma.len()).sum();
@@ -231,7 +229,7 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
     let targets = labels
         .iter()
         .zip(&values)
-        .zip(&shown_var)
+        .zip(&var_before)
         .map(|((l, y), v)| Target {
             p_supply_pa: l.0,
             speed_rad_s: l.1,
@@ -241,12 +239,13 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
         })
         .collect();
     let now = Now {
-        deflate: profile_inflation(fit, &unc),
-        cov: &unc.cov,
+        prior: design::Prior {
+            curvature: &unc.curvature,
+            stretch: &unc.stretch,
+        },
         g_targets: &g_t,
         values: &values,
         var_before: &var_before,
-        shown_var: &shown_var,
     };
     let (ranked, dropped) = rank(all, &g_c, &now);
     Ok(Plan {
@@ -255,93 +254,24 @@ pub fn plan(fit: &FitFile, options: &PlanOptions, progress: Progress) -> Result<
         ranked,
         sd_before: unc.sd.clone(),
         parameters: unc.names.clone(),
-        basis: shown.basis,
-        uncovered: shown.uncovered.clone(),
+        basis: unc.basis,
+        uncovered: unc.uncovered.clone(),
         not_gaussian: crate::predict::delta_unreliable(fit),
         dropped,
         gear,
     })
 }
 
-/// `shown` (the parameters `predict`'s bands cover) with the parameters it leaves out that
-/// the fit's covariance holds (an estimated parameter the profile found flat, such as a
-/// page's `b_crit`): σ of ln θ from the covariance's diagonal, correlated with the rest as
-/// the covariance says. A measurement's information is shared with them (it depends on
-/// them too), so the update is made over all of them, and what it does to a band is the
-/// ratio of its variance after to before in that space ([`assess`]).
-fn with_flat_parameters(fit: &FitFile, shown: &ParamUncertainty) -> ParamUncertainty {
-    let mut unc = shown.clone();
-    let Some(file) = &fit.covariance else {
-        return unc;
-    };
-    let at = |n: &str| file.parameters.iter().position(|m| m == n);
-    for (n, _) in &shown.uncovered {
-        let (Some(i), Some(v)) = (at(n), fit.params.get(n).filter(|v| *v > 0.0)) else {
-            continue;
-        };
-        let sd = file.matrix[i][i].max(0.0).sqrt();
-        if sd > 0.0 {
-            unc.names.push(n.clone());
-            unc.log_values.push(v.ln());
-            unc.sd.push(sd);
-        }
-    }
-    let k0 = shown.len();
-    let k = unc.names.len();
-    let corr = |a: usize, b: usize| match (at(&unc.names[a]), at(&unc.names[b])) {
-        (Some(i), Some(j)) => file.matrix[i][j] / (file.matrix[i][i] * file.matrix[j][j]).sqrt(),
-        _ => 0.0,
-    };
-    unc.cov = DMatrix::from_fn(k, k, |a, b| {
-        if a < k0 && b < k0 {
-            shown.cov[(a, b)]
-        } else if a == b {
-            unc.sd[a] * unc.sd[a]
-        } else {
-            unc.sd[a] * corr(a, b) * unc.sd[b]
-        }
-    });
-    unc
-}
-
-/// For each parameter of `unc`: σ of ln θ by the curvature (the fit's covariance) over the
-/// σ it has in `unc` (a profile interval's, usually wider where the likelihood is not
-/// quadratic); 1 where the covariance does not hold it. The update takes that inflation to
-/// persist after the measurement (what widens a profile interval is the likelihood's shape,
-/// which more data of the same kind do not remove at first order):
-/// C' = D·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·D with C = D·C_c·D, D = diag(1/deflate), which is the plain
-/// update of C by the sensitivities G·diag(deflate). On twin pages, promising the
-/// curvature's shrinkage to profile-width bands overstated it by half.
-fn profile_inflation(fit: &FitFile, unc: &ParamUncertainty) -> Vec<f64> {
-    let file = fit.covariance.as_ref();
-    unc.names
-        .iter()
-        .zip(&unc.sd)
-        .map(|(n, sd)| {
-            let i = file.and_then(|c| c.parameters.iter().position(|m| m == n));
-            let curv = i.and_then(|i| file.map(|c| c.matrix[i][i].max(0.0).sqrt()));
-            match curv {
-                Some(c) if c > 0.0 && *sd > 0.0 => c / sd,
-                _ => 1.0,
-            }
-        })
-        .collect()
-}
-
 /// The state now that every candidate is weighed against.
 struct Now<'a> {
-    /// Each parameter's σ by the curvature over its σ here ([`profile_inflation`]).
-    deflate: Vec<f64>,
-    /// Covariance of ln θ over every parameter the update spans.
-    cov: &'a DMatrix<f64>,
-    /// The targets' gradients over them.
+    /// The parameters' covariance now, C = A·C_c·Aᵀ (`predict`'s).
+    prior: design::Prior<'a>,
+    /// The targets' gradients over the parameters.
     g_targets: &'a DMatrix<f64>,
     /// The targets' values.
     values: &'a [f64],
-    /// The targets' variances in that space.
+    /// The targets' variances now (`predict`'s).
     var_before: &'a [f64],
-    /// The targets' variances as `predict` shows them (its parameters only).
-    shown_var: &'a [f64],
 }
 
 /// Every candidate assessed (its rows of `g_c`, the candidates' sensitivities stacked in
@@ -376,44 +306,35 @@ fn label(c: &Candidate) -> String {
     }
 }
 
-/// One candidate's expected effect, or why it has none. Each band after is the band
-/// `predict` shows with its variance scaled by Var'/Var of the update's space.
+/// One candidate's expected effect, or why it has none: the bands after are the delta
+/// method's with the updated covariance ([`design::expected`]).
 fn assess(c: Candidate, g: &DMatrix<f64>, now: &Now) -> Result<Assessed, &'static str> {
     if !g.iter().all(|v| v.is_finite()) {
         return Err("the motor moved within its uncertainty has no steady state at its settings");
     }
-    let g = DMatrix::from_fn(g.nrows(), g.ncols(), |i, j| g[(i, j)] * now.deflate[j]);
-    let Some(e) = design::expected(now.cov, &g, &c.sigma, now.g_targets) else {
+    let Some(e) = design::expected(&now.prior, g, &c.sigma, now.g_targets) else {
         return Err("its noise is not a positive number");
     };
-    let ratio: Vec<f64> = now
+    let var_after: Vec<f64> = now
         .var_before
         .iter()
         .zip(&e.var_after)
-        .map(|(b, a)| {
-            if *b > 0.0 {
-                (a / b).clamp(0.0, 1.0)
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let band_after = now
-        .values
-        .iter()
-        .zip(now.shown_var)
-        .zip(&ratio)
-        .map(|((y, v), r)| log_band(*y, Z95 * (v * r).sqrt()))
+        .map(|(b, a)| a.min(*b))
         .collect();
     Ok(Assessed {
-        band_after,
+        band_after: now
+            .values
+            .iter()
+            .zip(&var_after)
+            .map(|(y, v)| log_band(*y, Z95 * v.sqrt()))
+            .collect(),
         shrinkage: now
             .var_before
             .iter()
-            .zip(&e.var_after)
+            .zip(&var_after)
             .map(|(b, a)| design::shrinkage(*b, *a))
             .collect(),
-        v_reduction: design::v_reduction(now.values, now.var_before, &e.var_after),
+        v_reduction: design::v_reduction(now.values, now.var_before, &var_after),
         d_gain_nats: e.d_gain_nats,
         sd_after: e
             .cov_after
@@ -496,66 +417,4 @@ fn targets_of(
         }
     }
     Ok((labels, values))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::data::fitfile::LogCovariance;
-    use crate::model::effects::EffectSet;
-    use crate::model::params::MotorParams;
-
-    /// Two estimated parameters with a covariance, one of them with a profile interval
-    /// twice the curvature's width, and a third the covariance holds that is flat.
-    fn fit_file() -> FitFile {
-        let mut f = FitFile::from_params("t", MotorParams::default(), EffectSet::empty());
-        f.estimated = vec!["c_in1".into(), "c_ext".into(), "b_crit".into()];
-        let c = f.params.get("c_in1").unwrap();
-        let r = 2.0 * Z95 * 0.1; // σ 0.2 of ln c_in1 from the profile
-        f.ci95 = vec![("c_in1".into(), [c * (-r).exp(), c * r.exp()])];
-        f.covariance = Some(LogCovariance {
-            parameters: vec!["c_in1".into(), "c_ext".into(), "b_crit".into()],
-            matrix: vec![
-                vec![0.01, 0.003, 0.004],
-                vec![0.003, 0.04, 0.0],
-                vec![0.004, 0.0, 0.09],
-            ],
-        });
-        f.verdicts = vec![crate::data::fitfile::ParamVerdict {
-            name: "b_crit".into(),
-            bounds95: [None, None],
-            identifiable: false,
-            why: None,
-        }];
-        f
-    }
-
-    /// The flat parameter joins the update with the covariance's σ and correlations; the
-    /// profile's inflation over the curvature is σ_curv/σ_profile = 0.1/0.2 for c_in1 and 1
-    /// for the rest; the update's covariance is then the curvature's: D⁻¹·C·D⁻¹ = C_c.
-    #[test]
-    fn the_update_spans_the_flat_parameters_in_the_curvature_s_units() {
-        let f = fit_file();
-        let shown = ParamUncertainty::of(&f, None);
-        assert_eq!(shown.names, vec!["c_in1", "c_ext"]);
-        let all = with_flat_parameters(&f, &shown);
-        assert_eq!(all.names, vec!["c_in1", "c_ext", "b_crit"]);
-        assert!((all.sd[2] - 0.3).abs() < 1e-12);
-        let d = profile_inflation(&f, &all);
-        assert!(
-            (d[0] - 0.5).abs() < 1e-9 && (d[1] - 1.0).abs() < 1e-12 && (d[2] - 1.0).abs() < 1e-12,
-            "{d:?}"
-        );
-        let file = &f.covariance.as_ref().unwrap().matrix;
-        for a in 0..3 {
-            for b in 0..3 {
-                let c_c = all.cov[(a, b)] * d[a] * d[b];
-                assert!(
-                    (c_c - file[a][b]).abs() < 1e-12,
-                    "({a},{b}): {c_c} vs {}",
-                    file[a][b]
-                );
-            }
-        }
-    }
 }

@@ -31,8 +31,13 @@
 //! reading tolerance; the former C = S·R·S (the curvature's correlations R rescaled to the
 //! profile widths S, non-identifiable parameters left out) made them 2–4 times that, since
 //! rescaling each parameter alone breaks the cancellations along the directions the data
-//! pin. [`ParamUncertainty::of`] keeps that construction for `vanefit plan`'s update
-//! (`C' = D·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·D`, docs/plan.md) and for the posterior sampler's starts.
+//! pin. [`ParamUncertainty::of`] keeps that construction for the posterior sampler's starts.
+//!
+//! Each stretch is a congruence C ← M·C·Mᵀ with M = I + (λ − 1)·C·e_j·e_jᵀ/C_jj, so the
+//! result is C = A·C_c·Aᵀ, A the product of the M's ([`ParamUncertainty::stretch`]).
+//! `vanefit plan` keeps A through its update (docs/plan.md): the inflation persists and a
+//! measurement's information is added in the curvature's units,
+//! C' = A·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·Aᵀ.
 //!
 //! # S·R·S, and fits without a covariance
 //!
@@ -132,8 +137,15 @@ pub struct ParamUncertainty {
     pub log_values: Vec<f64>,
     /// Marginal standard deviation σ_j of ln θ_j.
     pub sd: Vec<f64>,
-    /// C = S·R·S, the covariance of ln θ.
+    /// C, the covariance of ln θ the bands use: A·C_c·Aᵀ ([`Self::for_bands`]) or S·R·S
+    /// ([`Self::of`]).
     pub cov: DMatrix<f64>,
+    /// C_c: C before the stretch along the profile paths (the fit's curvature covariance,
+    /// with the stated spread's variances on the diagonal); C itself for [`Self::of`].
+    pub curvature: DMatrix<f64>,
+    /// A, the product of the stretches (C = A·C_c·Aᵀ); the identity for [`Self::of`].
+    /// `vanefit plan` keeps it through its update: C' = A·(C_c⁻¹ + GᵀΣ⁻¹G)⁻¹·Aᵀ.
+    pub stretch: DMatrix<f64>,
     /// Estimated parameters the band does not cover, each with the reason.
     pub uncovered: Vec<(String, String)>,
     /// Parameters covered by the stated spread (held fixed or not identifiable).
@@ -173,7 +185,8 @@ impl ParamUncertainty {
                 profile_sd(fit, &u.names[a]).map(|s| s * s)
             })
             .collect();
-        stretch_to(&mut u.cov, &target);
+        u.curvature = u.cov.clone();
+        u.stretch = stretch_to(&mut u.cov, &target);
         u.sd = (0..k).map(|a| u.cov[(a, a)].max(0.0).sqrt()).collect();
         u.basis = BandBasis::Stretched;
         u
@@ -252,6 +265,7 @@ impl ParamUncertainty {
             }
         };
         let cov = DMatrix::from_fn(k, k, |a, b| sd[a] * corr(a, b) * sd[b]);
+        let curvature = cov.clone();
         let basis = match (k, covered_by_fit, &fit.covariance) {
             (0, _, _) => BandBasis::None,
             (_, 0, _) => BandBasis::SpreadOnly,
@@ -264,6 +278,8 @@ impl ParamUncertainty {
             names,
             sd,
             cov,
+            curvature,
+            stretch: DMatrix::identity(k, k),
             uncovered,
             spread: spread_names,
             spread_factor: spread,
@@ -463,9 +479,11 @@ fn profile_sd(fit: &FitFile, n: &str) -> Option<f64> {
 /// Sweeps over the parameters with a `target` variance; each stretches (or shrinks) `c`
 /// along its profile path, C ← C + (λ² − 1)·C·e_j·e_jᵀ·C/C_jj with λ² = target/C_jj (the
 /// module documentation), until every C_jj is its target within 1e-9 relative or after
-/// 200 sweeps. Each step is a congruence A·C·Aᵀ with det A = λ > 0: C stays positive
-/// definite.
-fn stretch_to(c: &mut DMatrix<f64>, target: &[Option<f64>]) {
+/// 200 sweeps. Each step is a congruence C ← M·C·Mᵀ, M = I + (λ − 1)·C·e_j·e_jᵀ/C_jj with
+/// det M = λ > 0, so C stays positive definite; returns A, the product of the M's (latest
+/// on the left), with C_after = A·C_before·Aᵀ.
+fn stretch_to(c: &mut DMatrix<f64>, target: &[Option<f64>]) -> DMatrix<f64> {
+    let mut a = DMatrix::identity(c.nrows(), c.ncols());
     for _ in 0..200 {
         let mut worst = 0.0_f64;
         for (j, t) in target.iter().enumerate() {
@@ -479,11 +497,14 @@ fn stretch_to(c: &mut DMatrix<f64>, target: &[Option<f64>]) {
             worst = worst.max((l2 - 1.0).abs());
             let v = c.column(j).clone_owned();
             *c += (&v * v.transpose()) * ((l2 - 1.0) / cjj);
+            let row_j = a.row(j).clone_owned();
+            a += (&v * row_j) * ((l2.sqrt() - 1.0) / cjj);
         }
         if worst < 1e-9 {
-            return;
+            break;
         }
     }
+    a
 }
 
 /// Largest half-width of a linear band, relative to the figure, that is still propagated in
@@ -652,7 +673,10 @@ mod tests {
         let mut c =
             DMatrix::from_row_slice(3, 3, &[1.0, 0.9, -0.5, 0.9, 1.0, -0.3, -0.5, -0.3, 1.0]);
         let target = [Some(4.0), Some(0.5), None];
-        stretch_to(&mut c, &target);
+        let c0 = c.clone();
+        let a = stretch_to(&mut c, &target);
+        // C = A·C₀·Aᵀ: what `vanefit plan`'s update keeps.
+        assert!((&a * &c0 * a.transpose() - &c).abs().max() < 1e-12, "{a}");
         assert!(
             (c[(0, 0)] - 4.0).abs() < 1e-8 && (c[(1, 1)] - 0.5).abs() < 1e-8,
             "{c}"

@@ -185,7 +185,7 @@ fn detail_markdown(plan: &Plan, rank: usize, a: &Assessed, display: &PressureDis
 /// What the ranking rests on, in words.
 pub fn notes(plan: &Plan) -> Vec<String> {
     let mut out = vec![format!(
-        "Linearised about the estimate: {}; each candidate adds its Fisher information GᵀΣ⁻¹G (its simulated sensitivities, the rig's sensor noise for the motor's size or a page's 2 % reading tolerance) and the bands after are the delta method's with the updated covariance (each profile interval's widening over the curvature taken to persist). Ranked by V (the mean relative variance removed at the operating points) per hour of rig time.",
+        "Linearised about the estimate: {}; each candidate adds its Fisher information GᵀΣ⁻¹G (its simulated sensitivities, the rig's sensor noise for the motor's size or a page's 2 % reading tolerance) added in the curvature's units, and the bands after are the delta method's with the updated covariance (the stretch to each profile interval's width taken to persist). Ranked by V (the mean relative variance removed at the operating points) per hour of rig time.",
         plan.basis.describe()
     )];
     if let Some(why) = &plan.not_gaussian {
@@ -197,7 +197,10 @@ pub fn notes(plan: &Plan) -> Vec<String> {
             .iter()
             .map(|(n, w)| format!("{n} ({w})"))
             .collect();
-        out.push(format!("Not in the bands shown (as predict's): {}; where the fit's covariance holds them, a measurement's information is shared with them and the shrinkage counts it.", u.join(", ")));
+        out.push(format!(
+            "Not in the bands (as in predict's): {}.",
+            u.join(", ")
+        ));
     }
     for (c, why) in &plan.dropped {
         out.push(format!("Left out: {c}: {why}."));

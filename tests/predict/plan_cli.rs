@@ -123,6 +123,58 @@ fn bands_now_are_predicts_and_a_direct_measurement_combines_as_independent_estim
     }
 }
 
+/// On the shipped catalogue page's fit (profile intervals wider than the curvature's,
+/// `b_crit` open and held by the covariance), every band `plan` shows now is `predict`'s
+/// delta band at the same pressure: each end over the value, which is free of units, to the
+/// CSV's seven digits. (Before plan took predict's stretched covariance, its bands stood on
+/// S·R·S: at 3 bar g the maximum power's was [27.4, 41.8] W against predict's [26.5, 43.2] W.)
+#[test]
+fn bands_now_are_predicts_on_a_catalogue_fit_with_wide_profiles() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fit = tmp.path().join("page.json");
+    let fit = fit.to_str().unwrap();
+    let page = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/measurements/ar034-synthetic-catalogue"
+    );
+    let o = vanefit(&["fit", page, "--out", fit, "--no-plots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let p = plan_json(tmp.path(), fit);
+    let pred = tmp.path().join("pred");
+    let args = ["--pressures", "3,4,5", "--bands", "delta", "--out"];
+    let mut all = vec!["predict", fit];
+    all.extend(args);
+    all.push(pred.to_str().unwrap());
+    let o = vanefit(&all);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cat = std::fs::read_to_string(pred.join("catalogue.csv")).unwrap();
+    let columns = [
+        ("max_power", "max_power_w"),
+        ("free_speed", "free_speed_rpm"),
+        ("stall_torque", "stall_torque_nm"),
+        ("air_at_max_power", "air_at_max_power_l_s_anr"),
+    ];
+    let targets = p["targets"].as_array().unwrap();
+    assert_eq!(targets.len(), 12);
+    for t in targets {
+        let row = [401_325.0, 501_325.0, 601_325.0]
+            .iter()
+            .position(|q| (num(&t["p_supply_pa"]) - q).abs() < 1.0)
+            .unwrap();
+        let (_, col) = columns.iter().find(|(f, _)| t["figure"] == *f).unwrap();
+        let y = num(&t["value_si"]);
+        let y_pred = cell(&cat, row, col);
+        for (end, side) in [(0, "lo"), (1, "hi")] {
+            let mine = num(&t["band95_before"][end]) / y;
+            let theirs = cell(&cat, row, &format!("{col}_{side}")) / y_pred;
+            assert!(
+                (mine / theirs - 1.0).abs() < 2e-6,
+                "{col}_{side} at row {row}: plan {mine} vs predict {theirs} (of the value)"
+            );
+        }
+    }
+}
+
 #[test]
 fn bad_options_are_refused_naming_them() {
     let tmp = tempfile::tempdir().unwrap();
