@@ -362,6 +362,47 @@ pub(crate) fn env_usize(key: &str, default: usize) -> usize {
         .unwrap_or(default)
 }
 
+/// The judged motors as the tables of docs/validation.md: a line per size band and for all,
+/// the recommended kinds, then a line per motor (failures last); printed and written to
+/// `PLAN_OUT` (default `default_out`).
+pub(crate) fn write_table(
+    bands: &[usize],
+    results: &[(usize, u64, Result<Judged, String>)],
+    default_out: &str,
+) {
+    let mut md = String::from(TABLE_HEADER);
+    let mut all = Vec::new();
+    for b in bands {
+        let js: Vec<Judged> = results
+            .iter()
+            .filter(|r| r.0 == *b)
+            .filter_map(|r| r.2.as_ref().ok().cloned())
+            .collect();
+        md += &line(&band_label(SIZE_BANDS_CM3[*b]), &js);
+        all.extend(js);
+    }
+    md += &line("all", &all);
+    let mut tops = std::collections::BTreeMap::<String, usize>::new();
+    for j in &all {
+        *tops.entry(j.top.clone()).or_default() += 1;
+    }
+    writeln!(md, "\nRecommended: {tops:?}").unwrap();
+    md += MOTOR_HEADER;
+    for (b, seed, r) in results {
+        if let Ok(j) = r {
+            md += &motor_line(*b, *seed, j);
+        }
+    }
+    for (b, seed, r) in results {
+        if let Err(e) = r {
+            writeln!(md, "- band {b} seed {seed} failed: {e}").unwrap();
+        }
+    }
+    println!("{md}");
+    let out = std::env::var("PLAN_OUT").unwrap_or_else(|_| default_out.into());
+    std::fs::write(out, &md).unwrap();
+}
+
 #[test]
 #[ignore = "long: fits three pages per motor; run with --ignored --nocapture"]
 fn plan_twin_table() {
@@ -388,37 +429,7 @@ fn plan_twin_table() {
             })
             .collect()
     });
-    let mut md = String::from(TABLE_HEADER);
-    let mut all = Vec::new();
-    for b in &bands {
-        let js: Vec<Judged> = results
-            .iter()
-            .filter(|r| r.0 == *b)
-            .filter_map(|r| r.2.as_ref().ok().cloned())
-            .collect();
-        md += &line(&band_label(SIZE_BANDS_CM3[*b]), &js);
-        all.extend(js);
-    }
-    md += &line("all", &all);
-    let mut tops = std::collections::BTreeMap::<String, usize>::new();
-    for j in &all {
-        *tops.entry(j.top.clone()).or_default() += 1;
-    }
-    writeln!(md, "\nRecommended: {tops:?}").unwrap();
-    md += MOTOR_HEADER;
-    for (b, seed, r) in &results {
-        if let Ok(j) = r {
-            md += &motor_line(*b, *seed, j);
-        }
-    }
-    for (b, seed, r) in &results {
-        if let Err(e) = r {
-            writeln!(md, "- band {b} seed {seed} failed: {e}").unwrap();
-        }
-    }
-    println!("{md}");
-    let out = std::env::var("PLAN_OUT").unwrap_or_else(|_| "target/plan-twin.md".into());
-    std::fs::write(out, &md).unwrap();
+    write_table(&bands, &results, "target/plan-twin.md");
 }
 
 /// One twin page end to end: the recommended measurement, made by the twin and refitted,

@@ -17,8 +17,7 @@
 //! default 4), `PLAN_OUT` (default target/plan-twin-rig.md), `PLAN_DIR`, `VANEFIT_BIN`.
 
 use crate::plan_twin::{
-    bands, env_usize, line, mean_shrinkage, motor_line, numbers, run, v_achieved, Judged,
-    MOTOR_HEADER, TABLE_HEADER,
+    bands, env_usize, mean_shrinkage, numbers, run, v_achieved, write_table, Judged,
 };
 use crate::twin;
 
@@ -26,13 +25,10 @@ use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 use serde_json::Value;
-use std::fmt::Write as _;
 use std::path::Path;
 use twin::catalogue::catalogue_row;
 use twin::motor::{TwinMotor, P_ATM_PA};
-use twin::sizes::{
-    band_label, displacement_in_band, perturbed_motor_sized, scaled_rig_config, SIZE_BANDS_CM3,
-};
+use twin::sizes::{displacement_in_band, perturbed_motor_sized, scaled_rig_config, SIZE_BANDS_CM3};
 use twin::{write_dataset, write_experiment, Experiment, RecordConfig};
 
 /// The operating pressures, bar g.
@@ -258,33 +254,7 @@ fn plan_twin_rig_table() {
             })
             .collect()
     });
-    let mut md = String::from(TABLE_HEADER);
-    let mut all = Vec::new();
-    for b in &bands {
-        let js: Vec<Judged> = results
-            .iter()
-            .filter(|r| r.0 == *b)
-            .filter_map(|r| r.2.as_ref().ok().cloned())
-            .collect();
-        md += &line(&band_label(SIZE_BANDS_CM3[*b]), &js);
-        all.extend(js);
-    }
-    md += &line("all", &all);
-    let mut tops = std::collections::BTreeMap::<String, usize>::new();
-    for j in &all {
-        *tops.entry(j.top.clone()).or_default() += 1;
-    }
-    writeln!(md, "\nRecommended: {tops:?}").unwrap();
-    md += MOTOR_HEADER;
-    for (b, seed, r) in &results {
-        match r {
-            Ok(j) => md += &motor_line(*b, *seed, j),
-            Err(e) => writeln!(md, "- band {b} seed {seed} failed: {e}").unwrap(),
-        }
-    }
-    println!("{md}");
-    let out = std::env::var("PLAN_OUT").unwrap_or_else(|_| "target/plan-twin-rig.md".into());
-    std::fs::write(out, &md).unwrap();
+    write_table(&bands, &results, "target/plan-twin-rig.md");
 }
 
 /// One twin rig end to end: the recommended measurement, recorded by the twin and
