@@ -312,7 +312,7 @@ pub enum SummaryLine {
 
 /// What `vanefit fit` prints after the fit, from what the fit computed: the run, the
 /// dataset's notes (gearbox, catalogue tolerances), the estimate and its goodness of fit
-/// ([`goodness_summary`]), the parameter table, the fixed parameters, the local minima and
+/// (`goodness_summary`), the parameter table, the fixed parameters, the local minima and
 /// the fit file written to `path`.
 pub fn terminal_summary(
     ds: &Dataset,
