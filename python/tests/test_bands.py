@@ -61,8 +61,12 @@ def test_to_arviz_round_trips_vanefit_s_samples_and_diagnostics(page_fit):
     stages = []
     p = vanefit.predict(page_fit, pressures=[5], bands="samples",
                         progress=lambda *a: stages.append(a), **SHORT)
-    assert {s[0] for s in stages} == {"sampling", "propagating"}
+    # A transport sampler runs a pilot ensemble first; every sampler samples, then propagates.
+    sampler = p.posterior["sampler"]
+    pilot = {"pilot"} if sampler == "transport_chains" else set()
+    assert {s[0] for s in stages} == {"sampling", "propagating"} | pilot
     idata = p.to_arviz()
+    assert idata.attrs["sampler"] == f"vanefit {sampler}"
     post = idata.posterior
     names = list(p.posterior["parameters"])
     assert list(post.data_vars) == names

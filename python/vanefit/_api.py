@@ -349,6 +349,7 @@ class Likelihood:
             acceptance=np.asarray(acc),
             names=self.names,
             units="coords",
+            sampler="ensemble",
         )
 
 
@@ -525,6 +526,7 @@ def predict(
             acceptance=np.asarray(acceptance),
             names=list(doc["sampled"]),
             units="SI",
+            sampler=doc["bands"]["sampling"]["sampler"],
         )
     return Prediction(doc, samples)
 

@@ -432,7 +432,9 @@ class Samples(dict):
     emcee's ``get_chain()`` layout), ``log_prob`` (steps × walkers), ``acceptance`` (per
     walker) and ``names`` (the parameters), with :meth:`to_arviz`. ``units``: ``"SI"`` when
     ``chain`` holds SI values (a prediction's samples), ``"coords"`` when it holds the
-    sampler's coordinates (ln θ of a log-scale parameter; :meth:`vanefit.Likelihood.sample`)."""
+    sampler's coordinates (ln θ of a log-scale parameter; :meth:`vanefit.Likelihood.sample`).
+    ``sampler``: which sampler drew them (``"ensemble"``, ``"laplace_chains"``,
+    ``"transport_chains"``; ``bands.json``'s ``sampling.sampler``)."""
 
     def to_arviz(self) -> Any:
         """The samples as an ``arviz.InferenceData``: group ``posterior`` with one variable
@@ -451,7 +453,10 @@ class Samples(dict):
         return az.from_dict(
             posterior=posterior,
             sample_stats={"lp": lp, "acceptance_rate": acc},
-            attrs={"units": self.get("units", "SI"), "sampler": "vanefit ensemble"},
+            attrs={
+                "units": self.get("units", "SI"),
+                "sampler": f"vanefit {self.get('sampler', 'ensemble')}",
+            },
         )
 
 
