@@ -66,37 +66,54 @@ pub(crate) fn run(args: &[&str]) -> Result<String, String> {
     ))
 }
 
-/// Fits the page in `page` to `fit` (default options, one thread).
-fn fit(page: &Path, fit: &Path) -> Result<(), String> {
-    let args = [
+/// `vanefit fit` of `data` to `fit` on one thread without plots, with `extra` options.
+pub(crate) fn fit_with(data: &Path, fit: &Path, extra: &[&str]) -> Result<(), String> {
+    let mut args = vec![
         "fit",
-        page.to_str().unwrap(),
+        data.to_str().unwrap(),
         "--out",
         fit.to_str().unwrap(),
         "--no-plots",
         "--threads",
         "1",
     ];
+    args.extend_from_slice(extra);
     run(&args).map(|_| ())
 }
 
-/// `vanefit plan` of `fit` at the operating pressures; its plan.json.
-fn plan(fit: &Path, out: &Path) -> Result<Value, String> {
+/// Fits the page in `page` to `fit` (default options, one thread).
+fn fit(page: &Path, fit: &Path) -> Result<(), String> {
+    fit_with(page, fit, &[])
+}
+
+/// `vanefit plan` of `fit` at 3, 4 and 5 bar g weighing `candidates` at `costs`; its
+/// plan.json.
+pub(crate) fn plan_with(
+    fit: &Path,
+    out: &Path,
+    candidates: &str,
+    costs: &str,
+) -> Result<Value, String> {
     let args = [
         "plan",
         fit.to_str().unwrap(),
         "--pressures",
         "3,4,5",
         "--candidates",
-        "key_figures,stall_torque",
+        candidates,
         "--costs",
-        "stall_torque=0.5",
+        costs,
         "--out",
         out.to_str().unwrap(),
     ];
     run(&args)?;
     let text = std::fs::read_to_string(out.join("plan.json")).map_err(|e| e.to_string())?;
     serde_json::from_str(&text).map_err(|e| e.to_string())
+}
+
+/// `vanefit plan` of `fit` at the operating pressures; its plan.json.
+fn plan(fit: &Path, out: &Path) -> Result<Value, String> {
+    plan_with(fit, out, "key_figures,stall_torque", "stall_torque=0.5")
 }
 
 pub(crate) fn numbers(v: &Value) -> Vec<f64> {
@@ -362,6 +379,39 @@ pub(crate) fn env_usize(key: &str, default: usize) -> usize {
         .unwrap_or(default)
 }
 
+/// Judges `per_band` twin motors in each size band of `PLAN_BANDS` (default 0–3), seeds
+/// 1 + s + 100·band, `PLAN_THREADS` at once (default 2), each in its own folder under
+/// `PLAN_DIR` (kept) or a temporary one: the bands and each motor's (band, seed, result).
+#[allow(clippy::type_complexity)]
+pub(crate) fn judge_all(
+    per_band: usize,
+    judge: &(dyn Fn(u64, (f64, f64), &Path) -> Result<Judged, String> + Sync),
+) -> (Vec<usize>, Vec<(usize, u64, Result<Judged, String>)>) {
+    let bands: Vec<usize> = std::env::var("PLAN_BANDS")
+        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_else(|_| vec![0, 1, 2, 3]);
+    let keep = std::env::var("PLAN_DIR").ok();
+    let tmp = tempfile::tempdir().unwrap();
+    let root = keep.as_deref().map_or(tmp.path().to_path_buf(), Into::into);
+    let jobs: Vec<(usize, u64)> = bands
+        .iter()
+        .flat_map(|b| (0..per_band as u64).map(move |s| (*b, 1 + s + 100 * *b as u64)))
+        .collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(env_usize("PLAN_THREADS", 2))
+        .build()
+        .unwrap();
+    let results = pool.install(|| {
+        jobs.par_iter()
+            .map(|(b, seed)| {
+                let dir = root.join(format!("band{b}-seed{seed}"));
+                (*b, *seed, judge(*seed, SIZE_BANDS_CM3[*b], &dir))
+            })
+            .collect()
+    });
+    (bands, results)
+}
+
 /// The judged motors as the tables of docs/validation.md: a line per size band and for all,
 /// the recommended kinds, then a line per motor (failures last); printed and written to
 /// `PLAN_OUT` (default `default_out`).
@@ -407,28 +457,7 @@ pub(crate) fn write_table(
 #[ignore = "long: fits three pages per motor; run with --ignored --nocapture"]
 fn plan_twin_table() {
     let per_band = env_usize("PLAN_MOTORS", 8);
-    let bands: Vec<usize> = std::env::var("PLAN_BANDS")
-        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
-        .unwrap_or_else(|_| vec![0, 1, 2, 3]);
-    let keep = std::env::var("PLAN_DIR").ok();
-    let tmp = tempfile::tempdir().unwrap();
-    let root = keep.as_deref().map_or(tmp.path().to_path_buf(), Into::into);
-    let jobs: Vec<(usize, u64)> = bands
-        .iter()
-        .flat_map(|b| (0..per_band as u64).map(move |s| (*b, 1 + s + 100 * *b as u64)))
-        .collect();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(env_usize("PLAN_THREADS", 2))
-        .build()
-        .unwrap();
-    let results: Vec<(usize, u64, Result<Judged, String>)> = pool.install(|| {
-        jobs.par_iter()
-            .map(|(b, seed)| {
-                let dir = root.join(format!("band{b}-seed{seed}"));
-                (*b, *seed, judge(*seed, SIZE_BANDS_CM3[*b], &dir))
-            })
-            .collect()
-    });
+    let (bands, results) = judge_all(per_band, &|seed, band, dir| judge(seed, band, dir));
     write_table(&bands, &results, "target/plan-twin.md");
 }
 

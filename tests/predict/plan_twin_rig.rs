@@ -17,13 +17,13 @@
 //! default 4), `PLAN_OUT` (default target/plan-twin-rig.md), `PLAN_DIR`, `VANEFIT_BIN`.
 
 use crate::plan_twin::{
-    bands, env_usize, mean_shrinkage, numbers, run, v_achieved, write_table, Judged,
+    bands, env_usize, fit_with, judge_all, mean_shrinkage, numbers, plan_with, v_achieved,
+    write_table, Judged,
 };
 use crate::twin;
 
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use rayon::prelude::*;
 use serde_json::Value;
 use std::path::Path;
 use twin::catalogue::catalogue_row;
@@ -39,38 +39,12 @@ const COSTS: &str = "datasheet=1,outlet_throttle=1,pressure_ramp=1";
 
 /// Fits the rig dataset in `data` to `fit`.
 fn fit(data: &Path, fit: &Path, starts: usize) -> Result<(), String> {
-    let starts = starts.to_string();
-    let args = [
-        "fit",
-        data.to_str().unwrap(),
-        "--out",
-        fit.to_str().unwrap(),
-        "--no-plots",
-        "--threads",
-        "1",
-        "--starts",
-        &starts,
-    ];
-    run(&args).map(|_| ())
+    fit_with(data, fit, &["--starts", &starts.to_string()])
 }
 
 /// `vanefit plan` of `fit` with the rig candidates; its plan.json.
 fn plan(fit: &Path, out: &Path) -> Result<Value, String> {
-    let args = [
-        "plan",
-        fit.to_str().unwrap(),
-        "--pressures",
-        "3,4,5",
-        "--candidates",
-        KINDS,
-        "--costs",
-        COSTS,
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    run(&args)?;
-    let text = std::fs::read_to_string(out.join("plan.json")).map_err(|e| e.to_string())?;
-    serde_json::from_str(&text).map_err(|e| e.to_string())
+    plan_with(fit, out, KINDS, COSTS)
 }
 
 /// The rig of `cfg` set as plan.json's `rig` of `cand` says: the supply pressure (a ramp's
@@ -232,28 +206,7 @@ fn judge(seed: u64, band: (f64, f64), starts: usize, dir: &Path) -> Result<Judge
 fn plan_twin_rig_table() {
     let per_band = env_usize("PLAN_RIGS", 4);
     let starts = env_usize("PLAN_STARTS", 4);
-    let bands: Vec<usize> = std::env::var("PLAN_BANDS")
-        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
-        .unwrap_or_else(|_| vec![0, 1, 2, 3]);
-    let keep = std::env::var("PLAN_DIR").ok();
-    let tmp = tempfile::tempdir().unwrap();
-    let root = keep.as_deref().map_or(tmp.path().to_path_buf(), Into::into);
-    let jobs: Vec<(usize, u64)> = bands
-        .iter()
-        .flat_map(|b| (0..per_band as u64).map(move |s| (*b, 1 + s + 100 * *b as u64)))
-        .collect();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(env_usize("PLAN_THREADS", 2))
-        .build()
-        .unwrap();
-    let results: Vec<(usize, u64, Result<Judged, String>)> = pool.install(|| {
-        jobs.par_iter()
-            .map(|(b, seed)| {
-                let dir = root.join(format!("band{b}-seed{seed}"));
-                (*b, *seed, judge(*seed, SIZE_BANDS_CM3[*b], starts, &dir))
-            })
-            .collect()
-    });
+    let (bands, results) = judge_all(per_band, &|seed, band, dir| judge(seed, band, starts, dir));
     write_table(&bands, &results, "target/plan-twin-rig.md");
 }
 
