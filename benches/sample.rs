@@ -19,8 +19,8 @@ use std::path::Path;
 use vanefit::data::{Dataset, FitFile};
 use vanefit::estimate::multistart::Silent;
 use vanefit::estimate::{
-    gaussian_of, run_chains, run_ensemble_with, ChainSettings, EnsembleSettings, FitLikelihood,
-    FitPosterior, ImportanceCheck, LogDensity, LogPrior, Mapped, Moves, QuadraticMap, TProposal,
+    run_chains, run_ensemble_with, straightened, ChainSettings, EnsembleSettings, FitLikelihood,
+    FitPosterior, ImportanceCheck, LogDensity, LogPrior, Mapped, Moves, QuadraticMap,
 };
 use vanefit::task::FitOptions;
 
@@ -81,13 +81,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("transport_map_fit", |b| {
         b.iter(|| black_box(QuadraticMap::fit(&draws, 1e-6).unwrap()))
     });
-    let map = QuadraticMap::fit(&draws, 1e-6).unwrap();
-    let zs: Vec<Vec<f64>> = draws.iter().map(|x| map.forward(x)).collect();
-    let qz = TProposal {
-        laplace: gaussian_of(&zs).unwrap(),
-        nu: 5.0,
-        scale: 1.2,
-    };
+    let (map, qz) = straightened(&draws, 1e-6, 5.0, 1.2).unwrap();
     let mapped = Mapped {
         density: &post,
         map: &map,

@@ -49,10 +49,10 @@ pub use sample::diagnostics::ParamDiagnostics;
 pub use sample::posterior::LogPrior;
 pub use sample::{
     ess, ess_bulk, ess_tail, gaussian_of, rhat_rank, run_chains, run_ensemble,
-    run_ensemble_resumable, run_ensemble_with, summarise, ChainSettings, Chains, Checkpoint,
-    CheckpointError, EnsembleSettings, FitPosterior, ImportanceCheck, Laplace, LogDensity, Mapped,
-    Moves, Proposal, QuadraticMap, SampleError, TProposal, Unbounded, INDEPENDENCE_SHARE,
-    K_HAT_LIMIT, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
+    run_ensemble_resumable, run_ensemble_with, straightened, summarise, ChainSettings, Chains,
+    Checkpoint, CheckpointError, EnsembleSettings, FitPosterior, ImportanceCheck, Laplace,
+    LogDensity, Mapped, Moves, Proposal, QuadraticMap, SampleError, TProposal, Unbounded,
+    INDEPENDENCE_SHARE, K_HAT_LIMIT, PROPOSAL_NU, PROPOSAL_SCALE, RW_TARGET,
 };
 
 pub use engine::Engine;

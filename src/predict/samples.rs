@@ -31,7 +31,7 @@ use super::PredictError;
 use crate::data::fitfile::FitFile;
 use crate::estimate::fit::fit_likelihood::FitLikelihood;
 use crate::estimate::sample::{
-    gaussian_of, run_chains, run_ensemble_resumable, run_ensemble_with, summarise, ChainSettings,
+    run_chains, run_ensemble_resumable, run_ensemble_with, straightened, summarise, ChainSettings,
     Checkpoint, EnsembleSettings, FitPosterior, ImportanceCheck, LogDensity, LogPrior, Mapped,
     Moves, ParamDiagnostics, QuadraticMap, SampleError, TProposal, Unbounded, PROPOSAL_NU,
 };
@@ -740,17 +740,7 @@ fn fit_map(
     draws: &[Vec<f64>],
     seed: u64,
 ) -> Result<(QuadraticMap, TProposal, f64), SampleError> {
-    let map = QuadraticMap::fit(draws, MAP_RIDGE).ok_or(SampleError::Curvature(
-        "no draws to fit the transport map to",
-    ))?;
-    let zs: Vec<Vec<f64>> = draws.iter().map(|x| map.forward(x)).collect();
-    let q = TProposal {
-        laplace: gaussian_of(&zs).ok_or(SampleError::Curvature(
-            "the mapped draws' covariance is not positive definite",
-        ))?,
-        nu: PROPOSAL_NU,
-        scale: MAP_SCALE,
-    };
+    let (map, q) = straightened(draws, MAP_RIDGE, PROPOSAL_NU, MAP_SCALE)?;
     let mapped = Mapped { density, map: &map };
     let (_, log_w) = ImportanceCheck::weighed(&mapped, &q, IMPORTANCE_DRAWS, seed ^ 0x1a91);
     let k_hat = ImportanceCheck::of_inside(log_w).k_hat;

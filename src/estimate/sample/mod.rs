@@ -51,7 +51,7 @@ pub use importance::{ImportanceCheck, K_HAT_LIMIT};
 pub use laplace::{Laplace, TProposal};
 pub use proposal::Proposal;
 pub use settings::ChainSettings;
-pub use transport::{gaussian_of, Mapped, QuadraticMap, Unbounded};
+pub use transport::{gaussian_of, straightened, Mapped, QuadraticMap, Unbounded};
 
 pub use posterior::{FitPosterior, LogPrior};
 

@@ -129,6 +129,25 @@ impl QuadraticMap {
     }
 }
 
+/// The map fitted to `draws` (ridge `ridge`) and the t proposal (ν `nu`, `scale` on its
+/// Cholesky factor) of the mapped draws' Gaussian: what the chains propose from in the
+/// map's coordinates.
+pub fn straightened(
+    draws: &[Vec<f64>],
+    ridge: f64,
+    nu: f64,
+    scale: f64,
+) -> Result<(QuadraticMap, super::TProposal), super::SampleError> {
+    let map = QuadraticMap::fit(draws, ridge).ok_or(super::SampleError::Curvature(
+        "no draws to fit the transport map to",
+    ))?;
+    let zs: Vec<Vec<f64>> = draws.iter().map(|x| map.forward(x)).collect();
+    let laplace = gaussian_of(&zs).ok_or(super::SampleError::Curvature(
+        "the mapped draws' covariance is not positive definite",
+    ))?;
+    Ok((map, super::TProposal { laplace, nu, scale }))
+}
+
 /// The Gaussian (mean, Cholesky factor of the covariance) of `draws`, its variances
 /// raised by 10⁻⁹ of themselves so that the factor exists; `None` without draws or where
 /// the covariance is singular.
@@ -346,7 +365,7 @@ mod tests {
     /// 4 Monte-Carlo standard errors, and R̂ < 1.01.
     #[test]
     fn chains_in_the_map_s_coordinates_draw_a_banana() {
-        use crate::estimate::sample::{run_chains, summarise, ChainSettings, TProposal};
+        use crate::estimate::sample::{run_chains, summarise, ChainSettings};
         struct Banana;
         impl LogDensity for Banana {
             fn dim(&self) -> usize {
@@ -365,13 +384,7 @@ mod tests {
                 vec![a, 0.5 * a * a + 0.05 * e]
             })
             .collect();
-        let map = QuadraticMap::fit(&pilot, 1e-6).unwrap();
-        let zs: Vec<Vec<f64>> = pilot.iter().map(|x| map.forward(x)).collect();
-        let q = TProposal {
-            laplace: gaussian_of(&zs).unwrap(),
-            nu: 5.0,
-            scale: 1.2,
-        };
+        let (map, q) = super::straightened(&pilot, 1e-6, 5.0, 1.2).unwrap();
         let mapped = Mapped {
             density: &Banana,
             map: &map,
